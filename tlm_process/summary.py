@@ -1,0 +1,93 @@
+"""One-screen flight summaries and the trajectory plot used by ``tlm fly`` and ``tlm demo``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tlm_sim.flightlog import FlightLog
+
+MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
+              9: "LAND"}
+M_PER_DEG = 111318.84502145034
+
+
+def flight_summary(log: FlightLog) -> dict[str, Any]:
+    """Duration, distance flown (true path), waypoints reached, final mode, row counts."""
+    meta = log.meta or {}
+    sim = log.tables.get("SIM")
+    dist = 0.0
+    max_alt = 0.0
+    if sim is not None and len(sim) > 1:
+        lat = sim["Lat"].to_numpy(float)
+        lon = sim["Lng"].to_numpy(float)
+        n = np.diff(lat) * M_PER_DEG
+        e = np.diff(lon) * M_PER_DEG * np.cos(np.radians(lat[:-1]))
+        dist = float(np.sum(np.hypot(n, e)))
+        max_alt = float(sim["Alt"].max() - sim["Alt"].iloc[0])
+    final_mode = int(meta.get("final_mode", -1))
+    return {
+        "duration_s": round(float(meta.get("duration_s", 0.0)), 1),
+        "armed_s": meta.get("armed_s"),
+        "disarmed_s": None if meta.get("disarmed_s") is None else round(meta["disarmed_s"], 1),
+        "distance_m": round(dist, 1),
+        "max_alt_m": round(max_alt, 1),
+        "waypoints_reached": f"{meta.get('waypoints_reached', '?')}/{meta.get('n_waypoints', '?')}",
+        "final_mode": f"{MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
+        "landed": meta.get("landed"),
+        "rows": {k: len(v) for k, v in log.tables.items()},
+    }
+
+
+def format_summary(s: dict[str, Any]) -> str:
+    """Human-readable lines of a flight summary."""
+    rows = ", ".join(f"{k} {v}" for k, v in s["rows"].items() if k in
+                     ("GPS", "IMU", "RATE", "VIBE", "ATT", "MODE", "EV", "ERR"))
+    return "\n".join([
+        f"duration           {s['duration_s']} s (armed {s['armed_s']} s -> disarmed "
+        f"{s['disarmed_s']} s)",
+        f"distance flown     {s['distance_m']} m, max altitude {s['max_alt_m']} m",
+        f"waypoints reached  {s['waypoints_reached']}",
+        f"final mode         {s['final_mode']}, landed {s['landed']}",
+        f"rows               {rows}",
+    ])
+
+
+def plot_trajectory(log: FlightLog, path: Path, title: str = "") -> Path:
+    """Top view of the true path (SIM) over the mission waypoints, and altitude over time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sim = log.tables["SIM"]
+    home_lat, home_lon = float(sim["Lat"].iloc[0]), float(sim["Lng"].iloc[0])
+    coslat = np.cos(np.radians(home_lat))
+    e = (sim["Lng"].to_numpy(float) - home_lon) * M_PER_DEG * coslat
+    n = (sim["Lat"].to_numpy(float) - home_lat) * M_PER_DEG
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5))
+    if log.mission is not None:
+        wp = np.asarray(log.mission.waypoints)
+        ax1.plot((wp[:, 1] - home_lon) * M_PER_DEG * coslat, (wp[:, 0] - home_lat) * M_PER_DEG,
+                 "o", ms=3, color="0.6", label="waypoints")
+    ax1.plot(e, n, lw=1.2, label="true path (SIM)")
+    ax1.plot([0], [0], "k^", label="home")
+    ax1.set_xlabel("east [m]")
+    ax1.set_ylabel("north [m]")
+    ax1.set_aspect("equal")
+    ax1.legend(loc="best", fontsize=8)
+    t = sim["TimeUS"].to_numpy(float) * 1e-6
+    ax2.plot(t, sim["Alt"].to_numpy(float) - sim["Alt"].iloc[0], label="true altitude")
+    if "CTUN" in log.tables:
+        ct = log.tables["CTUN"]
+        ax2.plot(ct["TimeUS"] * 1e-6, ct["DAlt"], "--", lw=0.8, label="desired altitude")
+    ax2.set_xlabel("time since boot [s]")
+    ax2.set_ylabel("altitude above home [m]")
+    ax2.legend(loc="best", fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

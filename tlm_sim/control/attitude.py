@@ -1,0 +1,178 @@
+"""ArduCopter-style attitude and rate control (AC_AttitudeControl structure, our implementation).
+
+Angle targets are shaped with a square-root controller (gain 1/ATC_INPUT_TC, acceleration limits
+ATC_ACCEL_*_MAX), the attitude error between the shaped target and the EKF attitude is turned into
+body-rate targets by a square-root controller (ATC_ANG_*_P) plus rate feed-forward, and per-axis
+rate PIDs (ATC_RAT_*) produce roll/pitch/yaw outputs in motor units (+-1).
+"""
+
+import math
+
+from numba import njit
+
+from tlm_sim.control import layout as C
+
+
+@njit(cache=True, nogil=True)
+def sqrt_ctrl(error, p, accel_max, dt):
+    """Square-root controller: linear (p*e) near zero, sqrt(2*a*|e|) far out; output limited to
+    |e|/dt so it never overshoots within one step. accel_max <= 0 gives a pure P controller."""
+    if accel_max <= 0.0:
+        out = p * error
+    elif p == 0.0:
+        out = math.copysign(math.sqrt(2.0 * accel_max * abs(error)), error)
+    else:
+        lin = accel_max / (p * p)
+        if abs(error) <= lin:
+            out = p * error
+        else:
+            out = math.copysign(math.sqrt(2.0 * accel_max * (abs(error) - 0.5 * lin)), error)
+    if dt > 0.0:
+        lim = abs(error) / dt
+        if out > lim:
+            out = lim
+        elif out < -lim:
+            out = -lim
+    return out
+
+
+@njit(cache=True, nogil=True)
+def wrap_pi(a):
+    """Wrap an angle to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@njit(cache=True, nogil=True)
+def _shape_axis(c, angle_i, rate_i, cmd, tc, accel_max, dt, wrap):
+    """Move a target angle towards cmd with a square-root rate demand and an accel limit."""
+    err = cmd - c[angle_i]
+    if wrap:
+        err = wrap_pi(err)
+    want = sqrt_ctrl(err, 1.0 / tc, accel_max, dt)
+    r = c[rate_i]
+    dv = accel_max * dt
+    if want > r + dv:
+        want = r + dv
+    elif want < r - dv:
+        want = r - dv
+    c[rate_i] = want
+    a = c[angle_i] + want * dt
+    c[angle_i] = wrap_pi(a) if wrap else a
+
+
+@njit(cache=True, nogil=True)
+def attitude_reset(c, roll, pitch, yaw):
+    """Set the attitude targets to the given euler angles [rad] with zero target rates."""
+    c[C.ATT_ROLL_T] = roll
+    c[C.ATT_PITCH_T] = pitch
+    c[C.ATT_YAW_T] = yaw
+    c[C.ATT_ROLL_CMD] = roll
+    c[C.ATT_PITCH_CMD] = pitch
+    c[C.ATT_YAW_CMD] = yaw
+    c[C.ATT_ROLL_RATE_T] = 0.0
+    c[C.ATT_PITCH_RATE_T] = 0.0
+    c[C.ATT_YAW_RATE_T] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def attitude_update(c, g, q, body_rate_out):
+    """Shape the commanded angles (ATT_*_CMD) and compute body-rate targets [rad/s].
+
+    q: EKF attitude quaternion body->NED (w, x, y, z). Writes body_rate_out[0:3].
+    """
+    dt = g[C.G_DT]
+    tc = g[C.G_INPUT_TC]
+    _shape_axis(c, C.ATT_ROLL_T, C.ATT_ROLL_RATE_T, c[C.ATT_ROLL_CMD], tc, g[C.G_ACCEL_MAX], dt, False)
+    _shape_axis(
+        c, C.ATT_PITCH_T, C.ATT_PITCH_RATE_T, c[C.ATT_PITCH_CMD], tc, g[C.G_ACCEL_MAX + 1], dt, False
+    )
+    # heading: slew-limited towards the command
+    yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
+    yrate = sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
+    smax = g[C.G_SLEW_YAW]
+    yrate = min(max(yrate, -smax), smax)
+    yr0 = c[C.ATT_YAW_RATE_T]
+    dv = g[C.G_ACCEL_MAX + 2] * dt
+    yrate = min(max(yrate, yr0 - dv), yr0 + dv)
+    c[C.ATT_YAW_RATE_T] = yrate
+    c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
+
+    # target quaternion from euler (ZYX)
+    cr = math.cos(0.5 * c[C.ATT_ROLL_T])
+    sr = math.sin(0.5 * c[C.ATT_ROLL_T])
+    cp = math.cos(0.5 * c[C.ATT_PITCH_T])
+    sp = math.sin(0.5 * c[C.ATT_PITCH_T])
+    cy = math.cos(0.5 * c[C.ATT_YAW_T])
+    sy = math.sin(0.5 * c[C.ATT_YAW_T])
+    tw = cr * cp * cy + sr * sp * sy
+    tx = sr * cp * cy - cr * sp * sy
+    ty = cr * sp * cy + sr * cp * sy
+    tz = cr * cp * sy - sr * sp * cy
+    # error rotation in the body frame: q_err = q^-1 * q_target
+    qw, qx, qy, qz = q[0], -q[1], -q[2], -q[3]
+    ew = qw * tw - qx * tx - qy * ty - qz * tz
+    ex = qw * tx + qx * tw + qy * tz - qz * ty
+    ey = qw * ty - qx * tz + qy * tw + qz * tx
+    ez = qw * tz + qx * ty - qy * tx + qz * tw
+    if ew < 0.0:
+        ew, ex, ey, ez = -ew, -ex, -ey, -ez
+    vn = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if vn > 1e-12:
+        ang = 2.0 * math.atan2(vn, ew)
+        k = ang / vn
+    else:
+        k = 2.0
+    e0 = ex * k
+    e1 = ey * k
+    e2 = ez * k
+    # feed-forward: target euler rates -> body rates (at the target attitude)
+    r = c[C.ATT_ROLL_T]
+    p = c[C.ATT_PITCH_T]
+    dr = c[C.ATT_ROLL_RATE_T]
+    dp = c[C.ATT_PITCH_RATE_T]
+    dy = c[C.ATT_YAW_RATE_T]
+    ff0 = dr - math.sin(p) * dy
+    ff1 = math.cos(r) * dp + math.sin(r) * math.cos(p) * dy
+    ff2 = -math.sin(r) * dp + math.cos(r) * math.cos(p) * dy
+    body_rate_out[0] = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt) + ff0
+    body_rate_out[1] = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt) + ff1
+    body_rate_out[2] = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt) + ff2
+
+
+@njit(cache=True, nogil=True)
+def rate_pid(c, g, axis, target, meas, limited):
+    """One AC_PID step for a body axis (0 roll, 1 pitch, 2 yaw); returns the output (+-1 units).
+
+    target and meas in rad/s; limited: the mixer saturated this axis (integrator may only shrink).
+    """
+    b = C.RATE_BASE + axis * C.RATE_STRIDE
+    dt = g[C.G_DT]
+    c[b + C.R_TARGET] = target
+    c[b + C.R_MEAS] = meas
+    c[b + C.R_TF] += g[C.G_RAT_FLTT + axis] * (target - c[b + C.R_TF])
+    err = c[b + C.R_TF] - meas
+    ef_prev = c[b + C.R_EF]
+    c[b + C.R_EF] += g[C.G_RAT_FLTE + axis] * (err - c[b + C.R_EF])
+    ef = c[b + C.R_EF]
+    d = (ef - ef_prev) / dt
+    c[b + C.R_DF] += g[C.G_RAT_FLTD + axis] * (d - c[b + C.R_DF])
+    i_new = c[b + C.R_I] + g[C.G_RAT_I + axis] * ef * dt
+    imax = g[C.G_RAT_IMAX + axis]
+    i_new = min(max(i_new, -imax), imax)
+    if not limited or abs(i_new) < abs(c[b + C.R_I]):
+        c[b + C.R_I] = i_new
+    out = (
+        g[C.G_RAT_P + axis] * ef
+        + g[C.G_RAT_D + axis] * c[b + C.R_DF]
+        + c[b + C.R_I]
+        + g[C.G_RAT_FF + axis] * c[b + C.R_TF]
+    )
+    c[b + C.R_OUT] = out
+    return out
+
+
+@njit(cache=True, nogil=True)
+def rate_reset(c):
+    """Zero the rate PIDs (on arming / disarmed)."""
+    for k in range(3 * C.RATE_STRIDE):
+        c[C.RATE_BASE + k] = 0.0

@@ -1,0 +1,105 @@
+"""Build the controller configuration array from ArduPilot parameters (once per flight).
+
+ArduPilot units are converted to SI here (cm -> m, cdeg -> rad, cm/s -> m/s); filter cut-offs
+become first-order filter alphas at the 400 Hz main-loop rate (SCHED_LOOP_RATE).
+"""
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from tlm_sim.control import layout as C
+
+LOOP_HZ = 400.0
+
+
+def lpf_alpha(cutoff_hz: float, dt: float) -> float:
+    """First-order low-pass alpha for a cut-off frequency (1 = no filtering when cut-off is 0)."""
+    if cutoff_hz <= 0.0:
+        return 1.0
+    return dt / (dt + 1.0 / (2.0 * math.pi * cutoff_hz))
+
+
+def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -> np.ndarray:
+    """Controller configuration from parameters (ArduCopter names, defaults as the SITL logs)."""
+    hz = loop_hz or p.get("SCHED_LOOP_RATE", LOOP_HZ)
+    dt = 1.0 / hz
+    g = np.zeros(C.N_CONTROL_CFG)
+    g[C.G_DT] = dt
+    rat_defaults = {
+        "RLL": (0.135, 0.135, 0.0036, 0.0, 0.5, 20.0, 0.0, 20.0),
+        "PIT": (0.135, 0.135, 0.0036, 0.0, 0.5, 20.0, 0.0, 20.0),
+        "YAW": (0.3, 0.02, 0.0, 0.0, 0.5, 20.0, 2.5, 20.0),
+    }
+    for k, ax in enumerate(("RLL", "PIT", "YAW")):
+        dp, di, dd, dff, dimax, dfltt, dflte, dfltd = rat_defaults[ax]
+        g[C.G_RAT_P + k] = p.get(f"ATC_RAT_{ax}_P", dp)
+        g[C.G_RAT_I + k] = p.get(f"ATC_RAT_{ax}_I", di)
+        g[C.G_RAT_D + k] = p.get(f"ATC_RAT_{ax}_D", dd)
+        g[C.G_RAT_FF + k] = p.get(f"ATC_RAT_{ax}_FF", dff)
+        g[C.G_RAT_IMAX + k] = p.get(f"ATC_RAT_{ax}_IMAX", dimax)
+        g[C.G_RAT_FLTT + k] = lpf_alpha(p.get(f"ATC_RAT_{ax}_FLTT", dfltt), dt)
+        g[C.G_RAT_FLTE + k] = lpf_alpha(p.get(f"ATC_RAT_{ax}_FLTE", dflte), dt)
+        g[C.G_RAT_FLTD + k] = lpf_alpha(p.get(f"ATC_RAT_{ax}_FLTD", dfltd), dt)
+    for k, ax in enumerate(("RLL", "PIT", "YAW")):
+        g[C.G_ANG_P + k] = p.get(f"ATC_ANG_{ax}_P", 4.5)
+    # ATC_ACCEL_*_MAX [cdeg/s^2], constrained as the attitude controller does
+    for k, (ax, d, lo, hi) in enumerate(
+        (("R", 110000.0, 40.0, 720.0), ("P", 110000.0, 40.0, 720.0), ("Y", 27000.0, 10.0, 120.0))
+    ):
+        deg = p.get(f"ATC_ACCEL_{ax}_MAX", d) / 100.0
+        g[C.G_ACCEL_MAX + k] = math.radians(min(max(deg, lo), hi) if deg > 0 else hi)
+    g[C.G_INPUT_TC] = max(p.get("ATC_INPUT_TC", 0.15), 0.05)
+    g[C.G_SLEW_YAW] = math.radians(p.get("ATC_SLEW_YAW", 6000.0) / 100.0)
+    g[C.G_ANGLE_MAX] = math.radians(p.get("ANGLE_MAX", 3000.0) / 100.0)
+    g[C.G_POSXY_P] = p.get("PSC_POSXY_P", 1.0)
+    g[C.G_VELXY_P] = p.get("PSC_VELXY_P", 2.0)
+    g[C.G_VELXY_I] = p.get("PSC_VELXY_I", 1.0)
+    g[C.G_VELXY_D] = p.get("PSC_VELXY_D", 0.25)
+    g[C.G_VELXY_IMAX] = p.get("PSC_VELXY_IMAX", 1000.0) / 100.0
+    g[C.G_VELXY_FLTE] = lpf_alpha(p.get("PSC_VELXY_FLTE", 5.0), dt)
+    g[C.G_VELXY_FLTD] = lpf_alpha(p.get("PSC_VELXY_FLTD", 5.0), dt)
+    g[C.G_POSZ_P] = p.get("PSC_POSZ_P", 1.0)
+    g[C.G_VELZ_P] = p.get("PSC_VELZ_P", 5.0)
+    g[C.G_ACCZ_P] = p.get("PSC_ACCZ_P", 0.5)
+    g[C.G_ACCZ_I] = p.get("PSC_ACCZ_I", 1.0)
+    g[C.G_ACCZ_D] = p.get("PSC_ACCZ_D", 0.0)
+    g[C.G_ACCZ_IMAX] = p.get("PSC_ACCZ_IMAX", 800.0)
+    g[C.G_ACCZ_FLTE] = lpf_alpha(p.get("PSC_ACCZ_FLTE", 20.0), dt)
+    g[C.G_WP_SPEED] = p.get("WPNAV_SPEED", 600.0) / 100.0
+    g[C.G_WP_ACCEL] = p.get("WPNAV_ACCEL", 250.0) / 100.0
+    g[C.G_WP_SPEED_UP] = p.get("WPNAV_SPEED_UP", 250.0) / 100.0
+    g[C.G_WP_SPEED_DN] = p.get("WPNAV_SPEED_DN", 150.0) / 100.0
+    g[C.G_WP_ACCEL_Z] = p.get("WPNAV_ACCEL_Z", 100.0) / 100.0
+    g[C.G_WP_RADIUS] = max(p.get("WPNAV_RADIUS", 200.0) / 100.0, 0.05)
+    g[C.G_WP_JERK] = p.get("WPNAV_JERK", 1.0)
+    g[C.G_RTL_ALT] = p.get("RTL_ALT", 2000.0) / 100.0
+    g[C.G_RTL_SPEED] = p.get("RTL_SPEED", 0.0) / 100.0
+    g[C.G_RTL_LOIT_TIME] = p.get("RTL_LOIT_TIME", 5000.0) / 1000.0
+    g[C.G_RTL_CONE_SLOPE] = p.get("RTL_CONE_SLOPE", 3.0)
+    g[C.G_RTL_CLIMB_MIN] = p.get("RTL_CLIMB_MIN", 0.0) / 100.0
+    g[C.G_LAND_SPEED] = p.get("LAND_SPEED", 50.0) / 100.0
+    g[C.G_LAND_SPEED_HIGH] = p.get("LAND_SPEED_HIGH", 0.0) / 100.0
+    g[C.G_LAND_ALT_LOW] = p.get("LAND_ALT_LOW", 1000.0) / 100.0
+    g[C.G_MOT_EXPO] = p.get("MOT_THST_EXPO", 0.65)
+    g[C.G_MOT_HOVER] = p.get("MOT_THST_HOVER", 0.39)
+    g[C.G_MOT_SPIN_ARM] = p.get("MOT_SPIN_ARM", 0.1)
+    g[C.G_MOT_SPIN_MIN] = p.get("MOT_SPIN_MIN", 0.15)
+    g[C.G_MOT_SPIN_MAX] = p.get("MOT_SPIN_MAX", 0.95)
+    g[C.G_MOT_PWM_MIN] = p.get("MOT_PWM_MIN", 1000.0) or 1000.0
+    g[C.G_MOT_PWM_MAX] = p.get("MOT_PWM_MAX", 2000.0) or 2000.0
+    g[C.G_MOT_BAT_MAX] = p.get("MOT_BAT_VOLT_MAX", 12.8)
+    g[C.G_MOT_BAT_MIN] = p.get("MOT_BAT_VOLT_MIN", 9.6)
+    g[C.G_MOT_YAW_HEADROOM] = p.get("MOT_YAW_HEADROOM", 200.0) / 1000.0
+    g[C.G_FS_THR_ENABLE] = p.get("FS_THR_ENABLE", 1.0)
+    g[C.G_RC_FS_TIMEOUT] = p.get("RC_FS_TIMEOUT", 1.0)
+    g[C.G_FS_THR_VALUE] = p.get("FS_THR_VALUE", 975.0)
+    g[C.G_ARM_TIME] = p.get("TLM_ARM_TIME", 10.0)
+    g[C.G_HOVER_LEARN] = p.get("MOT_HOVER_LEARN", 2.0)
+    g[C.G_WP_LEG_K] = p.get("TLM_WP_LEG_K", 0.94)
+    g[C.G_THR_MIX_MIN] = p.get("ATC_THR_MIX_MIN", 0.1)
+    g[C.G_THR_MIX_MAX] = p.get("ATC_THR_MIX_MAX", 0.5)
+    g[C.G_FS_CRASH_CHECK] = p.get("FS_CRASH_CHECK", 1.0)
+    g[C.G_DISARM_DELAY] = p.get("DISARM_DELAY", 10.0)
+    return g

@@ -1,0 +1,132 @@
+"""Quad "+" motor mixer with thrust linearisation (AP_MotorsMatrix structure, our implementation).
+
+Roll/pitch/yaw demands (+-1 motor units) and throttle (0..1 thrust fraction) are compensated for
+battery voltage (1/lift_max), mixed with roll/pitch priority over yaw (yaw limited to the headroom,
+at least MOT_YAW_HEADROOM), the throttle placed for best attitude authority, then each motor's
+thrust fraction is linearised through MOT_THST_EXPO into an actuator value and a PWM (us).
+"""
+
+import math
+
+from numba import njit
+
+from tlm_sim.control import layout as C
+
+# plus frame mixer factors (motor 1..4): roll, pitch, yaw (ArduPilot normalisation to 0.5)
+ROLL_FAC = (-0.5, 0.5, 0.0, 0.0)
+PITCH_FAC = (0.0, 0.0, 0.5, -0.5)
+YAW_FAC = (0.5, 0.5, -0.5, -0.5)
+
+
+@njit(cache=True, nogil=True)
+def lift_max(g, v_batt):
+    """Voltage compensation: (ratio, lift_max) with ratio = clamp(V, MIN, MAX)/MAX."""
+    vmax = g[C.G_MOT_BAT_MAX]
+    vmin = g[C.G_MOT_BAT_MIN]
+    if vmax <= 0.0 or vmin <= 0.0 or v_batt <= 0.0:
+        return 1.0, 1.0
+    ratio = min(max(v_batt, vmin), vmax) / vmax
+    e = g[C.G_MOT_EXPO]
+    return ratio, ratio * (1.0 - e) + e * ratio * ratio
+
+
+@njit(cache=True, nogil=True)
+def thrust_to_actuator(g, thrust, ratio, lift):
+    """Thrust fraction 0..1 -> actuator 0..1 (thrust curve + voltage scaling + spin limits)."""
+    e = g[C.G_MOT_EXPO]
+    t = min(max(thrust, 0.0), 1.0) * lift
+    if e > 0.0:
+        a = ((e - 1.0) + math.sqrt((1.0 - e) * (1.0 - e) + 4.0 * e * t)) / (2.0 * e)
+    else:
+        a = t
+    a = min(a / ratio, 1.0)
+    return g[C.G_MOT_SPIN_MIN] + (g[C.G_MOT_SPIN_MAX] - g[C.G_MOT_SPIN_MIN]) * a
+
+
+@njit(cache=True, nogil=True)
+def mix(c, g, roll, pitch, yaw, throttle, v_batt):
+    """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM and the LIM_* saturation flags."""
+    ratio, lift = lift_max(g, v_batt)
+    comp = 1.0 / lift
+    roll *= comp
+    pitch *= comp
+    yaw *= comp
+    thr = min(max(throttle * comp, 0.0), 1.0)
+    lim_rp = 0.0
+    lim_yaw = 0.0
+    lim_lo = 0.0
+    lim_hi = 0.0
+    # roll/pitch first
+    rp_hi = -1e9
+    rp_lo = 1e9
+    for i in range(4):
+        v = roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]
+        rp_hi = max(rp_hi, v)
+        rp_lo = min(rp_lo, v)
+    rp_scale = 1.0
+    if rp_hi - rp_lo > 1.0:
+        rp_scale = 1.0 / (rp_hi - rp_lo)
+        lim_rp = 1.0
+    # yaw headroom: keep every motor within [0, 1] around the best throttle
+    thr_best = 0.5 * (1.0 - (rp_hi + rp_lo) * rp_scale)
+    thr_best = min(max(thr_best, 0.0), 1.0)
+    yaw_allowed = 1.0
+    for i in range(4):
+        rp = (roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale
+        if YAW_FAC[i] != 0.0:
+            room_hi = (1.0 - (thr_best + rp)) / abs(YAW_FAC[i])
+            room_lo = (thr_best + rp) / abs(YAW_FAC[i])
+            yaw_allowed = min(yaw_allowed, min(room_hi, room_lo))
+    yaw_allowed = max(yaw_allowed, g[C.G_MOT_YAW_HEADROOM])
+    if abs(yaw) > yaw_allowed:
+        yaw = math.copysign(yaw_allowed, yaw)
+        lim_yaw = 1.0
+    hi = -1e9
+    lo = 1e9
+    for i in range(4):
+        v = (roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale + yaw * YAW_FAC[i]
+        hi = max(hi, v)
+        lo = min(lo, v)
+    scale = 1.0
+    if hi - lo > 1.0:
+        scale = 1.0 / (hi - lo)
+        lim_rp = 1.0
+        lim_yaw = 1.0
+    hi *= scale
+    lo *= scale
+    # throttle: as demanded, but move it to keep the mix inside [0, 1]
+    t = thr
+    if t + lo < 0.0:
+        t = -lo
+        lim_lo = 1.0
+    if t + hi > 1.0:
+        t = 1.0 - hi
+        lim_hi = 1.0
+    if thr <= 0.0:
+        lim_lo = 1.0
+    if thr >= 1.0:
+        lim_hi = 1.0
+    for i in range(4):
+        v = t + ((roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale + yaw * YAW_FAC[i]) * scale
+        v = min(max(v, 0.0), 1.0)
+        c[C.MIX_THRUST + i] = v
+        a = thrust_to_actuator(g, v, ratio, lift)
+        c[C.MIX_ACT + i] = a
+        c[C.MIX_PWM + i] = g[C.G_MOT_PWM_MIN] + (g[C.G_MOT_PWM_MAX] - g[C.G_MOT_PWM_MIN]) * a
+    c[C.LIM_RP] = lim_rp
+    c[C.LIM_YAW] = lim_yaw
+    c[C.LIM_THR_LO] = lim_lo
+    c[C.LIM_THR_HI] = lim_hi
+
+
+@njit(cache=True, nogil=True)
+def output_idle(c, g, spin):
+    """All motors at a fixed actuator value (0 = stopped, MOT_SPIN_ARM = ground idle)."""
+    for i in range(4):
+        c[C.MIX_THRUST + i] = 0.0
+        c[C.MIX_ACT + i] = spin
+        c[C.MIX_PWM + i] = g[C.G_MOT_PWM_MIN] + (g[C.G_MOT_PWM_MAX] - g[C.G_MOT_PWM_MIN]) * spin
+    c[C.LIM_RP] = 1.0
+    c[C.LIM_YAW] = 1.0
+    c[C.LIM_THR_LO] = 1.0
+    c[C.LIM_THR_HI] = 0.0

@@ -1,0 +1,261 @@
+"""ArduCopter-style vehicle logic: arming, GUIDED takeoff, AUTO mission, RTL, LAND, land detector
+and the radio failsafe; runs every main-loop tick and drives the position/attitude/rate
+controllers and the mixer.
+
+Flight sequence (as the reference SITL flights): boot in STABILIZE, GUIDED and arm at
+TLM_ARM_TIME, take off to the first waypoint's altitude, switch to AUTO, fly the waypoints, then
+the mission's RETURN_TO_LAUNCH (climb to RTL_ALT, return at WPNAV_SPEED, loiter RTL_LOIT_TIME,
+land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports landed.
+"""
+
+import math
+
+from numba import njit
+
+from tlm_sim.control import events as E
+from tlm_sim.control import layout as C
+from tlm_sim.control.attitude import attitude_reset, attitude_update, rate_pid, rate_reset
+from tlm_sim.control.mixer import mix, output_idle
+from tlm_sim.control.position import angle_boost, xy_reset, xy_update, z_reset, z_update
+from tlm_sim.control.wpnav import path_start, path_update
+
+SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
+LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
+LAND_MAYBE_S = 0.2
+
+
+@njit(cache=True, nogil=True)
+def set_mode(c, mode, rsn, t_us, mode_buf, ev_buf, err_buf, counts, k_mode):
+    """Change flight mode and write the MODE row."""
+    c[C.MODE] = mode
+    E.log_row3(mode_buf, counts, k_mode, t_us, mode, mode, rsn)
+
+
+@njit(cache=True, nogil=True)
+def _euler(q):
+    """Euler angles (roll, pitch, yaw) [rad] of a body->NED quaternion."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    sp = 2.0 * (w * y - z * x)
+    pitch = math.asin(min(max(sp, -1.0), 1.0))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
+@njit(cache=True, nogil=True)
+def _set_segment(seg, a0, a1, a2, b0, b1, b2):
+    """Two-point path seg[0] -> seg[1] (NED, m)."""
+    seg[0, 0] = a0
+    seg[0, 1] = a1
+    seg[0, 2] = a2
+    seg[1, 0] = b0
+    seg[1, 1] = b1
+    seg[1, 2] = b2
+
+
+@njit(cache=True, nogil=True)
+def _start_rtl(c, g, pos, seg):
+    """Enter RTL's initial climb from the current position."""
+    alt = -pos[2]
+    h = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1])
+    target = max(g[C.G_RTL_ALT], alt + g[C.G_RTL_CLIMB_MIN], 0.3)
+    if g[C.G_RTL_CONE_SLOPE] > 0.0:
+        cone = max(h * max(g[C.G_RTL_CONE_SLOPE], 0.5), 0.3, alt + g[C.G_RTL_CLIMB_MIN])
+        target = min(target, cone)
+    target = max(target, alt)
+    c[C.SUBMODE] = C.SUB_RTL_CLIMB
+    c[C.SUB_TIMER] = 0.0
+    _set_segment(seg, pos[0], pos[1], pos[2], pos[0], pos[1], -target)
+    path_start(c)
+
+
+@njit(cache=True, nogil=True)
+def vehicle_step(
+    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
+    mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
+):
+    """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
+
+    pos, vel: EKF position/velocity NED [m, m/s] (origin home ground); q: EKF attitude body->NED;
+    gyro: body rates [rad/s] (filtered, bias removed); acc_ned: kinematic acceleration NED
+    [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
+    path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
+    seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time.
+    """
+    dt = g[C.G_DT]
+    t_s = t_us * 1e-6
+    roll, pitch, yaw = _euler(q)
+    # 1 Hz low-pass of the earth-frame acceleration (land/crash detectors)
+    alpha = dt / (dt + 1.0 / (2.0 * math.pi * 1.0))
+    for k in range(3):
+        c[C.ALP + k] += alpha * (acc_ned[k] - c[C.ALP + k])
+    acc_up = -acc_ned[2]
+
+    # ---------------------------------------------------------------- disarmed
+    if c[C.ARMED] == 0.0:
+        output_idle(c, g, 0.0)
+        rate_reset(c)
+        if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
+            # arm in GUIDED (as the reference driver did) and start the motors
+            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, mode_buf, ev_buf, err_buf, counts, k_mode)
+            c[C.ARMED] = 1.0
+            c[C.LANDED] = 1.0
+            c[C.HOME_YAW] = yaw
+            c[C.SUBMODE] = C.SUB_GROUND_IDLE
+            c[C.SUB_TIMER] = 0.0
+            c[C.SPOOL] = 1.0
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_ARMED)
+        return
+
+    c[C.SUB_TIMER] += dt
+    sub = int(c[C.SUBMODE])
+
+    # ------------------------------------------------------------ radio failsafe
+    rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
+    if rc_late and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
+        c[C.RC_FAILSAFE] = 1.0
+        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
+        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
+        if c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF:
+            pass  # landed: the disarm below handles it
+        elif sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
+            set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, ev_buf, err_buf, counts,
+                     k_mode)
+            _start_rtl(c, g, pos, seg)
+            sub = C.SUB_RTL_CLIMB
+    elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
+        c[C.RC_FAILSAFE] = 0.0
+        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+
+    # ---------------------------------------------------------------- ground idle
+    if sub == C.SUB_GROUND_IDLE:
+        output_idle(c, g, g[C.G_MOT_SPIN_ARM])
+        attitude_reset(c, 0.0, 0.0, yaw)
+        if c[C.SUB_TIMER] >= SPOOL_TIME_S + 0.3:
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_AUTO_ARMED)
+            c[C.SUBMODE] = C.SUB_TAKEOFF
+            c[C.SUB_TIMER] = 0.0
+            c[C.SPOOL] = 2.0
+            xy_reset(c, pos[0], pos[1], vel[0], vel[1])
+            z_reset(c, g, pos[2], vel[2], 0.0)
+            c[C.THR_OUT] = 0.0
+            _set_segment(seg, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
+            path_start(c)
+        return
+
+    # ---------------------------------------------------------------- navigation
+    speed_cap = 0.0
+    yaw_cmd = c[C.ATT_YAW_CMD]
+    land_vertical = False
+    if sub == C.SUB_TAKEOFF:
+        heading, done = path_update(c, g, seg, 2, pos, 0.0)
+        if -pos[2] >= 0.95 * c[C.TAKEOFF_ALT]:
+            # the driver's "altitude reached" -> AUTO, first leg from here to waypoint 1
+            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, ev_buf, err_buf, counts, k_mode)
+            c[C.SUBMODE] = C.SUB_WP
+            c[C.SUB_TIMER] = 0.0
+            path_start(c)
+            c[C.PATH_V] = 0.0
+    elif sub == C.SUB_WP:
+        heading, done = path_update(c, g, path, n_path, pos, 0.0)
+        if not math.isnan(heading):
+            yaw_cmd = heading
+        if done > 0.0:
+            dn = path[n_path - 1, 0] - pos[0]
+            de = path[n_path - 1, 1] - pos[1]
+            if dn * dn + de * de <= g[C.G_WP_RADIUS] ** 2:
+                c[C.WP_REACHED] += 1.0
+                _start_rtl(c, g, pos, seg)
+    elif sub == C.SUB_RTL_CLIMB:
+        heading, done = path_update(c, g, seg, 2, pos, 0.0)
+        if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
+            c[C.SUBMODE] = C.SUB_RTL_RETURN
+            c[C.SUB_TIMER] = 0.0
+            _set_segment(seg, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
+            path_start(c)
+    elif sub == C.SUB_RTL_RETURN:
+        speed_cap = g[C.G_RTL_SPEED]
+        heading, done = path_update(c, g, seg, 2, pos, speed_cap)
+        if done > 0.0 and pos[0] * pos[0] + pos[1] * pos[1] <= g[C.G_WP_RADIUS] ** 2:
+            c[C.SUBMODE] = C.SUB_RTL_LOITER
+            c[C.SUB_TIMER] = 0.0
+    elif sub == C.SUB_RTL_LOITER:
+        c[C.PXY_VEL_FF] = 0.0
+        c[C.PXY_VEL_FF + 1] = 0.0
+        c[C.PXY_ACC_FF] = 0.0
+        c[C.PXY_ACC_FF + 1] = 0.0
+        c[C.PZ_VEL_FF] = 0.0
+        yaw_cmd = c[C.HOME_YAW]
+        if c[C.SUB_TIMER] >= g[C.G_RTL_LOIT_TIME]:
+            c[C.SUBMODE] = C.SUB_LAND
+            c[C.SUB_TIMER] = 0.0
+    elif sub == C.SUB_LAND:
+        land_vertical = True
+    sub = int(c[C.SUBMODE])
+
+    if sub == C.SUB_LAND:
+        # horizontal hold at the landing point, descent rate by height
+        c[C.PXY_VEL_FF] = 0.0
+        c[C.PXY_VEL_FF + 1] = 0.0
+        c[C.PXY_ACC_FF] = 0.0
+        c[C.PXY_ACC_FF + 1] = 0.0
+        alt = -pos[2]
+        v_high = g[C.G_LAND_SPEED_HIGH] if g[C.G_LAND_SPEED_HIGH] > 0.0 else g[C.G_WP_SPEED_DN]
+        alt_low = max(g[C.G_LAND_ALT_LOW], 1.0)
+        if alt > alt_low:
+            v_dn = min(v_high, max(g[C.G_LAND_SPEED], math.sqrt(2.0 * 1.0 * (alt - alt_low))
+                                   + g[C.G_LAND_SPEED]))
+        else:
+            v_dn = g[C.G_LAND_SPEED]
+        # velocity-controlled descent: keep the position target just below the vehicle
+        c[C.PZ_VEL_FF] = v_dn
+        c[C.PZ_POS_T] = pos[2] + v_dn * 0.1 if land_vertical else pos[2]
+        if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE)
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
+            c[C.ARMED] = 0.0
+            c[C.SUBMODE] = C.SUB_LANDED
+            c[C.DISARM_TIME] = t_s
+            output_idle(c, g, 0.0)
+            return
+
+    # ------------------------------------------------------------- controllers
+    xy_update(c, g, pos, vel, yaw)
+    c[C.ATT_YAW_CMD] = yaw_cmd
+    thr = z_update(c, g, pos[2], vel[2], acc_up, c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0)
+    c[C.THR_OUT] = thr
+    cos_tilt = math.cos(roll) * math.cos(pitch)
+    thr_b = angle_boost(thr, cos_tilt)
+    c[C.THR_OUT_BOOSTED] = thr_b
+    attitude_update(c, g, q, c[C.BODY_RATE_T : C.BODY_RATE_T + 3])
+    rate_t0 = c[C.BODY_RATE_T]
+    rate_t1 = c[C.BODY_RATE_T + 1]
+    rate_t2 = c[C.BODY_RATE_T + 2]
+    lim_rp = c[C.LIM_RP] != 0.0
+    lim_y = c[C.LIM_YAW] != 0.0
+    r_out = rate_pid(c, g, 0, rate_t0, gyro[0], lim_rp)
+    p_out = rate_pid(c, g, 1, rate_t1, gyro[1], lim_rp)
+    y_out = rate_pid(c, g, 2, rate_t2, gyro[2], lim_y)
+    mix(c, g, r_out, p_out, y_out, thr_b, v_batt)
+
+    # ------------------------------------------------------------- hover learning
+    if c[C.LANDED] == 0.0 and g[C.G_HOVER_LEARN] == 2.0 and abs(vel[2]) < 0.5 and sub >= C.SUB_WP:
+        h = c[C.THR_HOVER] + (thr - c[C.THR_HOVER]) * dt / (dt + 10.0)
+        c[C.THR_HOVER] = min(max(h, 0.125), 0.6875)
+
+    # ------------------------------------------------------------- land detector
+    a_lp = math.sqrt(c[C.ALP] ** 2 + c[C.ALP + 1] ** 2 + c[C.ALP + 2] ** 2)
+    at_lower = c[C.LIM_THR_LO] != 0.0 or thr <= 0.05
+    if at_lower and a_lp <= 1.0 and abs(vel[2]) < 1.0 and sub != C.SUB_TAKEOFF:
+        c[C.LAND_TIMER] += dt
+        if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
+            c[C.MAYBE_LANDED] = 1.0
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE_MAYBE)
+        if c[C.LAND_TIMER] >= LAND_DETECT_S:
+            c[C.LANDED] = 1.0
+    else:
+        c[C.LAND_TIMER] = 0.0
+        c[C.MAYBE_LANDED] = 0.0
+        if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
+            c[C.LANDED] = 0.0
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_NOT_LANDED)

@@ -1,0 +1,252 @@
+"""Rigid-body step of SITL's multicopter: one 1200 Hz physics tick (ardupilot-reference.md §1.9).
+
+Sequence of :func:`physics_step`: wind -> body airspeed and air density -> motors and frame
+sum -> semi-implicit Euler (rates first, attitude with the new rates, then velocity and
+position) -> accelerometer specific force -> ground contact -> battery.
+
+Differences from SITL, on purpose:
+
+* attitude is a unit quaternion (body -> NED) advanced with the exact exponential of the
+  body rate over the step and renormalised, instead of a first-order DCM update;
+* with ``F_GYRO = 1`` (default) the gyroscopic term ``-w x (I w)`` is included, integrated by
+  rotating the body angular momentum with the same rotation as the attitude, so that a
+  torque-free body keeps its earth-frame angular momentum exactly; ``F_GYRO = 0`` drops it as
+  SITL does;
+* the body airspeed is recomputed at the start of the tick from the current wind.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
+from tlm_sim.dynamics.battery import init_battery, update_battery
+from tlm_sim.dynamics.frame import (
+    F_FRAME_HEIGHT,
+    F_GYRO,
+    F_HOME_ALT,
+    F_IXX,
+    F_IYY,
+    F_IZZ,
+    F_MASS,
+    F_ROT_DAMP,
+    N_MOTORS,
+)
+from tlm_sim.dynamics.motors import motor_forces
+from tlm_sim.dynamics.wind import init_wind, update_wind
+
+#: body-rate limit per axis [rad/s] (2000 deg/s)
+GYRO_LIMIT: float = math.radians(2000.0)
+#: specific-force limit per axis [m/s^2] (64 g)
+ACCEL_LIMIT: float = 64.0 * GRAVITY_MSS
+#: height above ground below which the vehicle counts as on the ground [m]
+GROUND_EPS_M: float = 0.001
+#: minimum time between two recorded ground impacts [s]
+IMPACT_HOLDOFF_S: float = 1.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _clamp(v: float, lim: float) -> float:
+    if v > lim:
+        return lim
+    if v < -lim:
+        return -lim
+    return v
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def height_above_ground(x: np.ndarray, frame: np.ndarray) -> float:
+    """Height of the ground-contact point above home ground [m] (0 when resting)."""
+    return -x[X.PD] - frame[F_FRAME_HEIGHT]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def set_yaw_level(x: np.ndarray, yaw_rad: float) -> None:
+    """Set the attitude to level with heading ``yaw_rad`` [rad]."""
+    x[X.QW] = math.cos(0.5 * yaw_rad)
+    x[X.QX] = 0.0
+    x[X.QY] = 0.0
+    x[X.QZ] = math.sin(0.5 * yaw_rad)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def yaw_of(x: np.ndarray) -> float:
+    """Heading [rad] of the attitude quaternion in ``x`` (ZYX Euler yaw)."""
+    qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def init_state(x: np.ndarray, frame: np.ndarray, yaw_rad: float) -> None:
+    """Initialise ``x`` to a vehicle resting on the pad at home, motors stopped, facing yaw.
+
+    Position (0, 0, -frame_height), zero velocity and rates, level attitude with heading
+    ``yaw_rad`` [rad], accelerometer reading (0, 0, -g), battery full at SIM_BATT_VOLTAGE,
+    no wind.
+    """
+    for i in range(x.shape[0]):
+        x[i] = 0.0
+    x[X.PD] = -frame[F_FRAME_HEIGHT]
+    set_yaw_level(x, yaw_rad)
+    x[X.FZ] = -GRAVITY_MSS
+    x[X.ON_GROUND] = 1.0
+    x[X.TIME_LAST_AIRBORNE] = 0.0
+    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+    init_battery(x, frame)
+    init_wind(x, frame)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: float) -> None:
+    """Put the vehicle ``height_m`` [m] above ground, at rest, motors settled at ``command``.
+
+    For tests and for flights that start in the air; call after :func:`init_state`.
+    """
+    x[X.PD] = -frame[F_FRAME_HEIGHT] - height_m
+    x[X.ON_GROUND] = 0.0
+    x[X.TIME_LAST_AIRBORNE] = -1.0e9
+    for i in range(N_MOTORS):
+        x[X.M1 + i] = command
+    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None:
+    """Advance the truth state ``x`` by one physics tick of ``dt`` [s] (in place).
+
+    ``pwm[0..3]``: motor 1..4 PWM [us] as the motors see it (after any SIM_ENGINE_* fault
+    transform). ``t_s``: simulated time at the start of the tick [s] (wind start delay, ground
+    impact hold-off). Allocation-free.
+    """
+    g = GRAVITY_MSS
+    # --- environment -------------------------------------------------------------------
+    update_wind(x, frame, dt, t_s)
+    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+
+    qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
+    # DCM body -> NED of the current attitude
+    r00 = 1.0 - 2.0 * (qy * qy + qz * qz)
+    r01 = 2.0 * (qx * qy - qw * qz)
+    r02 = 2.0 * (qx * qz + qw * qy)
+    r10 = 2.0 * (qx * qy + qw * qz)
+    r11 = 1.0 - 2.0 * (qx * qx + qz * qz)
+    r12 = 2.0 * (qy * qz - qw * qx)
+    r20 = 2.0 * (qx * qz - qw * qy)
+    r21 = 2.0 * (qy * qz + qw * qx)
+    r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    an = x[X.VN] - x[X.WIND_N]
+    ae = x[X.VE] - x[X.WIND_E]
+    ad = x[X.VD] - x[X.WIND_D]
+    x[X.VAIR_X] = r00 * an + r10 * ae + r20 * ad
+    x[X.VAIR_Y] = r01 * an + r11 * ae + r21 * ad
+    x[X.VAIR_Z] = r02 * an + r12 * ae + r22 * ad
+
+    # --- forces and torques --------------------------------------------------------------
+    fx, fy, fz, tx, ty, tz, current = motor_forces(x, pwm, frame, dt)
+    ixx, iyy, izz = frame[F_IXX], frame[F_IYY], frame[F_IZZ]
+    damp = frame[F_ROT_DAMP]
+
+    # --- rates (semi-implicit: rates first, attitude with the new rates) ---------------------
+    wx = _clamp(x[X.WX] + (tx / ixx - damp * x[X.WX]) * dt, GYRO_LIMIT)
+    wy = _clamp(x[X.WY] + (ty / iyy - damp * x[X.WY]) * dt, GYRO_LIMIT)
+    wz = _clamp(x[X.WZ] + (tz / izz - damp * x[X.WZ]) * dt, GYRO_LIMIT)
+
+    # rotation over the step: dq = (c, u) = (cos(th/2), w_hat sin(th/2)), th = |w| dt
+    h2 = 0.25 * (wx * wx + wy * wy + wz * wz) * dt * dt  # (th/2)^2
+    if h2 < 2.5e-3:
+        # th/2 < 0.05 (always at 1200 Hz, |w| <= 2000 deg/s): series exact to double precision
+        k = 0.5 * dt * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)))
+        c = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)))
+    else:
+        wn = math.sqrt(wx * wx + wy * wy + wz * wz)
+        k = math.sin(0.5 * wn * dt) / wn
+        c = math.cos(0.5 * wn * dt)
+    ux, uy, uz = k * wx, k * wy, k * wz
+    nw = qw * c - qx * ux - qy * uy - qz * uz
+    nx = qw * ux + qx * c + qy * uz - qz * uy
+    ny = qw * uy - qx * uz + qy * c + qz * ux
+    nz = qw * uz + qx * uy - qy * ux + qz * c
+    n2 = nw * nw + nx * nx + ny * ny + nz * nz
+    if abs(n2 - 1.0) < 1.0e-8:
+        inv = 1.5 - 0.5 * n2  # one Newton step of 1/sqrt(n2) from 1: exact to O((n2-1)^2)
+    else:
+        inv = 1.0 / math.sqrt(n2)
+    qw, qx, qy, qz = nw * inv, nx * inv, ny * inv, nz * inv
+    x[X.QW], x[X.QX], x[X.QY], x[X.QZ] = qw, qx, qy, qz
+
+    if frame[F_GYRO] >= 0.5:
+        # gyroscopic coupling: body angular momentum rotates by -th about w_hat
+        lx, ly, lz = ixx * wx, iyy * wy, izz * wz
+        cx = uy * lz - uz * ly
+        cy = uz * lx - ux * lz
+        cz = ux * ly - uy * lx
+        ccx = uy * cz - uz * cy
+        ccy = uz * cx - ux * cz
+        ccz = ux * cy - uy * cx
+        wx = (lx - 2.0 * c * cx + 2.0 * ccx) / ixx
+        wy = (ly - 2.0 * c * cy + 2.0 * ccy) / iyy
+        wz = (lz - 2.0 * c * cz + 2.0 * ccz) / izz
+    x[X.WX], x[X.WY], x[X.WZ] = wx, wy, wz
+
+    # --- translation -------------------------------------------------------------------
+    m = frame[F_MASS]
+    bx = _clamp(fx / m, ACCEL_LIMIT)
+    by = _clamp(fy / m, ACCEL_LIMIT)
+    bz = _clamp(fz / m, ACCEL_LIMIT)
+    r00 = 1.0 - 2.0 * (qy * qy + qz * qz)
+    r01 = 2.0 * (qx * qy - qw * qz)
+    r02 = 2.0 * (qx * qz + qw * qy)
+    r10 = 2.0 * (qx * qy + qw * qz)
+    r11 = 1.0 - 2.0 * (qx * qx + qz * qz)
+    r12 = 2.0 * (qy * qz - qw * qx)
+    r20 = 2.0 * (qx * qz - qw * qy)
+    r21 = 2.0 * (qy * qz + qw * qx)
+    r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    aen = r00 * bx + r01 * by + r02 * bz
+    aee = r10 * bx + r11 * by + r12 * bz
+    aed = r20 * bx + r21 * by + r22 * bz + g
+    fh = frame[F_FRAME_HEIGHT]
+    was_on_ground = -x[X.PD] - fh <= GROUND_EPS_M
+    if was_on_ground and aed > 0.0:
+        aed = 0.0  # the ground pushes back
+    x[X.AN], x[X.AE], x[X.AD] = aen, aee, aed
+    # what an ideal accelerometer senses: R^T (a_e - g)
+    sd = aed - g
+    x[X.FX] = r00 * aen + r10 * aee + r20 * sd
+    x[X.FY] = r01 * aen + r11 * aee + r21 * sd
+    x[X.FZ] = r02 * aen + r12 * aee + r22 * sd
+
+    vn = x[X.VN] + aen * dt
+    ve = x[X.VE] + aee * dt
+    vd = x[X.VD] + aed * dt
+    x[X.VN], x[X.VE], x[X.VD] = vn, ve, vd
+    x[X.PN] += vn * dt
+    x[X.PE] += ve * dt
+    x[X.PD] += vd * dt
+
+    # --- ground contact (NO_MOVEMENT behaviour) ------------------------------------------
+    if -x[X.PD] - fh <= GROUND_EPS_M:
+        if not was_on_ground and t_s - x[X.TIME_LAST_AIRBORNE] > IMPACT_HOLDOFF_S:
+            x[X.IMPACT_SPEED] = vd
+            x[X.IMPACT_COUNT] += 1.0
+            x[X.TIME_LAST_AIRBORNE] = t_s
+        x[X.PD] = -fh
+        if qx != 0.0 or qy != 0.0:
+            set_yaw_level(x, yaw_of(x))
+        x[X.VN] = 0.0
+        x[X.VE] = 0.0
+        if vd > 0.0:
+            x[X.VD] = 0.0
+        x[X.WX] = 0.0
+        x[X.WY] = 0.0
+        x[X.WZ] = 0.0
+        x[X.ON_GROUND] = 1.0
+    else:
+        x[X.ON_GROUND] = 0.0
+
+    # --- battery ------------------------------------------------------------------------
+    update_battery(x, frame, current, dt)

@@ -1,0 +1,277 @@
+"""Frame constants of SITL's "+" quad: the model table, the derived constants and PWM helpers.
+
+A flight's frame is ONE float64 array indexed by the ``F_*`` constants below, built once per
+flight by :func:`build_frame` from a mapping of parameter names to floats (ArduPilot SITL
+names ``SIM_*`` plus ``TLM_*`` names for the model struct of ``SIM_Frame.h``). It holds the
+model values, the constants ``Frame::init`` derives from them (ardupilot-reference.md §1.3),
+the motor table and the environment parameters the physics reads (wind, battery, home
+altitude). Entries marked *live* may be rewritten by the flight loop while flying (a fault
+schedule changing ``SIM_WIND_*`` or ``SIM_BATT_VOLTAGE``); the rest are constants.
+
+Motor table of the plus frame (ArduPilot numbering 1..4 -> array index 0..3), body FRD:
+
+===== ======== ======================= ===== ==========
+motor servo    position (unit of diag) spin  yaw factor
+===== ======== ======================= ===== ==========
+1     SERVO1   (0, +1) right arm       CCW   +1
+2     SERVO2   (0, -1) left arm        CCW   +1
+3     SERVO3   (+1, 0) front arm       CW    -1
+4     SERVO4   (-1, 0) back arm        CW    -1
+===== ======== ======================= ===== ==========
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+from numba import njit
+
+from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
+
+#: number of motors of the plus frame
+N_MOTORS: int = 4
+#: unit arm direction (x forward, y right) of motors 1..4; the arm length is TLM_DIAG
+MOTOR_DIR_X: tuple[float, ...] = (0.0, 0.0, 1.0, -1.0)
+MOTOR_DIR_Y: tuple[float, ...] = (1.0, -1.0, 0.0, 0.0)
+#: arm angle from the nose, clockwise seen from above [deg] (documentation; MOTOR_DIR_* is used)
+MOTOR_ANGLE_DEG: tuple[float, ...] = (90.0, -90.0, 0.0, 180.0)
+#: yaw factor: +1 counter-clockwise propeller, -1 clockwise
+MOTOR_YAW_FACTOR: tuple[float, ...] = (1.0, 1.0, -1.0, -1.0)
+
+# ---- model values (SIM_Frame.h struct Model) --------------------------------------------
+F_MASS = 0  # vehicle mass [kg]
+F_DIAG = 1  # diagonal_size, used as the motor arm length [m]
+F_HOVER_THR = 2  # hoverThrOut, hover thrust fraction
+F_EXPO = 3  # propExpo, thrust curve expo
+F_PWM_MIN, F_PWM_MAX = 4, 5  # reference MOT_PWM_MIN/MAX [us]
+F_SPIN_MIN, F_SPIN_MAX = 6, 7  # reference MOT_SPIN_MIN/MAX
+F_SLEW_MAX = 8  # max motor command rate [1/s] (0 = no limit)
+F_DISC_AREA = 9  # total rotor disc area [m^2]
+F_MAX_VOLT = 10  # full-pack voltage, voltage_scale = V / this [V]
+F_FRAME_HEIGHT = 11  # height of the CG above the ground when resting [m]
+F_PROFILE = 12  # 0 = current SITL models, 1 = paper era (yaw torque, frame momentum drag)
+F_GYRO = 13  # 1 = include the gyroscopic term -w x (I w) (SITL omits it), 0 = SITL-exact
+# ---- derived at start-up (Frame::init) --------------------------------------------------
+F_RHO_REF = 14  # air density at refAlt [kg/m^3]
+F_D_REF = 15  # drag at the reference test [N]
+F_D_MOM = 16  # momentum drag at the reference test [N]
+F_AREA_CD = 17  # body drag area x Cd [m^2]
+F_MDRAG_COEF = 18  # momentum drag coefficient (possibly scaled down)
+F_HOVER_POWER = 19  # P_h = refCurrent * refVoltage [W]
+F_HOVER_VOUT = 20  # hover outflow speed v_h [m/s]
+F_AREA_EFF = 21  # effective prop area per motor A_e [m^2]
+F_AREA_TRUE = 22  # true prop area per motor A_p [m^2]
+F_VEL_MAX = 23  # max outflow speed v_max [m/s]
+F_POWER_FACTOR = 24  # power per newton of thrust k_P [W/N]
+F_IXX, F_IYY, F_IZZ = 25, 26, 27  # principal moments of inertia [kg m^2]
+F_ROT_DAMP = 28  # rotational air damping rate c_w [1/s]
+F_PWM_LO, F_PWM_HI = 29, 30  # PWM of command 0 and command 1 [us]
+F_HOVER_CMD = 31  # motor command a_h that gives hover thrust at rho_ref and full voltage
+# ---- motor table (positions in metres, body FRD) ----------------------------------------
+F_MOT_X = 32  # 4 entries: arm x [m]
+F_MOT_Y = 36  # 4 entries: arm y [m]
+F_MOT_YAW = 40  # 4 entries: yaw factor
+# ---- environment and battery (SIM_*); live entries may change in flight ------------------
+F_HOME_ALT = 44  # SIM_OPOS_ALT, home ground altitude [m AMSL]
+F_BATT_VOLT = 45  # SIM_BATT_VOLTAGE [V] (live: a change re-initialises the battery)
+F_BATT_CAP_AH = 46  # battery capacity [Ah], 0 = infinite
+F_BATT_RES = 47  # battery internal resistance [ohm]
+F_WIND_SPD = 48  # SIM_WIND_SPD [m/s] (live)
+F_WIND_DIR = 49  # SIM_WIND_DIR, direction the wind comes FROM [deg true] (live)
+F_WIND_TURB = 50  # SIM_WIND_TURB [m/s] (live)
+F_WIND_TC = 51  # SIM_WIND_TC [s] (live)
+F_WIND_DIR_Z = 52  # SIM_WIND_DIR_Z, vertical wind angle [deg], 90 = updraft (live)
+F_WIND_T = 53  # SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)
+F_WIND_T_ALT = 54  # SIM_WIND_T_ALT [m] (live)
+F_WIND_T_COEF = 55  # SIM_WIND_T_COEF [1/s] (live)
+F_REF_ALT = 56  # refAlt [m AMSL]
+
+N_FRAME = 57
+
+#: parameter name -> SITL default (TLM_* mirror SIM_Frame.h's Model, SIM_* SITL.cpp)
+FRAME_DEFAULTS: dict[str, float] = {
+    "TLM_MASS": 3.0,
+    "TLM_DIAG": 0.35,
+    "TLM_REF_SPD": 15.08,
+    "TLM_REF_ANGLE": 45.0,
+    "TLM_REF_VOLT": 12.09,
+    "TLM_REF_CURR": 29.3,
+    "TLM_REF_ALT": 593.0,
+    "TLM_HOVER_THR": 0.39,
+    "TLM_PROP_EXPO": 0.65,
+    "TLM_REF_ROT_RATE": 120.0,
+    "TLM_PWM_MIN": 1000.0,
+    "TLM_PWM_MAX": 2000.0,
+    "TLM_SPIN_MIN": 0.15,
+    "TLM_SPIN_MAX": 0.95,
+    "TLM_SLEW_MAX": 150.0,
+    "TLM_DISC_AREA": 0.385,
+    "TLM_MDRAG_COEF": 0.2,
+    "TLM_BAT_RES": 0.01,
+    "TLM_MAX_VOLT": 12.6,
+    "TLM_BATT_CAP_AH": 0.0,
+    "TLM_IXX": 0.0,
+    "TLM_IYY": 0.0,
+    "TLM_IZZ": 0.0,
+    "TLM_FRAME_HEIGHT": 0.1,
+    "TLM_PROFILE": 0.0,
+    "TLM_GYRO_COUPLING": 1.0,
+    "SIM_BATT_VOLTAGE": 12.6,
+    "SIM_BATT_CAP_AH": 0.0,
+    "SIM_OPOS_ALT": 584.0,
+    "SIM_WIND_SPD": 0.0,
+    "SIM_WIND_DIR": 180.0,
+    "SIM_WIND_TURB": 0.0,
+    "SIM_WIND_TC": 5.0,
+    "SIM_WIND_DIR_Z": 0.0,
+    "SIM_WIND_T": 0.0,
+    "SIM_WIND_T_ALT": 60.0,
+    "SIM_WIND_T_COEF": 0.01,
+}
+
+
+def _hover_command(hover_thr: float, expo: float) -> float:
+    """Command ``a`` in [0, 1] solving ``(1 - e) a + e a^2 = hover_thr``."""
+    if expo <= 0.0:
+        return hover_thr
+    b = 1.0 - expo
+    return (-b + math.sqrt(b * b + 4.0 * expo * hover_thr)) / (2.0 * expo)
+
+
+def build_frame(params: Mapping[str, float] | None = None) -> np.ndarray:
+    """Build the frame-constant array of one flight (run once per flight, in Python).
+
+    ``params`` maps parameter names (see :data:`FRAME_DEFAULTS`) to floats; missing names take
+    the SITL default. ``SIM_BATT_CAP_AH`` overrides ``TLM_BATT_CAP_AH`` when it is positive
+    (SITL sets the parameter's default to the model capacity). Returns a float64 array of
+    length :data:`N_FRAME` indexed by the ``F_*`` constants.
+    """
+    p = params if params is not None else {}
+
+    def get(name: str) -> float:
+        return float(p.get(name, FRAME_DEFAULTS[name]))
+
+    f = np.zeros(N_FRAME, dtype=np.float64)
+    mass = get("TLM_MASS")
+    diag = get("TLM_DIAG")
+    hover_thr = get("TLM_HOVER_THR")
+    expo = get("TLM_PROP_EXPO")
+    f[F_MASS] = mass
+    f[F_DIAG] = diag
+    f[F_HOVER_THR] = hover_thr
+    f[F_EXPO] = expo
+    f[F_PWM_MIN] = get("TLM_PWM_MIN")
+    f[F_PWM_MAX] = get("TLM_PWM_MAX")
+    f[F_SPIN_MIN] = get("TLM_SPIN_MIN")
+    f[F_SPIN_MAX] = get("TLM_SPIN_MAX")
+    f[F_SLEW_MAX] = get("TLM_SLEW_MAX")
+    f[F_DISC_AREA] = get("TLM_DISC_AREA")
+    f[F_MAX_VOLT] = get("TLM_MAX_VOLT")
+    f[F_FRAME_HEIGHT] = get("TLM_FRAME_HEIGHT")
+    f[F_PROFILE] = get("TLM_PROFILE")
+    f[F_GYRO] = get("TLM_GYRO_COUPLING")
+    f[F_REF_ALT] = get("TLM_REF_ALT")
+
+    # drag calibration from the reference test (lean refAngle at refSpd)
+    g = GRAVITY_MSS
+    theta = math.radians(get("TLM_REF_ANGLE"))
+    rho_ref = air_density(f[F_REF_ALT])
+    d_ref = mass * g * math.tan(theta)
+    v_bx = get("TLM_REF_SPD") * math.cos(theta)
+    t_ref = mass * g / math.cos(theta)
+    mdrag = get("TLM_MDRAG_COEF")
+    d_mom = math.cos(theta) * mdrag * v_bx * math.sqrt(t_ref * rho_ref * f[F_DISC_AREA])
+    if d_mom > d_ref:
+        mdrag *= d_ref / d_mom
+        area_cd = 0.0
+    else:
+        ref_spd = get("TLM_REF_SPD")
+        area_cd = (d_ref - d_mom) / (0.5 * rho_ref * ref_spd * ref_spd)
+    f[F_RHO_REF] = rho_ref
+    f[F_D_REF] = d_ref
+    f[F_D_MOM] = d_mom
+    f[F_AREA_CD] = area_cd
+    f[F_MDRAG_COEF] = mdrag
+
+    # momentum-theory motor constants from the hover reference
+    t_hover = mass * g
+    p_hover = get("TLM_REF_CURR") * get("TLM_REF_VOLT")
+    v_h = 2.0 * p_hover / t_hover
+    a_eff = t_hover / (0.5 * rho_ref * v_h * v_h)
+    f[F_HOVER_POWER] = p_hover
+    f[F_HOVER_VOUT] = v_h
+    f[F_AREA_EFF] = a_eff / N_MOTORS
+    f[F_AREA_TRUE] = f[F_DISC_AREA] / N_MOTORS
+    f[F_VEL_MAX] = v_h / math.sqrt(hover_thr)
+    f[F_POWER_FACTOR] = p_hover / t_hover
+
+    ixx, iyy, izz = get("TLM_IXX"), get("TLM_IYY"), get("TLM_IZZ")
+    if ixx == 0.0 or iyy == 0.0 or izz == 0.0:
+        # half the mass on a ring of radius diag/2
+        ixx = iyy = mass * 0.25 * (0.5 * diag) ** 2
+        izz = mass * 0.5 * (0.5 * diag) ** 2
+    f[F_IXX], f[F_IYY], f[F_IZZ] = ixx, iyy, izz
+    rot_rate = get("TLM_REF_ROT_RATE")
+    f[F_ROT_DAMP] = math.radians(400.0) / rot_rate if rot_rate > 0.0 else 0.0
+
+    span = f[F_PWM_MAX] - f[F_PWM_MIN]
+    f[F_PWM_LO] = f[F_PWM_MIN] + f[F_SPIN_MIN] * span
+    f[F_PWM_HI] = f[F_PWM_MIN] + f[F_SPIN_MAX] * span
+    f[F_HOVER_CMD] = _hover_command(hover_thr, expo)
+
+    for i in range(N_MOTORS):
+        f[F_MOT_X + i] = diag * MOTOR_DIR_X[i]
+        f[F_MOT_Y + i] = diag * MOTOR_DIR_Y[i]
+        f[F_MOT_YAW + i] = MOTOR_YAW_FACTOR[i]
+
+    f[F_HOME_ALT] = get("SIM_OPOS_ALT")
+    f[F_BATT_VOLT] = get("SIM_BATT_VOLTAGE")
+    cap = get("SIM_BATT_CAP_AH")
+    f[F_BATT_CAP_AH] = cap if cap > 0.0 else get("TLM_BATT_CAP_AH")
+    f[F_BATT_RES] = get("TLM_BAT_RES")
+    f[F_WIND_SPD] = get("SIM_WIND_SPD")
+    f[F_WIND_DIR] = get("SIM_WIND_DIR")
+    f[F_WIND_TURB] = get("SIM_WIND_TURB")
+    f[F_WIND_TC] = get("SIM_WIND_TC")
+    f[F_WIND_DIR_Z] = get("SIM_WIND_DIR_Z")
+    f[F_WIND_T] = get("SIM_WIND_T")
+    f[F_WIND_T_ALT] = get("SIM_WIND_T_ALT")
+    f[F_WIND_T_COEF] = get("SIM_WIND_T_COEF")
+    return f
+
+
+def hover_command(frame: np.ndarray) -> float:
+    """Motor command ``a_h`` (0..1) whose thrust equals the weight at rho_ref and full voltage.
+
+    Solves ``(1 - e) a + e a^2 = hover_thr``; about 0.5505 for the default frame.
+    """
+    return _hover_command(float(frame[F_HOVER_THR]), float(frame[F_EXPO]))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def pwm_to_command(pwm: float, frame: np.ndarray) -> float:
+    """Motor command 0..1 for a servo PWM [us] (SITL ``Motor::pwm_to_command``)."""
+    lo = frame[F_PWM_LO]
+    a = (pwm - lo) / (frame[F_PWM_HI] - lo)
+    if a < 0.0:
+        return 0.0
+    if a > 1.0:
+        return 1.0
+    return a
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def command_to_pwm(a: float, frame: np.ndarray) -> float:
+    """Servo PWM [us] that gives motor command ``a`` (0..1): the inverse of pwm_to_command."""
+    return frame[F_PWM_LO] + a * (frame[F_PWM_HI] - frame[F_PWM_LO])
+
+
+def frame_copy(frame: np.ndarray, **changes: float) -> np.ndarray:
+    """Return a copy of ``frame`` with entries replaced, e.g. ``frame_copy(f, F_ROT_DAMP=0.0)``."""
+    out = frame.copy()
+    names = globals()
+    for name, value in changes.items():
+        out[int(names[name])] = value
+    return out

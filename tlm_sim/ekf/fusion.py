@@ -1,0 +1,329 @@
+"""Measurements of one lane: GPS velocity/position, baro height, magnetometer, constant position.
+
+Every function takes one lane row ``e`` and the configuration ``cfg``; times ``t`` are seconds.
+Delayed measurements (GPS, baro) are compared with the lane's stored past state (ring buffer)
+and the correction is applied to the current state. Innovation test ratios follow EKF3:
+``innovation^2 / (gate^2 * innovation variance)`` (velocity and position summed over their
+components), and a group is fused only when its ratio is below 1.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from tlm_sim.ekf.core import (
+    apply_correction,
+    buffer_get,
+    clear_dx,
+    fuse_h3,
+    fuse_index,
+    innov_var_h3,
+    reset_block,
+)
+from tlm_sim.ekf.layout import (
+    AID_ABSOLUTE,
+    AID_MODE,
+    AID_NONE,
+    ALIGNED,
+    BUF_OFS,
+    C_ABIAS_LIM,
+    C_ALT_NSE,
+    C_CONSTPOS_DT,
+    C_DT,
+    C_GBIAS_LIM,
+    C_GLITCH_RAD,
+    C_GPS_DELAY,
+    C_HGT_DELAY,
+    C_HGT_GATE,
+    C_HGT_RETRY,
+    C_MAG_D,
+    C_MAG_E,
+    C_MAG_GATE,
+    C_MAG_N,
+    C_MAG_NSE,
+    C_NOAID_NSE,
+    C_ONGROUND_NSE,
+    C_POS_GATE,
+    C_POS_RETRY,
+    C_POSNE_NSE,
+    C_VEL_GATE,
+    C_VELD_NSE,
+    C_VELNE_NSE,
+    CONSTPOS_E,
+    CONSTPOS_N,
+    ES_ATT,
+    ES_POS,
+    ES_VEL,
+    FAULT,
+    HGT_RESET_COUNT,
+    HGT_TR,
+    IMU_OK,
+    INNOV_HGT,
+    INNOV_MX,
+    INNOV_MY,
+    INNOV_MZ,
+    INNOV_PE,
+    INNOV_PN,
+    INNOV_VD,
+    INNOV_VE,
+    INNOV_VN,
+    MAG_HAVE,
+    MAG_LX,
+    MAG_LY,
+    MAG_LZ,
+    MAG_TR,
+    NS,
+    P0,
+    PD,
+    PE,
+    PN,
+    POS_RESET_COUNT,
+    POS_RESET_DE,
+    POS_RESET_DN,
+    POS_TR,
+    R00,
+    R01,
+    R02,
+    R10,
+    R11,
+    R12,
+    R20,
+    R21,
+    R22,
+    T_CONSTPOS,
+    T_GPS_FUSED,
+    T_HGT_PASS,
+    T_POS_PASS,
+    T_VEL_PASS,
+    VD,
+    VE,
+    VEL_RESET_COUNT,
+    VEL_RESET_DD,
+    VEL_RESET_DE,
+    VEL_RESET_DN,
+    VEL_TR,
+    VN,
+)
+
+
+@njit(cache=True, nogil=True)
+def _delay_ticks(cfg, delay_s):
+    return int(delay_s / cfg[C_DT] + 0.5)
+
+
+@njit(cache=True, nogil=True)
+def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
+    """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago.
+
+    The jump (GPS minus the stored past state) is added to the current state and to the ring
+    buffer; the states are decorrelated and given the GPS noise variances.
+    """
+    dn = pn - buffer_get(e, k, 0)
+    de = pe - buffer_get(e, k, 1)
+    dvn = vn - buffer_get(e, k, 3)
+    dve = ve - buffer_get(e, k, 4)
+    dvd = vd - buffer_get(e, k, 5)
+    e[PN] += dn
+    e[PE] += de
+    e[BUF_OFS + 0] += dn
+    e[BUF_OFS + 1] += de
+    e[VN] += dvn
+    e[VE] += dve
+    e[VD] += dvd
+    e[BUF_OFS + 3] += dvn
+    e[BUF_OFS + 4] += dve
+    e[BUF_OFS + 5] += dvd
+    reset_block(e, ES_POS, 2, cfg[C_POSNE_NSE] ** 2)
+    reset_block(e, ES_VEL, 2, cfg[C_VELNE_NSE] ** 2)
+    reset_block(e, ES_VEL + 2, 1, cfg[C_VELD_NSE] ** 2)
+    e[POS_RESET_COUNT] += 1.0
+    e[POS_RESET_DN] = dn
+    e[POS_RESET_DE] = de
+    e[VEL_RESET_COUNT] += 1.0
+    e[VEL_RESET_DN] = dvn
+    e[VEL_RESET_DE] = dve
+    e[VEL_RESET_DD] = dvd
+    e[T_POS_PASS] = t
+    e[T_VEL_PASS] = t
+    e[T_GPS_FUSED] = t
+
+
+@njit(cache=True, nogil=True)
+def lane_fuse_gps(e, cfg, t, pos, vel):
+    """Fuse one 3-D-fix GPS sample: pos[0:2] NE [m] from the origin, vel[0:3] NED [m/s].
+
+    In aiding mode NONE (before the first fix, or after constant-position mode started) the
+    sample starts absolute aiding with a reset to GPS. Otherwise velocity (N, E, D) and position
+    (N, E) are gated separately and fused sequentially; when position or velocity has not passed
+    for C_POS_RETRY seconds, or the horizontal position variance exceeds EK3_GLITCH_RAD^2, the
+    lane is reset to GPS instead.
+    """
+    if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
+        return
+    k = _delay_ticks(cfg, cfg[C_GPS_DELAY])
+    if e[AID_MODE] == AID_NONE:
+        reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        e[AID_MODE] = AID_ABSOLUTE
+        return
+    yvn = vel[0] - buffer_get(e, k, 3)
+    yve = vel[1] - buffer_get(e, k, 4)
+    yvd = vel[2] - buffer_get(e, k, 5)
+    ypn = pos[0] - buffer_get(e, k, 0)
+    ype = pos[1] - buffer_get(e, k, 1)
+    r_vne = cfg[C_VELNE_NSE] ** 2
+    r_vd = cfg[C_VELD_NSE] ** 2
+    r_p = cfg[C_POSNE_NSE] ** 2
+    d = NS + 1
+    svn = e[P0 + (ES_VEL + 0) * d] + r_vne
+    sve = e[P0 + (ES_VEL + 1) * d] + r_vne
+    svd = e[P0 + (ES_VEL + 2) * d] + r_vd
+    spn = e[P0 + (ES_POS + 0) * d] + r_p
+    spe = e[P0 + (ES_POS + 1) * d] + r_p
+    vel_tr = (yvn * yvn + yve * yve + yvd * yvd) / (cfg[C_VEL_GATE] ** 2 * (svn + sve + svd))
+    pos_tr = (ypn * ypn + ype * ype) / (cfg[C_POS_GATE] ** 2 * (spn + spe))
+    e[VEL_TR] = vel_tr
+    e[POS_TR] = pos_tr
+    e[INNOV_VN] = yvn
+    e[INNOV_VE] = yve
+    e[INNOV_VD] = yvd
+    e[INNOV_PN] = ypn
+    e[INNOV_PE] = ype
+    retry = cfg[C_POS_RETRY]
+    timed_out = (t - e[T_POS_PASS] > retry) or (t - e[T_VEL_PASS] > retry)
+    pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
+    if timed_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
+        reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        return
+    if vel_tr >= 1.0 and pos_tr >= 1.0:
+        return
+    clear_dx(e)
+    if vel_tr < 1.0:
+        fuse_index(e, ES_VEL + 0, yvn, r_vne)
+        fuse_index(e, ES_VEL + 1, yve, r_vne)
+        fuse_index(e, ES_VEL + 2, yvd, r_vd)
+        e[T_VEL_PASS] = t
+    if pos_tr < 1.0:
+        fuse_index(e, ES_POS + 0, ypn, r_p)
+        fuse_index(e, ES_POS + 1, ype, r_p)
+        e[T_POS_PASS] = t
+        e[T_GPS_FUSED] = t
+    apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+
+
+@njit(cache=True, nogil=True)
+def lane_fuse_baro(e, cfg, t, alt):
+    """Fuse a baro altitude above the origin [m, up], delayed by EK3_HGT_DELAY.
+
+    After C_HGT_RETRY seconds of rejected samples the height is reset to the baro.
+    """
+    if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
+        return
+    k = _delay_ticks(cfg, cfg[C_HGT_DELAY])
+    y = -alt - buffer_get(e, k, 2)
+    r = cfg[C_ALT_NSE] ** 2
+    s = e[P0 + (ES_POS + 2) * (NS + 1)] + r
+    tr = y * y / (cfg[C_HGT_GATE] ** 2 * s)
+    e[HGT_TR] = tr
+    e[INNOV_HGT] = y
+    if tr < 1.0:
+        clear_dx(e)
+        fuse_index(e, ES_POS + 2, y, r)
+        apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+        e[T_HGT_PASS] = t
+    elif t - e[T_HGT_PASS] > cfg[C_HGT_RETRY]:
+        e[PD] += y
+        e[BUF_OFS + 2] += y
+        reset_block(e, ES_POS + 2, 1, r)
+        e[HGT_RESET_COUNT] += 1.0
+        e[T_HGT_PASS] = t
+
+
+@njit(cache=True, nogil=True)
+def lane_fuse_mag(e, cfg, mag):
+    """Fuse a body-frame magnetometer sample mag[0:3] [gauss] (3-axis, fixed earth field).
+
+    Measurement model m_b = R^T m_e; with the earth-frame attitude error the Jacobian row of body
+    axis k is (R[:, k] x m_e). All three axes are gated (EK3_MAG_I_GATE) and fused only if all
+    pass. Before alignment the sample is only stored (for the initial yaw).
+    """
+    e[MAG_LX] = mag[0]
+    e[MAG_LY] = mag[1]
+    e[MAG_LZ] = mag[2]
+    e[MAG_HAVE] = 1.0
+    if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
+        return
+    mn = cfg[C_MAG_N]
+    me = cfg[C_MAG_E]
+    md = cfg[C_MAG_D]
+    r = cfg[C_MAG_NSE] ** 2
+    g2 = cfg[C_MAG_GATE] ** 2
+    # body axes in NED (columns of R)
+    u0x, u0y, u0z = e[R00], e[R10], e[R20]
+    u1x, u1y, u1z = e[R01], e[R11], e[R21]
+    u2x, u2y, u2z = e[R02], e[R12], e[R22]
+    y0 = mag[0] - (u0x * mn + u0y * me + u0z * md)
+    y1 = mag[1] - (u1x * mn + u1y * me + u1z * md)
+    y2 = mag[2] - (u2x * mn + u2y * me + u2z * md)
+    # h_k = u_k x m_e
+    h00 = u0y * md - u0z * me
+    h01 = u0z * mn - u0x * md
+    h02 = u0x * me - u0y * mn
+    h10 = u1y * md - u1z * me
+    h11 = u1z * mn - u1x * md
+    h12 = u1x * me - u1y * mn
+    h20 = u2y * md - u2z * me
+    h21 = u2z * mn - u2x * md
+    h22 = u2x * me - u2y * mn
+    s0 = innov_var_h3(e, ES_ATT, h00, h01, h02, r)
+    s1 = innov_var_h3(e, ES_ATT, h10, h11, h12, r)
+    s2 = innov_var_h3(e, ES_ATT, h20, h21, h22, r)
+    tr0 = y0 * y0 / (g2 * s0)
+    tr1 = y1 * y1 / (g2 * s1)
+    tr2 = y2 * y2 / (g2 * s2)
+    e[MAG_TR] = max(tr0, max(tr1, tr2))
+    e[INNOV_MX] = y0
+    e[INNOV_MY] = y1
+    e[INNOV_MZ] = y2
+    if tr0 >= 1.0 or tr1 >= 1.0 or tr2 >= 1.0:
+        return
+    clear_dx(e)
+    fuse_h3(e, ES_ATT, h00, h01, h02, y0, r)
+    fuse_h3(e, ES_ATT, h10, h11, h12, y1, r)
+    fuse_h3(e, ES_ATT, h20, h21, h22, y2, r)
+    apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+
+
+@njit(cache=True, nogil=True)
+def lane_fuse_constpos(e, cfg, t, armed):
+    """Constant-position pseudo-measurement (aiding mode NONE), every C_CONSTPOS_DT seconds.
+
+    Fuses the last known NE position with EK3_NOAID_M_NSE (C_ONGROUND_NSE while disarmed),
+    bypassing the innovation gate as EKF3 does. The test ratio is still computed and stored.
+    """
+    if t - e[T_CONSTPOS] < cfg[C_CONSTPOS_DT] - 1e-9:
+        return
+    e[T_CONSTPOS] = t
+    nse = cfg[C_NOAID_NSE] if armed else cfg[C_ONGROUND_NSE]
+    r = nse * nse
+    yn = e[CONSTPOS_N] - e[PN]
+    ye = e[CONSTPOS_E] - e[PE]
+    d = NS + 1
+    s = e[P0 + ES_POS * d] + e[P0 + (ES_POS + 1) * d] + 2.0 * r
+    e[POS_TR] = (yn * yn + ye * ye) / (cfg[C_POS_GATE] ** 2 * s)
+    e[INNOV_PN] = yn
+    e[INNOV_PE] = ye
+    clear_dx(e)
+    fuse_index(e, ES_POS + 0, yn, r)
+    fuse_index(e, ES_POS + 1, ye, r)
+    apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+
+
+@njit(cache=True, nogil=True)
+def is_finite_lane(e):
+    """False if the quaternion, velocity, position or any covariance diagonal is not finite."""
+    s = e[0] + e[VN] + e[VE] + e[VD] + e[PN] + e[PE] + e[PD]
+    for i in range(NS):
+        s += e[P0 + i * (NS + 1)]
+    return math.isfinite(s)

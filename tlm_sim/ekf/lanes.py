@@ -1,0 +1,504 @@
+"""Per-tick EKF driver: lane prediction, measurement dispatch, primary-lane selection, outputs.
+
+Call order per 400 Hz main-loop tick (or use :func:`ekf_update`, which does exactly this):
+
+1. :func:`ekf_predict` -- every lane integrates its own IMU's delta angle/velocity; covariance
+   prediction runs when >= EKF3's 12 ms target of IMU data has accumulated (every 5 ticks);
+   alignment, aiding-mode transitions, constant-position fusion and status flags.
+2. :func:`ekf_fuse_gps` / :func:`ekf_fuse_baro` / :func:`ekf_fuse_mag` when a new sample arrived.
+3. :func:`ekf_select_primary` -- lane scores, health and the ERR 24-style primary switch.
+
+Controllers read the primary lane, via :func:`ekf_output` or directly
+``ekf[int(sel[SEL_PRIMARY]), QW..]`` (indices in :mod:`tlm_sim.ekf.layout`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from tlm_sim.ekf.core import (
+    buffer_push,
+    predict_covariance,
+    propagate,
+    reset_block,
+    set_quat_euler,
+)
+from tlm_sim.ekf.fusion import (
+    is_finite_lane,
+    lane_fuse_baro,
+    lane_fuse_constpos,
+    lane_fuse_gps,
+    lane_fuse_mag,
+)
+from tlm_sim.ekf.layout import (
+    ACC_DT,
+    AID_ABSOLUTE,
+    AID_MODE,
+    AID_NONE,
+    ALIGN_DT,
+    ALIGN_FX,
+    ALIGN_FY,
+    ALIGN_FZ,
+    ALIGNED,
+    BAX,
+    BGX,
+    BUF_COUNT,
+    BUF_HEAD,
+    BUF_OFS,
+    C_ABIAS_PNSE,
+    C_ACC_PNSE,
+    C_ALIGN_TIME,
+    C_ALT_NSE,
+    C_DT,
+    C_ERR_THRESH,
+    C_GBIAS_PNSE,
+    C_GYRO_PNSE,
+    C_HGT_RETRY,
+    C_LANE_IMU,
+    C_LANE_INIT_T,
+    C_MAG_E,
+    C_MAG_N,
+    C_POS_RETRY,
+    C_SELECT_T,
+    C_TARGET_DT,
+    C_TILT_DRIFT,
+    C_USING_GPS_T,
+    CONSTPOS_E,
+    CONSTPOS_N,
+    ES_ATT,
+    ES_BA,
+    ES_BG,
+    ES_POS,
+    ES_VEL,
+    F_ATTITUDE,
+    F_CONST_POS,
+    F_HORIZ_POS,
+    F_HORIZ_VEL,
+    F_USING_GPS,
+    F_VERT_POS,
+    F_VERT_VEL,
+    FAULT,
+    HEALTHY,
+    HGT_TR,
+    IMU_INDEX,
+    IMU_OK,
+    MAG_HAVE,
+    MAG_LX,
+    MAG_LY,
+    MAG_LZ,
+    MAG_TR,
+    MAX_LANES,
+    N_EKF,
+    N_PREDICT,
+    NS,
+    O_BAX,
+    O_BGX,
+    O_F_ATTITUDE,
+    O_F_CONST_POS,
+    O_F_HORIZ_POS,
+    O_F_HORIZ_VEL,
+    O_F_USING_GPS,
+    O_F_VERT_POS,
+    O_PITCH,
+    O_POS_RESET_COUNT,
+    O_PRIMARY,
+    O_PRIMARY_CHANGES,
+    O_QW,
+    O_ROLL,
+    O_SQRT_HGT,
+    O_SQRT_MAG,
+    O_SQRT_POS,
+    O_SQRT_VEL,
+    O_VEL_RESET_COUNT,
+    O_VN,
+    O_YAW,
+    P0,
+    PN,
+    POS_RESET_COUNT,
+    POS_TR,
+    QW,
+    QX,
+    QY,
+    QZ,
+    SCORE,
+    SEL_CHANGES,
+    SEL_HEALTHY_SINCE,
+    SEL_N_LANES,
+    SEL_PRIMARY,
+    SEL_REL_ERR,
+    SEL_RUN,
+    SEL_T_PRIMARY,
+    SEL_T_SWITCH,
+    T_ALIGNED,
+    T_CONSTPOS,
+    T_GPS_FUSED,
+    T_HGT_PASS,
+    T_LAST,
+    T_POS_PASS,
+    T_VEL_PASS,
+    VEL_RESET_COUNT,
+    VEL_TR,
+    VN,
+)
+
+# initial standard deviations at alignment
+INIT_TILT_SD = 0.05  # rad
+INIT_YAW_SD = 0.1  # rad
+INIT_VEL_SD = 0.5  # m/s
+INIT_POS_SD = 1.0  # m
+INIT_GBIAS_SD = math.radians(2.5)  # rad/s (EKF3: 2.5 deg/s)
+INIT_ABIAS_SD = 0.1  # m/s^2
+
+
+@njit(cache=True, nogil=True)
+def ekf_init(ekf, sel, cfg):
+    """Reset all lanes to "waiting for alignment" and the selector to lane 0 primary.
+
+    ekf.shape[0] must equal cfg[C_N_LANES]; lane i integrates IMU cfg[C_LANE_IMU + i].
+    """
+    n = ekf.shape[0]
+    for i in range(n):
+        for j in range(N_EKF):
+            ekf[i, j] = 0.0
+        ekf[i, QW] = 1.0
+        ekf[i, T_LAST] = -1.0
+        ekf[i, AID_MODE] = AID_NONE
+        ekf[i, IMU_INDEX] = cfg[C_LANE_IMU + i]
+        ekf[i, IMU_OK] = 1.0
+        ekf[i, BUF_HEAD] = -1.0
+    for j in range(sel.shape[0]):
+        sel[j] = 0.0
+    sel[SEL_N_LANES] = n
+    sel[SEL_T_SWITCH] = -1.0
+    sel[SEL_HEALTHY_SINCE] = -1.0
+    for i in range(MAX_LANES):
+        sel[SEL_T_PRIMARY + i] = -1.0e9
+
+
+@njit(cache=True, nogil=True)
+def _align(e, cfg, t):
+    """Tilt from the averaged specific force, yaw from the magnetometer; initialise P."""
+    f = 1.0 / e[ALIGN_DT]
+    fx = e[ALIGN_FX] * f
+    fy = e[ALIGN_FY] * f
+    fz = e[ALIGN_FZ] * f
+    roll = math.atan2(-fy, -fz)
+    pitch = math.atan2(fx, math.sqrt(fy * fy + fz * fz))
+    mx = e[MAG_LX]
+    my = e[MAG_LY]
+    mz = e[MAG_LZ]
+    cr = math.cos(roll)
+    sr = math.sin(roll)
+    cp = math.cos(pitch)
+    sp = math.sin(pitch)
+    mlx = cp * mx + sp * (sr * my + cr * mz)
+    mly = cr * my - sr * mz
+    yaw = math.atan2(cfg[C_MAG_E], cfg[C_MAG_N]) - math.atan2(mly, mlx)
+    set_quat_euler(e, roll, pitch, yaw)
+    for j in range(VN, BAX + 3):
+        e[j] = 0.0
+    for j in range(NS * NS):
+        e[P0 + j] = 0.0
+    reset_block(e, ES_ATT, 2, INIT_TILT_SD**2)
+    reset_block(e, ES_ATT + 2, 1, INIT_YAW_SD**2)
+    reset_block(e, ES_VEL, 3, INIT_VEL_SD**2)
+    reset_block(e, ES_POS, 2, INIT_POS_SD**2)
+    reset_block(e, ES_POS + 2, 1, cfg[C_ALT_NSE] ** 2)
+    reset_block(e, ES_BG, 3, INIT_GBIAS_SD**2)
+    reset_block(e, ES_BA, 3, INIT_ABIAS_SD**2)
+    e[ACC_DT] = 0.0
+    e[ALIGNED] = 1.0
+    e[T_ALIGNED] = t
+    e[AID_MODE] = AID_NONE
+    e[CONSTPOS_N] = 0.0
+    e[CONSTPOS_E] = 0.0
+    e[T_CONSTPOS] = t
+    e[T_HGT_PASS] = t
+    e[T_POS_PASS] = t
+    e[T_VEL_PASS] = t
+    e[T_GPS_FUSED] = -1.0e9
+    e[BUF_HEAD] = -1.0
+    e[BUF_COUNT] = 0.0
+    for j in range(6):
+        e[BUF_OFS + j] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def _update_flags(e, cfg, t):
+    aligned = e[ALIGNED] != 0.0 and e[FAULT] == 0.0
+    absolute = aligned and e[AID_MODE] == AID_ABSOLUTE
+    retry = cfg[C_POS_RETRY]
+    e[F_ATTITUDE] = 1.0 if aligned else 0.0
+    e[F_HORIZ_VEL] = 1.0 if absolute and t - e[T_VEL_PASS] <= retry else 0.0
+    e[F_HORIZ_POS] = 1.0 if absolute and t - e[T_POS_PASS] <= retry else 0.0
+    e[F_VERT_VEL] = 1.0 if aligned else 0.0
+    e[F_VERT_POS] = 1.0 if aligned and t - e[T_HGT_PASS] <= cfg[C_HGT_RETRY] else 0.0
+    e[F_CONST_POS] = 1.0 if aligned and e[AID_MODE] == AID_NONE else 0.0
+    e[F_USING_GPS] = 1.0 if absolute and t - e[T_GPS_FUSED] <= cfg[C_USING_GPS_T] else 0.0
+
+
+@njit(cache=True, nogil=True)
+def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
+    """One main-loop tick of one lane (see the module docstring); t in seconds."""
+    dt = cfg[C_DT] if e[T_LAST] < 0.0 else t - e[T_LAST]
+    e[T_LAST] = t
+    if dt <= 0.0 or dt > 0.1:
+        dt = cfg[C_DT]
+    imu = int(e[IMU_INDEX])
+    if imu_ok[imu] == 0 or e[FAULT] != 0.0:
+        e[IMU_OK] = 1.0 if imu_ok[imu] != 0 else 0.0
+        _update_flags(e, cfg, t)
+        return
+    e[IMU_OK] = 1.0
+    if e[ALIGNED] == 0.0:
+        e[ALIGN_FX] += dvel[imu, 0]
+        e[ALIGN_FY] += dvel[imu, 1]
+        e[ALIGN_FZ] += dvel[imu, 2]
+        e[ALIGN_DT] += dt
+        if e[ALIGN_DT] >= cfg[C_ALIGN_TIME] and e[MAG_HAVE] != 0.0:
+            _align(e, cfg, t)
+        _update_flags(e, cfg, t)
+        return
+    propagate(e, dang, dvel, imu, dt)
+    buffer_push(e)
+    if e[ACC_DT] >= cfg[C_TARGET_DT] - 0.5 * dt:
+        tt = e[ACC_DT]
+        predict_covariance(
+            e,
+            (cfg[C_GYRO_PNSE] * tt) ** 2,
+            (cfg[C_ACC_PNSE] * tt) ** 2,
+            (cfg[C_GBIAS_PNSE] * tt) ** 2,
+            (cfg[C_ABIAS_PNSE] * tt) ** 2,
+        )
+        e[N_PREDICT] += 1.0
+        if not is_finite_lane(e):
+            e[FAULT] = 1.0
+            _update_flags(e, cfg, t)
+            return
+    # aiding: absolute -> none after the tilt-drift time without GPS position or velocity
+    if e[AID_MODE] == AID_ABSOLUTE:
+        drift = cfg[C_TILT_DRIFT]
+        if t - e[T_POS_PASS] > drift and t - e[T_VEL_PASS] > drift:
+            e[AID_MODE] = AID_NONE
+            e[CONSTPOS_N] = e[PN]
+            e[CONSTPOS_E] = e[PN + 1]
+            e[T_CONSTPOS] = t - cfg[C_TARGET_DT]
+    if e[AID_MODE] == AID_NONE:
+        lane_fuse_constpos(e, cfg, t, armed)
+    _update_flags(e, cfg, t)
+
+
+@njit(cache=True, nogil=True)
+def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
+    """Predict all lanes by one main-loop tick.
+
+    t_us: time since boot [us]; dang[imu, 0:3] delta angle [rad] and dvel[imu, 0:3] delta
+    velocity [m/s] (body FRD) accumulated over the tick; imu_ok[imu]: 0 when that IMU's samples
+    stopped; armed: selects the constant-position noise (on-ground value while disarmed).
+    """
+    t = t_us * 1e-6
+    for i in range(ekf.shape[0]):
+        lane_predict(ekf[i], cfg, t, dang, dvel, imu_ok, armed)
+
+
+@njit(cache=True, nogil=True)
+def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
+    """New GPS sample: pos[0:3] NED [m] from the origin, vel[0:3] NED [m/s], lagged by
+    GPS_DELAY_MS. Nothing is fused unless fix_3d (a no-fix sample is how a GPS loss looks)."""
+    if not fix_3d:
+        return
+    t = t_us * 1e-6
+    for i in range(ekf.shape[0]):
+        lane_fuse_gps(ekf[i], cfg, t, pos, vel)
+
+
+@njit(cache=True, nogil=True)
+def ekf_fuse_baro(ekf, cfg, t_us, alt):
+    """New baro sample: altitude above the origin [m, up]."""
+    t = t_us * 1e-6
+    for i in range(ekf.shape[0]):
+        lane_fuse_baro(ekf[i], cfg, t, alt)
+
+
+@njit(cache=True, nogil=True)
+def ekf_fuse_mag(ekf, cfg, mag):
+    """New magnetometer sample: body-frame field mag[0:3] [gauss]."""
+    for i in range(ekf.shape[0]):
+        lane_fuse_mag(ekf[i], cfg, mag)
+
+
+@njit(cache=True, nogil=True)
+def lane_score(e):
+    """EKF3 error score max(0.5 (vel + pos), hgt) of a lane (0 before alignment)."""
+    if e[ALIGNED] == 0.0:
+        return 0.0
+    return max(0.5 * (e[VEL_TR] + e[POS_TR]), e[HGT_TR])
+
+
+@njit(cache=True, nogil=True)
+def lane_healthy(e, cfg, t):
+    """Lane health: aligned, IMU delivering, no fault, out of its first second, and not all of
+    the velocity, position and height test ratios above 1."""
+    if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
+        return False
+    if t - e[T_ALIGNED] < cfg[C_LANE_INIT_T]:
+        return False
+    return not (e[VEL_TR] > 1.0 and e[POS_TR] > 1.0 and e[HGT_TR] > 1.0)
+
+
+@njit(cache=True, nogil=True)
+def ekf_select_primary(ekf, sel, cfg, t_us, armed):
+    """Update lane scores/health and switch the primary lane as EKF3 does (section 3.4).
+
+    Relative errors of the non-primary lanes accumulate score_i - score_primary when positive
+    or below -max(EK3_ERR_THRESH, 0.05), clamped to +-1. Once the primary has been healthy for
+    10 s (latched) and while armed, the primary switches to the healthy lane with the lowest
+    relative error that was not primary in the last 10 s when the primary is unhealthy, or its
+    score exceeds 1 (and the candidate's is lower), or the candidate's relative error <= -0.5.
+    If the primary's IMU stops delivering samples it switches at once (our addition).
+    Returns True when the primary changed on this call.
+    """
+    t = t_us * 1e-6
+    n = ekf.shape[0]
+    for i in range(n):
+        e = ekf[i]
+        e[SCORE] = lane_score(e)
+        e[HEALTHY] = 1.0 if lane_healthy(e, cfg, t) else 0.0
+    p = int(sel[SEL_PRIMARY])
+    sp = ekf[p, SCORE]
+    thr = max(cfg[C_ERR_THRESH], 0.05)
+    for i in range(n):
+        if i == p:
+            continue
+        d = ekf[i, SCORE] - sp
+        if d > 0.0 or d < -thr:
+            sel[SEL_REL_ERR + i] = min(max(sel[SEL_REL_ERR + i] + d, -1.0), 1.0)
+    healthy_p = ekf[p, HEALTHY] != 0.0
+    if sel[SEL_RUN] == 0.0:
+        if healthy_p:
+            if sel[SEL_HEALTHY_SINCE] < 0.0:
+                sel[SEL_HEALTHY_SINCE] = t
+            if t - sel[SEL_HEALTHY_SINCE] >= cfg[C_SELECT_T]:
+                sel[SEL_RUN] = 1.0
+        else:
+            sel[SEL_HEALTHY_SINCE] = -1.0
+    imu_dead = ekf[p, IMU_OK] == 0.0
+    if not imu_dead and (sel[SEL_RUN] == 0.0 or not armed):
+        return False
+    best = -1
+    best_rel = 1.0e30
+    for i in range(n):
+        if i == p or ekf[i, HEALTHY] == 0.0:
+            continue
+        if t - sel[SEL_T_PRIMARY + i] < cfg[C_SELECT_T] and not imu_dead:
+            continue
+        if sel[SEL_REL_ERR + i] < best_rel:
+            best_rel = sel[SEL_REL_ERR + i]
+            best = i
+    if best < 0:
+        return False
+    switch = (
+        imu_dead
+        or not healthy_p
+        or (sp > 1.0 and ekf[best, SCORE] < sp)
+        or best_rel <= -0.5
+    )
+    if not switch:
+        return False
+    sel[SEL_T_PRIMARY + p] = t
+    sel[SEL_PRIMARY] = best
+    sel[SEL_CHANGES] += 1.0
+    sel[SEL_T_SWITCH] = t
+    for i in range(MAX_LANES):
+        sel[SEL_REL_ERR + i] = 0.0
+    return True
+
+
+@njit(cache=True, nogil=True)
+def ekf_update(
+    ekf,
+    sel,
+    cfg,
+    t_us,
+    dang,
+    dvel,
+    imu_ok,
+    gps_new,
+    gps_pos,
+    gps_vel,
+    gps_fix,
+    baro_new,
+    baro_alt,
+    mag_new,
+    mag,
+    armed=True,
+):
+    """One main-loop tick: predict, fuse the new samples flagged, select the primary lane.
+
+    t_us: time since boot [us]; dang/dvel[imu, 0:3]: IMU deltas of this tick (body FRD);
+    imu_ok[imu]; gps_new + gps_pos[0:3] (NED from the origin, m) + gps_vel[0:3] (NED, m/s) +
+    gps_fix (3-D fix); baro_new + baro_alt (m above the origin, up); mag_new + mag[0:3] (body
+    field, gauss); armed (vehicle armed: enables lane switching, sets the constant-position noise).
+    Returns True when the primary lane changed on this tick (log ERR 24 then).
+    """
+    ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed)
+    if gps_new:
+        ekf_fuse_gps(ekf, cfg, t_us, gps_pos, gps_vel, gps_fix)
+    if baro_new:
+        ekf_fuse_baro(ekf, cfg, t_us, baro_alt)
+    if mag_new:
+        ekf_fuse_mag(ekf, cfg, mag)
+    return ekf_select_primary(ekf, sel, cfg, t_us, armed)
+
+
+@njit(cache=True, nogil=True)
+def quat_to_euler(qw, qx, qy, qz):
+    """ZYX Euler angles (roll, pitch, yaw) [rad] of a body -> NED quaternion."""
+    roll = math.atan2(2.0 * (qw * qx + qy * qz), 1.0 - 2.0 * (qx * qx + qy * qy))
+    sp = 2.0 * (qw * qy - qz * qx)
+    sp = min(max(sp, -1.0), 1.0)
+    pitch = math.asin(sp)
+    yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    return roll, pitch, yaw
+
+
+@njit(cache=True, nogil=True)
+def ekf_output(ekf, sel, out):
+    """Fill out[N_OUT] (layout O_*) from the primary lane: attitude, velocity, position, biases,
+    Euler angles, status flags, square roots of the test ratios (what ekf_check compares with
+    FS_EKF_THRESH), primary index and counters."""
+    p = int(sel[SEL_PRIMARY])
+    e = ekf[p]
+    for j in range(4):
+        out[O_QW + j] = e[QW + j]
+    for j in range(6):
+        out[O_VN + j] = e[VN + j]
+    for j in range(3):
+        out[O_BGX + j] = e[BGX + j]
+        out[O_BAX + j] = e[BAX + j]
+    r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
+    out[O_ROLL] = r
+    out[O_PITCH] = pt
+    out[O_YAW] = y
+    out[O_F_ATTITUDE] = e[F_ATTITUDE]
+    out[O_F_HORIZ_VEL] = e[F_HORIZ_VEL]
+    out[O_F_HORIZ_POS] = e[F_HORIZ_POS]
+    out[O_F_VERT_POS] = e[F_VERT_POS]
+    out[O_F_CONST_POS] = e[F_CONST_POS]
+    out[O_F_USING_GPS] = e[F_USING_GPS]
+    out[O_SQRT_VEL] = math.sqrt(max(e[VEL_TR], 0.0))
+    out[O_SQRT_POS] = math.sqrt(max(e[POS_TR], 0.0))
+    out[O_SQRT_HGT] = math.sqrt(max(e[HGT_TR], 0.0))
+    out[O_SQRT_MAG] = math.sqrt(max(e[MAG_TR], 0.0))
+    out[O_PRIMARY] = p
+    out[O_PRIMARY_CHANGES] = sel[SEL_CHANGES]
+    out[O_POS_RESET_COUNT] = e[POS_RESET_COUNT]
+    out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
+
+
+@njit(cache=True, nogil=True)
+def ekf_primary(sel):
+    """Index of the primary lane."""
+    return int(sel[SEL_PRIMARY])

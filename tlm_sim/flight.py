@@ -1,0 +1,577 @@
+"""The flight: one numba call runs physics, sensors, EKF, autopilot and logging for a whole flight.
+
+``fly(mission, faults=None, params=None, seed=0) -> FlightLog`` is the public entry point. It
+builds the per-subsystem arrays from the parameters once, allocates the log buffers, runs
+:func:`run_flight` (a single ``@njit(cache=True, nogil=True)`` call: 1200 Hz physics on an
+integer-microsecond clock, 400 Hz main loop) and wraps the buffers into a FlightLog.
+A flight is a pure function of (mission, faults, parameters, seed).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from tlm_sim import logger as L
+from tlm_sim.control import layout as C
+from tlm_sim.control.config import build_control_config
+from tlm_sim.control.modes import vehicle_step
+from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics.body import init_state, physics_step
+from tlm_sim.dynamics.frame import build_frame
+from tlm_sim.dynamics.wind import seed_rng
+from tlm_sim.ekf import layout as EK
+from tlm_sim.ekf.config import build_ekf_config, new_ekf
+from tlm_sim.ekf.lanes import ekf_init, ekf_update
+from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
+from tlm_sim.mission import Mission, builtin_mission
+from tlm_sim.params import Params
+from tlm_sim.sensors import layout as S
+from tlm_sim.sensors.baro import baro_sample, mag_sample
+from tlm_sim.sensors.config import build_sensor_config
+from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
+from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas, vibe
+from tlm_sim.sensors.rc import rc_init, rc_update
+
+PHYSICS_DT_US = 833  # floor(1e6 / SIM_RATE_HZ) with SIM_RATE_HZ 1200
+LOOP_DT_US = 2500  # SCHED_LOOP_RATE 400 Hz
+GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.UTC)
+BOOT_UTC = _dt.datetime(2025, 10, 24, 12, 0, 0, tzinfo=_dt.UTC)  # simulated boot time (UTC)
+LEAP_SECONDS = 18
+
+# schedule targets (which configuration array a parameter change writes into)
+TGT_SENSOR = 0
+TGT_FRAME = 1
+TGT_CONTROL = 2
+TGT_EKF = 3
+
+
+def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
+    """GPS week and milliseconds of week for a UTC time."""
+    dt = utc - GPS_EPOCH + _dt.timedelta(seconds=LEAP_SECONDS)
+    ms = int(dt.total_seconds() * 1000)
+    return ms // (7 * 86400000), ms % (7 * 86400000)
+
+
+@njit(cache=True, nogil=True)
+def _apply_schedule(sched, k, t_us, scfg, frame, g, ecfg):
+    """Apply every scheduled parameter change due at t_us (rows sorted by time); returns next k."""
+    while k < sched.shape[0] and sched[k, 0] <= t_us:
+        tgt = int(sched[k, 1])
+        idx = int(sched[k, 2])
+        v = sched[k, 3]
+        if tgt == TGT_SENSOR:
+            scfg[idx] = v
+        elif tgt == TGT_FRAME:
+            frame[idx] = v
+        elif tgt == TGT_CONTROL:
+            g[idx] = v
+        else:
+            ecfg[idx] = v
+        k += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _motor_pwm(c, scfg, pwm):
+    """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs."""
+    mask = int(scfg[S.C_ENGINE_MASK])
+    mul = scfg[S.C_ENGINE_MUL]
+    for i in range(4):
+        p = c[C.MIX_PWM + i]
+        if (mask >> i) & 1:
+            p = 1000.0 + (p - 1000.0) * mul
+        pwm[i] = p
+
+
+@njit(cache=True, nogil=True)
+def run_flight(
+    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, seed, t_end_us, home, gps_time,
+    bufs, counts,
+):
+    """Fly one whole flight in place; returns the final simulated time [us].
+
+    x: truth state; frame/scfg/g/ecfg: configuration arrays; ekf/sel: EKF lanes and selector;
+    c: controller state; path: mission as NED points (path[0] = takeoff point); seg: scratch
+    segment; sched: (n, 4) rows (t_us, target, index, value) of parameter changes; home: (lat,
+    lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers.
+    """
+    np.random.seed(seed)
+    n_path = path.shape[0]
+    s = np.zeros(S.N_SENSOR_STATE)
+    dang = np.zeros((S.N_IMU, 3))
+    dvel = np.zeros((S.N_IMU, 3))
+    imu_ok = np.ones(S.N_IMU)
+    gps = np.zeros(9)
+    pwm = np.zeros(4)
+    pos = np.zeros(3)
+    vel = np.zeros(3)
+    q = np.zeros(4)
+    gyro = np.zeros(3)
+    acc_ned = np.zeros(3)
+    imu_init(s, scfg, 0.0)
+    gps_init(s, 0.0)
+    rc_init(s, 0.0)
+    s[S.B_NEXT_US] = 0.0
+    s[S.M_NEXT_US] = 0.0
+    ekf_init(ekf, sel, ecfg)
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]
+    k_sched = 0
+    t_us = 0
+    next_loop = 0
+    tick = 0
+    gps_new = False
+    baro_new = False
+    mag_new = False
+    last_gps_ms = 0.0
+    stop_at = -1
+    dt_loop = LOOP_DT_US * 1e-6
+    L.euler_deg(1.0, 0.0, 0.0, 0.0)
+    from_mode = 0.0
+    L_mode = bufs[L.K_MODE]
+    r = L.new_row(bufs, counts, L.K_MODE, 0.0)
+    if r >= 0:
+        L_mode[r, 1] = from_mode
+        L_mode[r, 2] = from_mode
+        L_mode[r, 3] = 26.0  # ModeReason::INITIALISED
+    while t_us < t_end_us:
+        # ------------------------------------------------------------- physics tick (1200 Hz)
+        k_sched = _apply_schedule(sched, k_sched, t_us, scfg, frame, g, ecfg)
+        _motor_pwm(c, scfg, pwm)
+        physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6)
+        t_us += PHYSICS_DT_US
+        thr_sum = 0.0
+        n_on = 0
+        for i in range(4):
+            if pwm[i] > 0.0:
+                thr_sum += (pwm[i] - 1000.0) / 1000.0
+                n_on += 1
+        throttle = thr_sum / n_on if n_on > 0 else 0.0
+        imu_sample(s, x, scfg, float(t_us), throttle)
+        if t_us < next_loop:
+            continue
+        # ------------------------------------------------------------- main loop (400 Hz)
+        next_loop += LOOP_DT_US
+        tick += 1
+        for i in range(S.N_IMU):
+            imu_ok[i] = imu_take_deltas(s, i, dt_loop, dang, dvel)
+        gps_push_truth(s, x, t_us * 1e-6)
+        gps_new = False
+        if gps_due(s, float(t_us)):
+            gps_measure(s, scfg, float(t_us), gps)
+            gps_new = True
+        baro_new = False
+        if t_us >= s[S.B_NEXT_US]:
+            s[S.B_NEXT_US] += 100000.0
+            baro_sample(s, x, scfg)
+            baro_new = True
+        mag_new = False
+        if t_us >= s[S.M_NEXT_US]:
+            s[S.M_NEXT_US] += 100000.0
+            mag_sample(s, x, scfg)
+            mag_new = True
+        rc_update(s, scfg, float(t_us))
+        ekf_update(
+            ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
+            gps_new, gps[0:3], gps[3:6], gps[8] > 0.5,
+            baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3],
+        )
+        lane = int(sel[EK.SEL_PRIMARY])
+        e = ekf[lane]
+        for k in range(3):
+            pos[k] = e[EK.PN + k]
+            vel[k] = e[EK.VN + k]
+        for k in range(4):
+            q[k] = e[EK.QW + k]
+        ib = S.IMU_BASE + int(e[EK.IMU_INDEX]) * S.IMU_STRIDE
+        for k in range(3):
+            gyro[k] = s[ib + S.I_GYR_F + k] - e[EK.BGX + k]
+        # kinematic acceleration NED from the filtered accel rotated by the EKF attitude
+        ax = s[ib + S.I_ACC_F] - e[EK.BAX]
+        ay = s[ib + S.I_ACC_F + 1] - e[EK.BAY]
+        az = s[ib + S.I_ACC_F + 2] - e[EK.BAZ]
+        acc_ned[0] = e[EK.R00] * ax + e[EK.R01] * ay + e[EK.R02] * az
+        acc_ned[1] = e[EK.R10] * ax + e[EK.R11] * ay + e[EK.R12] * az
+        acc_ned[2] = e[EK.R20] * ax + e[EK.R21] * ay + e[EK.R22] * az + 9.80665
+        vehicle_step(
+            c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, n_path, seg,
+            s[S.RC_LAST_FRAME_US],
+            bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR], counts, L.K_MODE, L.K_EV, L.K_ERR,
+        )
+        # ------------------------------------------------------------- logging
+        if gps_new:
+            last_gps_ms = _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt,
+                                   gps_time, last_gps_ms)
+        if tick % 16 == 0:  # IMU at 25 Hz, both instances
+            _log_imu(bufs, counts, t_us, s, scfg)
+        if tick % 40 == 0:  # 10 Hz messages
+            _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt,
+                      throttle)
+        if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
+            stop_at = t_us + 2000000
+        if stop_at >= 0 and t_us >= stop_at:
+            break
+    return t_us
+
+
+@njit(cache=True, nogil=True)
+def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_time, last_ms):
+    """GPS and GPA rows for one GPS epoch; returns the epoch's ms of week."""
+    r = L.new_row(bufs, counts, L.K_GPS, t_us)
+    ms = gps_time[1] + round(t_us / 200000.0) * 200.0
+    week = gps_time[0] + math.floor(ms / 604800000.0)
+    ms = ms % 604800000.0
+    if r >= 0:
+        b = bufs[L.K_GPS]
+        lat, lon = L.ne_to_latlon(home_lat, home_lon, gps[0], gps[1])
+        b[r, 1] = 0.0
+        b[r, 2] = gps[6]
+        b[r, 3] = ms
+        b[r, 4] = week
+        b[r, 5] = gps[7]
+        b[r, 6] = scfg[S.C_GPS_HDOP]
+        b[r, 7] = lat
+        b[r, 8] = lon
+        b[r, 9] = home_alt - gps[2]
+        b[r, 10] = math.sqrt(gps[3] * gps[3] + gps[4] * gps[4])
+        crs = math.degrees(math.atan2(gps[4], gps[3]))
+        b[r, 11] = crs + 360.0 if crs < 0.0 else crs
+        b[r, 12] = gps[5]
+        b[r, 13] = 0.0
+        b[r, 14] = 1.0
+    r = L.new_row(bufs, counts, L.K_GPA, t_us)
+    if r >= 0:
+        b = bufs[L.K_GPA]
+        b[r, 1] = 0.0
+        b[r, 2] = 2.0  # VDop
+        b[r, 3] = 0.3  # HAcc (SIM_GPS1_ACC)
+        b[r, 4] = 0.3  # VAcc
+        b[r, 5] = 0.0  # SAcc
+        b[r, 6] = 0.0  # YAcc
+        b[r, 7] = 1.0  # VV
+        b[r, 8] = t_us // 1000  # SMS
+        b[r, 9] = (ms - last_ms) if last_ms > 0.0 else 0.0  # Delta
+    return ms
+
+
+@njit(cache=True, nogil=True)
+def _log_imu(bufs, counts, t_us, s, scfg):
+    """IMU rows (one per instance): filtered gyro/accel, error counts, temperature, rates."""
+    temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
+    for i in range(S.N_IMU):
+        r = L.new_row(bufs, counts, L.K_IMU, t_us)
+        if r < 0:
+            return
+        b = bufs[L.K_IMU]
+        ib = S.IMU_BASE + i * S.IMU_STRIDE
+        b[r, 1] = i
+        for k in range(3):
+            b[r, 2 + k] = s[ib + S.I_GYR_F + k]
+            b[r, 5 + k] = s[ib + S.I_ACC_F + k]
+        b[r, 8] = s[ib + S.I_EG]
+        b[r, 9] = s[ib + S.I_EA]
+        b[r, 10] = temp
+        b[r, 11] = 1.0
+        b[r, 12] = 1.0
+        b[r, 13] = round(1e6 / scfg[S.C_GYR_PERIOD_US + i])
+        b[r, 14] = round(1e6 / scfg[S.C_ACC_PERIOD_US + i])
+
+
+@njit(cache=True, nogil=True)
+def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt, throttle):
+    """The 10 Hz messages: RATE, VIBE, ATT, BARO, MAG, RCIN, RCOU, XKF1, XKF4, CTUN, BAT, POS,
+    SIM, PSCN/E/D."""
+    d = L.RAD2DEG
+    r = L.new_row(bufs, counts, L.K_RATE, t_us)
+    if r >= 0:
+        b = bufs[L.K_RATE]
+        for k in range(3):
+            rb = C.RATE_BASE + k * C.RATE_STRIDE
+            b[r, 1 + 3 * k] = c[rb + C.R_TARGET] * d
+            b[r, 2 + 3 * k] = c[rb + C.R_MEAS] * d
+            b[r, 3 + 3 * k] = c[rb + C.R_OUT]
+        b[r, 10] = c[C.PZ_ACC_T] * 100.0
+        b[r, 11] = c[C.PZ_ACC_MEAS] * 100.0
+        b[r, 12] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
+        b[r, 13] = 0.0
+    for i in range(S.N_IMU):
+        r = L.new_row(bufs, counts, L.K_VIBE, t_us)
+        if r >= 0:
+            b = bufs[L.K_VIBE]
+            b[r, 1] = i
+            for k in range(3):
+                b[r, 2 + k] = vibe(s, i, k)
+            b[r, 5] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
+    roll, pitch, yaw = L.euler_deg(e[EK.QW], e[EK.QX], e[EK.QY], e[EK.QZ])
+    r = L.new_row(bufs, counts, L.K_ATT, t_us)
+    if r >= 0:
+        b = bufs[L.K_ATT]
+        b[r, 1] = c[C.ATT_ROLL_T] * d
+        b[r, 2] = roll
+        b[r, 3] = c[C.ATT_PITCH_T] * d
+        b[r, 4] = pitch
+        yd = c[C.ATT_YAW_T] * d
+        b[r, 5] = yd + 360.0 if yd < 0.0 else yd
+        b[r, 6] = yaw
+        b[r, 7] = 3.0
+    for i in range(2):
+        r = L.new_row(bufs, counts, L.K_BARO, t_us)
+        if r >= 0:
+            b = bufs[L.K_BARO]
+            b[r, 1] = i
+            b[r, 2] = s[S.B_ALT]
+            b[r, 3] = home_alt + s[S.B_ALT]
+            b[r, 4] = s[S.B_PRESS]
+            b[r, 5] = s[S.B_TEMP]
+            b[r, 6] = (s[S.B_ALT] - s[S.B_ALT_PREV]) * 10.0
+            b[r, 7] = t_us // 1000
+            b[r, 8] = 0.0
+            b[r, 9] = 25.0
+            b[r, 10] = 1.0
+            b[r, 11] = s[S.B_PRESS]
+    r = L.new_row(bufs, counts, L.K_MAG, t_us)
+    if r >= 0:
+        b = bufs[L.K_MAG]
+        b[r, 1] = 0.0
+        for k in range(3):
+            b[r, 2 + k] = round(s[S.M_FIELD + k] * 1000.0)
+        b[r, 11] = 1.0
+        b[r, 12] = t_us // 1000
+    r = L.new_row(bufs, counts, L.K_RCIN, t_us)
+    if r >= 0:
+        b = bufs[L.K_RCIN]
+        for k in range(8):
+            b[r, 1 + k] = s[S.RC_CH + k]
+    r = L.new_row(bufs, counts, L.K_RCOU, t_us)
+    if r >= 0:
+        b = bufs[L.K_RCOU]
+        for k in range(4):
+            b[r, 1 + k] = round(c[C.MIX_PWM + k])
+    n_lanes = int(sel[EK.SEL_N_LANES])
+    for ln in range(n_lanes):
+        el = ekf[ln]
+        r = L.new_row(bufs, counts, L.K_XKF1, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKF1]
+            lr, lp, ly = L.euler_deg(el[EK.QW], el[EK.QX], el[EK.QY], el[EK.QZ])
+            b[r, 1] = ln
+            b[r, 2] = lr
+            b[r, 3] = lp
+            b[r, 4] = ly
+            b[r, 5] = el[EK.VN]
+            b[r, 6] = el[EK.VE]
+            b[r, 7] = el[EK.VD]
+            b[r, 8] = el[EK.VD]
+            b[r, 9] = el[EK.PN]
+            b[r, 10] = el[EK.PE]
+            b[r, 11] = el[EK.PD]
+            b[r, 12] = el[EK.BGX] * d
+            b[r, 13] = el[EK.BGY] * d
+            b[r, 14] = el[EK.BGZ] * d
+            b[r, 15] = home_alt
+        r = L.new_row(bufs, counts, L.K_XKF4, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKF4]
+            b[r, 1] = ln
+            b[r, 2] = math.sqrt(max(el[EK.VEL_TR], 0.0))
+            b[r, 3] = math.sqrt(max(el[EK.POS_TR], 0.0))
+            b[r, 4] = math.sqrt(max(el[EK.HGT_TR], 0.0))
+            b[r, 5] = math.sqrt(max(el[EK.MAG_TR], 0.0))
+            b[r, 10] = el[EK.FAULT]
+            b[r, 11] = 0.0 if el[EK.F_HORIZ_POS] != 0.0 else 1.0
+            b[r, 14] = sel[EK.SEL_PRIMARY]
+    r = L.new_row(bufs, counts, L.K_CTUN, t_us)
+    if r >= 0:
+        b = bufs[L.K_CTUN]
+        alt = -e[EK.PD]
+        b[r, 1] = c[C.THR_OUT]
+        b[r, 2] = c[C.THR_OUT_BOOSTED] - c[C.THR_OUT]
+        b[r, 3] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
+        b[r, 4] = c[C.THR_HOVER]
+        b[r, 5] = -c[C.PZ_POS_T]
+        b[r, 6] = alt
+        b[r, 7] = s[S.B_ALT]
+        b[r, 8] = math.nan
+        b[r, 9] = 0.0
+        b[r, 10] = math.nan
+        b[r, 11] = round(-c[C.PZ_VEL_T] * 100.0)
+        b[r, 12] = round(-e[EK.VD] * 100.0)
+    r = L.new_row(bufs, counts, L.K_BAT, t_us)
+    if r >= 0:
+        b = bufs[L.K_BAT]
+        b[r, 1] = 0.0
+        b[r, 2] = x[X.BATT_V]
+        b[r, 3] = x[X.BATT_VREST]
+        b[r, 4] = x[X.BATT_I]
+        b[r, 5] = x[X.BATT_AH] * 1000.0
+        b[r, 6] = 0.0
+        b[r, 7] = 0.0
+        b[r, 8] = 0.0
+        b[r, 9] = 100.0
+        b[r, 10] = 1.0
+        b[r, 11] = 0.0
+    r = L.new_row(bufs, counts, L.K_POS, t_us)
+    if r >= 0:
+        b = bufs[L.K_POS]
+        lat, lon = L.ne_to_latlon(home_lat, home_lon, e[EK.PN], e[EK.PE])
+        b[r, 1] = lat
+        b[r, 2] = lon
+        b[r, 3] = home_alt - e[EK.PD]
+        b[r, 4] = -e[EK.PD]
+        b[r, 5] = -e[EK.PD]
+    r = L.new_row(bufs, counts, L.K_SIM, t_us)
+    if r >= 0:
+        b = bufs[L.K_SIM]
+        tr, tp, ty = L.euler_deg(x[X.QW], x[X.QX], x[X.QY], x[X.QZ])
+        lat, lon = L.ne_to_latlon(home_lat, home_lon, x[X.PN], x[X.PE])
+        b[r, 1] = tr
+        b[r, 2] = tp
+        b[r, 3] = ty
+        b[r, 4] = home_alt - x[X.PD]
+        b[r, 5] = lat
+        b[r, 6] = lon
+        for k in range(4):
+            b[r, 7 + k] = x[X.QW + k]
+    for ax in range(3):
+        kbuf = L.K_PSCN + ax
+        r = L.new_row(bufs, counts, kbuf, t_us)
+        if r >= 0:
+            b = bufs[kbuf]
+            if ax < 2:
+                b[r, 1] = c[C.PXY_POS_T + ax]
+                b[r, 2] = c[C.PXY_POS_T + ax]
+                b[r, 4] = c[C.PXY_VEL_T + ax]
+                b[r, 5] = c[C.PXY_VEL_T + ax]
+                b[r, 7] = c[C.PXY_ACC_T + ax]
+                b[r, 8] = c[C.PXY_ACC_T + ax]
+            else:
+                b[r, 1] = c[C.PZ_POS_T]
+                b[r, 2] = c[C.PZ_POS_T]
+                b[r, 4] = c[C.PZ_VEL_T]
+                b[r, 5] = c[C.PZ_VEL_T]
+                b[r, 7] = -c[C.PZ_ACC_T]
+                b[r, 8] = -c[C.PZ_ACC_T]
+            b[r, 3] = e[EK.PN + ax]
+            b[r, 6] = e[EK.VN + ax]
+            b[r, 9] = x[X.AN + ax]
+
+
+# ------------------------------------------------------------------------- Python entry point
+
+
+def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(sensor, frame, control, ekf) configuration arrays for a parameter set."""
+    return build_sensor_config(p), build_frame(p), build_control_config(p), build_ekf_config(p)
+
+
+def build_schedule(
+    params: Params, changes: Sequence[tuple[float, str, float]]
+) -> np.ndarray:
+    """Rows (t_us, target, index, value) realising timed parameter changes.
+
+    Each change (time [s], ArduPilot parameter name, value) is applied to the parameter set in
+    time order; every configuration entry that differs from the previous configuration becomes a
+    row, so any parameter the subsystems read can change in flight, exactly as in SITL.
+    """
+    rows: list[tuple[float, int, int, float]] = []
+    current = params
+    before = _configs(current)
+    for t_s, name, value in sorted(changes, key=lambda c: c[0]):
+        if not math.isfinite(t_s) or t_s < 0:
+            raise ValueError(f"parameter change time must be a finite time >= 0 s, got {t_s}")
+        current = current.updated({name: value})
+        after = _configs(current)
+        for tgt, (a, b) in enumerate(zip(before, after, strict=True)):
+            for idx in np.flatnonzero(a != b):
+                rows.append((round(t_s * 1e6), tgt, int(idx), float(b[idx])))
+        before = after
+    if not rows:
+        return np.zeros((0, 4))
+    return np.array(rows, dtype=np.float64)
+
+
+def mission_path(mission: Mission) -> np.ndarray:
+    """The mission as NED points: the takeoff point above home, then the waypoints."""
+    ned = mission.ned()
+    path = np.empty((ned.shape[0] + 1, 3))
+    path[0] = (0.0, 0.0, -mission.takeoff_alt)
+    path[1:] = ned
+    return path
+
+
+def max_duration_s(mission: Mission, params: Mapping[str, float]) -> float:
+    """Upper bound on a flight's simulated time (sizes the log buffers; the flight ends at
+    disarm + 2 s long before): slow cruise along the path, return, landing, margins."""
+    return float(params.get("TLM_ARM_TIME", 10.0) + 120.0 + 2.5 * mission.path_length_3d_m / 3.0
+                 + 600.0)
+
+
+def fly(
+    mission: Mission | int,
+    faults: Sequence[tuple[float, str, float]] | None = None,
+    params: Params | Mapping[str, float] | None = None,
+    seed: int = 0,
+) -> FlightLog:
+    """Fly one mission and return its FlightLog.
+
+    Args:
+        mission: a Mission, or 1-4 for a built-in one.
+        faults: timed SITL parameter changes ``(time_s, name, value)``, e.g.
+            ``[(120, "SIM_GPS1_ENABLE", 0), (150, "SIM_GPS1_ENABLE", 1)]``; None for none.
+        params: parameter overrides (ArduPilot names) on top of tlm's defaults (the reference
+            SITL logs' parameter set).
+        seed: random seed of all noise draws; a flight is a pure function of its arguments.
+    """
+    if isinstance(mission, bool) or not isinstance(mission, Mission | int | np.integer):
+        raise TypeError(f"mission must be a Mission or a built-in number 1-4, got {mission!r}")
+    if not isinstance(mission, Mission):
+        mission = builtin_mission(int(mission))
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    p = params if isinstance(params, Params) else Params(params)
+    changes = list(faults or ())
+    sched = build_schedule(p, changes)
+    scfg, frame, g, ecfg = _configs(p)
+    home = np.array(mission.home, dtype=np.float64)
+    x = np.zeros(X.N_STATE)
+    init_state(x, frame, math.radians(p.get("SIM_OPOS_HDG", 353.0)))
+    ekf, sel = new_ekf(p)
+    c = np.zeros(C.N_CONTROL_STATE)
+    c[C.THR_HOVER] = g[C.G_MOT_HOVER]
+    c[C.TAKEOFF_ALT] = mission.takeoff_alt
+    c[C.DISARM_TIME] = -1.0
+    path = mission_path(mission)
+    seg = np.zeros((2, 3))
+    duration = max_duration_s(mission, p)
+    bufs = allocate_buffers(duration, LOGGED_MESSAGES)
+    buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
+    counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
+    week, ms = gps_week_ms(BOOT_UTC)
+    seed_rng(int(seed))
+    t_final = run_flight(
+        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, int(seed),
+        int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
+    )
+    meta: dict[str, Any] = {
+        "seed": int(seed),
+        "duration_s": t_final * 1e-6,
+        "mission": mission.name,
+        "home": list(mission.home),
+        "armed_s": float(g[C.G_ARM_TIME]),
+        "disarmed_s": float(c[C.DISARM_TIME]) if c[C.DISARM_TIME] >= 0 else None,
+        "final_mode": int(c[C.MODE]),
+        "waypoints_reached": int(c[C.WP_REACHED]),
+        "n_waypoints": int(mission.n_waypoints),
+        "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
+        "param_changes": [list(ch) for ch in changes],
+    }
+    return FlightLog.from_buffers(
+        {n: bufs[n] for n in L.LOG_ORDER},
+        {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
+        params=p, mission=mission, faults=[], meta=meta,
+    )

@@ -1,0 +1,413 @@
+"""FlightLog: one flight's message tables (pandas) plus its parameters, mission and fault records.
+
+Simulator contract (``FlightLog.from_buffers``)
+-----------------------------------------------
+For every message in ``LOGGED_MESSAGES`` the numba loop fills a float64 array
+``[max_rows, len(SCHEMAS[name].columns)]``, one row per logged message (one row per instance,
+with the instance number in the instance column), columns in schema order, values already in
+the table units of ``tlm_sim.flightlog.schema`` (the units pymavlink shows: Lat/Lng in degrees,
+GPS.Alt in metres, HDop 1.21, XKF1.Roll in degrees, CTUN.CRt in cm/s, MAG in mGauss). TimeUS is
+float64 microseconds since boot (exact below 2**53). String fields (n/N/Z) are left 0.
+The loop returns how many rows of each buffer it filled. ``from_buffers`` slices to the counts,
+quantises every column to its format character (``tlm_sim.flightlog.quantise``) and sorts each
+table stably by TimeUS.
+
+Table dtypes: integer characters → numpy integers (B uint8, b int8, h int16, H uint16, i int32,
+I uint32, q/Q int64, M uint8); f → float64 holding the exact float32 value; c/C/e/E/L → float64
+(raw/100, raw/1e7); d → float64; strings → pandas' string dtype (object on pandas 2).
+
+Folder layout (``write``/``read``)
+----------------------------------
+``DIR/<NAME>.csv`` and/or ``DIR/<NAME>.parquet`` per non-empty table, and ``DIR/meta.json``
+with ``meta``, ``faults``, ``params`` (all), ``params_changed``, ``mission``, the row count of
+every table and the layout of any table whose schema is not in ``SCHEMAS``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .quantise import frame_from_columns, quantise_column, quantise_frame
+from .schema import LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
+from .tableio import read_csv, read_parquet, write_csv, write_parquet
+
+__all__ = ["FlightLog", "allocate_buffers", "to_jsonable"]
+
+FORMAT_NAME = "tlm.flightlog"
+FORMAT_VERSION = 1
+_FORMATS = ("csv", "parquet")
+
+
+def allocate_buffers(
+    duration_s: float,
+    names: Sequence[str] = LOGGED_MESSAGES,
+    instances: Mapping[str, int] | None = None,
+    event_rows: int = 256,
+) -> dict[str, np.ndarray]:
+    """Zeroed float64 log buffers ``[max_rows, n_columns]`` for a flight of ``duration_s``.
+
+    Rows: ``rate_hz × instances × duration × 1.1 + 16`` (at least ``event_rows`` for
+    on-event messages). ``instances`` overrides ``MessageSchema.instances`` per message.
+    """
+    out = {}
+    for n in names:
+        s = SCHEMAS[n]
+        k = (instances or {}).get(n, s.instances)
+        rows = s.max_rows(duration_s, k) if s.rate_hz > 0 else event_rows
+        out[n] = np.zeros((rows, len(s.columns)), dtype=np.float64)
+    return out
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Plain JSON structures from numpy arrays/scalars, dataclasses, NamedTuples, Paths."""
+    if obj is None or isinstance(obj, bool | int | float | str):
+        return obj
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if hasattr(obj, "_asdict"):
+        return {k: to_jsonable(v) for k, v in obj._asdict().items()}
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, pd.DataFrame):
+        return obj.to_dict(orient="list")
+    raise TypeError(f"cannot store {type(obj).__name__} in meta.json")
+
+
+def _params_dict(params: Any) -> dict[str, Any] | None:
+    if params is None:
+        return None
+    d = to_jsonable(params)
+    if not isinstance(d, dict):
+        raise TypeError("params must be a mapping, dataclass or NamedTuple of ArduPilot names")
+    return d
+
+
+def _params_changed(params: Any) -> dict[str, Any] | None:
+    """Parameters that differ from their declared defaults (dataclass / NamedTuple fields)."""
+    if params is None:
+        return None
+    defaults: dict[str, Any] = {}
+    if dataclasses.is_dataclass(params) and not isinstance(params, type):
+        for f in dataclasses.fields(params):
+            if f.default is not dataclasses.MISSING:
+                defaults[f.name] = f.default
+            elif f.default_factory is not dataclasses.MISSING:
+                defaults[f.name] = f.default_factory()
+    elif hasattr(params, "_field_defaults"):
+        defaults = dict(params._field_defaults)
+    values = _params_dict(params) or {}
+    if not defaults:
+        return dict(values)  # no defaults known: all are "set"
+    out = {}
+    for k, v in values.items():
+        if k not in defaults or to_jsonable(defaults[k]) != v:
+            out[k] = v
+    return out
+
+
+def _json_equal(a: Any, b: Any) -> bool:
+    """Equality of JSON-like structures treating NaN == NaN."""
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    if isinstance(a, Mapping) and isinstance(b, Mapping):
+        return a.keys() == b.keys() and all(_json_equal(a[k], b[k]) for k in a)
+    if isinstance(a, list | tuple) and isinstance(b, list | tuple):
+        return len(a) == len(b) and all(_json_equal(x, y) for x, y in zip(a, b, strict=True))
+    return a == b
+
+
+def _as_named(
+    values: Mapping[str, Any] | Sequence[Any], what: str
+) -> dict[str, Any]:
+    if isinstance(values, Mapping):
+        return dict(values)
+    values = list(values)
+    if len(values) != len(LOGGED_MESSAGES):
+        raise ValueError(
+            f"{what}: a sequence must follow LOGGED_MESSAGES ({len(LOGGED_MESSAGES)} entries), "
+            f"got {len(values)}"
+        )
+    return dict(zip(LOGGED_MESSAGES, values, strict=True))
+
+
+class FlightLog:
+    """Tables of one flight (ArduPilot message names and columns) plus its context.
+
+    Attributes:
+        tables: message name → DataFrame (non-empty tables only; see ``table``).
+        schemas: message name → MessageSchema of every table.
+        params: ArduPilot parameter name → value (dict) or None.
+        params_changed: parameters that differ from their declared defaults (all parameters
+            when no defaults are known), or None.
+        mission: the mission (any JSON-able object; plain JSON after ``read``).
+        faults: fault records (Eq. 4: type, label, start/end TimeUS, start/end lat, lon, alt,
+            parameters set), as dicts.
+        meta: free-form flight metadata (seed, duration, tlm version, ...).
+    """
+
+    def __init__(
+        self,
+        tables: Mapping[str, pd.DataFrame],
+        *,
+        params: Any = None,
+        mission: Any = None,
+        faults: Iterable[Mapping[str, Any]] = (),
+        meta: Mapping[str, Any] | None = None,
+        schemas: Mapping[str, MessageSchema] | None = None,
+        params_changed: Mapping[str, Any] | None = None,
+    ) -> None:
+        self.schemas: dict[str, MessageSchema] = {}
+        self.tables: dict[str, pd.DataFrame] = {}
+        for name, df in tables.items():
+            schema = (schemas or {}).get(name) or SCHEMAS.get(name)
+            if schema is None:
+                raise KeyError(f"no schema for table {name!r}: pass schemas={{...}}")
+            self.schemas[name] = schema
+            self.tables[name] = df
+        self.params: dict[str, Any] | None = _params_dict(params)
+        self.params_changed: dict[str, Any] | None = (
+            dict(params_changed) if params_changed is not None else _params_changed(params)
+        )
+        self.mission = mission
+        self.faults: list[dict[str, Any]] = [
+            to_jsonable(f) if not isinstance(f, dict) else dict(f) for f in faults
+        ]
+        self.meta: dict[str, Any] = dict(meta or {})
+
+    # --- construction -----------------------------------------------------------------------
+    @classmethod
+    def from_buffers(
+        cls,
+        buffers: Mapping[str, np.ndarray] | Sequence[np.ndarray],
+        counts: Mapping[str, int] | Sequence[int] | np.ndarray,
+        *,
+        params: Any = None,
+        mission: Any = None,
+        faults: Iterable[Mapping[str, Any]] = (),
+        meta: Mapping[str, Any] | None = None,
+    ) -> FlightLog:
+        """Build a FlightLog from the simulator's float64 log buffers (see module docstring).
+
+        Args:
+            buffers: name → array ``[max_rows, len(SCHEMAS[name].columns)]``, or a sequence
+                in ``LOGGED_MESSAGES`` order.
+            counts: name → rows filled (or a sequence/array in ``LOGGED_MESSAGES`` order).
+            params, mission, faults, meta: stored as given (see class docstring).
+        Returns:
+            a FlightLog whose tables are quantised, typed and sorted stably by TimeUS; tables
+            with 0 rows are left out.
+        """
+        bufs = _as_named(buffers, "buffers")
+        cnts = _as_named(counts, "counts")
+        tables: dict[str, pd.DataFrame] = {}
+        for name, buf in bufs.items():
+            if name not in SCHEMAS:
+                raise KeyError(f"unknown message {name!r}")
+            schema = SCHEMAS[name]
+            if name not in cnts:
+                raise KeyError(f"no row count for {name}")
+            n = int(cnts[name])
+            buf = np.asarray(buf)
+            if buf.ndim != 2 or buf.shape[1] != len(schema.columns):
+                raise ValueError(
+                    f"{name}: buffer shape {buf.shape}, expected (rows, {len(schema.columns)})"
+                )
+            if not 0 <= n <= buf.shape[0]:
+                raise ValueError(f"{name}: count {n} outside 0..{buf.shape[0]}")
+            if n == 0:
+                continue
+            rows = buf[:n]
+            t = quantise_column(rows[:, 0], schema.fmt[0])
+            order = np.argsort(t, kind="stable")
+            cols = {schema.columns[0]: t[order]}
+            for k in range(1, len(schema.columns)):
+                cols[schema.columns[k]] = quantise_column(rows[order, k], schema.fmt[k])
+            tables[name] = frame_from_columns(schema, cols)
+        return cls(tables, params=params, mission=mission, faults=faults, meta=meta)
+
+    @classmethod
+    def from_bin(cls, path: str | os.PathLike, types: Iterable[str] | None = None) -> FlightLog:
+        """FlightLog of a DataFlash ``.bin`` log (tables as ``read_bin``; params from PARM)."""
+        from .binreader import read_bin, read_params, read_schemas
+
+        raw = read_bin(path, types)
+        log_schemas = read_schemas(path)
+        schemas = {}
+        for name in raw:
+            s = SCHEMAS.get(name)
+            ls = log_schemas.get(name)
+            if s is None or (ls is not None and (ls.fmt, ls.columns) != (s.fmt, s.columns)):
+                s = ls
+            schemas[name] = s
+        tables = {n: df for n, df in raw.items() if len(df)}
+        params = read_params(path) if types is None or "PARM" in types else None
+        return cls(tables, params=params, schemas=schemas, meta={"source": os.fspath(path)})
+
+    # --- access -------------------------------------------------------------------------------
+    def table(self, name: str) -> pd.DataFrame:
+        """Table ``name``; an empty, correctly typed table if the flight logged none."""
+        if name in self.tables:
+            return self.tables[name]
+        schema = self.schemas.get(name) or SCHEMAS.get(name)
+        if schema is None:
+            raise KeyError(f"unknown message {name!r}")
+        return quantise_frame(pd.DataFrame({c: [] for c in schema.columns}), schema)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.tables
+
+    def __repr__(self) -> str:
+        rows = ", ".join(f"{n}={len(df)}" for n, df in self.tables.items())
+        return f"FlightLog({rows}; faults={len(self.faults)})"
+
+    def summary(self) -> dict[str, Any]:
+        """Row counts, per-instance rates, time span, faults and meta, as a dict."""
+        tables: dict[str, dict[str, Any]] = {}
+        t0, t1 = None, None
+        for name, df in self.tables.items():
+            schema = self.schemas[name]
+            info: dict[str, Any] = {"rows": len(df), "columns": len(df.columns)}
+            if len(df) and "TimeUS" in df.columns:
+                t = df["TimeUS"].to_numpy()
+                t0 = int(t.min()) if t0 is None else min(t0, int(t.min()))
+                t1 = int(t.max()) if t1 is None else max(t1, int(t.max()))
+                inst = schema.instance_field
+                groups = [t] if inst is None else [
+                    g["TimeUS"].to_numpy() for _, g in df.groupby(inst, sort=True)
+                ]
+                info["instances"] = len(groups)
+                rates = [
+                    (len(g) - 1) / ((g[-1] - g[0]) * 1e-6) for g in groups
+                    if len(g) > 1 and g[-1] > g[0]
+                ]
+                info["rate_hz"] = float(np.mean(rates)) if rates else None
+            tables[name] = info
+        return {
+            "tables": tables,
+            "time_us": [t0, t1],
+            "duration_s": (t1 - t0) * 1e-6 if t0 is not None else 0.0,
+            "faults": [
+                {k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")}
+                for f in self.faults
+            ],
+            "params": None if self.params is None else len(self.params),
+            "meta": dict(self.meta),
+        }
+
+    def equals(self, other: FlightLog) -> bool:
+        """True when tables (values and dtypes), params, mission, faults and meta are equal."""
+        if self.tables.keys() != other.tables.keys():
+            return False
+        for n, df in self.tables.items():
+            o = other.tables[n]
+            if list(df.columns) != list(o.columns) or not df.dtypes.equals(o.dtypes):
+                return False
+            if not df.reset_index(drop=True).equals(o.reset_index(drop=True)):
+                return False
+        return all(
+            _json_equal(to_jsonable(a), to_jsonable(b))
+            for a, b in (
+                (self.params, other.params),
+                (self.params_changed, other.params_changed),
+                (self.mission, other.mission),
+                (self.faults, other.faults),
+                (self.meta, other.meta),
+            )
+        )
+
+    # --- files --------------------------------------------------------------------------------
+    def write(self, out_dir: str | os.PathLike, formats: Iterable[str] = _FORMATS) -> Path:
+        """Write ``DIR/<NAME>.csv`` / ``.parquet`` per non-empty table and ``DIR/meta.json``.
+
+        Args:
+            out_dir: folder (created if missing). Existing files of the same names are
+                overwritten.
+            formats: any of "csv", "parquet".
+        Returns:
+            the folder.
+        """
+        formats = tuple(formats)
+        bad = [f for f in formats if f not in _FORMATS]
+        if bad:
+            raise ValueError(f"unknown formats {bad}; use 'csv' and/or 'parquet'")
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        rows = {}
+        for name, df in self.tables.items():
+            if len(df) == 0:
+                continue
+            schema = self.schemas[name]
+            if "csv" in formats:
+                write_csv(df, schema, out / f"{name}.csv")
+            if "parquet" in formats:
+                write_parquet(df, schema, out / f"{name}.parquet")
+            rows[name] = len(df)
+        extra = {
+            n: {"fmt": s.fmt, "columns": list(s.columns), "units": s.units, "mults": s.mults}
+            for n, s in self.schemas.items()
+            if n in rows and SCHEMAS.get(n) != s
+        }
+        doc = {
+            "format": FORMAT_NAME,
+            "format_version": FORMAT_VERSION,
+            "meta": to_jsonable(self.meta),
+            "faults": to_jsonable(self.faults),
+            "params": self.params,
+            "params_changed": self.params_changed,
+            "mission": to_jsonable(self.mission),
+            "tables": rows,
+            "schemas": extra,
+        }
+        (out / "meta.json").write_text(json.dumps(doc, indent=1) + "\n")
+        return out
+
+    @classmethod
+    def read(cls, in_dir: str | os.PathLike) -> FlightLog:
+        """Read a folder written by ``write`` (Parquet preferred, CSV where no Parquet)."""
+        d = Path(in_dir)
+        if not d.is_dir():
+            raise FileNotFoundError(f"no such flight-log folder: {d}")
+        meta_path = d / "meta.json"
+        doc: dict[str, Any] = json.loads(meta_path.read_text()) if meta_path.exists() else {}
+        schemas = dict(SCHEMAS)
+        for n, s in (doc.get("schemas") or {}).items():
+            schemas[n] = schema_from_fmt(n, s["fmt"], tuple(s["columns"]), s["units"],
+                                         s["mults"])
+        names = sorted({p.stem for p in d.glob("*.parquet")} | {p.stem for p in d.glob("*.csv")})
+        order = list(doc.get("tables") or {})
+        names = [n for n in order if n in names] + [n for n in names if n not in order]
+        tables = {}
+        for n in names:
+            if n not in schemas:
+                continue  # not a table of ours
+            pq_path, csv_path = d / f"{n}.parquet", d / f"{n}.csv"
+            if pq_path.exists():
+                tables[n] = read_parquet(pq_path, schemas[n])
+            else:
+                tables[n] = read_csv(csv_path, schemas[n])
+        return cls(
+            tables,
+            params=doc.get("params"),
+            params_changed=doc.get("params_changed"),
+            mission=doc.get("mission"),
+            faults=doc.get("faults") or (),
+            meta=doc.get("meta"),
+            schemas={n: schemas[n] for n in tables},
+        )

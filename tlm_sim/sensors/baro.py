@@ -1,0 +1,52 @@
+"""Barometer and compass as the autopilot reads them (10 Hz each).
+
+Baro altitude is relative to the ground calibration (home), with SIM_BARO_RND uniform noise and
+SIM_BARO_GLITCH offset; pressure and temperature follow the 1976 standard atmosphere. The compass
+reports the earth field (NED, gauss) rotated into the body frame plus SIM_MAG_RND noise.
+"""
+
+import numpy as np
+from numba import njit
+
+from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics.atmosphere import pressure_temperature
+from tlm_sim.sensors import layout as S
+
+
+@njit(cache=True, nogil=True)
+def baro_sample(s, x, cfg):
+    """Take a baro sample from truth x: altitude above home ground [m], pressure, temperature."""
+    h = -x[X.PD] - cfg[S.C_FRAME_HEIGHT]
+    alt = h + cfg[S.C_BARO_RND] * (2.0 * np.random.random() - 1.0) + cfg[S.C_BARO_GLITCH]
+    s[S.B_ALT_PREV] = s[S.B_ALT]
+    s[S.B_ALT] = alt
+    p, t_k = pressure_temperature(cfg[S.C_HOME_ALT] + alt)
+    s[S.B_PRESS] = p
+    s[S.B_TEMP] = t_k - 273.15
+    return alt
+
+
+@njit(cache=True, nogil=True)
+def mag_sample(s, x, cfg):
+    """Take a compass sample: earth field rotated into the body frame [gauss] (+ noise)."""
+    qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
+    mn = cfg[S.C_MAG_EARTH]
+    me = cfg[S.C_MAG_EARTH + 1]
+    md = cfg[S.C_MAG_EARTH + 2]
+    # R^T m with R the body->NED rotation of q
+    r00 = 1 - 2 * (qy * qy + qz * qz)
+    r01 = 2 * (qx * qy - qw * qz)
+    r02 = 2 * (qx * qz + qw * qy)
+    r10 = 2 * (qx * qy + qw * qz)
+    r11 = 1 - 2 * (qx * qx + qz * qz)
+    r12 = 2 * (qy * qz - qw * qx)
+    r20 = 2 * (qx * qz - qw * qy)
+    r21 = 2 * (qy * qz + qw * qx)
+    r22 = 1 - 2 * (qx * qx + qy * qy)
+    s[S.M_FIELD] = r00 * mn + r10 * me + r20 * md
+    s[S.M_FIELD + 1] = r01 * mn + r11 * me + r21 * md
+    s[S.M_FIELD + 2] = r02 * mn + r12 * me + r22 * md
+    rnd = cfg[S.C_MAG_RND]
+    if rnd != 0.0:
+        for k in range(3):
+            s[S.M_FIELD + k] += rnd * (2.0 * np.random.random() - 1.0)
