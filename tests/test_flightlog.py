@@ -25,6 +25,7 @@ from tlm_sim.flightlog import (
     FlightLog,
     allocate_buffers,
     quantise_column,
+    quantise_frame,
     read_bin,
     read_events,
     read_params,
@@ -96,7 +97,11 @@ def test_read_schemas_matches_registry():
     for name, s in SCHEMAS.items():
         ls = log[name]
         assert (ls.fmt, ls.columns, ls.units, ls.mults, ls.instance_field) == (
-            s.fmt, s.columns, s.units, s.mults, s.instance_field
+            s.fmt,
+            s.columns,
+            s.units,
+            s.mults,
+            s.instance_field,
         )
 
 
@@ -115,9 +120,25 @@ def test_required_messages_and_logged_subset():
 
 @pytest.mark.parametrize(
     ("name", "length"),
-    [("GPS", 51), ("IMU", 54), ("VIBE", 28), ("RATE", 63), ("ATT", 36), ("BARO", 47),
-     ("RCIN", 39), ("XKF1", 56), ("MODE", 14), ("ERR", 13), ("EV", 12), ("PARM", 35),
-     ("MSG", 75), ("FMT", 89), ("UNIT", 76), ("MULT", 20), ("FMTU", 44)],
+    [
+        ("GPS", 51),
+        ("IMU", 54),
+        ("VIBE", 28),
+        ("RATE", 63),
+        ("ATT", 36),
+        ("BARO", 47),
+        ("RCIN", 39),
+        ("XKF1", 56),
+        ("MODE", 14),
+        ("ERR", 13),
+        ("EV", 12),
+        ("PARM", 35),
+        ("MSG", 75),
+        ("FMT", 89),
+        ("UNIT", 76),
+        ("MULT", 20),
+        ("FMTU", 44),
+    ],
 )
 def test_struct_lengths_equal_ardupilot(name, length):
     s = SCHEMAS[name]
@@ -202,8 +223,9 @@ def test_from_buffers_slices_sorts_and_types():
     gps = _filled_buffer("GPS", 3, rng)
     gps[:3, 7] = [-35.36326104, -35.3632611, -35.36326126]
     mode = np.zeros((8, 4))
-    log = FlightLog.from_buffers({"IMU": imu, "GPS": gps, "MODE": mode},
-                                 {"IMU": 40, "GPS": 3, "MODE": 0})
+    log = FlightLog.from_buffers(
+        {"IMU": imu, "GPS": gps, "MODE": mode}, {"IMU": 40, "GPS": 3, "MODE": 0}
+    )
     assert set(log.tables) == {"IMU", "GPS"}  # empty tables are left out
     df = log.tables["IMU"]
     assert len(df) == 40
@@ -248,13 +270,18 @@ _value = st.one_of(
 @st.composite
 def _buffers(draw):
     bufs, counts = {}, {}
-    for name in draw(st.lists(st.sampled_from(_ROUND_TRIP), min_size=1, max_size=4,
-                              unique=True)):
+    for name in draw(st.lists(st.sampled_from(_ROUND_TRIP), min_size=1, max_size=4, unique=True)):
         ncol = len(SCHEMAS[name].columns)
         n = draw(st.integers(0, 12))
         buf = draw(hnp.arrays(np.float64, (n + 2, ncol), elements=_value, fill=st.nothing()))
-        buf[:, 0] = draw(hnp.arrays(np.float64, n + 2, fill=st.nothing(),
-                                    elements=st.floats(0, 2.0**53, allow_nan=False)))
+        buf[:, 0] = draw(
+            hnp.arrays(
+                np.float64,
+                n + 2,
+                fill=st.nothing(),
+                elements=st.floats(0, 2.0**53, allow_nan=False),
+            )
+        )
         bufs[name], counts[name] = buf, n
     return bufs, counts
 
@@ -264,7 +291,9 @@ def _buffers(draw):
 def test_buffers_to_csv_and_parquet_round_trip(data):
     bufs, counts = data
     log = FlightLog.from_buffers(
-        bufs, counts, params={"SIM_ENGINE_MUL": 1.0, "WPNAV_SPEED": 600},
+        bufs,
+        counts,
+        params={"SIM_ENGINE_MUL": 1.0, "WPNAV_SPEED": 600},
         mission={"waypoints": [[-35.36, 149.16, 20.0]]},
         faults=[{"type": "gps", "label": 1, "start_time_us": 5, "end_time_us": 9}],
         meta={"seed": 3, "duration_s": 1.5},
@@ -287,24 +316,44 @@ def test_buffers_to_csv_and_parquet_round_trip(data):
 
 def test_write_layout_csv_format_and_meta(tmp_path):
     gps = np.zeros((2, 15))
-    gps[0] = [3e6, 0, 6, 123456000, 2300, 10, 1.21, -35.363261, 149.16523, 584.0, 1.5, 90.0,
-              -0.2, 0, 1]
+    gps[0] = [
+        3e6,
+        0,
+        6,
+        123456000,
+        2300,
+        10,
+        1.21,
+        -35.363261,
+        149.16523,
+        584.0,
+        1.5,
+        90.0,
+        -0.2,
+        0,
+        1,
+    ]
 
     @dataclasses.dataclass
     class Params:
         SIM_ENGINE_MUL: float = 1.0
         WPNAV_SPEED: float = 1000.0
 
-    log = FlightLog.from_buffers({"GPS": gps, "EV": np.zeros((4, 2))}, {"GPS": 1, "EV": 0},
-                                 params=Params(WPNAV_SPEED=600.0), meta={"seed": 7},
-                                 faults=[{"type": "rc", "label": 4, "start_time_us": np.int64(1)}])
+    log = FlightLog.from_buffers(
+        {"GPS": gps, "EV": np.zeros((4, 2))},
+        {"GPS": 1, "EV": 0},
+        params=Params(WPNAV_SPEED=600.0),
+        meta={"seed": 7},
+        faults=[{"type": "rc", "label": 4, "start_time_us": np.int64(1)}],
+    )
     out = log.write(tmp_path / "flight", formats=("csv",))
     files = sorted(p.name for p in out.iterdir())
     assert files == ["GPS.csv", "meta.json"]  # empty EV skipped, no Parquet asked for
     lines = (out / "GPS.csv").read_text().splitlines()
     assert lines[0] == ",".join(SCHEMAS["GPS"].columns)
-    assert lines[1] == ("3000000,0,6,123456000,2300,10,1.21,-35.3632610,149.1652300,584.00,1.5,"
-                        "90.0,-0.2,0.0,1")
+    assert lines[1] == (
+        "3000000,0,6,123456000,2300,10,1.21,-35.3632610,149.1652300,584.00,1.5,90.0,-0.2,0.0,1"
+    )
     doc = json.loads((out / "meta.json").read_text())
     assert doc["meta"] == {"seed": 7}
     assert doc["params_changed"] == {"WPNAV_SPEED": 600.0}
@@ -410,6 +459,25 @@ def test_reference_tables_round_trip_through_files(ref_tables, tmp_path):
     for p in tmp_path.glob("*.parquet"):
         p.unlink()
     assert FlightLog.read(tmp_path).equals(log)
+
+
+def test_array_format_round_trip(tmp_path):
+    from tlm_sim.flightlog.schema import schema_from_fmt
+
+    s = schema_from_fmt("ARRY", "QaB", "TimeUS,Arr,X")
+    df = quantise_frame(
+        pd.DataFrame({"TimeUS": [1, 2], "Arr": [list(range(40)), [5, 6]], "X": [1, 2]}), s
+    )
+    assert df["Arr"].iloc[0].tolist() == list(range(32))
+    assert df["Arr"].iloc[1].tolist() == [5, 6] + [0] * 30
+    FlightLog({"ARRY": df}, schemas={"ARRY": s}).write(tmp_path)
+    for back in (FlightLog.read(tmp_path), None):
+        if back is None:
+            (tmp_path / "ARRY.parquet").unlink()
+            back = FlightLog.read(tmp_path)
+        got = back.tables["ARRY"]
+        assert [a.tolist() for a in got["Arr"]] == [a.tolist() for a in df["Arr"]]
+        assert got["X"].tolist() == [1, 2]
 
 
 def test_read_bin_missing_file(tmp_path):

@@ -3,10 +3,7 @@
 ``tlm_sim.fly(mission, faults=None, params=None, seed=0) -> FlightLog``.
 """
 
-try:
-    from tlm_sim.flight import fly
-except ImportError:  # DEVTMP
-    fly = None
+from tlm_sim.flight import fly
 from tlm_sim.flightlog import FlightLog
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import ParamError, Params

@@ -176,11 +176,16 @@ def run_flight(
             mag_sample(s, x, scfg)
             mag_new = True
         rc_update(s, scfg, float(t_us))
-        ekf_update(
+        switched = ekf_update(
             ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
             gps_new, gps[0:3], gps[3:6], gps[8] > 0.5,
-            baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3],
+            baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], c[C.ARMED] != 0.0,
         )
+        if switched:  # ERR EKF_PRIMARY with the new lane index
+            r = L.new_row(bufs, counts, L.K_ERR, float(t_us))
+            if r >= 0:
+                bufs[L.K_ERR][r, 1] = 24.0
+                bufs[L.K_ERR][r, 2] = sel[EK.SEL_PRIMARY]
         lane = int(sel[EK.SEL_PRIMARY])
         e = ekf[lane]
         for k in range(3):

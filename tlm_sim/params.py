@@ -164,6 +164,18 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "earth field inclination at home, + down (SITL WMM table at CMAC, §1.13)")),
     ("TLM_MAG_INT_GA", 0.579, ParamInfo(
         "gauss", 0.0, 2.0, "earth field intensity at home (SITL WMM table at CMAC, §1.13)")),
+    ("TLM_GYRO_COUPLING", 1.0, ParamInfo(
+        "", 0.0, 1.0,
+        "1 = include the gyroscopic w x Iw term in the rigid body (conserves angular momentum); "
+        "0 = SITL-exact (SITL omits it, §1.8)", integer=True)),
+    ("TLM_ARM_TIME", 10.0, ParamInfo(
+        "s", 0.5, 3600.0,
+        "simulated time since boot at which the vehicle arms in GUIDED and takes off (the "
+        "reference SITL flights armed at ~42 s after waiting for GPS and EKF origin)")),
+    ("TLM_WP_LEG_K", 0.94, ParamInfo(
+        "", 0.1, 2.0,
+        "S-curve leg-speed factor: cruise on a leg of length L is K*(L*sqrt(WPNAV_JERK)/2)^(2/3), "
+        "fitted to the reference SITL logs (~3.4 m/s on 13.5 m legs)")),
     ("TLM_PROFILE", 0.0, ParamInfo(
         "", 0.0, 1.0,
         "behaviour profile: 0 = ArduPilot 2598e9d4 (current), 1 = paper era 4.1/4.2 (§6)",

@@ -8,6 +8,7 @@ from tlm_sim.dynamics import layout
 from tlm_sim.dynamics.atmosphere import (
     GRAVITY_MSS,
     air_density,
+    air_density_gradient,
     eas_to_tas,
     pressure_temperature,
 )
@@ -16,6 +17,7 @@ from tlm_sim.dynamics.body import (
     height_above_ground,
     init_state,
     physics_step,
+    run_ticks,
     set_airborne,
     yaw_of,
 )
@@ -40,6 +42,7 @@ __all__ = [
     "N_FRAME",
     "PHYSICS_DT_S",
     "air_density",
+    "air_density_gradient",
     "build_frame",
     "command_to_pwm",
     "eas_to_tas",
@@ -55,6 +58,7 @@ __all__ = [
     "pressure_temperature",
     "pwm_to_command",
     "resting_voltage",
+    "run_ticks",
     "seed_rng",
     "set_airborne",
     "update_battery",

@@ -8,7 +8,7 @@ All functions are scalar ``@njit`` functions usable from the flight loop and fro
 
 from __future__ import annotations
 
-from numba import njit
+from tlm_sim.dynamics._jit import tick_jit
 
 #: standard gravity [m/s^2]
 GRAVITY_MSS: float = 9.80665
@@ -26,27 +26,35 @@ R0_M: float = 6356766.0
 _P_EXP: float = GRAVITY_MSS / (LAPSE_K_PER_M * R_AIR)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def temperature_ratio(alt_amsl_m: float) -> float:
     """Return ``T / T0`` at geometric altitude ``alt_amsl_m`` [m AMSL] (dimensionless)."""
     hgp = R0_M * alt_amsl_m / (R0_M + alt_amsl_m)
     return (T0_K - LAPSE_K_PER_M * hgp) / T0_K
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def air_density(alt_amsl_m: float) -> float:
     """Air density [kg/m^3] at geometric altitude ``alt_amsl_m`` [m AMSL]."""
     return RHO0 * temperature_ratio(alt_amsl_m) ** (_P_EXP - 1.0)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
+def air_density_gradient(alt_amsl_m: float) -> float:
+    """Derivative of the air density with geometric altitude [kg/m^4] at ``alt_amsl_m``."""
+    theta = temperature_ratio(alt_amsl_m)
+    dhgp_dh = (R0_M / (R0_M + alt_amsl_m)) ** 2
+    return RHO0 * (_P_EXP - 1.0) * theta ** (_P_EXP - 2.0) * (-LAPSE_K_PER_M / T0_K) * dhgp_dh
+
+
+@tick_jit
 def pressure_temperature(alt_amsl_m: float) -> tuple[float, float]:
     """Static pressure [Pa] and temperature [K] at geometric altitude ``alt_amsl_m`` [m AMSL]."""
     theta = temperature_ratio(alt_amsl_m)
     return P0_PA * theta**_P_EXP, T0_K * theta
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def eas_to_tas(alt_amsl_m: float) -> float:
     """Equivalent-to-true airspeed ratio ``sqrt(rho0 / rho)`` at ``alt_amsl_m`` [m AMSL]."""
     return (RHO0 / air_density(alt_amsl_m)) ** 0.5

@@ -17,9 +17,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.frame import F_BATT_CAP_AH, F_BATT_RES, F_BATT_VOLT, F_MAX_VOLT
 
 #: cut-off frequency of the terminal-voltage filter [Hz]
@@ -44,7 +44,7 @@ _CELL_SOC = np.array(
 )  # fmt: skip
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def resting_voltage(soc_pct: float, max_voltage: float) -> float:
     """Resting (open-circuit) pack voltage [V] at state of charge ``soc_pct`` [%]."""
     full = _CELL_V[0]
@@ -56,7 +56,7 @@ def resting_voltage(soc_pct: float, max_voltage: float) -> float:
     return 0.001
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def soc_from_voltage(voltage: float, max_voltage: float) -> float:
     """State of charge [%] whose resting voltage is ``voltage`` [V] (inverse of the curve)."""
     cell = voltage / max_voltage * _CELL_V[0]
@@ -67,7 +67,7 @@ def soc_from_voltage(voltage: float, max_voltage: float) -> float:
     return 0.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def reset_battery(x: np.ndarray, frame: np.ndarray) -> None:
     """(Re)initialise the battery to ``SIM_BATT_VOLTAGE`` (keeps the consumed-charge count)."""
     v = frame[F_BATT_VOLT]
@@ -82,7 +82,7 @@ def reset_battery(x: np.ndarray, frame: np.ndarray) -> None:
         x[X.BATT_VREST] = v
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def init_battery(x: np.ndarray, frame: np.ndarray) -> None:
     """Initialise the battery state at the start of a flight (no charge consumed, no load)."""
     x[X.BATT_I] = 0.0
@@ -90,7 +90,7 @@ def init_battery(x: np.ndarray, frame: np.ndarray) -> None:
     reset_battery(x, frame)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@tick_jit
 def update_battery(x: np.ndarray, frame: np.ndarray, current: float, dt: float) -> None:
     """Advance the battery by ``dt`` [s] under load ``current`` [A]; updates the BATT_* state."""
     if frame[F_BATT_VOLT] != x[X.BATT_VSET]:

@@ -20,10 +20,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from tlm_sim.dynamics import layout as X
-from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
+from tlm_sim.dynamics._jit import tick_jit
+from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
 from tlm_sim.dynamics.frame import (
     F_FRAME_HEIGHT,
@@ -47,9 +47,12 @@ ACCEL_LIMIT: float = 64.0 * GRAVITY_MSS
 GROUND_EPS_M: float = 0.001
 #: minimum time between two recorded ground impacts [s]
 IMPACT_HOLDOFF_S: float = 1.0
+#: the air density is interpolated linearly within this distance of its anchor altitude [m]
+#: (relative error below 1e-7, against a pow() per tick)
+RHO_SPAN_M: float = 5.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def _clamp(v: float, lim: float) -> float:
     if v > lim:
         return lim
@@ -58,13 +61,30 @@ def _clamp(v: float, lim: float) -> float:
     return v
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
+def update_air_density(x: np.ndarray, frame: np.ndarray) -> None:
+    """Set ``RHO`` to the air density at the vehicle, altitude ``home_alt - PD`` [m AMSL].
+
+    The 1976 atmosphere is evaluated at an anchor altitude and interpolated linearly within
+    RHO_SPAN_M of it; the anchor moves when the vehicle leaves that span.
+    """
+    alt = frame[F_HOME_ALT] - x[X.PD]
+    dh = alt - x[X.RHO_ALT]
+    if dh > RHO_SPAN_M or dh < -RHO_SPAN_M or x[X.RHO_ANCHOR] <= 0.0:
+        x[X.RHO_ALT] = alt
+        x[X.RHO_ANCHOR] = air_density(alt)
+        x[X.RHO_GRAD] = air_density_gradient(alt)
+        dh = 0.0
+    x[X.RHO] = x[X.RHO_ANCHOR] + x[X.RHO_GRAD] * dh
+
+
+@tick_jit
 def height_above_ground(x: np.ndarray, frame: np.ndarray) -> float:
     """Height of the ground-contact point above home ground [m] (0 when resting)."""
     return -x[X.PD] - frame[F_FRAME_HEIGHT]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def set_yaw_level(x: np.ndarray, yaw_rad: float) -> None:
     """Set the attitude to level with heading ``yaw_rad`` [rad]."""
     x[X.QW] = math.cos(0.5 * yaw_rad)
@@ -73,14 +93,14 @@ def set_yaw_level(x: np.ndarray, yaw_rad: float) -> None:
     x[X.QZ] = math.sin(0.5 * yaw_rad)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def yaw_of(x: np.ndarray) -> float:
     """Heading [rad] of the attitude quaternion in ``x`` (ZYX Euler yaw)."""
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def init_state(x: np.ndarray, frame: np.ndarray, yaw_rad: float) -> None:
     """Initialise ``x`` to a vehicle resting on the pad at home, motors stopped, facing yaw.
 
@@ -95,12 +115,12 @@ def init_state(x: np.ndarray, frame: np.ndarray, yaw_rad: float) -> None:
     x[X.FZ] = -GRAVITY_MSS
     x[X.ON_GROUND] = 1.0
     x[X.TIME_LAST_AIRBORNE] = 0.0
-    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+    update_air_density(x, frame)
     init_battery(x, frame)
     init_wind(x, frame)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: float) -> None:
     """Put the vehicle ``height_m`` [m] above ground, at rest, motors settled at ``command``.
 
@@ -111,10 +131,11 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
     x[X.TIME_LAST_AIRBORNE] = -1.0e9
     for i in range(N_MOTORS):
         x[X.M1 + i] = command
-    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+    x[X.RHO_ANCHOR] = 0.0
+    update_air_density(x, frame)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None:
     """Advance the truth state ``x`` by one physics tick of ``dt`` [s] (in place).
 
@@ -125,7 +146,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     g = GRAVITY_MSS
     # --- environment -------------------------------------------------------------------
     update_wind(x, frame, dt, t_s)
-    x[X.RHO] = air_density(frame[F_HOME_ALT] - x[X.PD])
+    update_air_density(x, frame)
 
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
     # DCM body -> NED of the current attitude
@@ -250,3 +271,18 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     # --- battery ------------------------------------------------------------------------
     update_battery(x, frame, current, dt)
+
+
+@tick_jit
+def run_ticks(
+    x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float, n: int
+) -> float:
+    """Run ``n`` physics ticks of ``dt`` [s] with constant ``pwm`` from time ``t_s`` [s].
+
+    Returns the simulated time after the last tick [s]. For tests, benchmarks and open-loop
+    experiments; the flight loop calls :func:`physics_step` itself.
+    """
+    for _ in range(n):
+        physics_step(x, pwm, frame, dt, t_s)
+        t_s += dt
+    return t_s

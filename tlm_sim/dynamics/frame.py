@@ -26,8 +26,8 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
-from numba import njit
 
+from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
 
 #: number of motors of the plus frame
@@ -250,7 +250,7 @@ def hover_command(frame: np.ndarray) -> float:
     return _hover_command(float(frame[F_HOVER_THR]), float(frame[F_EXPO]))
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def pwm_to_command(pwm: float, frame: np.ndarray) -> float:
     """Motor command 0..1 for a servo PWM [us] (SITL ``Motor::pwm_to_command``)."""
     lo = frame[F_PWM_LO]
@@ -262,7 +262,7 @@ def pwm_to_command(pwm: float, frame: np.ndarray) -> float:
     return a
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def command_to_pwm(a: float, frame: np.ndarray) -> float:
     """Servo PWM [us] that gives motor command ``a`` (0..1): the inverse of pwm_to_command."""
     return frame[F_PWM_LO] + a * (frame[F_PWM_HI] - frame[F_PWM_LO])

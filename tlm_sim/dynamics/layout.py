@@ -43,5 +43,8 @@ BATT_REM_AH, BATT_VSET = 46, 47
 RHO = 48
 # wind model cache: unit vector (NED) of the filtered direction the wind comes FROM
 WIND_UN, WIND_UE, WIND_UD = 49, 50, 51
+# air density cache: altitude [m AMSL] where RHO_ANCHOR [kg/m^3] and its gradient RHO_GRAD
+# [kg/m^4] were evaluated (RHO is interpolated linearly within a few metres of it)
+RHO_ALT, RHO_ANCHOR, RHO_GRAD = 52, 53, 54
 
-N_STATE = 52
+N_STATE = 55

@@ -11,9 +11,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.frame import (
     F_AREA_CD,
     F_AREA_EFF,
@@ -38,7 +38,7 @@ from tlm_sim.dynamics.frame import (
 PAPER_YAW_SCALE: float = math.radians(40.0)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def slew_command(pwm: float, last: float, frame: np.ndarray, dt: float) -> float:
     """Motor command 0..1 for ``pwm`` [us], rate limited to ``slew_max * dt`` from ``last``."""
     a = pwm_to_command(pwm, frame)
@@ -52,7 +52,7 @@ def slew_command(pwm: float, last: float, frame: np.ndarray, dt: float) -> float
     return a
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@tick_jit
 def motor_forces(
     x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float
 ) -> tuple[float, float, float, float, float, float, float]:

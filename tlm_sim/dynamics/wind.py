@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.frame import (
     F_FRAME_HEIGHT,
     F_WIND_DIR,
@@ -39,13 +39,13 @@ GUST_IIR: float = 0.98
 GUST_SCALE: float = 10.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def seed_rng(seed: int) -> None:
     """Seed numba's global random generator (the one used inside njit code)."""
-    np.random.seed(seed)
+    np.random.seed(seed)  # noqa: NPY002 - numba's global generator is the one njit code uses
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def wrap_180(deg: float) -> float:
     """Wrap an angle [deg] into [-180, 180)."""
     if -180.0 <= deg < 180.0:
@@ -53,7 +53,7 @@ def wrap_180(deg: float) -> float:
     return (deg + 180.0) % 360.0 - 180.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def wrap_360(deg: float) -> float:
     """Wrap an angle [deg] into [0, 360)."""
     if 0.0 <= deg < 360.0:
@@ -61,7 +61,7 @@ def wrap_360(deg: float) -> float:
     return deg % 360.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def profile_speed(speed: float, height_m: float, frame: np.ndarray) -> float:
     """Wind speed [m/s] at ``height_m`` above ground for the ``SIM_WIND_T`` profile (>= 0)."""
     kind = frame[F_WIND_T]
@@ -74,7 +74,7 @@ def profile_speed(speed: float, height_m: float, frame: np.ndarray) -> float:
     return max(speed, 0.0)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def _set_direction(x: np.ndarray, dir_deg: float, dirz_deg: float) -> None:
     """Store the filtered directions [deg] and the unit vector the wind comes from."""
     x[X.WIND_DIR_F] = dir_deg
@@ -87,7 +87,7 @@ def _set_direction(x: np.ndarray, dir_deg: float, dirz_deg: float) -> None:
     x[X.WIND_UD] = math.sin(thz)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@tick_jit
 def init_wind(x: np.ndarray, frame: np.ndarray) -> None:
     """Reset the wind state: no wind, filters at zero speed and at the parameter directions.
 
@@ -103,7 +103,7 @@ def init_wind(x: np.ndarray, frame: np.ndarray) -> None:
     _set_direction(x, wrap_360(frame[F_WIND_DIR]), frame[F_WIND_DIR_Z])
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@tick_jit
 def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None:
     """Advance the wind model by ``dt`` [s] at simulated time ``t_s`` [s]; writes WIND_N/E/D.
 
@@ -134,9 +134,9 @@ def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None
         turb = frame[F_WIND_TURB]
         if turb > 0.0 and x[X.ON_GROUND] < 0.5:
             amp = GUST_SCALE * turb * (1.0 - GUST_IIR)
-            gh = GUST_IIR * x[X.GUST_H] + amp * np.random.standard_normal()
-            gv = GUST_IIR * x[X.GUST_V] + amp * np.random.standard_normal()
-            az = 2.0 * math.pi * np.random.random()
+            gh = GUST_IIR * x[X.GUST_H] + amp * np.random.standard_normal()  # noqa: NPY002
+            gv = GUST_IIR * x[X.GUST_V] + amp * np.random.standard_normal()  # noqa: NPY002
+            az = 2.0 * math.pi * np.random.random()  # noqa: NPY002
             x[X.GUST_H] = gh
             x[X.GUST_V] = gv
             wn += math.cos(az) * gh

@@ -15,6 +15,7 @@ import numpy as np
 from tlm_sim.ekf import layout as L
 
 GRAVITY = 9.80665  # m/s^2
+DEFAULT_GPS_DELAY_MS = 200.0
 
 
 def _gate_sigmas(gate_percent: float) -> float:
@@ -34,6 +35,18 @@ def earth_field_ned(dec_deg: float, inc_deg: float, intensity_ga: float) -> np.n
     return np.array([h * math.cos(dec), h * math.sin(dec), intensity_ga * math.sin(inc)])
 
 
+def gps_delay_s(params: Mapping[str, float]) -> float:
+    """Assumed lag of GPS samples [s]: GPS1_DELAY_MS (or the older GPS_DELAY_MS) when > 0, else
+    the driver default DEFAULT_GPS_DELAY_MS (ArduPilot's u-blox driver reports 0.22 s until the
+    receiver generation is known; SITL itself lags its samples by SIM_GPS1_LAG_MS = 100 ms)."""
+    ms = float(params.get("GPS1_DELAY_MS", 0.0) or 0.0)
+    if ms <= 0.0:
+        ms = float(params.get("GPS_DELAY_MS", 0.0) or 0.0)
+    if ms <= 0.0:
+        ms = DEFAULT_GPS_DELAY_MS
+    return ms * 1e-3
+
+
 def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     """Return the ``cfg[N_CFG]`` float64 array from ArduPilot-named parameters.
 
@@ -43,7 +56,7 @@ def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     EK3_ABIAS_P_NSE (m/s^3, 0.02), EK3_VEL_I_GATE / EK3_POS_I_GATE / EK3_HGT_I_GATE (%, 500),
     EK3_MAG_I_GATE (%, 300), EK3_GLITCH_RAD (m, 25), EK3_NOAID_M_NSE (m, 10),
     EK3_ERR_THRESH (0.2), EK3_HGT_DELAY (ms, 60), EK3_ACC_BIAS_LIM (m/s^2, 1.0),
-    GPS_DELAY_MS (ms, 200: assumed lag of GPS samples), TLM_MAG_DEC_DEG (deg, 12.5),
+    GPS1_DELAY_MS (ms, 0 = driver default, see :func:`gps_delay_s`), TLM_MAG_DEC_DEG (deg, 12.5),
     TLM_MAG_INC_DEG (deg, -66), TLM_MAG_INT_GA (gauss, 0.58), TLM_LOOP_HZ (Hz, 400),
     TLM_EKF_TARGET_DT (s, 0.012: covariance prediction interval target, as EKF3).
     """
@@ -68,7 +81,7 @@ def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     c[L.C_GLITCH_RAD] = float(p.get("EK3_GLITCH_RAD", 25.0))
     c[L.C_NOAID_NSE] = float(p.get("EK3_NOAID_M_NSE", 10.0))
     c[L.C_ERR_THRESH] = float(p.get("EK3_ERR_THRESH", 0.2))
-    c[L.C_GPS_DELAY] = float(p.get("GPS_DELAY_MS", 200.0)) * 1e-3
+    c[L.C_GPS_DELAY] = gps_delay_s(p)
     c[L.C_HGT_DELAY] = float(p.get("EK3_HGT_DELAY", 60.0)) * 1e-3
     field = earth_field_ned(
         float(p.get("TLM_MAG_DEC_DEG", 12.5)),
@@ -87,6 +100,9 @@ def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     c[L.C_LANE_INIT_T] = 1.0
     c[L.C_SELECT_T] = 10.0
     c[L.C_ONGROUND_NSE] = 0.5
+    c[L.C_BAD_IMU_ACC_NSE] = 5.0
+    c[L.C_BAD_IMU_HOLD] = 10.0
+    c[L.C_BAD_IMU_TIMEOUT] = 1.0
     imus = lane_imus(params)
     c[L.C_N_LANES] = len(imus)
     for i, imu in enumerate(imus):

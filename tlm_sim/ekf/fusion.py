@@ -27,9 +27,13 @@ from tlm_sim.ekf.layout import (
     AID_MODE,
     AID_NONE,
     ALIGNED,
+    BAD_IMU,
+    BARO_LAST,
     BUF_OFS,
     C_ABIAS_LIM,
     C_ALT_NSE,
+    C_BAD_IMU_HOLD,
+    C_BAD_IMU_TIMEOUT,
     C_CONSTPOS_DT,
     C_DT,
     C_GBIAS_LIM,
@@ -48,6 +52,7 @@ from tlm_sim.ekf.layout import (
     C_POS_GATE,
     C_POS_RETRY,
     C_POSNE_NSE,
+    C_USING_GPS_T,
     C_VEL_GATE,
     C_VELD_NSE,
     C_VELNE_NSE,
@@ -56,6 +61,13 @@ from tlm_sim.ekf.layout import (
     ES_ATT,
     ES_POS,
     ES_VEL,
+    F_ATTITUDE,
+    F_CONST_POS,
+    F_HORIZ_POS,
+    F_HORIZ_VEL,
+    F_USING_GPS,
+    F_VERT_POS,
+    F_VERT_VEL,
     FAULT,
     HGT_RESET_COUNT,
     HGT_TR,
@@ -92,7 +104,10 @@ from tlm_sim.ekf.layout import (
     R20,
     R21,
     R22,
+    T_BAD_IMU,
+    T_BARO_LAST,
     T_CONSTPOS,
+    T_GOOD_IMU,
     T_GPS_FUSED,
     T_HGT_PASS,
     T_POS_PASS,
@@ -108,12 +123,12 @@ from tlm_sim.ekf.layout import (
 )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _delay_ticks(cfg, delay_s):
     return int(delay_s / cfg[C_DT] + 0.5)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago.
 
@@ -150,7 +165,47 @@ def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     e[T_GPS_FUSED] = t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
+def _bad_imu_check(e, cfg, t, vd_gps, k, r_vd):
+    """EKF3's bad-IMU (accel aliasing) check and response; returns True while it is active.
+
+    Detection: with a baro sample less than 0.2 s old, the height and vertical-velocity errors
+    (state minus measurement, at the GPS time horizon) have the same sign and both exceed
+    gain * R (gain 1 within 1.5 hold times of the last detection, 4 within 2, else 9).
+    Response for C_BAD_IMU_HOLD seconds: vertical velocity set to the GPS value, GPS and baro
+    fused without innovation gates, accel process noise raised to C_BAD_IMU_ACC_NSE; after
+    C_BAD_IMU_TIMEOUT seconds of continuous detections the height is reset to the baro (at most
+    once per timeout).
+    """
+    hold = cfg[C_BAD_IMU_HOLD]
+    r_hgt = cfg[C_ALT_NSE] ** 2
+    if t - e[T_BARO_LAST] < 0.2:
+        hgt_err = buffer_get(e, k, 2) + e[BARO_LAST]
+        vd_err = buffer_get(e, k, 5) - vd_gps
+        since = t - e[T_BAD_IMU]
+        gain = 9.0 if since > 2.0 * hold else (4.0 if since > 1.5 * hold else 1.0)
+        if hgt_err * vd_err > 0.0 and hgt_err**2 > gain * r_hgt and vd_err**2 > gain * r_vd:
+            e[T_BAD_IMU] = t
+        else:
+            e[T_GOOD_IMU] = t
+    bad = t - e[T_BAD_IMU] < hold
+    e[BAD_IMU] = 1.0 if bad else 0.0
+    if bad:
+        dvd = vd_gps - buffer_get(e, k, 5)
+        e[VD] += dvd
+        e[BUF_OFS + 5] += dvd
+        if t - e[T_GOOD_IMU] > cfg[C_BAD_IMU_TIMEOUT] and t - e[T_BARO_LAST] < 0.2:
+            # bad for longer than the timeout: reset the height to the baro
+            dpd = -e[BARO_LAST] - buffer_get(e, k, 2)
+            e[PD] += dpd
+            e[BUF_OFS + 2] += dpd
+            reset_block(e, ES_POS + 2, 1, r_hgt)
+            e[HGT_RESET_COUNT] += 1.0
+            e[T_GOOD_IMU] = t
+    return bad
+
+
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_fuse_gps(e, cfg, t, pos, vel):
     """Fuse one 3-D-fix GPS sample: pos[0:2] NE [m] from the origin, vel[0:3] NED [m/s].
 
@@ -158,7 +213,7 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     sample starts absolute aiding with a reset to GPS. Otherwise velocity (N, E, D) and position
     (N, E) are gated separately and fused sequentially; when position or velocity has not passed
     for C_POS_RETRY seconds, or the horizontal position variance exceeds EK3_GLITCH_RAD^2, the
-    lane is reset to GPS instead.
+    lane is reset to GPS instead. While the bad-IMU response is active the gates are bypassed.
     """
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
         return
@@ -166,15 +221,17 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     if e[AID_MODE] == AID_NONE:
         reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
         e[AID_MODE] = AID_ABSOLUTE
+        update_flags(e, cfg, t)
         return
+    r_vne = cfg[C_VELNE_NSE] ** 2
+    r_vd = cfg[C_VELD_NSE] ** 2
+    r_p = cfg[C_POSNE_NSE] ** 2
+    bad = _bad_imu_check(e, cfg, t, vel[2], k, r_vd)
     yvn = vel[0] - buffer_get(e, k, 3)
     yve = vel[1] - buffer_get(e, k, 4)
     yvd = vel[2] - buffer_get(e, k, 5)
     ypn = pos[0] - buffer_get(e, k, 0)
     ype = pos[1] - buffer_get(e, k, 1)
-    r_vne = cfg[C_VELNE_NSE] ** 2
-    r_vd = cfg[C_VELD_NSE] ** 2
-    r_p = cfg[C_POSNE_NSE] ** 2
     d = NS + 1
     svn = e[P0 + (ES_VEL + 0) * d] + r_vne
     sve = e[P0 + (ES_VEL + 1) * d] + r_vne
@@ -195,31 +252,38 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
     if timed_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
         reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        update_flags(e, cfg, t)
         return
-    if vel_tr >= 1.0 and pos_tr >= 1.0:
+    fuse_vel = vel_tr < 1.0 or bad
+    fuse_pos = pos_tr < 1.0 or bad
+    if not (fuse_vel or fuse_pos):
         return
     clear_dx(e)
-    if vel_tr < 1.0:
+    if fuse_vel:
         fuse_index(e, ES_VEL + 0, yvn, r_vne)
         fuse_index(e, ES_VEL + 1, yve, r_vne)
         fuse_index(e, ES_VEL + 2, yvd, r_vd)
         e[T_VEL_PASS] = t
-    if pos_tr < 1.0:
+    if fuse_pos:
         fuse_index(e, ES_POS + 0, ypn, r_p)
         fuse_index(e, ES_POS + 1, ype, r_p)
         e[T_POS_PASS] = t
         e[T_GPS_FUSED] = t
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+    update_flags(e, cfg, t)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_fuse_baro(e, cfg, t, alt):
     """Fuse a baro altitude above the origin [m, up], delayed by EK3_HGT_DELAY.
 
-    After C_HGT_RETRY seconds of rejected samples the height is reset to the baro.
+    After C_HGT_RETRY seconds of rejected samples the height is reset to the baro. The gate is
+    bypassed while the bad-IMU response is active.
     """
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
         return
+    e[BARO_LAST] = alt
+    e[T_BARO_LAST] = t
     k = _delay_ticks(cfg, cfg[C_HGT_DELAY])
     y = -alt - buffer_get(e, k, 2)
     r = cfg[C_ALT_NSE] ** 2
@@ -227,7 +291,7 @@ def lane_fuse_baro(e, cfg, t, alt):
     tr = y * y / (cfg[C_HGT_GATE] ** 2 * s)
     e[HGT_TR] = tr
     e[INNOV_HGT] = y
-    if tr < 1.0:
+    if tr < 1.0 or e[BAD_IMU] != 0.0:
         clear_dx(e)
         fuse_index(e, ES_POS + 2, y, r)
         apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
@@ -240,7 +304,7 @@ def lane_fuse_baro(e, cfg, t, alt):
         e[T_HGT_PASS] = t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_fuse_mag(e, cfg, mag):
     """Fuse a body-frame magnetometer sample mag[0:3] [gauss] (3-axis, fixed earth field).
 
@@ -295,7 +359,7 @@ def lane_fuse_mag(e, cfg, mag):
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_fuse_constpos(e, cfg, t, armed):
     """Constant-position pseudo-measurement (aiding mode NONE), every C_CONSTPOS_DT seconds.
 
@@ -320,10 +384,25 @@ def lane_fuse_constpos(e, cfg, t, armed):
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def is_finite_lane(e):
     """False if the quaternion, velocity, position or any covariance diagonal is not finite."""
     s = e[0] + e[VN] + e[VE] + e[VD] + e[PN] + e[PE] + e[PD]
     for i in range(NS):
         s += e[P0 + i * (NS + 1)]
     return math.isfinite(s)
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def update_flags(e, cfg, t):
+    """Refresh the lane status flags (layout F_*) for time t [s]."""
+    aligned = e[ALIGNED] != 0.0 and e[FAULT] == 0.0
+    absolute = aligned and e[AID_MODE] == AID_ABSOLUTE
+    retry = cfg[C_POS_RETRY]
+    e[F_ATTITUDE] = 1.0 if aligned else 0.0
+    e[F_HORIZ_VEL] = 1.0 if absolute and t - e[T_VEL_PASS] <= retry else 0.0
+    e[F_HORIZ_POS] = 1.0 if absolute and t - e[T_POS_PASS] <= retry else 0.0
+    e[F_VERT_VEL] = 1.0 if aligned else 0.0
+    e[F_VERT_POS] = 1.0 if aligned and t - e[T_HGT_PASS] <= cfg[C_HGT_RETRY] else 0.0
+    e[F_CONST_POS] = 1.0 if aligned and e[AID_MODE] == AID_NONE else 0.0
+    e[F_USING_GPS] = 1.0 if absolute and t - e[T_GPS_FUSED] <= cfg[C_USING_GPS_T] else 0.0

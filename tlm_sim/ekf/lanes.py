@@ -31,6 +31,7 @@ from tlm_sim.ekf.fusion import (
     lane_fuse_constpos,
     lane_fuse_gps,
     lane_fuse_mag,
+    update_flags,
 )
 from tlm_sim.ekf.layout import (
     ACC_DT,
@@ -42,6 +43,7 @@ from tlm_sim.ekf.layout import (
     ALIGN_FY,
     ALIGN_FZ,
     ALIGNED,
+    BAD_IMU,
     BAX,
     BGX,
     BUF_COUNT,
@@ -51,20 +53,19 @@ from tlm_sim.ekf.layout import (
     C_ACC_PNSE,
     C_ALIGN_TIME,
     C_ALT_NSE,
+    C_BAD_IMU_ACC_NSE,
+    C_BAD_IMU_HOLD,
     C_DT,
     C_ERR_THRESH,
     C_GBIAS_PNSE,
     C_GYRO_PNSE,
-    C_HGT_RETRY,
     C_LANE_IMU,
     C_LANE_INIT_T,
     C_MAG_E,
     C_MAG_N,
-    C_POS_RETRY,
     C_SELECT_T,
     C_TARGET_DT,
     C_TILT_DRIFT,
-    C_USING_GPS_T,
     CONSTPOS_E,
     CONSTPOS_N,
     ES_ATT,
@@ -78,7 +79,6 @@ from tlm_sim.ekf.layout import (
     F_HORIZ_VEL,
     F_USING_GPS,
     F_VERT_POS,
-    F_VERT_VEL,
     FAULT,
     HEALTHY,
     HGT_TR,
@@ -132,6 +132,8 @@ from tlm_sim.ekf.layout import (
     SEL_T_PRIMARY,
     SEL_T_SWITCH,
     T_ALIGNED,
+    T_BAD_IMU,
+    T_BARO_LAST,
     T_CONSTPOS,
     T_GPS_FUSED,
     T_HGT_PASS,
@@ -152,7 +154,7 @@ INIT_GBIAS_SD = math.radians(2.5)  # rad/s (EKF3: 2.5 deg/s)
 INIT_ABIAS_SD = 0.1  # m/s^2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_init(ekf, sel, cfg):
     """Reset all lanes to "waiting for alignment" and the selector to lane 0 primary.
 
@@ -168,6 +170,8 @@ def ekf_init(ekf, sel, cfg):
         ekf[i, IMU_INDEX] = cfg[C_LANE_IMU + i]
         ekf[i, IMU_OK] = 1.0
         ekf[i, BUF_HEAD] = -1.0
+        ekf[i, T_BAD_IMU] = -1.0e9
+        ekf[i, T_BARO_LAST] = -1.0e9
     for j in range(sel.shape[0]):
         sel[j] = 0.0
     sel[SEL_N_LANES] = n
@@ -177,7 +181,7 @@ def ekf_init(ekf, sel, cfg):
         sel[SEL_T_PRIMARY + i] = -1.0e9
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _align(e, cfg, t):
     """Tilt from the averaged specific force, yaw from the magnetometer; initialise P."""
     f = 1.0 / e[ALIGN_DT]
@@ -219,27 +223,16 @@ def _align(e, cfg, t):
     e[T_POS_PASS] = t
     e[T_VEL_PASS] = t
     e[T_GPS_FUSED] = -1.0e9
+    e[T_BAD_IMU] = -1.0e9
+    e[BAD_IMU] = 0.0
+    e[T_BARO_LAST] = -1.0e9
     e[BUF_HEAD] = -1.0
     e[BUF_COUNT] = 0.0
     for j in range(6):
         e[BUF_OFS + j] = 0.0
 
 
-@njit(cache=True, nogil=True)
-def _update_flags(e, cfg, t):
-    aligned = e[ALIGNED] != 0.0 and e[FAULT] == 0.0
-    absolute = aligned and e[AID_MODE] == AID_ABSOLUTE
-    retry = cfg[C_POS_RETRY]
-    e[F_ATTITUDE] = 1.0 if aligned else 0.0
-    e[F_HORIZ_VEL] = 1.0 if absolute and t - e[T_VEL_PASS] <= retry else 0.0
-    e[F_HORIZ_POS] = 1.0 if absolute and t - e[T_POS_PASS] <= retry else 0.0
-    e[F_VERT_VEL] = 1.0 if aligned else 0.0
-    e[F_VERT_POS] = 1.0 if aligned and t - e[T_HGT_PASS] <= cfg[C_HGT_RETRY] else 0.0
-    e[F_CONST_POS] = 1.0 if aligned and e[AID_MODE] == AID_NONE else 0.0
-    e[F_USING_GPS] = 1.0 if absolute and t - e[T_GPS_FUSED] <= cfg[C_USING_GPS_T] else 0.0
-
-
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     """One main-loop tick of one lane (see the module docstring); t in seconds."""
     dt = cfg[C_DT] if e[T_LAST] < 0.0 else t - e[T_LAST]
@@ -249,7 +242,7 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     imu = int(e[IMU_INDEX])
     if imu_ok[imu] == 0 or e[FAULT] != 0.0:
         e[IMU_OK] = 1.0 if imu_ok[imu] != 0 else 0.0
-        _update_flags(e, cfg, t)
+        update_flags(e, cfg, t)
         return
     e[IMU_OK] = 1.0
     if e[ALIGNED] == 0.0:
@@ -259,23 +252,29 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
         e[ALIGN_DT] += dt
         if e[ALIGN_DT] >= cfg[C_ALIGN_TIME] and e[MAG_HAVE] != 0.0:
             _align(e, cfg, t)
-        _update_flags(e, cfg, t)
+        update_flags(e, cfg, t)
         return
     propagate(e, dang, dvel, imu, dt)
     buffer_push(e)
     if e[ACC_DT] >= cfg[C_TARGET_DT] - 0.5 * dt:
         tt = e[ACC_DT]
+        acc_nse = cfg[C_ACC_PNSE]
+        if e[BAD_IMU] != 0.0:
+            if t - e[T_BAD_IMU] >= cfg[C_BAD_IMU_HOLD]:
+                e[BAD_IMU] = 0.0
+            else:
+                acc_nse = max(acc_nse, cfg[C_BAD_IMU_ACC_NSE])
         predict_covariance(
             e,
             (cfg[C_GYRO_PNSE] * tt) ** 2,
-            (cfg[C_ACC_PNSE] * tt) ** 2,
+            (acc_nse * tt) ** 2,
             (cfg[C_GBIAS_PNSE] * tt) ** 2,
             (cfg[C_ABIAS_PNSE] * tt) ** 2,
         )
         e[N_PREDICT] += 1.0
         if not is_finite_lane(e):
             e[FAULT] = 1.0
-            _update_flags(e, cfg, t)
+            update_flags(e, cfg, t)
             return
     # aiding: absolute -> none after the tilt-drift time without GPS position or velocity
     if e[AID_MODE] == AID_ABSOLUTE:
@@ -287,10 +286,10 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
             e[T_CONSTPOS] = t - cfg[C_TARGET_DT]
     if e[AID_MODE] == AID_NONE:
         lane_fuse_constpos(e, cfg, t, armed)
-    _update_flags(e, cfg, t)
+    update_flags(e, cfg, t)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
     """Predict all lanes by one main-loop tick.
 
@@ -303,7 +302,7 @@ def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
         lane_predict(ekf[i], cfg, t, dang, dvel, imu_ok, armed)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
     """New GPS sample: pos[0:3] NED [m] from the origin, vel[0:3] NED [m/s], lagged by
     GPS_DELAY_MS. Nothing is fused unless fix_3d (a no-fix sample is how a GPS loss looks)."""
@@ -314,7 +313,7 @@ def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
         lane_fuse_gps(ekf[i], cfg, t, pos, vel)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_fuse_baro(ekf, cfg, t_us, alt):
     """New baro sample: altitude above the origin [m, up]."""
     t = t_us * 1e-6
@@ -322,14 +321,14 @@ def ekf_fuse_baro(ekf, cfg, t_us, alt):
         lane_fuse_baro(ekf[i], cfg, t, alt)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_fuse_mag(ekf, cfg, mag):
     """New magnetometer sample: body-frame field mag[0:3] [gauss]."""
     for i in range(ekf.shape[0]):
         lane_fuse_mag(ekf[i], cfg, mag)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_score(e):
     """EKF3 error score max(0.5 (vel + pos), hgt) of a lane (0 before alignment)."""
     if e[ALIGNED] == 0.0:
@@ -337,7 +336,7 @@ def lane_score(e):
     return max(0.5 * (e[VEL_TR] + e[POS_TR]), e[HGT_TR])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_healthy(e, cfg, t):
     """Lane health: aligned, IMU delivering, no fault, out of its first second, and not all of
     the velocity, position and height test ratios above 1."""
@@ -348,7 +347,7 @@ def lane_healthy(e, cfg, t):
     return not (e[VEL_TR] > 1.0 and e[POS_TR] > 1.0 and e[HGT_TR] > 1.0)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     """Update lane scores/health and switch the primary lane as EKF3 does (section 3.4).
 
@@ -399,12 +398,7 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
             best = i
     if best < 0:
         return False
-    switch = (
-        imu_dead
-        or not healthy_p
-        or (sp > 1.0 and ekf[best, SCORE] < sp)
-        or best_rel <= -0.5
-    )
+    switch = imu_dead or not healthy_p or (sp > 1.0 and ekf[best, SCORE] < sp) or best_rel <= -0.5
     if not switch:
         return False
     sel[SEL_T_PRIMARY + p] = t
@@ -416,7 +410,7 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_update(
     ekf,
     sel,
@@ -453,7 +447,7 @@ def ekf_update(
     return ekf_select_primary(ekf, sel, cfg, t_us, armed)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def quat_to_euler(qw, qx, qy, qz):
     """ZYX Euler angles (roll, pitch, yaw) [rad] of a body -> NED quaternion."""
     roll = math.atan2(2.0 * (qw * qx + qy * qz), 1.0 - 2.0 * (qx * qx + qy * qy))
@@ -464,7 +458,7 @@ def quat_to_euler(qw, qx, qy, qz):
     return roll, pitch, yaw
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_output(ekf, sel, out):
     """Fill out[N_OUT] (layout O_*) from the primary lane: attitude, velocity, position, biases,
     Euler angles, status flags, square roots of the test ratios (what ekf_check compares with
@@ -498,7 +492,7 @@ def ekf_output(ekf, sel, out):
     out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def ekf_primary(sel):
     """Index of the primary lane."""
     return int(sel[SEL_PRIMARY])

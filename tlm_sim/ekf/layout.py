@@ -105,8 +105,14 @@ N_PREDICT = 472  # covariance predictions so far
 # applied later shift all stored entries at O(1) cost)
 BUF_HEAD = 473  # index of the newest row
 BUF_COUNT = 474  # rows filled (<= NBUF)
-BUF_OFS = 475  # cumulative corrections pn, pe, pd, vn, ve, vd (6)
-BUF0 = 481  # NBUF rows of BUF_ROW
+# bad-IMU handling (EKF3: vertical GPS velocity and height innovations both large, same sign)
+BAD_IMU = 475  # 1 while the bad-IMU response is active (held 10 s after the last detection)
+T_BAD_IMU = 476  # last detection [s]
+BARO_LAST = 477  # latest baro altitude [m, up]
+T_BARO_LAST = 478  # time of the latest baro sample [s]
+T_GOOD_IMU = 479  # last GPS sample without bad-IMU detection (or last bad-IMU height reset) [s]
+BUF_OFS = 480  # cumulative corrections pn, pe, pd, vn, ve, vd (6)
+BUF0 = 486  # NBUF rows of BUF_ROW
 N_EKF = BUF0 + NBUF * BUF_ROW
 
 # aiding modes (EKF3 names)
@@ -159,7 +165,10 @@ C_SELECT_T = 32  # primary healthy this long before selection runs; min time bet
 C_ONGROUND_NSE = 33  # constant-position noise while disarmed [m]
 C_N_LANES = 34  # number of lanes (from EK3_IMU_MASK)
 C_LANE_IMU = 35  # IMU instance of each lane (MAX_LANES)
-N_CFG = C_LANE_IMU + MAX_LANES
+C_BAD_IMU_ACC_NSE = C_LANE_IMU + MAX_LANES  # accel process noise while the IMU is bad [m/s^2]
+C_BAD_IMU_HOLD = C_BAD_IMU_ACC_NSE + 1  # bad-IMU response hold time [s]
+C_BAD_IMU_TIMEOUT = C_BAD_IMU_HOLD + 1  # continuous bad-IMU time before a height reset [s]
+N_CFG = C_BAD_IMU_TIMEOUT + 1
 
 # ------------------------------------------------------------------ output vector --------------
 # filled by tlm_sim.ekf.lanes.ekf_output from the primary lane

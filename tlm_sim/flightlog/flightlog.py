@@ -150,6 +150,9 @@ def _as_named(
 class FlightLog:
     """Tables of one flight (ArduPilot message names and columns) plus its context.
 
+    The constructor stores the tables as given: they must already be canonical (quantised and
+    typed, as made by ``from_buffers``, ``read``, ``read_bin`` or ``quantise_frame``).
+
     Attributes:
         tables: message name → DataFrame (non-empty tables only; see ``table``).
         schemas: message name → MessageSchema of every table.
@@ -247,6 +250,7 @@ class FlightLog:
         """FlightLog of a DataFlash ``.bin`` log (tables as ``read_bin``; params from PARM)."""
         from .binreader import read_bin, read_params, read_schemas
 
+        types = None if types is None else list(types)
         raw = read_bin(path, types)
         log_schemas = read_schemas(path)
         schemas = {}

@@ -12,6 +12,7 @@ bit-identical values:
   (``Q`` is int64).
 * strings (n N Z) → ``str``, truncated to the field width in UTF-8 bytes; numbers (the
   simulator leaves 0 there), None and NaN become "".
+* ``a`` (int16[32]) → an object column of int16 arrays of length 32.
 
 Rounding is round-half-to-even (``np.rint``). Quantising is idempotent.
 """
@@ -70,7 +71,27 @@ def _to_str(values: Sequence | np.ndarray, width: int) -> np.ndarray:
         else:  # numbers (simulator placeholder 0), None, NaN
             b = b""
         b = b[:width].split(b"\0", 1)[0]
-        out[k] = b.decode("utf-8", errors="ignore")
+        try:
+            out[k] = b.decode("utf-8")
+        except UnicodeDecodeError:  # as pymavlink: fall back to Latin-1
+            out[k] = b.decode("latin-1")
+    return out
+
+
+def _to_int16_arrays(values: Sequence | np.ndarray) -> np.ndarray:
+    """Object column of int16[32] arrays (format ``a``) from bytes, sequences or text."""
+    out = np.empty(len(values), dtype=object)
+    for k, v in enumerate(values):
+        if isinstance(v, bytes | bytearray):
+            a = np.frombuffer(bytes(v), dtype="<i2")
+        elif isinstance(v, str):
+            a = np.array([int(x) for x in v.split()], dtype=np.int64)
+        else:
+            a = np.asarray(v, dtype=np.float64)
+            a = np.clip(np.nan_to_num(np.rint(a)), -32768, 32767)
+        b = np.zeros(32, dtype=np.int16)
+        b[: min(32, a.size)] = np.asarray(a).reshape(-1)[:32]
+        out[k] = b
     return out
 
 
@@ -87,7 +108,7 @@ def quantise_column(values: Sequence | np.ndarray, char: str) -> np.ndarray:
     if fc.kind == "str":
         return _to_str(values, _STR_WIDTH[char])
     if fc.kind == "array":
-        raise ValueError("format character 'a' (int16[32]) is not supported in tables")
+        return _to_int16_arrays(values)
     arr = np.asarray(values)
     if fc.kind == "float":
         x = arr.astype(np.float64, copy=False)
@@ -115,10 +136,7 @@ def raw_to_column(raw: np.ndarray | Sequence, char: str) -> np.ndarray:
     if fc.kind == "str":
         return _to_str(raw, _STR_WIDTH[char])
     if fc.kind == "array":
-        out = np.empty(len(raw), dtype=object)
-        for k, v in enumerate(raw):
-            out[k] = np.frombuffer(bytes(v), dtype="<i2").copy() if isinstance(v, bytes) else v
-        return out
+        return _to_int16_arrays(raw)
     arr = np.asarray(raw)
     if fc.kind == "scaled":
         return arr.astype(np.float64) / _divisor(fc.reader_scale)

@@ -7,7 +7,8 @@ that reading them back and re-quantising gives bit-identical tables:
 * ``f`` (float32) as the shortest decimal that round-trips the float32 ("0.1", "1e-05",
   "nan", "inf"); ``g`` likewise for float16; ``d`` as the shortest float64 round-trip decimal;
 * ``c C e E`` with exactly two decimals ("584.12"), ``L`` with seven ("-35.3632610");
-* strings as text (quoted by the CSV writer where needed).
+* strings as text (quoted by the CSV writer where needed); ``a`` arrays as 32
+  space-separated integers.
 
 Parquet (pyarrow, zstd): ``f`` columns are stored as float32, everything else in its table
 dtype; the schema (fmt, units, mults) is kept in the file's key-value metadata.
@@ -41,6 +42,8 @@ def _format_column(values: np.ndarray, char: str) -> np.ndarray | list[str]:
     if kind == "scaled":
         spec = ".7f" if char == "L" else ".2f"
         return [format(v, spec) for v in values.tolist()]
+    if kind == "array":
+        return [" ".join(str(int(x)) for x in v) for v in values]
     return values  # strings
 
 
@@ -59,7 +62,7 @@ def read_csv(path: str | os.PathLike, schema: MessageSchema) -> pd.DataFrame:
     na: dict[str, list[str]] = {}
     for c, f in zip(schema.columns, schema.fmt, strict=True):
         kind = FORMAT_CHARS[f].kind
-        if kind == "str":
+        if kind in ("str", "array"):
             dtypes[c] = str
         elif kind == "int":
             dtypes[c] = np.int64 if f != "Q" else np.uint64
@@ -89,6 +92,8 @@ def write_parquet(df: pd.DataFrame, schema: MessageSchema, path: str | os.PathLi
             arr = pa.array(v.astype(np.float32), type=pa.float32())
         elif kind == "str":
             arr = pa.array([str(x) for x in v], type=pa.string())
+        elif kind == "array":
+            arr = pa.array([np.asarray(x, dtype=np.int16) for x in v], type=pa.list_(pa.int16()))
         else:
             arr = pa.array(v.astype(FORMAT_CHARS[f].dtype))
         arrays.append(arr)

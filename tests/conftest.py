@@ -1,0 +1,33 @@
+"""Shared fixtures: reference SITL log location and flights flown once per test session."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+REFERENCE = REPO.parent / "shared" / "reference" / "sitl"
+
+
+def reference_path(name: str) -> Path:
+    """Path of a reference SITL file; skips the test (with the reason) when it is absent."""
+    p = REFERENCE / name
+    if not p.exists():
+        pytest.skip(f"reference SITL logs not found at {REFERENCE}")
+    return p
+
+
+@lru_cache(maxsize=16)
+def flown(mission: int, seed: int = 0):
+    """A default flight of a built-in mission, flown once per test process."""
+    from tlm_sim import fly
+
+    return fly(mission, seed=seed)
+
+
+@pytest.fixture(scope="session")
+def normal_flight():
+    """Built-in mission 1, seed 0, default parameters."""
+    return flown(1, 0)

@@ -1,0 +1,586 @@
+"""Physics of SITL's "+" quad (tlm_sim.dynamics) against ardupilot-reference.md §1."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tlm_sim.dynamics import (
+    GRAVITY_MSS,
+    PHYSICS_DT_S,
+    air_density,
+    air_density_gradient,
+    build_frame,
+    command_to_pwm,
+    frame_copy,
+    hover_command,
+    init_state,
+    physics_step,
+    pressure_temperature,
+    pwm_to_command,
+    resting_voltage,
+    run_ticks,
+    seed_rng,
+    set_airborne,
+    update_wind,
+    yaw_of,
+)
+from tlm_sim.dynamics import frame as F
+from tlm_sim.dynamics import layout as X
+
+G = GRAVITY_MSS
+DT = PHYSICS_DT_S
+
+
+def new_state(frame: np.ndarray, yaw: float = 0.0) -> np.ndarray:
+    x = np.zeros(X.N_STATE)
+    init_state(x, frame, yaw)
+    return x
+
+
+def airborne(frame: np.ndarray, height: float, command: float) -> np.ndarray:
+    x = new_state(frame)
+    set_airborne(x, frame, height, command)
+    return x
+
+
+def pwm_all(value: float) -> np.ndarray:
+    return np.full(4, float(value))
+
+
+def hover_pwm(frame: np.ndarray) -> np.ndarray:
+    return pwm_all(command_to_pwm(hover_command(frame), frame))
+
+
+def quat_to_dcm(x: np.ndarray) -> np.ndarray:
+    w, i, j, k = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
+    return np.array(
+        [
+            [1 - 2 * (j * j + k * k), 2 * (i * j - w * k), 2 * (i * k + w * j)],
+            [2 * (i * j + w * k), 1 - 2 * (i * i + k * k), 2 * (j * k - w * i)],
+            [2 * (i * k - w * j), 2 * (j * k + w * i), 1 - 2 * (i * i + j * j)],
+        ]
+    )
+
+
+def euler(x: np.ndarray) -> tuple[float, float, float]:
+    """Roll, pitch, yaw [rad] (ZYX) of the attitude in x."""
+    r = quat_to_dcm(x)
+    return (
+        math.atan2(r[2, 1], r[2, 2]),
+        -math.asin(max(-1.0, min(1.0, r[2, 0]))),
+        math.atan2(r[1, 0], r[0, 0]),
+    )
+
+
+def set_euler(x: np.ndarray, roll: float, pitch: float, yaw: float) -> None:
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    x[X.QW] = cr * cp * cy + sr * sp * sy
+    x[X.QX] = sr * cp * cy - cr * sp * sy
+    x[X.QY] = cr * sp * cy + sr * cp * sy
+    x[X.QZ] = cr * cp * sy - sr * sp * cy
+
+
+@pytest.fixture(scope="module")
+def frame() -> np.ndarray:
+    return build_frame({})
+
+
+# --------------------------------------------------------------------------- atmosphere
+def test_atmosphere_matches_1976_standard() -> None:
+    p0, t0 = pressure_temperature(0.0)
+    assert p0 == pytest.approx(101325.0)
+    assert t0 == pytest.approx(288.15)
+    assert air_density(0.0) == pytest.approx(1.225)
+    assert air_density(593.0) == pytest.approx(1.1568, abs=5e-5)
+    assert air_density(584.0) == pytest.approx(1.1578, abs=5e-5)
+    p, t = pressure_temperature(1000.0)
+    assert p == pytest.approx(89876.0, rel=2e-4)  # 1976 table, 1 km geometric
+    assert t == pytest.approx(281.66, abs=0.02)
+    h = 700.0
+    fd = (air_density(h + 0.01) - air_density(h - 0.01)) / 0.02
+    assert air_density_gradient(h) == pytest.approx(fd, rel=1e-6)
+
+
+# --------------------------------------------------------------------------- frame
+def test_derived_constants_match_reference_table(frame: np.ndarray) -> None:
+    """§1.3 'Numbers for the default frame'."""
+    assert frame[F.F_RHO_REF] == pytest.approx(1.1568, abs=5e-5)
+    assert frame[F.F_D_REF] == pytest.approx(29.42, abs=5e-3)
+    assert frame[F.F_D_MOM] == pytest.approx(6.49, abs=5e-3)
+    assert frame[F.F_AREA_CD] == pytest.approx(0.1743, abs=5e-5)
+    assert frame[F.F_MDRAG_COEF] == 0.2  # not scaled down: D_mom < D_ref
+    assert frame[F.F_HOVER_POWER] == pytest.approx(354.2, abs=0.05)
+    assert frame[F.F_HOVER_VOUT] == pytest.approx(24.08, abs=5e-3)
+    assert 4 * frame[F.F_AREA_EFF] == pytest.approx(0.08771, abs=5e-6)
+    assert frame[F.F_AREA_EFF] == pytest.approx(0.02193, abs=5e-6)
+    assert frame[F.F_AREA_TRUE] == pytest.approx(0.09625, abs=5e-6)
+    assert frame[F.F_VEL_MAX] == pytest.approx(38.56, abs=5e-3)
+    assert frame[F.F_IXX] == pytest.approx(0.02297, abs=5e-6)
+    assert frame[F.F_IYY] == frame[F.F_IXX]
+    assert frame[F.F_IZZ] == pytest.approx(0.04594, abs=5e-6)
+    assert frame[F.F_ROT_DAMP] == pytest.approx(0.0582, abs=5e-5)
+    assert frame[F.F_PWM_LO] == 1150.0
+    assert frame[F.F_PWM_HI] == 1950.0
+    k_m = frame[F.F_MDRAG_COEF] * math.sqrt(frame[F.F_RHO_REF] * frame[F.F_AREA_TRUE])
+    assert k_m == pytest.approx(0.0667, abs=5e-5)
+    t_max = 0.5 * frame[F.F_RHO_REF] * frame[F.F_AREA_EFF] * frame[F.F_VEL_MAX] ** 2
+    assert t_max == pytest.approx(18.86, abs=5e-3)
+    assert 4 * t_max / (frame[F.F_MASS] * G) == pytest.approx(2.56, abs=5e-3)
+    # hover command solves (1-e)a + e a^2 = 0.39 (the table's 0.5505 is a rounding slip:
+    # it gives 0.3897); hover PWM ~1590 us
+    a_h = hover_command(frame)
+    assert 0.35 * a_h + 0.65 * a_h * a_h == pytest.approx(0.39, abs=1e-12)
+    assert a_h == pytest.approx(0.5508, abs=1e-4)
+    assert command_to_pwm(a_h, frame) == pytest.approx(1590.0, abs=1.0)
+    # per-motor hover current at 12.6 V: 7.0 A
+    i_motor = frame[F.F_POWER_FACTOR] * frame[F.F_MASS] * G / 4 / 12.6
+    assert i_motor == pytest.approx(7.0, abs=0.05)
+
+
+def test_motor_table_and_parameters() -> None:
+    f = build_frame({"TLM_DIAG": 0.5, "TLM_IXX": 0.1, "TLM_IYY": 0.2, "TLM_IZZ": 0.3})
+    assert list(f[F.F_MOT_X : F.F_MOT_X + 4]) == [0.0, 0.0, 0.5, -0.5]
+    assert list(f[F.F_MOT_Y : F.F_MOT_Y + 4]) == [0.5, -0.5, 0.0, 0.0]
+    assert list(f[F.F_MOT_YAW : F.F_MOT_YAW + 4]) == [1.0, 1.0, -1.0, -1.0]
+    assert (f[F.F_IXX], f[F.F_IYY], f[F.F_IZZ]) == (0.1, 0.2, 0.3)
+    assert build_frame({"SIM_BATT_CAP_AH": 2.0})[F.F_BATT_CAP_AH] == 2.0
+    assert build_frame({"TLM_BATT_CAP_AH": 3.0})[F.F_BATT_CAP_AH] == 3.0
+    # a huge momentum-drag coefficient is scaled down to the reference drag, areaCd -> 0
+    g = build_frame({"TLM_MDRAG_COEF": 2.0})
+    assert g[F.F_AREA_CD] == 0.0
+    assert g[F.F_MDRAG_COEF] == pytest.approx(2.0 * g[F.F_D_REF] / g[F.F_D_MOM])
+
+
+def test_pwm_command_mapping(frame: np.ndarray) -> None:
+    assert pwm_to_command(1000.0, frame) == 0.0
+    assert pwm_to_command(1150.0, frame) == 0.0
+    assert pwm_to_command(1550.0, frame) == pytest.approx(0.5)
+    assert pwm_to_command(1950.0, frame) == 1.0
+    assert pwm_to_command(2100.0, frame) == 1.0
+    for a in (0.0, 0.3, 0.5508, 1.0):
+        assert pwm_to_command(command_to_pwm(a, frame), frame) == pytest.approx(a)
+
+
+def test_slew_limit(frame: np.ndarray) -> None:
+    x = airborne(frame, 50.0, 0.0)
+    pwm = pwm_all(2000.0)
+    step = frame[F.F_SLEW_MAX] * DT  # 0.125 per tick: full range in 8 ticks (6.7 ms)
+    for k in range(1, 9):
+        physics_step(x, pwm, frame, DT, 0.0)
+        assert x[X.M1] == pytest.approx(min(1.0, k * step), abs=1e-12)
+    physics_step(x, pwm, frame, DT, 0.0)
+    assert x[X.M1] == 1.0
+    physics_step(x, pwm_all(1000.0), frame, DT, 0.0)
+    assert x[X.M1] == pytest.approx(1.0 - step)
+
+
+# --------------------------------------------------------------------------- equilibrium
+def test_hover_equilibrium(frame: np.ndarray) -> None:
+    x = airborne(frame, 10.0, hover_command(frame))
+    p0 = x[X.PN : X.PD + 1].copy()
+    pwm = hover_pwm(frame)
+    t = 0.0
+    for _ in range(1200):
+        t = run_ticks(x, pwm, frame, DT, t, 1)
+        assert math.sqrt(x[X.AN] ** 2 + x[X.AE] ** 2 + x[X.AD] ** 2) < 0.05
+    assert np.linalg.norm(x[X.PN : X.PD + 1] - p0) < 0.01
+    # the accelerometer reads -g on z, nothing else; no rotation
+    assert x[X.FZ] == pytest.approx(-G, abs=0.05)
+    assert abs(x[X.FX]) < 1e-9 and abs(x[X.FY]) < 1e-9
+    assert np.all(x[X.WX : X.WZ + 1] == 0.0)
+    assert x[X.ON_GROUND] == 0.0
+    # at the reference density the hover command gives exactly the weight
+    for i in range(4):
+        assert x[X.T1 + i] == pytest.approx(frame[F.F_MASS] * G / 4, rel=2e-3)
+
+
+def test_hover_at_reference_density_is_exact(frame: np.ndarray) -> None:
+    height = frame[F.F_REF_ALT] - frame[F.F_HOME_ALT] - frame[F.F_FRAME_HEIGHT]
+    x = airborne(frame, height, hover_command(frame))
+    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 10)
+    assert abs(x[X.AD]) < 1e-9
+
+
+# --------------------------------------------------------------------------- free fall
+def test_free_fall_without_drag_matches_half_g_t2(frame: np.ndarray) -> None:
+    f = frame_copy(frame, F_AREA_CD=0.0)
+    x = airborne(f, 100.0, 0.0)
+    z0 = x[X.PD]
+    n = 1800  # 1.5 s
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    t = n * DT
+    drop = x[X.PD] - z0
+    assert drop == pytest.approx(0.5 * G * t * t, rel=0.01)
+    assert x[X.VD] == pytest.approx(G * t, rel=1e-9)
+    # weightless: an accelerometer in free fall reads zero
+    assert np.allclose(x[X.FX : X.FZ + 1], 0.0, atol=1e-9)
+    assert x[X.AD] == pytest.approx(G)
+
+
+def test_free_fall_with_drag_matches_quadratic_drag_solution(frame: np.ndarray) -> None:
+    x = airborne(frame, 100.0, 0.0)
+    z0 = x[X.PD]
+    n = 3000  # 2.5 s, about 28 m: drag is a third of the weight at the end
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, n)
+    t = n * DT
+    rho = air_density(frame[F.F_HOME_ALT] - 0.5 * (z0 + x[X.PD]))
+    k = frame[F.F_AREA_CD] * 0.5 * rho / frame[F.F_MASS]
+    drop = math.log(math.cosh(math.sqrt(G * k) * t)) / k
+    assert x[X.PD] - z0 == pytest.approx(drop, rel=0.01)
+    assert x[X.PD] - z0 < 0.97 * 0.5 * G * t * t  # drag is really acting
+    assert x[X.VD] == pytest.approx(math.sqrt(G / k) * math.tanh(math.sqrt(G * k) * t), rel=0.01)
+
+
+# --------------------------------------------------------------------------- rotation
+@settings(max_examples=12, deadline=None)
+@given(
+    st.tuples(
+        st.floats(-8.0, 8.0, allow_nan=False),
+        st.floats(-8.0, 8.0, allow_nan=False),
+        st.floats(-8.0, 8.0, allow_nan=False),
+    )
+)
+def test_torque_free_spin_conserves_angular_momentum(rates: tuple[float, float, float]) -> None:
+    # no rotor thrust (so no inflow torques) and no rotational damping: torque-free body
+    f = frame_copy(build_frame({}), F_ROT_DAMP=0.0, F_AREA_EFF=0.0)
+    x = airborne(f, 5000.0, 0.0)
+    x[X.WX], x[X.WY], x[X.WZ] = rates
+    inertia = np.array([f[F.F_IXX], f[F.F_IYY], f[F.F_IZZ]])
+
+    def momentum_earth() -> np.ndarray:
+        return quat_to_dcm(x) @ (inertia * x[X.WX : X.WZ + 1])
+
+    l0 = momentum_earth()
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 100_000)
+    assert x[X.ON_GROUND] == 0.0
+    q = x[X.QW : X.QZ + 1]
+    assert abs(np.dot(q, q) - 1.0) < 1e-12
+    l1 = momentum_earth()
+    assert np.linalg.norm(l1 - l0) <= 1e-9 * max(np.linalg.norm(l0), 1e-3)
+
+
+def test_spin_without_gyroscopic_term_keeps_body_rates(frame: np.ndarray) -> None:
+    """SITL-exact mode (F_GYRO = 0): no w x Iw term, constant body rates when torque-free."""
+    f = frame_copy(frame, F_ROT_DAMP=0.0, F_AREA_EFF=0.0, F_GYRO=0.0)
+    x = airborne(f, 5000.0, 0.0)
+    x[X.WX], x[X.WY], x[X.WZ] = 1.0, -2.0, 3.0
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 5000)
+    assert list(x[X.WX : X.WZ + 1]) == [1.0, -2.0, 3.0]
+
+
+def test_rotational_damping(frame: np.ndarray) -> None:
+    f = frame_copy(frame, F_AREA_EFF=0.0)
+    x = airborne(f, 5000.0, 0.0)
+    x[X.WZ] = 2.0
+    n = 12000  # 10 s
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    assert x[X.WZ] == pytest.approx(2.0 * math.exp(-f[F.F_ROT_DAMP] * n * DT), rel=1e-3)
+
+
+def test_constant_rate_rotates_attitude(frame: np.ndarray) -> None:
+    f = frame_copy(frame, F_ROT_DAMP=0.0, F_AREA_EFF=0.0)
+    x = airborne(f, 5000.0, 0.0)
+    x[X.WZ] = 1.0
+    n = 1200
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    assert yaw_of(x) == pytest.approx(n * DT, abs=1e-9)
+
+
+def test_differential_thrust_rolls_and_pitches_the_right_way(frame: np.ndarray) -> None:
+    a_h = hover_command(frame)
+    base = command_to_pwm(a_h, frame)
+    # motor 1 (right arm) faster -> right side lifts -> roll left (negative)
+    x = airborne(frame, 20.0, a_h)
+    pwm = pwm_all(base)
+    pwm[0] += 40.0
+    run_ticks(x, pwm, frame, DT, 0.0, 120)
+    assert x[X.WX] < -0.5
+    assert euler(x)[0] < 0.0
+    assert abs(x[X.WY]) < 0.01 * abs(x[X.WX])  # only gyroscopic coupling with the yaw rate
+    # motor 3 (front) faster -> nose up (positive pitch)
+    x = airborne(frame, 20.0, a_h)
+    pwm = pwm_all(base)
+    pwm[2] += 40.0
+    run_ticks(x, pwm, frame, DT, 0.0, 120)
+    assert x[X.WY] > 0.5
+    assert euler(x)[1] > 0.0
+    assert abs(x[X.WX]) < 0.01 * abs(x[X.WY])
+
+
+@pytest.mark.parametrize("profile", [0.0, 1.0])
+def test_yaw_torque_sign(frame: np.ndarray, profile: float) -> None:
+    """CCW motors 1 and 2 faster, CW motors 3 and 4 slower -> nose right (§1.6)."""
+    f = frame_copy(frame, F_PROFILE=profile)
+    a_h = hover_command(f)
+    x = airborne(f, 20.0, a_h)
+    pwm = pwm_all(command_to_pwm(a_h, f))
+    pwm[:2] += 30.0
+    pwm[2:] -= 30.0
+    run_ticks(x, pwm, f, DT, 0.0, 240)
+    assert x[X.WZ] > 0.05
+    assert euler(x)[2] > 0.0
+    assert abs(x[X.WX]) < 1e-9 and abs(x[X.WY]) < 1e-9
+
+
+def test_paper_era_yaw_torque_is_stronger(frame: np.ndarray) -> None:
+    """Paper era: tau = k a radians(40) s; now: tau = k a 0.05 d T(a) (§1.6).
+
+    At hover one motor gives 0.38 N m then against 0.071 N m now (5.4x); for a differential
+    command the ratio of the slopes is radians(40) / (0.05 d (T_h + a_h dT/da)) = 2.2.
+    """
+    rates = []
+    for profile in (0.0, 1.0):
+        f = frame_copy(frame, F_PROFILE=profile)
+        a_h = hover_command(f)
+        x = airborne(f, 20.0, a_h)
+        pwm = pwm_all(command_to_pwm(a_h, f))
+        pwm[:2] += 8.0
+        pwm[2:] -= 8.0
+        run_ticks(x, pwm, f, DT, 0.0, 12)
+        rates.append(x[X.WZ])
+    a_h = hover_command(frame)
+    e = frame[F.F_EXPO]
+    t_h = frame[F.F_MASS] * G / 4
+    dt_da = t_h * ((1 - e) + 2 * e * a_h) / frame[F.F_HOVER_THR]
+    slope_now = 0.05 * frame[F.F_DIAG] * (t_h + a_h * dt_da)
+    assert rates[1] / rates[0] == pytest.approx(math.radians(40.0) / slope_now, rel=0.05)
+    assert math.radians(40.0) * a_h / (0.05 * frame[F.F_DIAG] * a_h * t_h) > 5.0
+
+
+# --------------------------------------------------------------------------- aerodynamics
+def test_climb_inflow_and_momentum_drag_reduce_thrust(frame: np.ndarray) -> None:
+    a_h = hover_command(frame)
+    x = airborne(frame, 20.0, a_h)
+    x[X.VD] = -5.0  # climbing at 5 m/s: air flows into the discs
+    physics_step(x, hover_pwm(frame), frame, DT, 0.0)
+    x0 = airborne(frame, 20.0, a_h)
+    physics_step(x0, hover_pwm(frame), frame, DT, 0.0)
+    assert x[X.T1] < x0[X.T1]
+    assert x[X.AD] > 0.5  # decelerating the climb
+    # forward flight: body drag plus momentum drag oppose the airspeed
+    x = airborne(frame, 20.0, a_h)
+    x[X.VN] = 10.0
+    physics_step(x, hover_pwm(frame), frame, DT, 0.0)
+    body_drag = frame[F.F_AREA_CD] * 0.5 * x[X.RHO] * 100.0
+    assert body_drag == pytest.approx(10.0, rel=0.05)  # "~10 N at 10 m/s"
+    assert -x[X.FX] * frame[F.F_MASS] > body_drag
+
+
+# --------------------------------------------------------------------------- ground
+def test_rest_on_pad(frame: np.ndarray) -> None:
+    x = new_state(frame, math.radians(353.0))
+    assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 2400)
+    assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
+    assert x[X.ON_GROUND] == 1.0
+    assert x[X.IMPACT_COUNT] == 0.0
+    assert np.allclose(x[X.FX : X.FZ + 1], [0.0, 0.0, -G], atol=1e-12)
+    assert x[X.AD] == 0.0
+    assert yaw_of(x) == pytest.approx(math.radians(353.0) - 2 * math.pi)
+
+
+def test_ground_impact_is_recorded_and_vehicle_does_not_sink(frame: np.ndarray) -> None:
+    h = 20.0
+    x = airborne(frame, h, 0.0)
+    t = 0.0
+    while x[X.ON_GROUND] == 0.0:
+        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1)
+        assert t < 10.0
+    rho = air_density(frame[F.F_HOME_ALT] + 0.5 * h)
+    v_term = math.sqrt(frame[F.F_MASS] * G / (0.5 * rho * frame[F.F_AREA_CD]))
+    v_hit = v_term * math.sqrt(1.0 - math.exp(-2.0 * G * h / v_term**2))
+    assert x[X.IMPACT_SPEED] == pytest.approx(v_hit, rel=0.02)
+    assert x[X.IMPACT_COUNT] == 1.0
+    assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
+    assert x[X.VD] == 0.0
+    run_ticks(x, pwm_all(1000.0), frame, DT, t, 1200)
+    assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
+    assert x[X.IMPACT_COUNT] == 1.0
+    assert x[X.FZ] == pytest.approx(-G)
+
+
+def test_touchdown_levels_attitude_keeping_yaw(frame: np.ndarray) -> None:
+    x = airborne(frame, 0.05, 0.0)
+    set_euler(x, math.radians(20.0), math.radians(-10.0), math.radians(30.0))
+    x[X.VD] = 1.0
+    x[X.WX] = 1.0
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 120)
+    assert x[X.ON_GROUND] == 1.0
+    roll, pitch, yaw = euler(x)
+    assert abs(roll) < 1e-12 and abs(pitch) < 1e-12
+    assert yaw == pytest.approx(math.radians(30.0), abs=2e-3)
+    assert np.all(x[X.WX : X.WZ + 1] == 0.0)
+    assert x[X.VN] == 0.0 and x[X.VE] == 0.0
+
+
+def test_lift_off_when_thrust_exceeds_weight(frame: np.ndarray) -> None:
+    x = new_state(frame)
+    t = run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 1200)
+    assert x[X.ON_GROUND] == 1.0  # hover thrust only balances the weight
+    run_ticks(x, pwm_all(1800.0), frame, DT, t, 2400)
+    assert x[X.ON_GROUND] == 0.0
+    assert -x[X.PD] - frame[F.F_FRAME_HEIGHT] > 1.0
+    assert x[X.VD] < -1.0
+
+
+# --------------------------------------------------------------------------- battery
+def test_infinite_battery_holds_voltage_and_counts_charge(frame: np.ndarray) -> None:
+    height = frame[F.F_REF_ALT] - frame[F.F_HOME_ALT] - frame[F.F_FRAME_HEIGHT]
+    x = airborne(frame, height, hover_command(frame))
+    n = 2400
+    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, n)
+    assert x[X.BATT_V] == 12.6
+    assert x[X.BATT_I] == pytest.approx(28.1, abs=0.05)  # §1.3: 28.1 A at hover
+    assert x[X.BATT_AH] == pytest.approx(x[X.BATT_I] * n * DT / 3600.0, rel=1e-3)
+
+
+def test_finite_battery_sags_under_load(frame: np.ndarray) -> None:
+    f = build_frame({"SIM_BATT_CAP_AH": 1.0})
+    x = airborne(f, 100.0, hover_command(f))
+    assert x[X.BATT_V] == 12.6
+    assert x[X.BATT_REM_AH] == pytest.approx(1.0)
+    pwm = hover_pwm(f)
+    run_ticks(x, pwm, f, DT, 0.0, 240)  # 0.2 s: filter settled on the I R drop
+    v_early = x[X.BATT_V]
+    assert v_early == pytest.approx(12.6 - x[X.BATT_I] * 0.01, abs=0.02)
+    used = x[X.BATT_AH]
+    t = 0.2
+    for _ in range(100):  # 10 s more of open-loop hover command
+        i0 = x[X.BATT_I]
+        t = run_ticks(x, pwm, f, DT, t, 120)
+        used += 0.5 * (i0 + x[X.BATT_I]) * 120 * DT / 3600.0
+    assert x[X.BATT_AH] == pytest.approx(used, rel=1e-3)
+    assert x[X.BATT_REM_AH] == pytest.approx(1.0 - x[X.BATT_AH], rel=1e-9)
+    v_rest = resting_voltage(100.0 * x[X.BATT_REM_AH], 12.6)
+    assert x[X.BATT_VREST] == pytest.approx(v_rest)
+    assert v_rest < 12.6 - 0.05
+    assert x[X.BATT_V] == pytest.approx(v_rest - x[X.BATT_I] * 0.01, abs=0.01)
+    assert x[X.BATT_V] < v_early - 0.05
+    # thrust per command scales with (V / V_max)^2: the open-loop vehicle now sinks
+    scale = (x[X.BATT_V] / 12.6) ** 2 * x[X.RHO] / f[F.F_RHO_REF]
+    assert x[X.T1] == pytest.approx(f[F.F_MASS] * G / 4 * scale, rel=2e-3)
+    assert x[X.VD] > 0.5
+
+
+def test_battery_voltage_parameter_change_and_dead_battery(frame: np.ndarray) -> None:
+    f = frame.copy()
+    x = airborne(f, 50.0, hover_command(f))
+    f[F.F_BATT_VOLT] = 11.0  # SIM_BATT_VOLTAGE changed in flight: re-initialised
+    physics_step(x, hover_pwm(f), f, DT, 0.0)
+    assert x[X.BATT_V] == 11.0
+    run_ticks(x, hover_pwm(f), f, DT, 0.0, 10)
+    assert x[X.AD] > 0.2 * G  # thrust scales with (11/12.6)^2
+    f[F.F_BATT_VOLT] = 1.0  # below 10 % of max voltage: motors stop
+    run_ticks(x, hover_pwm(f), f, DT, 0.0, 2)
+    assert np.all(x[X.T1 : X.T4 + 1] == 0.0)
+    assert x[X.BATT_I] == 0.0
+
+
+# --------------------------------------------------------------------------- wind
+def wind_state(f: np.ndarray, height: float, settled_speed: float) -> np.ndarray:
+    x = airborne(f, height, 0.0)
+    x[X.WIND_SPD_F] = settled_speed
+    return x
+
+
+@pytest.mark.parametrize(
+    ("kind", "height", "expected"),
+    [
+        (0.0, 15.0, 5.0),  # square-root law: 10 * sqrt(15 / 60)
+        (0.0, 60.0, 10.0),
+        (0.0, 150.0, 10.0),
+        (0.0, 0.0, 0.0),
+        (1.0, 15.0, 10.0),  # no profile
+        (2.0, 160.0, 11.0),  # linear: 10 + (160 - 60) * 0.01
+        (2.0, 30.0, 9.7),
+    ],
+)
+def test_wind_height_profile(kind: float, height: float, expected: float) -> None:
+    f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_T": kind})
+    x = wind_state(f, height, 10.0)
+    update_wind(x, f, DT, 10.0)
+    # from the south (180 deg): the air moves north
+    assert x[X.WIND_N] == pytest.approx(expected, abs=1e-9)
+    assert abs(x[X.WIND_E]) < 1e-9 and x[X.WIND_D] == 0.0
+
+
+def test_wind_direction_delay_and_filter() -> None:
+    f = build_frame({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0})
+    x = wind_state(f, 100.0, 8.0)
+    update_wind(x, f, DT, 4.9)  # no wind during the first 5 s
+    assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
+    update_wind(x, f, DT, 5.1)  # from the east: the air moves west
+    assert x[X.WIND_E] == pytest.approx(-8.0)
+    assert abs(x[X.WIND_N]) < 1e-9
+    # first-order ramp from zero with SIM_WIND_TC = 5 s
+    x = wind_state(f, 100.0, 0.0)
+    t = 5.0
+    for _ in range(6000):
+        t += DT
+        update_wind(x, f, DT, t)
+    assert -x[X.WIND_E] == pytest.approx(8.0 * (1.0 - math.exp(-1.0)), rel=0.01)
+    # vertical direction 90 deg: a pure updraft (NED down negative)
+    g = build_frame({"SIM_WIND_SPD": 3.0, "SIM_WIND_DIR_Z": 90.0, "SIM_WIND_T": 1.0})
+    x = wind_state(g, 100.0, 3.0)
+    update_wind(x, g, DT, 10.0)
+    assert x[X.WIND_D] == pytest.approx(-3.0)
+
+
+def test_wind_pushes_hovering_vehicle_downwind() -> None:
+    f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0})
+    x = airborne(f, 100.0, hover_command(f))
+    x[X.WIND_SPD_F] = 10.0
+    run_ticks(x, hover_pwm(f), f, DT, 10.0, 2400)
+    assert x[X.VN] > 1.0 and x[X.PN] > 1.0  # drifting north, with the air
+    assert x[X.VAIR_X] < 0.0  # the air comes from ahead (body x = north at yaw 0)
+
+
+def run_turbulent(seed: int, n: int = 3000) -> np.ndarray:
+    f = build_frame({"SIM_WIND_SPD": 5.0, "SIM_WIND_TURB": 2.0})
+    x = airborne(f, 50.0, hover_command(f))
+    seed_rng(seed)
+    out = np.empty((n, X.N_STATE))
+    pwm = hover_pwm(f)
+    t = 5.0
+    for k in range(n):
+        t = run_ticks(x, pwm, f, DT, t, 1)
+        out[k] = x
+    return out
+
+
+def test_turbulence_is_deterministic_with_a_seed() -> None:
+    a = run_turbulent(7)
+    b = run_turbulent(7)
+    c = run_turbulent(8)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a[:, X.WIND_N], c[:, X.WIND_N])
+    # gusts have a standard deviation of about SIM_WIND_TURB
+    assert np.std(a[:, X.GUST_V]) == pytest.approx(2.0, rel=0.35)
+    assert np.std(a[:, X.WIND_D]) > 0.5
+
+
+def test_no_turbulence_on_the_ground() -> None:
+    f = build_frame({"SIM_WIND_TURB": 3.0})
+    x = new_state(f)
+    seed_rng(1)
+    run_ticks(x, pwm_all(1000.0), f, DT, 6.0, 100)
+    assert x[X.GUST_H] == 0.0 and x[X.GUST_V] == 0.0
+
+
+def test_air_density_cache_tracks_altitude(frame: np.ndarray) -> None:
+    x = airborne(frame, 0.5, 1.0)
+    pwm = pwm_all(1950.0)
+    t = 0.0
+    for _ in range(40):
+        t = run_ticks(x, pwm, frame, DT, t, 120)
+        # RHO was set at the start of the last tick, before it moved by VD * DT
+        exact = air_density(frame[F.F_HOME_ALT] - (x[X.PD] - x[X.VD] * DT))
+        assert x[X.RHO] == pytest.approx(exact, rel=1e-7)
+    assert -x[X.PD] > 30.0

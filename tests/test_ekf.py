@@ -1,0 +1,382 @@
+"""Navigation EKF: kernels against filterpy / dense algebra, accuracy on a synthetic flight,
+GPS-loss timeouts, constant-position mode, GPS return reset, and IMU-lane switching."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from filterpy.kalman import KalmanFilter
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tests.ekf_synth import DT, G, fly_ekf, make_flight, quat_angle_deg
+from tlm_sim.ekf import build_ekf_config, earth_field_ned, ekf_output, new_ekf
+from tlm_sim.ekf import layout as L
+from tlm_sim.ekf.core import (
+    apply_correction,
+    clear_dx,
+    fuse_h3,
+    fuse_index,
+    predict_covariance,
+    propagate,
+    quat_to_rot,
+    set_quat_euler,
+)
+from tlm_sim.ekf.lanes import ekf_update, quat_to_euler
+
+NS = L.NS
+
+
+def _get_p(e: np.ndarray) -> np.ndarray:
+    return e[L.P0 : L.P0 + NS * NS].reshape(NS, NS).copy()
+
+
+def _set_p(e: np.ndarray, p: np.ndarray) -> None:
+    e[L.P0 : L.P0 + NS * NS] = p.ravel()
+
+
+def _random_spd(rng: np.random.Generator, n: int, scale: float) -> np.ndarray:
+    a = rng.normal(size=(n, n)) * scale
+    return a @ a.T + np.eye(n) * scale * scale * 0.1
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _lane(params: dict | None = None) -> np.ndarray:
+    ekf, _ = new_ekf(params or {})
+    e = ekf[0].copy()
+    e[L.QW] = 1.0
+    quat_to_rot(e)
+    return e
+
+
+# ----------------------------------------------------------------------------- layout / config
+
+
+def test_layout_blocks_do_not_overlap():
+    blocks = {
+        "nominal": (0, L.N_NOMINAL),
+        "rot": (L.R00, 9),
+        "P": (L.P0, NS * NS),
+        "acc": (L.ACC_DVN, 4),
+        "scr_a": (L.SCR_A, 9 * NS),
+        "scr_c": (L.SCR_C, NS),
+        "scr_dx": (L.SCR_DX, NS),
+        "buf_ofs": (L.BUF_OFS, 6),
+        "buf": (L.BUF0, L.NBUF * L.BUF_ROW),
+    }
+    used = np.zeros(L.N_EKF, dtype=int)
+    for start, n in blocks.values():
+        used[start : start + n] += 1
+    scalars = [
+        v
+        for k, v in vars(L).items()
+        if k.isupper() and isinstance(v, int) and L.ALIGNED <= v < L.BUF_OFS
+    ]
+    for v in set(scalars):
+        used[v] += 1
+    assert used.max() == 1
+    assert used.min() == 1  # no gaps either
+    assert L.N_CFG == L.C_BAD_IMU_TIMEOUT + 1
+
+
+def test_config_defaults_and_overrides():
+    c = build_ekf_config({})
+    assert c[L.C_DT] == pytest.approx(0.0025)
+    assert c[L.C_VELNE_NSE] == 0.3 and c[L.C_VELD_NSE] == 0.5 and c[L.C_POSNE_NSE] == 0.5
+    assert c[L.C_ALT_NSE] == 2.0 and c[L.C_MAG_NSE] == 0.05
+    assert c[L.C_GYRO_PNSE] == 0.015 and c[L.C_ACC_PNSE] == 0.35
+    assert (c[L.C_VEL_GATE], c[L.C_POS_GATE], c[L.C_HGT_GATE], c[L.C_MAG_GATE]) == (5, 5, 5, 3)
+    assert c[L.C_GPS_DELAY] == pytest.approx(0.2) and c[L.C_HGT_DELAY] == pytest.approx(0.06)
+    field = c[L.C_MAG_N : L.C_MAG_D + 1]
+    assert np.linalg.norm(field) == pytest.approx(0.58)
+    assert field[2] < 0.0  # inclination -66 deg: field points up
+    assert math.degrees(math.atan2(field[1], field[0])) == pytest.approx(12.5)
+    assert c[L.C_N_LANES] == 2 and list(c[L.C_LANE_IMU : L.C_LANE_IMU + 2]) == [0, 1]
+    c2 = build_ekf_config({"EK3_POS_I_GATE": 50, "GPS1_DELAY_MS": 120, "EK3_IMU_MASK": 2})
+    assert c2[L.C_POS_GATE] == 1.0  # gates never below one sigma
+    assert c2[L.C_GPS_DELAY] == pytest.approx(0.12)
+    assert c2[L.C_N_LANES] == 1 and c2[L.C_LANE_IMU] == 1
+    ekf, sel = new_ekf({"EK3_IMU_MASK": 2})
+    assert ekf.shape == (1, L.N_EKF) and ekf[0, L.IMU_INDEX] == 1.0
+    assert build_ekf_config({"GPS1_DELAY_MS": 0, "GPS_DELAY_MS": 150})[L.C_GPS_DELAY] == 0.15
+    with pytest.raises(ValueError):
+        build_ekf_config({"GPS1_DELAY_MS": 1000})
+
+
+# ----------------------------------------------------------------------------- kernels
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    t=st.floats(0.005, 0.05),
+    dv=st.floats(0.0, 1.0),
+)
+def test_sparse_covariance_prediction_equals_dense_product(seed, t, dv):
+    """predict_covariance == F P F^T + Q with the full 15x15 F of the error-state model."""
+    rng = np.random.default_rng(seed)
+    e = _lane()
+    q = rng.normal(size=4)
+    e[L.QW : L.QW + 4] = q / np.linalg.norm(q)
+    quat_to_rot(e)
+    r = e[L.R00 : L.R22 + 1].reshape(3, 3).copy()
+    s = rng.normal(size=3) * dv
+    e[L.ACC_DVN : L.ACC_DVD + 1] = s
+    e[L.ACC_DT] = t
+    p = _random_spd(rng, NS, 0.05)
+    _set_p(e, p)
+    qa, qv, qg, qb = 1e-6, 2e-5, 1e-9, 3e-8
+    predict_covariance(e, qa, qv, qg, qb)
+    f = np.eye(NS)
+    f[0:3, 9:12] = -r * t
+    f[3:6, 0:3] = -_skew(s)
+    f[3:6, 12:15] = -r * t
+    f[6:9, 3:6] = np.eye(3) * t
+    qd = np.diag([qa] * 3 + [qv] * 3 + [0.0] * 3 + [qg] * 3 + [qb] * 3)
+    want = f @ p @ f.T + qd
+    got = _get_p(e)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+    assert np.array_equal(got, got.T)  # exactly symmetric
+    assert e[L.ACC_DT] == 0.0 and not e[L.ACC_DVN : L.ACC_DVD + 1].any()
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    ticks=st.integers(1, 8),
+    sigma_a=st.floats(0.0, 2.0),
+    n_steps=st.integers(1, 30),
+)
+def test_linear_constant_velocity_block_matches_filterpy(seed, ticks, sigma_a, n_steps):
+    """Velocity/position block with a constant-velocity model == filterpy's KalmanFilter.
+
+    The lane is predicted by the real kernels (IMU propagation with zero specific force net of
+    gravity, sparse covariance prediction) and updated by sequential scalar fusions with the
+    batch correction; filterpy runs the same linear model with Joseph-form updates.
+    """
+    rng = np.random.default_rng(seed)
+    e = _lane()
+    x0 = rng.normal(size=6) * 3.0  # v (3), p (3)
+    e[L.VN : L.VN + 3] = x0[:3]
+    e[L.PN : L.PN + 3] = x0[3:]
+    p = np.zeros((NS, NS))
+    p[3:9, 3:9] = _random_spd(rng, 6, 0.7)
+    _set_p(e, p)
+    kf = KalmanFilter(dim_x=6, dim_z=1)
+    kf.x = x0.reshape(6, 1).copy()
+    kf.P = p[3:9, 3:9].copy()
+    t = ticks * DT
+    kf.F = np.eye(6)
+    kf.F[3:6, 0:3] = np.eye(3) * t
+    kf.Q = np.diag([(sigma_a * t) ** 2] * 3 + [0.0] * 3)
+    dang = np.zeros((2, 3))
+    dvel = np.zeros((2, 3))
+    dvel[0, 2] = -G * DT
+    for _ in range(n_steps):
+        for _k in range(ticks):
+            propagate(e, dang, dvel, 0, DT)
+        predict_covariance(e, 0.0, (sigma_a * e[L.ACC_DT]) ** 2, 0.0, 0.0)
+        kf.predict()
+        clear_dx(e)
+        for _m in range(int(rng.integers(1, 4))):
+            j = int(rng.integers(0, 6))
+            r = float(rng.uniform(0.01, 4.0))
+            z = float(kf.x[j, 0] + rng.normal() * 2.0)
+            nominal = e[L.VN + j] if j < 3 else e[L.PN + j - 3]
+            fuse_index(e, L.ES_VEL + j, z - nominal, r)
+            h = np.zeros((1, 6))
+            h[0, j] = 1.0
+            kf.update(np.array([[z]]), R=r, H=h)
+        apply_correction(e, 1e9, 1e9)
+        got_x = np.concatenate([e[L.VN : L.VN + 3], e[L.PN : L.PN + 3]])
+        np.testing.assert_allclose(got_x, kf.x[:, 0], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(_get_p(e)[3:9, 3:9], kf.P, rtol=0, atol=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 3))
+def test_sparse_h_update_matches_filterpy(seed, n):
+    """fuse_h3 (3 non-zero Jacobian entries, e.g. a magnetometer axis) == filterpy's update."""
+    rng = np.random.default_rng(seed)
+    e = _lane()
+    p = _random_spd(rng, NS, 0.3)
+    _set_p(e, p)
+    kf = KalmanFilter(dim_x=NS, dim_z=1)
+    kf.x = np.zeros((NS, 1))
+    kf.P = p.copy()
+    clear_dx(e)
+    for _ in range(n):
+        hv = rng.normal(size=3)
+        innov = float(rng.normal())
+        r = float(rng.uniform(0.001, 1.0))
+        # the innovation refers to the nominal state; filterpy's x is the correction so far
+        fuse_h3(e, L.ES_ATT, hv[0], hv[1], hv[2], innov, r)
+        h = np.zeros((1, NS))
+        h[0, 0:3] = hv
+        kf.update(np.array([[innov]]), R=r, H=h)
+    np.testing.assert_allclose(e[L.SCR_DX : L.SCR_DX + NS], kf.x[:, 0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(_get_p(e), kf.P, rtol=0, atol=1e-9)
+
+
+# ----------------------------------------------------------------------------- alignment
+
+
+def test_alignment_at_rest_recovers_tilt_and_yaw():
+    params = {}
+    cfg = build_ekf_config(params)
+    ekf, sel = new_ekf(params)
+    roll, pitch, yaw = math.radians(5.0), math.radians(-3.0), math.radians(100.0)
+    e = np.zeros(L.N_EKF)
+    set_quat_euler(e, roll, pitch, yaw)
+    r = e[L.R00 : L.R22 + 1].reshape(3, 3)
+    dang = np.zeros((2, 3))
+    dvel = np.tile(r.T @ np.array([0.0, 0.0, -G]) * DT, (2, 1))
+    mag = r.T @ earth_field_ned(12.5, -66.0, 0.58)
+    gps = np.zeros(3)
+    for k in range(400):
+        ekf_update(
+            ekf, sel, cfg, (k + 1) * 2500, dang, dvel, np.ones(2),
+            False, gps, gps, False, False, 0.0, k % 40 == 0, mag, False,
+        )  # fmt: skip
+    out = np.zeros(L.N_OUT)
+    ekf_output(ekf, sel, out)
+    assert out[L.O_F_ATTITUDE] == 1.0
+    assert out[L.O_F_CONST_POS] == 1.0 and out[L.O_F_HORIZ_POS] == 0.0  # no GPS yet
+    assert math.degrees(abs(out[L.O_ROLL] - roll)) < 0.05
+    assert math.degrees(abs(out[L.O_PITCH] - pitch)) < 0.05
+    assert math.degrees(abs(out[L.O_YAW] - yaw)) < 0.1
+    assert quat_to_euler(*out[L.O_QW : L.O_QZ + 1])[2] == pytest.approx(out[L.O_YAW])
+
+
+# ----------------------------------------------------------------------------- synthetic flights
+
+
+def _run(flight, params):
+    cfg = build_ekf_config(params)
+    ekf, sel = new_ekf(params)
+    out, lanes_pos = fly_ekf(flight, ekf, sel, cfg)
+    return ekf, sel, out, lanes_pos
+
+
+@pytest.fixture(scope="module")
+def clean_flight():
+    return make_flight(100.0, seed=1)
+
+
+@pytest.mark.parametrize(
+    ("delay_ms", "pos_rms_max", "att_rms_max"),
+    [(100.0, 0.1, 0.2), (200.0, 1.0, 1.0)],  # matched delay; default 0.2 s vs 0.1 s true lag
+)
+def test_synthetic_flight_accuracy(clean_flight, delay_ms, pos_rms_max, att_rms_max):
+    f = clean_flight
+    ekf, sel, out, _ = _run(f, {"GPS1_DELAY_MS": delay_ms})
+    t = f.t_us * 1e-6
+    m = t > 15.0
+    pos_err = np.linalg.norm(out[:, L.O_PN : L.O_PN + 3] - f.pos, axis=1)
+    att_err = quat_angle_deg(out[:, L.O_QW : L.O_QZ + 1], f.quat)
+    vel_err = np.linalg.norm(out[:, L.O_VN : L.O_VN + 3] - f.vel, axis=1)
+    assert np.sqrt(np.mean(pos_err[m] ** 2)) < pos_rms_max
+    assert np.sqrt(np.mean(att_err[m] ** 2)) < att_rms_max
+    assert np.sqrt(np.mean(vel_err[m] ** 2)) < 0.2
+    assert att_err[m].max() < 2.0
+    # gyro bias learned on both lanes (lane 1 has a different bias)
+    for lane in range(2):
+        err_deg = np.degrees(ekf[lane, L.BGX : L.BGZ + 1] - f.gyro_bias[lane])
+        assert np.abs(err_deg).max() < 0.05, err_deg
+    # healthy, GPS in use, no lane switch, innovations consistent
+    assert out[-1, L.O_F_HORIZ_POS] == 1.0 and out[-1, L.O_F_USING_GPS] == 1.0
+    assert out[-1, L.O_PRIMARY] == 0.0 and sel[L.SEL_CHANGES] == 0.0
+    assert out[m, L.O_SQRT_VEL].max() < 0.5 and out[m, L.O_SQRT_POS].max() < 0.5
+
+
+def test_gps_loss_timeouts_constant_position_and_reset():
+    flight = make_flight(100.0, seed=1)
+    t = flight.t_us * 1e-6
+    gps_fix = flight.gps_fix & ~((t >= 40.0) & (t < 65.0))
+    flight.gps_fix = gps_fix
+    ekf, _, out, _ = _run(flight, {"GPS1_DELAY_MS": 100.0})
+    fixes = np.nonzero(flight.gps_new & gps_fix)[0]
+    last = fixes[fixes < int(40.0 / DT)][-1]
+    back = fixes[fixes > int(40.0 / DT)][0]
+    t_last = t[last]
+    hpos = out[:, L.O_F_HORIZ_POS]
+    cpos = out[:, L.O_F_CONST_POS]
+    ticks = np.arange(t.size)
+    during = (ticks > last) & (ticks < back)
+    dt_lost = t - t_last
+    # 0-7 s: still absolute aiding; from 7 s: horizontal position and velocity invalid
+    assert np.all(hpos[during & (dt_lost <= 6.99)] == 1.0)
+    assert np.all(hpos[during & (dt_lost >= 7.01)] == 0.0)
+    assert np.all(out[during & (dt_lost >= 7.01), L.O_F_HORIZ_VEL] == 0.0)
+    # from 15 s: constant-position mode
+    assert np.all(cpos[during & (dt_lost <= 14.99)] == 0.0)
+    assert np.all(cpos[during & (dt_lost >= 15.01)] == 1.0)
+    assert np.all(out[during & (dt_lost >= 4.01), L.O_F_USING_GPS] == 0.0)
+    # pinned near the last position while the vehicle flies on: large error before GPS returns
+    err = np.linalg.norm(out[:, L.O_PN : L.O_PN + 2] - flight.pos[:, :2], axis=1)
+    assert err[back - 1] > 10.0
+    # the first GPS sample after the loss resets position and velocity, flags valid again
+    assert err[back] < 0.5
+    gps_now = flight.gps_pos[back, :2]
+    assert np.linalg.norm(out[back, L.O_PN : L.O_PN + 2] - gps_now) < 1.0
+    vel_err = np.linalg.norm(out[back, L.O_VN : L.O_VN + 3] - flight.vel[back])
+    assert vel_err < 0.2
+    assert hpos[back] == 1.0 and cpos[back] == 0.0 and out[back, L.O_F_USING_GPS] == 1.0
+    assert ekf[0, L.POS_RESET_COUNT] == 2.0  # first fix + return from constant-position mode
+    assert np.sqrt(np.mean(err[back:] ** 2)) < 0.2
+
+
+def test_accel_failure_switches_primary_lane():
+    flight = make_flight(80.0, seed=2)
+    t = flight.t_us * 1e-6
+    fail = t >= 50.0
+    flight.dvel[fail, 0, :] = 1.0 * DT  # SIM_ACCEL1_FAIL = 1: accel reads (1, 1, 1) m/s^2
+    ekf, sel, out, lanes_pos = _run(flight, {"GPS1_DELAY_MS": 100.0})
+    prim = out[:, L.O_PRIMARY]
+    assert np.all(prim[~fail] == 0.0)
+    k_switch = int(np.argmax(prim == 1.0))
+    assert 50.0 < t[k_switch] < 52.0
+    assert np.all(prim[k_switch:] == 1.0)
+    assert sel[L.SEL_CHANGES] == 1.0 and out[-1, L.O_PRIMARY_CHANGES] == 1.0
+    assert sel[L.SEL_T_SWITCH] == pytest.approx(t[k_switch])
+    # the failed lane goes wrong (bounded by its bad-IMU response); the output follows lane 1
+    lane0_err = np.linalg.norm(lanes_pos[:, 0] - flight.pos, axis=1)
+    assert lane0_err[fail].max() > 3.0
+    assert ekf[0, L.BAD_IMU] == 1.0 and ekf[1, L.BAD_IMU] == 0.0
+    err = np.linalg.norm(out[:, L.O_PN : L.O_PN + 3] - flight.pos, axis=1)
+    assert err[k_switch:].max() < 0.5
+    assert ekf[1, L.HEALTHY] == 1.0 and ekf[1, L.SCORE] < 0.1
+
+
+def test_both_accels_failed_bad_imu_response_bounds_the_error():
+    """Paper case (SIM_ACCEL1_FAIL = SIM_ACCEL2_FAIL = 1): no good lane; EKF3's bad-IMU response
+    (vertical velocity from GPS, gates bypassed, 5 m/s^2 accel noise) keeps the estimate bounded,
+    where pure inertial integration of the wrong specific force would be off by ~3 km."""
+    flight = make_flight(90.0, seed=4)
+    t = flight.t_us * 1e-6
+    fail = t >= 50.0
+    flight.dvel[fail, :, :] = 1.0 * DT
+    ekf, sel, out, _ = _run(flight, {"GPS1_DELAY_MS": 100.0})
+    assert np.all(ekf[:, L.BAD_IMU] == 1.0)
+    assert sel[L.SEL_CHANGES] == 0.0
+    err = np.linalg.norm(out[:, L.O_PN : L.O_PN + 3] - flight.pos, axis=1)
+    assert 2.0 < err[fail].max() < 15.0
+    vel_err = np.linalg.norm(out[:, L.O_VN : L.O_VN + 3] - flight.vel, axis=1)
+    assert np.median(vel_err[t > 55.0]) < 4.0  # saw-tooth: vD reset to GPS at 5 Hz
+    assert out[-1, L.O_F_HORIZ_POS] == 1.0
+
+
+def test_imu_stop_switches_primary_at_once():
+    flight = make_flight(30.0, seed=3)
+    t = flight.t_us * 1e-6
+    flight.imu_ok[t >= 20.0, 0] = 0.0
+    flight.armed[:] = False  # an IMU without samples switches even while disarmed
+    ekf, sel, out, _ = _run(flight, {"GPS1_DELAY_MS": 100.0})
+    k = int(np.argmax(t >= 20.0))
+    assert out[k - 1, L.O_PRIMARY] == 0.0 and out[k, L.O_PRIMARY] == 1.0
+    assert ekf[0, L.IMU_OK] == 0.0 and ekf[0, L.HEALTHY] == 0.0
