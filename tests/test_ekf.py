@@ -91,7 +91,7 @@ def test_config_defaults_and_overrides():
     assert c[L.C_ALT_NSE] == 2.0 and c[L.C_MAG_NSE] == 0.05
     assert c[L.C_GYRO_PNSE] == 0.015 and c[L.C_ACC_PNSE] == 0.35
     assert (c[L.C_VEL_GATE], c[L.C_POS_GATE], c[L.C_HGT_GATE], c[L.C_MAG_GATE]) == (5, 5, 5, 3)
-    assert c[L.C_GPS_DELAY] == pytest.approx(0.2) and c[L.C_HGT_DELAY] == pytest.approx(0.06)
+    assert c[L.C_GPS_DELAY] == pytest.approx(0.12) and c[L.C_HGT_DELAY] == pytest.approx(0.06)
     field = c[L.C_MAG_N : L.C_MAG_D + 1]
     assert np.linalg.norm(field) == pytest.approx(0.58)
     assert field[2] < 0.0  # inclination -66 deg: field points up

@@ -31,12 +31,10 @@ def test_mission_completed_within_wpnav_radius(k):
     wp = m.ned()
     radius = Params()["WPNAV_RADIUS"] / 100.0
     # SIM is logged at 10 Hz (~0.35 m apart at cruise): distance from each waypoint to the path
-    d = np.hypot(n[None, :] - wp[:, 0:1], e[None, :] - wp[:, 1:2])
+    d = np.sqrt((n[None, :] - wp[:, 0:1]) ** 2 + (e[None, :] - wp[:, 1:2]) ** 2
+                + (alt[None, :] + wp[:, 2:3]) ** 2)
     closest = d.min(axis=1)
     assert closest.max() <= radius, f"waypoint {closest.argmax()} missed by {closest.max():.2f} m"
-    # altitude tracked too
-    i = d.argmin(axis=1)
-    assert np.abs(alt[i] - (-wp[:, 2])).max() < 2.0
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4])

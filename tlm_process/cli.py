@@ -102,7 +102,8 @@ def cmd_fly(args: argparse.Namespace) -> int:
     print(format_summary(s))
     print(f"wall time          {wall:.2f} s ({s['duration_s'] / max(wall, 1e-9):.0f}x real time, "
           "incl. compile on first run)")
-    print(f"written            {out}/ ({', '.join(fmts)}{', trajectory.png' if not args.no_plot else ''})")
+    extra = "" if args.no_plot else ", trajectory.png"
+    print(f"written            {out}/ ({', '.join(fmts)}{extra})")
     return 0
 
 

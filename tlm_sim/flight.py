@@ -15,12 +15,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from tlm_sim import logger as L
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.modes import vehicle_step
+from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
@@ -31,6 +32,7 @@ from tlm_sim.ekf.lanes import ekf_init, ekf_update
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import Params
+from tlm_sim.rng import new_rng
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.baro import baro_sample, mag_sample
 from tlm_sim.sensors.config import build_sensor_config
@@ -58,7 +60,7 @@ def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
     return ms // (7 * 86400000), ms % (7 * 86400000)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _apply_schedule(sched, k, t_us, scfg, frame, g, ecfg):
     """Apply every scheduled parameter change due at t_us (rows sorted by time); returns next k."""
     while k < sched.shape[0] and sched[k, 0] <= t_us:
@@ -77,7 +79,7 @@ def _apply_schedule(sched, k, t_us, scfg, frame, g, ecfg):
     return k
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _motor_pwm(c, scfg, pwm):
     """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs."""
     mask = int(scfg[S.C_ENGINE_MASK])
@@ -89,31 +91,31 @@ def _motor_pwm(c, scfg, pwm):
         pwm[i] = p
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def run_flight(
     x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, seed, t_end_us, home, gps_time,
-    bufs, counts,
+    bufs, counts, s, work, rng,
 ):
     """Fly one whole flight in place; returns the final simulated time [us].
 
     x: truth state; frame/scfg/g/ecfg: configuration arrays; ekf/sel: EKF lanes and selector;
     c: controller state; path: mission as NED points (path[0] = takeoff point); seg: scratch
     segment; sched: (n, 4) rows (t_us, target, index, value) of parameter changes; home: (lat,
-    lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers.
+    lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
+    s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
+    generator (tlm_sim.rng). Allocation-free.
     """
-    np.random.seed(seed)
+    np.random.seed(seed)  # noqa: NPY002 - numba's generator (wind turbulence) is the legacy API
     n_path = path.shape[0]
-    s = np.zeros(S.N_SENSOR_STATE)
-    dang = np.zeros((S.N_IMU, 3))
-    dvel = np.zeros((S.N_IMU, 3))
-    imu_ok = np.ones(S.N_IMU)
-    gps = np.zeros(9)
-    pwm = np.zeros(4)
-    pos = np.zeros(3)
-    vel = np.zeros(3)
-    q = np.zeros(4)
-    gyro = np.zeros(3)
-    acc_ned = np.zeros(3)
+    dang, dvel = work[0], work[1]
+    imu_ok = work[2][0]
+    gps = work[2][1]
+    pwm = work[2][2]
+    pos = work[2][3]
+    vel = work[2][4]
+    q = work[2][5]
+    gyro = work[2][6]
+    acc_ned = work[2][7]
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
     rc_init(s, 0.0)
@@ -131,14 +133,9 @@ def run_flight(
     last_gps_ms = 0.0
     stop_at = -1
     dt_loop = LOOP_DT_US * 1e-6
-    L.euler_deg(1.0, 0.0, 0.0, 0.0)
-    from_mode = 0.0
-    L_mode = bufs[L.K_MODE]
-    r = L.new_row(bufs, counts, L.K_MODE, 0.0)
+    r = L.new_row(bufs, counts, L.K_MODE, 0.0)  # boot in STABILIZE, ModeReason INITIALISED
     if r >= 0:
-        L_mode[r, 1] = from_mode
-        L_mode[r, 2] = from_mode
-        L_mode[r, 3] = 26.0  # ModeReason::INITIALISED
+        bufs[L.K_MODE][r, 3] = 26.0
     while t_us < t_end_us:
         # ------------------------------------------------------------- physics tick (1200 Hz)
         k_sched = _apply_schedule(sched, k_sched, t_us, scfg, frame, g, ecfg)
@@ -152,7 +149,7 @@ def run_flight(
                 thr_sum += (pwm[i] - 1000.0) / 1000.0
                 n_on += 1
         throttle = thr_sum / n_on if n_on > 0 else 0.0
-        imu_sample(s, x, scfg, float(t_us), throttle)
+        imu_sample(s, x, scfg, float(t_us), throttle, rng)
         if t_us < next_loop:
             continue
         # ------------------------------------------------------------- main loop (400 Hz)
@@ -163,17 +160,17 @@ def run_flight(
         gps_push_truth(s, x, t_us * 1e-6)
         gps_new = False
         if gps_due(s, float(t_us)):
-            gps_measure(s, scfg, float(t_us), gps)
+            gps_measure(s, scfg, float(t_us), gps, rng)
             gps_new = True
         baro_new = False
         if t_us >= s[S.B_NEXT_US]:
             s[S.B_NEXT_US] += 100000.0
-            baro_sample(s, x, scfg)
+            baro_sample(s, x, scfg, rng)
             baro_new = True
         mag_new = False
         if t_us >= s[S.M_NEXT_US]:
             s[S.M_NEXT_US] += 100000.0
-            mag_sample(s, x, scfg)
+            mag_sample(s, x, scfg, rng)
             mag_new = True
         rc_update(s, scfg, float(t_us))
         switched = ekf_update(
@@ -224,7 +221,7 @@ def run_flight(
     return t_us
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_time, last_ms):
     """GPS and GPA rows for one GPS epoch; returns the epoch's ms of week."""
     r = L.new_row(bufs, counts, L.K_GPS, t_us)
@@ -264,7 +261,7 @@ def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_ti
     return ms
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _log_imu(bufs, counts, t_us, s, scfg):
     """IMU rows (one per instance): filtered gyro/accel, error counts, temperature, rates."""
     temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
@@ -287,7 +284,7 @@ def _log_imu(bufs, counts, t_us, s, scfg):
         b[r, 14] = round(1e6 / scfg[S.C_ACC_PERIOD_US + i])
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt, throttle):
     """The 10 Hz messages: RATE, VIBE, ATT, BARO, MAG, RCIN, RCOU, XKF1, XKF4, CTUN, BAT, POS,
     SIM, PSCN/E/D."""
@@ -469,6 +466,13 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
 # ------------------------------------------------------------------------- Python entry point
 
 
+def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3), and a (8, 9)
+    block whose rows are imu_ok, the GPS epoch, motor PWM, EKF position, velocity, attitude,
+    gyro and NED acceleration."""
+    return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((8, 9))
+
+
 def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(sensor, frame, control, ekf) configuration arrays for a parameter set."""
     return build_sensor_config(p), build_frame(p), build_control_config(p), build_ekf_config(p)
@@ -500,12 +504,14 @@ def build_schedule(
     return np.array(rows, dtype=np.float64)
 
 
-def mission_path(mission: Mission) -> np.ndarray:
-    """The mission as NED points: the takeoff point above home, then the waypoints."""
+def mission_path(mission: Mission, g: np.ndarray) -> np.ndarray:
+    """The mission as NED points (the takeoff point above home, then the waypoints) with the
+    per-leg data of control.wpnav.prepare_path for the controller configuration g."""
     ned = mission.ned()
-    path = np.empty((ned.shape[0] + 1, 3))
-    path[0] = (0.0, 0.0, -mission.takeoff_alt)
-    path[1:] = ned
+    path = np.zeros((ned.shape[0] + 1, PATH_COLS))
+    path[0, :3] = (0.0, 0.0, -mission.takeoff_alt)
+    path[1:, :3] = ned
+    prepare_path(path, path.shape[0], g)
     return path
 
 
@@ -550,8 +556,8 @@ def fly(
     c[C.THR_HOVER] = g[C.G_MOT_HOVER]
     c[C.TAKEOFF_ALT] = mission.takeoff_alt
     c[C.DISARM_TIME] = -1.0
-    path = mission_path(mission)
-    seg = np.zeros((2, 3))
+    path = mission_path(mission, g)
+    seg = np.zeros((2, PATH_COLS))
     duration = max_duration_s(mission, p)
     bufs = allocate_buffers(duration, LOGGED_MESSAGES)
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
@@ -561,6 +567,7 @@ def fly(
     t_final = run_flight(
         x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, int(seed),
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
+        np.zeros(S.N_SENSOR_STATE), new_work(), new_rng(int(seed), 1),
     )
     meta: dict[str, Any] = {
         "seed": int(seed),

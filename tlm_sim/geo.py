@@ -146,3 +146,15 @@ def ne_to_latlon_scalar(
     lat = home_lat + north_m / M_PER_DEG_LAT
     lon = home_lon + east_m / (M_PER_DEG_LAT * _longitude_scale_scalar(0.5 * (lat + home_lat)))
     return lat, _wrap_180_scalar(lon)
+
+
+def earth_field_ned(dec_deg: float, inc_deg: float, intensity_ga: float) -> np.ndarray:
+    """Earth magnetic field NED [gauss] from declination/inclination [deg] and intensity [gauss].
+
+    Positive inclination points the field down (northern hemisphere); ArduPilot SITL's default
+    location (Canberra) has inclination about -66 deg, i.e. the field points up.
+    """
+    dec = math.radians(dec_deg)
+    inc = math.radians(inc_deg)
+    h = intensity_ga * math.cos(inc)
+    return np.array([h * math.cos(dec), h * math.sin(dec), intensity_ga * math.sin(inc)])

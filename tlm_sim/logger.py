@@ -8,7 +8,7 @@ capacity are dropped (the counts never exceed the buffer size).
 
 import math
 
-from numba import njit
+from tlm_sim._jit import tick_jit
 
 K_GPS, K_GPA, K_IMU, K_RATE, K_VIBE, K_ATT, K_BARO, K_MAG, K_RCIN, K_RCOU = range(10)
 K_MODE, K_EV, K_ERR, K_XKF1, K_XKF4, K_CTUN, K_BAT, K_POS, K_SIM = range(10, 19)
@@ -22,7 +22,7 @@ RAD2DEG = 180.0 / math.pi
 M_PER_DEG_LAT = 111318.84502145034  # ArduPilot's LOCATION_SCALING_FACTOR * 1e7
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def new_row(bufs, counts, k, t_us):
     """Reserve the next row of buffer k, write TimeUS; returns the row index or -1 when full."""
     n = counts[k]
@@ -34,7 +34,7 @@ def new_row(bufs, counts, k, t_us):
     return n
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def ne_to_latlon(home_lat, home_lon, pn, pe):
     """Flat-earth offset [m] from home -> (lat, lon) [deg], as ArduPilot's Location::offset."""
     lat = home_lat + pn / M_PER_DEG_LAT
@@ -42,7 +42,7 @@ def ne_to_latlon(home_lat, home_lon, pn, pe):
     return lat, lon
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def euler_deg(qw, qx, qy, qz):
     """(roll, pitch, yaw 0..360) [deg] of a body->NED quaternion."""
     roll = math.atan2(2.0 * (qw * qx + qy * qz), 1.0 - 2.0 * (qx * qx + qy * qy))

@@ -164,7 +164,7 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "earth field inclination at home, + down (SITL WMM table at CMAC, §1.13)")),
     ("TLM_MAG_INT_GA", 0.579, ParamInfo(
         "gauss", 0.0, 2.0, "earth field intensity at home (SITL WMM table at CMAC, §1.13)")),
-    ("TLM_GYRO_COUPLING", 1.0, ParamInfo(
+    ("TLM_GYRO_CPL", 1.0, ParamInfo(
         "", 0.0, 1.0,
         "1 = include the gyroscopic w x Iw term in the rigid body (conserves angular momentum); "
         "0 = SITL-exact (SITL omits it, §1.8)", integer=True)),

@@ -8,12 +8,11 @@ rate PIDs (ATC_RAT_*) produce roll/pitch/yaw outputs in motor units (+-1).
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def sqrt_ctrl(error, p, accel_max, dt):
     """Square-root controller: linear (p*e) near zero, sqrt(2*a*|e|) far out; output limited to
     |e|/dt so it never overshoots within one step. accel_max <= 0 gives a pure P controller."""
@@ -36,13 +35,17 @@ def sqrt_ctrl(error, p, accel_max, dt):
     return out
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def wrap_pi(a):
-    """Wrap an angle to [-pi, pi)."""
+    """Wrap an angle to [-pi, pi) (fast path for angles already within one turn)."""
+    if -math.pi <= a < math.pi:
+        return a
+    if -3.0 * math.pi <= a < 3.0 * math.pi:
+        return a - 2.0 * math.pi if a >= math.pi else a + 2.0 * math.pi
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _shape_axis(c, angle_i, rate_i, cmd, tc, accel_max, dt, wrap):
     """Move a target angle towards cmd with a square-root rate demand and an accel limit."""
     err = cmd - c[angle_i]
@@ -60,7 +63,7 @@ def _shape_axis(c, angle_i, rate_i, cmd, tc, accel_max, dt, wrap):
     c[angle_i] = wrap_pi(a) if wrap else a
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def attitude_reset(c, roll, pitch, yaw):
     """Set the attitude targets to the given euler angles [rad] with zero target rates."""
     c[C.ATT_ROLL_T] = roll
@@ -74,7 +77,7 @@ def attitude_reset(c, roll, pitch, yaw):
     c[C.ATT_YAW_RATE_T] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def attitude_update(c, g, q, body_rate_out):
     """Shape the commanded angles (ATT_*_CMD) and compute body-rate targets [rad/s].
 
@@ -82,10 +85,10 @@ def attitude_update(c, g, q, body_rate_out):
     """
     dt = g[C.G_DT]
     tc = g[C.G_INPUT_TC]
-    _shape_axis(c, C.ATT_ROLL_T, C.ATT_ROLL_RATE_T, c[C.ATT_ROLL_CMD], tc, g[C.G_ACCEL_MAX], dt, False)
-    _shape_axis(
-        c, C.ATT_PITCH_T, C.ATT_PITCH_RATE_T, c[C.ATT_PITCH_CMD], tc, g[C.G_ACCEL_MAX + 1], dt, False
-    )
+    amax = g[C.G_ACCEL_MAX]
+    _shape_axis(c, C.ATT_ROLL_T, C.ATT_ROLL_RATE_T, c[C.ATT_ROLL_CMD], tc, amax, dt, False)
+    amax = g[C.G_ACCEL_MAX + 1]
+    _shape_axis(c, C.ATT_PITCH_T, C.ATT_PITCH_RATE_T, c[C.ATT_PITCH_CMD], tc, amax, dt, False)
     # heading: slew-limited towards the command
     yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
     yrate = sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
@@ -126,20 +129,23 @@ def attitude_update(c, g, q, body_rate_out):
     e1 = ey * k
     e2 = ez * k
     # feed-forward: target euler rates -> body rates (at the target attitude)
-    r = c[C.ATT_ROLL_T]
-    p = c[C.ATT_PITCH_T]
+    # (full-angle sines/cosines from the half angles above)
+    sin_r = 2.0 * sr * cr
+    cos_r = cr * cr - sr * sr
+    sin_p = 2.0 * sp * cp
+    cos_p = cp * cp - sp * sp
     dr = c[C.ATT_ROLL_RATE_T]
     dp = c[C.ATT_PITCH_RATE_T]
     dy = c[C.ATT_YAW_RATE_T]
-    ff0 = dr - math.sin(p) * dy
-    ff1 = math.cos(r) * dp + math.sin(r) * math.cos(p) * dy
-    ff2 = -math.sin(r) * dp + math.cos(r) * math.cos(p) * dy
+    ff0 = dr - sin_p * dy
+    ff1 = cos_r * dp + sin_r * cos_p * dy
+    ff2 = -sin_r * dp + cos_r * cos_p * dy
     body_rate_out[0] = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt) + ff0
     body_rate_out[1] = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt) + ff1
     body_rate_out[2] = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt) + ff2
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def rate_pid(c, g, axis, target, meas, limited):
     """One AC_PID step for a body axis (0 roll, 1 pitch, 2 yaw); returns the output (+-1 units).
 
@@ -171,7 +177,7 @@ def rate_pid(c, g, axis, target, meas, limited):
     return out
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def rate_reset(c):
     """Zero the rate PIDs (on arming / disarmed)."""
     for k in range(3 * C.RATE_STRIDE):

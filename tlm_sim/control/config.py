@@ -53,6 +53,7 @@ def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -
     g[C.G_INPUT_TC] = max(p.get("ATC_INPUT_TC", 0.15), 0.05)
     g[C.G_SLEW_YAW] = math.radians(p.get("ATC_SLEW_YAW", 6000.0) / 100.0)
     g[C.G_ANGLE_MAX] = math.radians(p.get("ANGLE_MAX", 3000.0) / 100.0)
+    g[C.G_ACCEL_XY_MAX] = 9.80665 * math.tan(g[C.G_ANGLE_MAX])
     g[C.G_POSXY_P] = p.get("PSC_POSXY_P", 1.0)
     g[C.G_VELXY_P] = p.get("PSC_VELXY_P", 2.0)
     g[C.G_VELXY_I] = p.get("PSC_VELXY_I", 1.0)

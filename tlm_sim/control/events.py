@@ -4,7 +4,7 @@ Buffers follow tlm_sim.flightlog.schema: MODE (TimeUS, Mode, ModeNum, Rsn), EV (
 ERR (TimeUS, Subsys, ECode). ``counts`` holds the row count of each buffer at the index given.
 """
 
-from numba import njit
+from tlm_sim._jit import tick_jit
 
 # EV ids (AP_Logger LogEvent)
 EV_ARMED = 10
@@ -23,7 +23,7 @@ ERR_CODE_FAILSAFE = 1
 ERR_CODE_LATE_FRAME = 2
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def log_row3(buf, counts, k, t_us, a, b, c_):
     """Append (TimeUS, a, b, c) to a 4-column buffer (MODE); drops rows when full."""
     n = counts[k]
@@ -35,7 +35,7 @@ def log_row3(buf, counts, k, t_us, a, b, c_):
         counts[k] = n + 1
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def log_row2(buf, counts, k, t_us, a, b):
     """Append (TimeUS, a, b) to a 3-column buffer (ERR)."""
     n = counts[k]
@@ -46,7 +46,7 @@ def log_row2(buf, counts, k, t_us, a, b):
         counts[k] = n + 1
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def log_row1(buf, counts, k, t_us, a):
     """Append (TimeUS, a) to a 2-column buffer (EV)."""
     n = counts[k]

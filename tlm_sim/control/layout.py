@@ -171,4 +171,5 @@ G_THR_MIX_MIN = 79
 G_THR_MIX_MAX = 80
 G_FS_CRASH_CHECK = 81
 G_DISARM_DELAY = 82  # [s]
-N_CONTROL_CFG = 83
+G_ACCEL_XY_MAX = 83  # g * tan(ANGLE_MAX): horizontal acceleration limit [m/s^2]
+N_CONTROL_CFG = 84

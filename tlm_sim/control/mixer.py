@@ -8,8 +8,7 @@ thrust fraction is linearised through MOT_THST_EXPO into an actuator value and a
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 
 # plus frame mixer factors (motor 1..4): roll, pitch, yaw (ArduPilot normalisation to 0.5)
@@ -18,7 +17,7 @@ PITCH_FAC = (0.0, 0.0, 0.5, -0.5)
 YAW_FAC = (0.5, 0.5, -0.5, -0.5)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def lift_max(g, v_batt):
     """Voltage compensation: (ratio, lift_max) with ratio = clamp(V, MIN, MAX)/MAX."""
     vmax = g[C.G_MOT_BAT_MAX]
@@ -30,7 +29,7 @@ def lift_max(g, v_batt):
     return ratio, ratio * (1.0 - e) + e * ratio * ratio
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def thrust_to_actuator(g, thrust, ratio, lift):
     """Thrust fraction 0..1 -> actuator 0..1 (thrust curve + voltage scaling + spin limits)."""
     e = g[C.G_MOT_EXPO]
@@ -43,7 +42,7 @@ def thrust_to_actuator(g, thrust, ratio, lift):
     return g[C.G_MOT_SPIN_MIN] + (g[C.G_MOT_SPIN_MAX] - g[C.G_MOT_SPIN_MIN]) * a
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM and the LIM_* saturation flags."""
     ratio, lift = lift_max(g, v_batt)
@@ -119,7 +118,7 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     c[C.LIM_THR_HI] = lim_hi
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def output_idle(c, g, spin):
     """All motors at a fixed actuator value (0 = stopped, MOT_SPIN_ARM = ground idle)."""
     for i in range(4):

@@ -10,50 +10,47 @@ land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import attitude_reset, attitude_update, rate_pid, rate_reset
 from tlm_sim.control.mixer import mix, output_idle
 from tlm_sim.control.position import angle_boost, xy_reset, xy_update, z_reset, z_update
-from tlm_sim.control.wpnav import path_start, path_update
+from tlm_sim.control.wpnav import path_start, path_update, prepare_path
 
 SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 LAND_MAYBE_S = 0.2
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def set_mode(c, mode, rsn, t_us, mode_buf, ev_buf, err_buf, counts, k_mode):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
     E.log_row3(mode_buf, counts, k_mode, t_us, mode, mode, rsn)
 
 
-@njit(cache=True, nogil=True)
-def _euler(q):
-    """Euler angles (roll, pitch, yaw) [rad] of a body->NED quaternion."""
+@tick_jit
+def _yaw_cos_tilt(q):
+    """Heading [rad] and cos(tilt) = cos(roll) cos(pitch) of a body->NED quaternion."""
     w, x, y, z = q[0], q[1], q[2], q[3]
-    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    sp = 2.0 * (w * y - z * x)
-    pitch = math.asin(min(max(sp, -1.0), 1.0))
     yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return roll, pitch, yaw
+    return yaw, 1.0 - 2.0 * (x * x + y * y)
 
 
-@njit(cache=True, nogil=True)
-def _set_segment(seg, a0, a1, a2, b0, b1, b2):
-    """Two-point path seg[0] -> seg[1] (NED, m)."""
+@tick_jit
+def _set_segment(seg, g, a0, a1, a2, b0, b1, b2):
+    """Two-point path seg[0] -> seg[1] (NED, m), legs prepared for path_update."""
     seg[0, 0] = a0
     seg[0, 1] = a1
     seg[0, 2] = a2
     seg[1, 0] = b0
     seg[1, 1] = b1
     seg[1, 2] = b2
+    prepare_path(seg, 2, g)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _start_rtl(c, g, pos, seg):
     """Enter RTL's initial climb from the current position."""
     alt = -pos[2]
@@ -65,11 +62,11 @@ def _start_rtl(c, g, pos, seg):
     target = max(target, alt)
     c[C.SUBMODE] = C.SUB_RTL_CLIMB
     c[C.SUB_TIMER] = 0.0
-    _set_segment(seg, pos[0], pos[1], pos[2], pos[0], pos[1], -target)
+    _set_segment(seg, g, pos[0], pos[1], pos[2], pos[0], pos[1], -target)
     path_start(c)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def vehicle_step(
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
     mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
@@ -84,7 +81,7 @@ def vehicle_step(
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
-    roll, pitch, yaw = _euler(q)
+    yaw, cos_tilt = _yaw_cos_tilt(q)
     # 1 Hz low-pass of the earth-frame acceleration (land/crash detectors)
     alpha = dt / (dt + 1.0 / (2.0 * math.pi * 1.0))
     for k in range(3):
@@ -139,7 +136,7 @@ def vehicle_step(
             xy_reset(c, pos[0], pos[1], vel[0], vel[1])
             z_reset(c, g, pos[2], vel[2], 0.0)
             c[C.THR_OUT] = 0.0
-            _set_segment(seg, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
+            _set_segment(seg, g, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
             path_start(c)
         return
 
@@ -171,7 +168,7 @@ def vehicle_step(
         if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
             c[C.SUBMODE] = C.SUB_RTL_RETURN
             c[C.SUB_TIMER] = 0.0
-            _set_segment(seg, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
+            _set_segment(seg, g, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
             path_start(c)
     elif sub == C.SUB_RTL_RETURN:
         speed_cap = g[C.G_RTL_SPEED]
@@ -224,7 +221,6 @@ def vehicle_step(
     c[C.ATT_YAW_CMD] = yaw_cmd
     thr = z_update(c, g, pos[2], vel[2], acc_up, c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0)
     c[C.THR_OUT] = thr
-    cos_tilt = math.cos(roll) * math.cos(pitch)
     thr_b = angle_boost(thr, cos_tilt)
     c[C.THR_OUT_BOOSTED] = thr_b
     attitude_update(c, g, q, c[C.BODY_RATE_T : C.BODY_RATE_T + 3])

@@ -9,15 +9,14 @@ NED positions/velocities in m, m/s; PZ_ACC_T is "up" acceleration like ArduPilot
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import sqrt_ctrl
 
 GRAVITY = 9.80665
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def xy_reset(c, pn, pe, vn, ve):
     """Hold the current position: target = estimate, integrators cleared."""
     c[C.PXY_POS_T] = pn
@@ -34,11 +33,11 @@ def xy_reset(c, pn, pe, vn, ve):
     c[C.PXY_VEL_T] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def xy_update(c, g, pos, vel, yaw):
     """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD."""
     dt = g[C.G_DT]
-    accel_max = GRAVITY * math.tan(g[C.G_ANGLE_MAX])
+    accel_max = g[C.G_ACCEL_XY_MAX]
     # position -> velocity (square-root shaped along the error vector)
     en = c[C.PXY_POS_T] - pos[0]
     ee = c[C.PXY_POS_T + 1] - pos[1]
@@ -81,13 +80,14 @@ def xy_update(c, g, pos, vel, yaw):
     sy = math.sin(yaw)
     a_fwd = an * cy + ae * sy
     a_rgt = -an * sy + ae * cy
-    pitch = math.atan(-a_fwd / GRAVITY)
-    roll = math.atan(a_rgt * math.cos(pitch) / GRAVITY)
+    u = -a_fwd / GRAVITY
+    pitch = math.atan(u)
+    roll = math.atan(a_rgt / math.sqrt(1.0 + u * u) / GRAVITY)  # cos(atan(u)) = 1/sqrt(1+u^2)
     c[C.ATT_ROLL_CMD] = roll
     c[C.ATT_PITCH_CMD] = pitch
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def z_reset(c, g, pd, vd, throttle):
     """Hold the current altitude; the accel integrator starts at throttle - hover."""
     c[C.PZ_POS_T] = pd
@@ -98,7 +98,7 @@ def z_reset(c, g, pd, vd, throttle):
     c[C.PZ_I] = throttle - c[C.THR_HOVER]
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
     """Run the vertical controller; returns the throttle demand 0..1 (before angle boost).
 
@@ -129,7 +129,7 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
     return min(max(thr, 0.0), 1.0)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def angle_boost(throttle, cos_tilt):
     """ATC_ANGLE_BOOST: raise throttle by 1/cos(tilt), fading out when nearly inverted."""
     inverted = min(max(10.0 * cos_tilt, 0.0), 1.0)

@@ -12,18 +12,20 @@ The target waits for the vehicle when it falls behind (position error beyond 2 m
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 
+# path rows: (pn, pe, pd) of the point, then data of the leg that ENDS at that point
+P_LEN = 3  # leg length [m]
+P_UN, P_UE, P_UD = 4, 5, 6  # leg unit vector NED
+P_VLEG = 7  # leg speed limit [m/s]
+P_CORNER = 8  # cos of the turn at the end of the leg (0 at the path's end / beyond 90 deg)
+PATH_COLS = 9
 
-@njit(cache=True, nogil=True)
-def leg_speed(g, path, i):
-    """Speed limit [m/s] on leg i (from path[i-1] to path[i])."""
-    dn = path[i, 0] - path[i - 1, 0]
-    de = path[i, 1] - path[i - 1, 1]
-    dd = path[i, 2] - path[i - 1, 2]
-    length = math.sqrt(dn * dn + de * de + dd * dd)
+
+@tick_jit
+def leg_speed(g, length, dd):
+    """Speed limit [m/s] of a leg of 3-D length [m] and down displacement dd [m]."""
     v = g[C.G_WP_SPEED]
     if length <= 1e-6:
         return v
@@ -36,25 +38,42 @@ def leg_speed(g, path, i):
     return max(v, 0.1)
 
 
-@njit(cache=True, nogil=True)
-def _corner_factor(path, i, n):
-    """cos of the turn at the end of leg i (0 at the path's end, 0 for turns beyond 90 deg)."""
-    if i >= n - 1:
-        return 0.0
-    a0 = path[i, 0] - path[i - 1, 0]
-    a1 = path[i, 1] - path[i - 1, 1]
-    a2 = path[i, 2] - path[i - 1, 2]
-    b0 = path[i + 1, 0] - path[i, 0]
-    b1 = path[i + 1, 1] - path[i, 1]
-    b2 = path[i + 1, 2] - path[i, 2]
-    na = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-    if na < 1e-6 or nb < 1e-6:
-        return 1.0
-    return max((a0 * b0 + a1 * b1 + a2 * b2) / (na * nb), 0.0)
+@tick_jit
+def prepare_path(path, n, g):
+    """Fill the leg columns (P_LEN..P_CORNER) of path[0:n] from its points (NED in 0:3)."""
+    path[0, P_LEN] = 0.0
+    path[0, P_UN] = 0.0
+    path[0, P_UE] = 0.0
+    path[0, P_UD] = 0.0
+    path[0, P_VLEG] = g[C.G_WP_SPEED]
+    path[0, P_CORNER] = 1.0
+    for i in range(1, n):
+        dn = path[i, 0] - path[i - 1, 0]
+        de = path[i, 1] - path[i - 1, 1]
+        dd = path[i, 2] - path[i - 1, 2]
+        length = math.sqrt(dn * dn + de * de + dd * dd)
+        path[i, P_LEN] = length
+        if length > 1e-9:
+            path[i, P_UN] = dn / length
+            path[i, P_UE] = de / length
+            path[i, P_UD] = dd / length
+        else:
+            path[i, P_UN] = 0.0
+            path[i, P_UE] = 0.0
+            path[i, P_UD] = 0.0
+        path[i, P_VLEG] = leg_speed(g, length, dd)
+    for i in range(1, n):
+        if i >= n - 1:
+            path[i, P_CORNER] = 0.0
+        elif path[i, P_LEN] < 1e-6 or path[i + 1, P_LEN] < 1e-6:
+            path[i, P_CORNER] = 1.0
+        else:
+            cosang = (path[i, P_UN] * path[i + 1, P_UN] + path[i, P_UE] * path[i + 1, P_UE]
+                      + path[i, P_UD] * path[i + 1, P_UD])
+            path[i, P_CORNER] = max(cosang, 0.0)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def path_start(c):
     """Start following a path from its first point (leg 1), target at rest."""
     c[C.WP_INDEX] = 1.0
@@ -63,47 +82,36 @@ def path_start(c):
     c[C.PATH_A] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def path_update(c, g, path, n, pos, speed_cap):
-    """Advance the target along path[0:n] and set the position controller targets.
+    """Advance the target along path[0:n] (prepared by prepare_path) and set the position
+    controller targets. pos: EKF position NED [m]; speed_cap [m/s] (<= 0: none).
 
-    pos: EKF position NED [m]. speed_cap [m/s] (<= 0: none) e.g. RTL_SPEED.
-    Returns (leg heading [rad] or nan when the leg is vertical, 1.0 when the end is reached).
+    Returns (leg heading [rad], nan for a vertical leg; 1.0 when the end is reached).
     """
     dt = g[C.G_DT]
     i = int(c[C.WP_INDEX])
     if i >= n:
         i = n - 1
-    p0n, p0e, p0d = path[i - 1, 0], path[i - 1, 1], path[i - 1, 2]
-    dn = path[i, 0] - p0n
-    de = path[i, 1] - p0e
-    dd = path[i, 2] - p0d
-    length = math.sqrt(dn * dn + de * de + dd * dd)
+    length = path[i, P_LEN]
     s = c[C.PATH_S]
-    v_leg = leg_speed(g, path, i)
+    v_leg = path[i, P_VLEG]
     if speed_cap > 0.0:
         v_leg = min(v_leg, speed_cap)
     a_max = g[C.G_WP_ACCEL]
-    # speed allowed from the distance to the next corner / the end (two legs of look-ahead)
+    # speed allowed by the distance to the next corner / the end (two legs of look-ahead)
     d_rem = max(length - s, 0.0)
-    v_corner = v_leg * _corner_factor(path, i, n)
+    v_corner = v_leg * path[i, P_CORNER]
     if i + 1 < n:
-        v_corner = min(v_corner, leg_speed(g, path, i + 1))
+        v_corner = min(v_corner, path[i + 1, P_VLEG])
     v_allow = min(v_leg, math.sqrt(v_corner * v_corner + a_max * d_rem))
     if i + 1 < n:
-        dn2 = path[i + 1, 0] - path[i, 0]
-        de2 = path[i + 1, 1] - path[i, 1]
-        dd2 = path[i + 1, 2] - path[i, 2]
-        l2 = math.sqrt(dn2 * dn2 + de2 * de2 + dd2 * dd2)
-        v_c2 = leg_speed(g, path, i + 1) * _corner_factor(path, i + 1, n)
-        v_allow = min(v_allow, math.sqrt(v_c2 * v_c2 + a_max * (d_rem + l2)))
+        v_c2 = path[i + 1, P_VLEG] * path[i + 1, P_CORNER]
+        v_allow = min(v_allow, math.sqrt(v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])))
     # the target waits for a vehicle that falls behind
-    tn = p0n + (dn / length * s if length > 1e-9 else 0.0)
-    te = p0e + (de / length * s if length > 1e-9 else 0.0)
-    td = p0d + (dd / length * s if length > 1e-9 else 0.0)
-    en = tn - pos[0]
-    ee = te - pos[1]
-    ed = td - pos[2]
+    en = path[i - 1, 0] + path[i, P_UN] * s - pos[0]
+    ee = path[i - 1, 1] + path[i, P_UE] * s - pos[1]
+    ed = path[i - 1, 2] + path[i, P_UD] * s - pos[2]
     err = math.sqrt(en * en + ee * ee + ed * ed)
     if err > 2.0:
         v_allow *= max(0.0, 1.0 - (err - 2.0) / 3.0)
@@ -127,27 +135,18 @@ def path_update(c, g, path, n, pos, speed_cap):
             c[C.WP_INDEX] = i + 1.0
             c[C.WP_REACHED] += 1.0
             i += 1
-            p0n, p0e, p0d = path[i - 1, 0], path[i - 1, 1], path[i - 1, 2]
-            dn = path[i, 0] - p0n
-            de = path[i, 1] - p0e
-            dd = path[i, 2] - p0d
-            length = math.sqrt(dn * dn + de * de + dd * dd)
+            length = path[i, P_LEN]
             s = min(s, length)
         else:
             s = length
             done = 1.0
     c[C.PATH_S] = s
-    if length > 1e-9:
-        un = dn / length
-        ue = de / length
-        ud = dd / length
-    else:
-        un = 0.0
-        ue = 0.0
-        ud = 0.0
-    c[C.PXY_POS_T] = p0n + un * s
-    c[C.PXY_POS_T + 1] = p0e + ue * s
-    c[C.PZ_POS_T] = p0d + ud * s
+    un = path[i, P_UN]
+    ue = path[i, P_UE]
+    ud = path[i, P_UD]
+    c[C.PXY_POS_T] = path[i - 1, 0] + un * s
+    c[C.PXY_POS_T + 1] = path[i - 1, 1] + ue * s
+    c[C.PZ_POS_T] = path[i - 1, 2] + ud * s
     vff = 0.0 if done > 0.0 else v
     c[C.PXY_VEL_FF] = un * vff
     c[C.PXY_VEL_FF + 1] = ue * vff
@@ -155,6 +154,6 @@ def path_update(c, g, path, n, pos, speed_cap):
     c[C.PXY_ACC_FF] = un * a
     c[C.PXY_ACC_FF + 1] = ue * a
     heading = math.nan
-    if math.sqrt(dn * dn + de * de) > 0.5:
-        heading = math.atan2(de, dn)
+    if length * math.sqrt(un * un + ue * ue) > 0.5:
+        heading = math.atan2(ue, un)
     return heading, done

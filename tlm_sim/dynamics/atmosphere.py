@@ -8,7 +8,7 @@ All functions are scalar ``@njit`` functions usable from the flight loop and fro
 
 from __future__ import annotations
 
-from tlm_sim.dynamics._jit import tick_jit
+from tlm_sim._jit import tick_jit
 
 #: standard gravity [m/s^2]
 GRAVITY_MSS: float = 9.80665

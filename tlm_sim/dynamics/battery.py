@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
-from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.frame import F_BATT_CAP_AH, F_BATT_RES, F_BATT_VOLT, F_MAX_VOLT
 
 #: cut-off frequency of the terminal-voltage filter [Hz]

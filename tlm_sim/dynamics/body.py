@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
-from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
 from tlm_sim.dynamics.frame import (

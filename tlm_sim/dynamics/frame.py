@@ -27,7 +27,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from tlm_sim.dynamics._jit import tick_jit
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
 
 #: number of motors of the plus frame
@@ -117,7 +117,7 @@ FRAME_DEFAULTS: dict[str, float] = {
     "TLM_IZZ": 0.0,
     "TLM_FRAME_HEIGHT": 0.1,
     "TLM_PROFILE": 0.0,
-    "TLM_GYRO_COUPLING": 1.0,
+    "TLM_GYRO_CPL": 1.0,
     "SIM_BATT_VOLTAGE": 12.6,
     "SIM_BATT_CAP_AH": 0.0,
     "SIM_OPOS_ALT": 584.0,
@@ -171,7 +171,7 @@ def build_frame(params: Mapping[str, float] | None = None) -> np.ndarray:
     f[F_MAX_VOLT] = get("TLM_MAX_VOLT")
     f[F_FRAME_HEIGHT] = get("TLM_FRAME_HEIGHT")
     f[F_PROFILE] = get("TLM_PROFILE")
-    f[F_GYRO] = get("TLM_GYRO_COUPLING")
+    f[F_GYRO] = get("TLM_GYRO_CPL")
     f[F_REF_ALT] = get("TLM_REF_ALT")
 
     # drag calibration from the reference test (lean refAngle at refSpd)

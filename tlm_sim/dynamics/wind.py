@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
-from tlm_sim.dynamics._jit import tick_jit
 from tlm_sim.dynamics.frame import (
     F_FRAME_HEIGHT,
     F_WIND_DIR,

@@ -1,5 +1,23 @@
 """Navigation EKF: an EKF3-like error-state filter, one lane per IMU, with primary selection.
 
+Design (``ardupilot-reference.md`` sections 3.2-3.4, 3.8):
+
+* Nominal state 16 (quaternion body->NED, velocity NED, position NED, gyro bias, accel bias);
+  covariance over 15 error states (earth-frame attitude error, velocity, position, gyro bias,
+  accel bias). No magnetic-field or wind states: the earth field is fixed from TLM_MAG_*.
+* State propagation every 400 Hz tick from each lane's own IMU deltas; covariance prediction
+  when >= 12 ms of IMU data has accumulated (every 5 ticks = 80 Hz, as EKF3), block-sparse.
+* Sequential scalar fusion: GPS velocity N/E/D and position N/E against the lane's stored past
+  state (ring buffer, delay GPS1_DELAY_MS, default 0.2 s), baro height (EK3_HGT_DELAY), 3-axis
+  magnetometer (current time); EKF3 innovation gates and test ratios.
+* Aiding: GPS timeouts 7 s (horizontal position/velocity invalid), 15 s (constant-position
+  mode, EK3_NOAID_M_NSE); reset to GPS on timeout, on variance > EK3_GLITCH_RAD^2 and when
+  GPS returns. EKF3's bad-IMU response (vertical velocity from GPS, gates bypassed, 5 m/s^2
+  accel noise, height reset after 1 s) for accelerometer failures.
+* Lane health, error score, relative errors and the ERR 24-style primary switch (section 3.4).
+* Not modelled: the output complementary filter (controllers see the lane state directly, with
+  small steps at fusion times), earth/body magnetic field learning, wind, GPS-quality checks.
+
 Public API (all per-tick functions are ``@njit`` and allocation-free):
 
 * :func:`build_ekf_config` / :func:`new_ekf` -- Python, once per flight.
@@ -10,7 +28,13 @@ Public API (all per-tick functions are ``@njit`` and allocation-free):
 Array layouts: :mod:`tlm_sim.ekf.layout`.
 """
 
-from tlm_sim.ekf.config import build_ekf_config, earth_field_ned, lane_imus, new_ekf
+from tlm_sim.ekf.config import (
+    build_ekf_config,
+    earth_field_ned,
+    gps_delay_s,
+    lane_imus,
+    new_ekf,
+)
 from tlm_sim.ekf.lanes import (
     ekf_fuse_baro,
     ekf_fuse_gps,
@@ -30,12 +54,13 @@ __all__ = [
     "ekf_fuse_baro",
     "ekf_fuse_gps",
     "ekf_fuse_mag",
+    "ekf_init",
     "ekf_output",
     "ekf_predict",
     "ekf_primary",
-    "ekf_init",
     "ekf_select_primary",
     "ekf_update",
+    "gps_delay_s",
     "lane_imus",
     "new_ekf",
     "quat_to_euler",

@@ -7,15 +7,15 @@ Parameter names follow ArduPilot (EK3_*); defaults are the ArduCopter EKF3 defau
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import numpy as np
 
 from tlm_sim.ekf import layout as L
+from tlm_sim.geo import earth_field_ned
 
 GRAVITY = 9.80665  # m/s^2
-DEFAULT_GPS_DELAY_MS = 200.0
+DEFAULT_GPS_DELAY_MS = 120.0  # u-blox M8/F9 generation (ardupilot-reference §3.8)
 
 
 def _gate_sigmas(gate_percent: float) -> float:
@@ -23,22 +23,11 @@ def _gate_sigmas(gate_percent: float) -> float:
     return max(0.01 * float(gate_percent), 1.0)
 
 
-def earth_field_ned(dec_deg: float, inc_deg: float, intensity_ga: float) -> np.ndarray:
-    """Earth magnetic field NED [gauss] from declination/inclination [deg] and intensity [gauss].
-
-    Positive inclination points the field down (northern hemisphere); ArduPilot SITL's default
-    location (Canberra) has inclination about -66 deg, i.e. the field points up.
-    """
-    dec = math.radians(dec_deg)
-    inc = math.radians(inc_deg)
-    h = intensity_ga * math.cos(inc)
-    return np.array([h * math.cos(dec), h * math.sin(dec), intensity_ga * math.sin(inc)])
-
-
 def gps_delay_s(params: Mapping[str, float]) -> float:
     """Assumed lag of GPS samples [s]: GPS1_DELAY_MS (or the older GPS_DELAY_MS) when > 0, else
     the driver default DEFAULT_GPS_DELAY_MS (ArduPilot's u-blox driver reports 0.22 s until the
-    receiver generation is known; SITL itself lags its samples by SIM_GPS1_LAG_MS = 100 ms)."""
+    receiver generation is known, 0.12 s for M8/F9 receivers; SITL itself lags its samples by
+    SIM_GPS1_LAG_MS = 100 ms)."""
     ms = float(params.get("GPS1_DELAY_MS", 0.0) or 0.0)
     if ms <= 0.0:
         ms = float(params.get("GPS_DELAY_MS", 0.0) or 0.0)

@@ -304,8 +304,9 @@ def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
 
 @njit(cache=True, nogil=True, _nrt=False)
 def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
-    """New GPS sample: pos[0:3] NED [m] from the origin, vel[0:3] NED [m/s], lagged by
-    GPS_DELAY_MS. Nothing is fused unless fix_3d (a no-fix sample is how a GPS loss looks)."""
+    """New GPS sample: pos[0:3] NED [m] from the origin (only N, E are used; height comes from
+    the baro), vel[0:3] NED [m/s], lagged by the assumed GPS delay (cfg C_GPS_DELAY). Nothing is
+    fused unless fix_3d (a no-fix sample is how a GPS loss looks)."""
     if not fix_3d:
         return
     t = t_us * 1e-6

@@ -1,4 +1,4 @@
-"""Simulated sensors: two IMUs, GPS, barometer, compass and RC receiver (ArduPilot SITL semantics)."""
+"""Simulated sensors: two IMUs, GPS, barometer, compass, RC receiver (ArduPilot SITL semantics)."""
 
 from tlm_sim.sensors.config import build_sensor_config
 

@@ -5,19 +5,19 @@ SIM_BARO_GLITCH offset; pressure and temperature follow the 1976 standard atmosp
 reports the earth field (NED, gauss) rotated into the body frame plus SIM_MAG_RND noise.
 """
 
-import numpy as np
-from numba import njit
 
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import pressure_temperature
+from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
 
-@njit(cache=True, nogil=True)
-def baro_sample(s, x, cfg):
+@tick_jit
+def baro_sample(s, x, cfg, rng):
     """Take a baro sample from truth x: altitude above home ground [m], pressure, temperature."""
     h = -x[X.PD] - cfg[S.C_FRAME_HEIGHT]
-    alt = h + cfg[S.C_BARO_RND] * (2.0 * np.random.random() - 1.0) + cfg[S.C_BARO_GLITCH]
+    alt = h + cfg[S.C_BARO_RND] * uniform_pm1(rng) + cfg[S.C_BARO_GLITCH]
     s[S.B_ALT_PREV] = s[S.B_ALT]
     s[S.B_ALT] = alt
     p, t_k = pressure_temperature(cfg[S.C_HOME_ALT] + alt)
@@ -26,8 +26,8 @@ def baro_sample(s, x, cfg):
     return alt
 
 
-@njit(cache=True, nogil=True)
-def mag_sample(s, x, cfg):
+@tick_jit
+def mag_sample(s, x, cfg, rng):
     """Take a compass sample: earth field rotated into the body frame [gauss] (+ noise)."""
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
     mn = cfg[S.C_MAG_EARTH]
@@ -49,4 +49,4 @@ def mag_sample(s, x, cfg):
     rnd = cfg[S.C_MAG_RND]
     if rnd != 0.0:
         for k in range(3):
-            s[S.M_FIELD + k] += rnd * (2.0 * np.random.random() - 1.0)
+            s[S.M_FIELD + k] += rnd * uniform_pm1(rng)

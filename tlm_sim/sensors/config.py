@@ -5,19 +5,12 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from tlm_sim.geo import earth_field_ned
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.imu import lpf2p_coefficients
 
 # SITL's IMU sample rates ("like a Pixhawk 1"): (gyro Hz, accel Hz) per instance
 IMU_RATES_HZ = ((1000.0, 1000.0), (760.0, 800.0))
-
-
-def earth_field_ned(dec_deg: float, inc_deg: float, intensity_ga: float) -> np.ndarray:
-    """Earth magnetic field NED [gauss] from declination, inclination and intensity."""
-    d = math.radians(dec_deg)
-    i = math.radians(inc_deg)
-    h = intensity_ga * math.cos(i)
-    return np.array([h * math.cos(d), h * math.sin(d), intensity_ga * math.sin(i)])
 
 
 def build_sensor_config(p: Mapping[str, float]) -> np.ndarray:
@@ -58,7 +51,9 @@ def build_sensor_config(p: Mapping[str, float]) -> np.ndarray:
     c[S.C_BARO_GLITCH] = p.get("SIM_BARO_GLITCH", 0.0)
     c[S.C_MAG_RND] = p.get("SIM_MAG_RND", 0.0) / 1000.0  # mG -> gauss
     c[S.C_MAG_EARTH : S.C_MAG_EARTH + 3] = earth_field_ned(
-        p.get("TLM_MAG_DEC_DEG", 12.5), p.get("TLM_MAG_INC_DEG", -66.0), p.get("TLM_MAG_INT_GA", 0.58)
+        p.get("TLM_MAG_DEC_DEG", 12.65),
+        p.get("TLM_MAG_INC_DEG", -65.75),
+        p.get("TLM_MAG_INT_GA", 0.579),
     )
     c[S.C_RC_FAIL] = p.get("SIM_RC_FAIL", 0.0)
     c[S.C_HOME_ALT] = p.get("SIM_OPOS_ALT", 584.0)

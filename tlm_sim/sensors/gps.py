@@ -7,17 +7,16 @@ does. Status 6 (RTK fixed) and NSats = SIM_GPS1_NUMSATS while locked; HDop is co
 
 import math
 
-import numpy as np
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
+from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
 GPS_STATUS_NO_FIX = 1
 GPS_STATUS_RTK_FIXED = 6
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def gps_init(s, t_us):
     """Clear the delay line; the first epoch is due at t_us."""
     g = S.GPS_BASE
@@ -26,7 +25,7 @@ def gps_init(s, t_us):
     s[g + S.G_NEXT_US] = t_us
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def gps_push_truth(s, x, t_s):
     """Append the current true position/velocity to the delay line (call every main-loop tick)."""
     g = S.GPS_BASE
@@ -41,7 +40,7 @@ def gps_push_truth(s, x, t_s):
         s[r + 4 + k] = x[X.VN + k]
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def gps_due(s, t_us):
     """True if a GPS epoch is due at t_us; schedules the next one."""
     g = S.GPS_BASE
@@ -50,8 +49,8 @@ def gps_due(s, t_us):
     return False
 
 
-@njit(cache=True, nogil=True)
-def gps_measure(s, cfg, t_us, out):
+@tick_jit
+def gps_measure(s, cfg, t_us, out, rng):
     """Produce one GPS epoch at t_us into out[0:9]: pn, pe, pd, vn, ve, vd (NED, m, m/s, from home
     ground), status, nsats, fix_3d. Position and velocity are the truth interpolated at t - lag."""
     g = S.GPS_BASE
@@ -78,7 +77,7 @@ def gps_measure(s, cfg, t_us, out):
     out[2] -= cfg[S.C_GPS_NOISE] * math.sin(0.0005 * t_us * 1e-3)
     for k in range(3):
         if cfg[S.C_GPS_VERR + k] != 0.0:
-            out[3 + k] += cfg[S.C_GPS_VERR + k] * (2.0 * np.random.random() - 1.0)
+            out[3 + k] += cfg[S.C_GPS_VERR + k] * uniform_pm1(rng)
     if cfg[S.C_GPS_ENABLE] != 0.0:
         out[6] = GPS_STATUS_RTK_FIXED
         out[7] = cfg[S.C_GPS_NUMSATS]

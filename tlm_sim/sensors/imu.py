@@ -11,9 +11,10 @@ Body frame FRD; accel in m/s^2 (specific force, about (0, 0, -g) at rest), gyro 
 import math
 
 import numpy as np
-from numba import njit
 
+from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
+from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
 CLIP_LIMIT = (16.0 - 0.5) * 9.80665  # m/s^2, a sample beyond this on any axis counts as a clip
@@ -31,7 +32,7 @@ def lpf2p_coefficients(sample_hz: float, cutoff_hz: float) -> np.ndarray:
     return np.array([b0, 2.0 * b0, b0, a1, a2])
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def _biquad(s, d, coef, c, x):
     """One biquad step on state s[d], s[d+1] with coefficients coef[c:c+5]; returns the output."""
     d0 = x - s[d] * coef[c + 3] - s[d + 1] * coef[c + 4]
@@ -41,7 +42,7 @@ def _biquad(s, d, coef, c, x):
     return out
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def gyro_drift(t_s, cfg):
     """SITL gyro drift [rad/s], the same on every axis: a triangle wave in time."""
     speed = cfg[S.C_DRIFT_SPEED]
@@ -54,7 +55,7 @@ def gyro_drift(t_s, cfg):
     return speed * (period - tm)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def imu_init(s, cfg, t_us):
     """Reset both IMUs' accumulators and filters; first samples due at t_us."""
     for i in range(S.N_IMU):
@@ -66,11 +67,12 @@ def imu_init(s, cfg, t_us):
         s[b + S.I_ACC_OK] = 1.0
 
 
-@njit(cache=True, nogil=True)
-def imu_sample(s, x, cfg, t_us, throttle):
+@tick_jit
+def imu_sample(s, x, cfg, t_us, throttle, rng):
     """Take every IMU sample due at physics time t_us [us] from truth state x.
 
     throttle: mean motor output 0..1 (SITL's noise scaling; "motors on" above SIM_INS_THR_MIN).
+    rng: noise generator state (tlm_sim.rng).
     """
     t_s = t_us * 1e-6
     motors_on = throttle > cfg[S.C_INS_THR_MIN]
@@ -85,12 +87,13 @@ def imu_sample(s, x, cfg, t_us, throttle):
                 a_g = cfg[S.C_GYR_NOISE]
             for k in range(3):
                 g = x[X.WX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
-                g += cfg[S.C_GYR_NOISE] * (2.0 * np.random.random() - 1.0)
+                g += cfg[S.C_GYR_NOISE] * uniform_pm1(rng)
                 if a_g != 0.0:
-                    g += a_g * (2.0 * np.random.random() - 1.0)
+                    g += a_g * uniform_pm1(rng)
                 s[b + S.I_LAST_GYR + k] = g
                 s[b + S.I_DANG + k] += g
-                s[b + S.I_GYR_F + k] = _biquad(s, b + S.I_GYR_LPF + 2 * k, cfg, S.C_GYR_LPF + 5 * i, g)
+                d = b + S.I_GYR_LPF + 2 * k
+                s[b + S.I_GYR_F + k] = _biquad(s, d, cfg, S.C_GYR_LPF + 5 * i, g)
             s[b + S.I_GYR_COUNT] += 1.0
         if t_us >= s[b + S.I_NEXT_ACC_US]:
             s[b + S.I_NEXT_ACC_US] += cfg[S.C_ACC_PERIOD_US + i]
@@ -101,7 +104,7 @@ def imu_sample(s, x, cfg, t_us, throttle):
                     a = fail
                 else:
                     a = x[X.FX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
-                    a += cfg[S.C_ACC_NOISE] * (2.0 * np.random.random() - 1.0)
+                    a += cfg[S.C_ACC_NOISE] * uniform_pm1(rng)
                     if motors_on and cfg[S.C_ACC_RND + i] != 0.0 and cfg[S.C_VIB_MOT_MAX] != 0.0:
                         # motor vibration: a sinusoid at the motor rotation rate (SIM_VIB_MOT_MAX)
                         f_hz = throttle * cfg[S.C_VIB_MOT_MAX]
@@ -110,7 +113,8 @@ def imu_sample(s, x, cfg, t_us, throttle):
                     clipped = True
                 s[b + S.I_LAST_ACC + k] = a
                 s[b + S.I_DVEL + k] += a
-                s[b + S.I_ACC_F + k] = _biquad(s, b + S.I_ACC_LPF + 2 * k, cfg, S.C_ACC_LPF + 5 * i, a)
+                d = b + S.I_ACC_LPF + 2 * k
+                s[b + S.I_ACC_F + k] = _biquad(s, d, cfg, S.C_ACC_LPF + 5 * i, a)
                 # VIBE: deviation from a 5 Hz floor, squared, filtered at 2 Hz
                 fl = s[b + S.I_VIB_FLOOR + k]
                 fl += cfg[S.C_VIB_FLOOR_A + i] * (a - fl)
@@ -122,7 +126,7 @@ def imu_sample(s, x, cfg, t_us, throttle):
             s[b + S.I_ACC_COUNT] += 1.0
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def imu_take_deltas(s, i, dt, dang, dvel):
     """Hand IMU i's samples of this main-loop tick to the EKF and reset the accumulators.
 
@@ -148,7 +152,7 @@ def imu_take_deltas(s, i, dt, dang, dvel):
     return 1.0 if na > 0.0 else 0.0
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def vibe(s, i, k):
     """VIBE metric of IMU i, axis k [m/s^2]."""
     return math.sqrt(max(s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_VIB_SQ + k], 0.0))

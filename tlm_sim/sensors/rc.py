@@ -5,15 +5,14 @@ channel at 1500 and throttle (channel 3) at 950 us (failsafe by low throttle).
 Defaults when nothing was ever received: 1500, 1500, 1000, 1500, 1800, 1000, 1000, 1800.
 """
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.sensors import layout as S
 
 RC_FRAME_US = 20000.0  # 50 Hz
 RC_DEFAULTS = (1500.0, 1500.0, 1000.0, 1500.0, 1800.0, 1000.0, 1000.0, 1800.0)
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def rc_init(s, t_us):
     """Receiver with the SITL default channel values; first frame at t_us."""
     for k in range(8):
@@ -22,7 +21,7 @@ def rc_init(s, t_us):
     s[S.RC_LAST_FRAME_US] = t_us
 
 
-@njit(cache=True, nogil=True)
+@tick_jit
 def rc_update(s, cfg, t_us):
     """Deliver the frames due at t_us according to SIM_RC_FAIL; returns True if one arrived."""
     if t_us < s[S.RC_NEXT_US]:

@@ -1,4 +1,4 @@
-"""Numba options shared by every per-tick dynamics function.
+"""Numba options shared by every per-tick function (dynamics, sensors, control, logging).
 
 ``cache`` and ``nogil`` as everywhere in tlm. ``error_model="numpy"``: a float division by
 zero gives inf/nan instead of raising, which removes an exception branch from every division.
