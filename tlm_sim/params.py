@@ -176,6 +176,13 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "", 0.1, 2.0,
         "S-curve leg-speed factor: cruise on a leg of length L is K*(L*sqrt(WPNAV_JERK)/2)^(2/3), "
         "fitted to the reference SITL logs (~3.4 m/s on 13.5 m legs)")),
+    ("TLM_INS1_NSE_SC", 0.5, ParamInfo(
+        "", 0.0, 100.0,
+        "scale of IMU0's base accel/gyro noise; fitted: in the reference SITL logs IMU0 shows "
+        "half the noise of IMU1 (accel std 0.0006 vs 0.0014 m/s/s on the pad, VIBE 0.0028 vs "
+        "0.0055), while IMU1 matches SITL's stated amplitudes")),
+    ("TLM_INS2_NSE_SC", 1.0, ParamInfo(
+        "", 0.0, 100.0, "scale of IMU1's base accel/gyro noise (SITL's amplitudes: 1)")),
     ("TLM_PROFILE", 0.0, ParamInfo(
         "", 0.0, 1.0,
         "behaviour profile: 0 = ArduPilot 2598e9d4 (current), 1 = paper era 4.1/4.2 (§6)",

@@ -235,7 +235,11 @@ def vehicle_step(
     mix(c, g, r_out, p_out, y_out, thr_b, v_batt)
 
     # ------------------------------------------------------------- hover learning
-    if c[C.LANDED] == 0.0 and g[C.G_HOVER_LEARN] == 2.0 and abs(vel[2]) < 0.5 and sub >= C.SUB_WP:
+    # (MOT_HOVER_LEARN 2: learn while flying level-ish, clear of the ground and of throttle limits)
+    learning = (c[C.LANDED] == 0.0 and c[C.LAND_TIMER] == 0.0 and c[C.LIM_THR_LO] == 0.0
+                and c[C.LIM_THR_HI] == 0.0 and abs(vel[2]) < 0.6 and -pos[2] > 2.0
+                and sub >= C.SUB_WP)
+    if learning and g[C.G_HOVER_LEARN] == 2.0:
         h = c[C.THR_HOVER] + (thr - c[C.THR_HOVER]) * dt / (dt + 10.0)
         c[C.THR_HOVER] = min(max(h, 0.125), 0.6875)
 

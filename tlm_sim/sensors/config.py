@@ -25,6 +25,7 @@ def build_sensor_config(p: Mapping[str, float]) -> np.ndarray:
             c[S.C_ACC_BIAS + 3 * i + k] = p.get(f"SIM_ACC{n}_BIAS_{ax}", 0.0)
             c[S.C_GYR_BIAS + 3 * i + k] = p.get(f"SIM_GYR{n}_BIAS_{ax}", 0.0)
         c[S.C_ACC_FAIL + i] = p.get(f"SIM_ACCEL{n}_FAIL", 0.0)
+        c[S.C_NOISE_SCALE + i] = p.get(f"TLM_INS{n}_NSE_SC", 1.0)
         g_hz, a_hz = IMU_RATES_HZ[i]
         c[S.C_GYR_PERIOD_US + i] = round(1e6 / g_hz)
         c[S.C_ACC_PERIOD_US + i] = round(1e6 / a_hz)

@@ -81,13 +81,14 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
         b = S.IMU_BASE + i * S.IMU_STRIDE
         if t_us >= s[b + S.I_NEXT_GYR_US]:
             s[b + S.I_NEXT_GYR_US] += cfg[S.C_GYR_PERIOD_US + i]
+            sc = cfg[S.C_NOISE_SCALE + i]
             if motors_on:
                 a_g = cfg[S.C_GYR_RND + i] * throttle
             else:
-                a_g = cfg[S.C_GYR_NOISE]
+                a_g = cfg[S.C_GYR_NOISE] * sc
             for k in range(3):
                 g = x[X.WX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
-                g += cfg[S.C_GYR_NOISE] * uniform_pm1(rng)
+                g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
                 if a_g != 0.0:
                     g += a_g * uniform_pm1(rng)
                 s[b + S.I_LAST_GYR + k] = g
@@ -104,7 +105,7 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
                     a = fail
                 else:
                     a = x[X.FX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
-                    a += cfg[S.C_ACC_NOISE] * uniform_pm1(rng)
+                    a += cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng)
                     if motors_on and cfg[S.C_ACC_RND + i] != 0.0 and cfg[S.C_VIB_MOT_MAX] != 0.0:
                         # motor vibration: a sinusoid at the motor rotation rate (SIM_VIB_MOT_MAX)
                         f_hz = throttle * cfg[S.C_VIB_MOT_MAX]

@@ -88,4 +88,5 @@ C_ACC_RND = 67  # SIM_ACC1_RND, SIM_ACC2_RND [m/s^2] (2)
 C_FRAME_HEIGHT = 69  # ground-to-CG height [m]
 C_ENGINE_MUL = 70  # SIM_ENGINE_MUL: PWM multiplier above 1000 us on the failed outputs
 C_ENGINE_MASK = 71  # SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)
-N_SENSOR_CFG = 72
+C_NOISE_SCALE = 72  # per-IMU scale of the base noise amplitudes (2)
+N_SENSOR_CFG = 74
