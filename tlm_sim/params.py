@@ -662,6 +662,11 @@ class Params(Mapping[str, float]):
             raise UnknownParamError(
                 f"unknown parameter {name!r}{_suggest(str(name), self._values)}") from None
 
+    def get(self, name: str, default: Any = None) -> Any:  # type: ignore[override]
+        """Value of ``name``, or ``default`` when it is not a parameter (no error, no search for
+        suggestions: subsystems probe optional names with ``get`` on every flight)."""
+        return self._values.get(name, default)
+
     def __contains__(self, name: object) -> bool:
         return name in self._values
 
