@@ -31,11 +31,16 @@ def set_mode(c, mode, rsn, t_us, mode_buf, ev_buf, err_buf, counts, k_mode):
 
 
 @tick_jit
-def _yaw_cos_tilt(q):
-    """Heading [rad] and cos(tilt) = cos(roll) cos(pitch) of a body->NED quaternion."""
+def _heading(q):
+    """Heading [rad], its cosine and sine, and cos(tilt) = cos(roll) cos(pitch) of a body->NED
+    quaternion (the heading vector is the body x axis projected on the horizontal plane)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return yaw, 1.0 - 2.0 * (x * x + y * y)
+    hx = 1.0 - 2.0 * (y * y + z * z)
+    hy = 2.0 * (w * z + x * y)
+    norm = math.sqrt(hx * hx + hy * hy)
+    if norm < 1e-9:
+        return 0.0, 1.0, 0.0, 1.0 - 2.0 * (x * x + y * y)
+    return math.atan2(hy, hx), hx / norm, hy / norm, 1.0 - 2.0 * (x * x + y * y)
 
 
 @tick_jit
@@ -81,7 +86,7 @@ def vehicle_step(
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
-    yaw, cos_tilt = _yaw_cos_tilt(q)
+    yaw, cos_yaw, sin_yaw, cos_tilt = _heading(q)
     # 1 Hz low-pass of the earth-frame acceleration (land/crash detectors)
     alpha = dt / (dt + 1.0 / (2.0 * math.pi * 1.0))
     for k in range(3):
@@ -217,7 +222,7 @@ def vehicle_step(
             return
 
     # ------------------------------------------------------------- controllers
-    xy_update(c, g, pos, vel, yaw)
+    xy_update(c, g, pos, vel, cos_yaw, sin_yaw)
     c[C.ATT_YAW_CMD] = yaw_cmd
     thr = z_update(c, g, pos[2], vel[2], acc_up, c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0)
     c[C.THR_OUT] = thr

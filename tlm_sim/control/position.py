@@ -34,8 +34,11 @@ def xy_reset(c, pn, pe, vn, ve):
 
 
 @tick_jit
-def xy_update(c, g, pos, vel, yaw):
-    """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD."""
+def xy_update(c, g, pos, vel, cy, sy):
+    """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD.
+
+    cy, sy: cosine and sine of the vehicle heading.
+    """
     dt = g[C.G_DT]
     accel_max = g[C.G_ACCEL_XY_MAX]
     # position -> velocity (square-root shaped along the error vector)
@@ -76,8 +79,6 @@ def xy_update(c, g, pos, vel, yaw):
     c[C.PXY_ACC_T] = an
     c[C.PXY_ACC_T + 1] = ae
     # acceleration -> lean angles in the heading frame
-    cy = math.cos(yaw)
-    sy = math.sin(yaw)
     a_fwd = an * cy + ae * sy
     a_rgt = -an * sy + ae * cy
     u = -a_fwd / GRAVITY
