@@ -128,3 +128,23 @@ def test_gps_fields(normal_flight):
     assert np.allclose(gps.HDop, 1.21)
     assert gps.GWk.iloc[0] > 2000
     assert np.all(np.diff(gps.GMS) % 200 == 0)
+
+
+def test_radio_failsafe_returns_home_and_lands():
+    """SIM_RC_FAIL 1 at 120 s: ERR 2/2 and 5/1 after RC_FS_TIMEOUT (1 s), RTL (mode 6, reason 3),
+    ERR 5/0 when RC returns at 150 s, stays in RTL, lands at home and disarms."""
+    log = fly(3, faults=[(120.0, "SIM_RC_FAIL", 1), (150.0, "SIM_RC_FAIL", 0)], seed=2)
+    err = log.tables["ERR"]
+    fs = err[(err.Subsys == 5) & (err.ECode == 1)].TimeUS.iloc[0] * 1e-6
+    assert 120.9 <= fs <= 121.2
+    assert ((err.Subsys == 2) & (err.ECode == 2)).any()
+    assert err[(err.Subsys == 5) & (err.ECode == 0)].TimeUS.iloc[0] * 1e-6 == pytest.approx(
+        150.0, abs=0.1)
+    mode = log.tables["MODE"]
+    rtl = mode[mode.Mode == 6]
+    assert len(rtl) == 1 and rtl.Rsn.iloc[0] == 3
+    assert rtl.TimeUS.iloc[0] * 1e-6 == pytest.approx(fs, abs=0.01)
+    assert mode.Mode.iloc[-1] == 6
+    assert log.meta["landed"]
+    n, e, _ = _truth_ne(log)
+    assert math.hypot(n[-1], e[-1]) < 2.0

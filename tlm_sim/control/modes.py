@@ -24,7 +24,7 @@ LAND_MAYBE_S = 0.2
 
 
 @tick_jit
-def set_mode(c, mode, rsn, t_us, mode_buf, ev_buf, err_buf, counts, k_mode):
+def set_mode(c, mode, rsn, t_us, mode_buf, counts, k_mode):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
     E.log_row3(mode_buf, counts, k_mode, t_us, mode, mode, rsn)
@@ -99,7 +99,7 @@ def vehicle_step(
         rate_reset(c)
         if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
             # arm in GUIDED (as the reference driver did) and start the motors
-            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, mode_buf, ev_buf, err_buf, counts, k_mode)
+            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
             c[C.ARMED] = 1.0
             c[C.LANDED] = 1.0
             c[C.HOME_YAW] = yaw
@@ -118,11 +118,10 @@ def vehicle_step(
         c[C.RC_FAILSAFE] = 1.0
         E.log_row2(err_buf, counts, k_err, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
         E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
-        if c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF:
-            pass  # landed: the disarm below handles it
-        elif sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
-            set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, ev_buf, err_buf, counts,
-                     k_mode)
+        # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
+        landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
+        if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
+            set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
             _start_rtl(c, g, pos, seg)
             sub = C.SUB_RTL_CLIMB
     elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
@@ -153,7 +152,7 @@ def vehicle_step(
         heading, done = path_update(c, g, seg, 2, pos, 0.0)
         if -pos[2] >= 0.95 * c[C.TAKEOFF_ALT]:
             # the driver's "altitude reached" -> AUTO, first leg from here to waypoint 1
-            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, ev_buf, err_buf, counts, k_mode)
+            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
             c[C.SUBMODE] = C.SUB_WP
             c[C.SUB_TIMER] = 0.0
             path_start(c)
