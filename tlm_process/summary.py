@@ -8,10 +8,10 @@ from typing import Any
 import numpy as np
 
 from tlm_sim.flightlog import FlightLog
+from tlm_sim.geo import latlon_to_ne
 
 MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
               9: "LAND"}
-M_PER_DEG = 111318.84502145034
 
 
 def flight_summary(log: FlightLog) -> dict[str, Any]:
@@ -21,11 +21,9 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
     dist = 0.0
     max_alt = 0.0
     if sim is not None and len(sim) > 1:
-        lat = sim["Lat"].to_numpy(float)
-        lon = sim["Lng"].to_numpy(float)
-        n = np.diff(lat) * M_PER_DEG
-        e = np.diff(lon) * M_PER_DEG * np.cos(np.radians(lat[:-1]))
-        dist = float(np.sum(np.hypot(n, e)))
+        n, e = latlon_to_ne(sim["Lat"].to_numpy(float), sim["Lng"].to_numpy(float),
+                            float(sim["Lat"].iloc[0]), float(sim["Lng"].iloc[0]))
+        dist = float(np.sum(np.hypot(np.diff(n), np.diff(e))))
         max_alt = float(sim["Alt"].max() - sim["Alt"].iloc[0])
     final_mode = int(meta.get("final_mode", -1))
     return {
@@ -64,14 +62,12 @@ def plot_trajectory(log: FlightLog, path: Path, title: str = "") -> Path:
 
     sim = log.tables["SIM"]
     home_lat, home_lon = float(sim["Lat"].iloc[0]), float(sim["Lng"].iloc[0])
-    coslat = np.cos(np.radians(home_lat))
-    e = (sim["Lng"].to_numpy(float) - home_lon) * M_PER_DEG * coslat
-    n = (sim["Lat"].to_numpy(float) - home_lat) * M_PER_DEG
+    n, e = latlon_to_ne(sim["Lat"].to_numpy(float), sim["Lng"].to_numpy(float), home_lat, home_lon)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5))
     if log.mission is not None:
         wp = np.asarray(log.mission.waypoints)
-        ax1.plot((wp[:, 1] - home_lon) * M_PER_DEG * coslat, (wp[:, 0] - home_lat) * M_PER_DEG,
-                 "o", ms=3, color="0.6", label="waypoints")
+        wn, we = latlon_to_ne(wp[:, 0], wp[:, 1], home_lat, home_lon)
+        ax1.plot(we, wn, "o", ms=3, color="0.6", label="waypoints")
     ax1.plot(e, n, lw=1.2, label="true path (SIM)")
     ax1.plot([0], [0], "k^", label="home")
     ax1.set_xlabel("east [m]")

@@ -30,6 +30,7 @@ from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.lanes import ekf_init, ekf_update
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
+from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import Params
 from tlm_sim.rng import new_rng
@@ -230,7 +231,7 @@ def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_ti
     ms = ms % 604800000.0
     if r >= 0:
         b = bufs[L.K_GPS]
-        lat, lon = L.ne_to_latlon(home_lat, home_lon, gps[0], gps[1])
+        lat, lon = ne_to_latlon_scalar(gps[0], gps[1], home_lat, home_lon)
         b[r, 1] = 0.0
         b[r, 2] = gps[6]
         b[r, 3] = ms
@@ -420,7 +421,7 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
     r = L.new_row(bufs, counts, L.K_POS, t_us)
     if r >= 0:
         b = bufs[L.K_POS]
-        lat, lon = L.ne_to_latlon(home_lat, home_lon, e[EK.PN], e[EK.PE])
+        lat, lon = ne_to_latlon_scalar(e[EK.PN], e[EK.PE], home_lat, home_lon)
         b[r, 1] = lat
         b[r, 2] = lon
         b[r, 3] = home_alt - e[EK.PD]
@@ -430,7 +431,7 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
     if r >= 0:
         b = bufs[L.K_SIM]
         tr, tp, ty = L.euler_deg(x[X.QW], x[X.QX], x[X.QY], x[X.QZ])
-        lat, lon = L.ne_to_latlon(home_lat, home_lon, x[X.PN], x[X.PE])
+        lat, lon = ne_to_latlon_scalar(x[X.PN], x[X.PE], home_lat, home_lon)
         b[r, 1] = tr
         b[r, 2] = tp
         b[r, 3] = ty

@@ -9,6 +9,7 @@ capacity are dropped (the counts never exceed the buffer size).
 import math
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.rotation import quat_to_euler
 
 K_GPS, K_GPA, K_IMU, K_RATE, K_VIBE, K_ATT, K_BARO, K_MAG, K_RCIN, K_RCOU = range(10)
 K_MODE, K_EV, K_ERR, K_XKF1, K_XKF4, K_CTUN, K_BAT, K_POS, K_SIM = range(10, 19)
@@ -19,7 +20,6 @@ LOG_ORDER = (
 )  # must equal tlm_sim.flightlog.LOGGED_MESSAGES (checked by the tests)
 
 RAD2DEG = 180.0 / math.pi
-M_PER_DEG_LAT = 111318.84502145034  # ArduPilot's LOCATION_SCALING_FACTOR * 1e7
 
 
 @tick_jit
@@ -35,20 +35,9 @@ def new_row(bufs, counts, k, t_us):
 
 
 @tick_jit
-def ne_to_latlon(home_lat, home_lon, pn, pe):
-    """Flat-earth offset [m] from home -> (lat, lon) [deg], as ArduPilot's Location::offset."""
-    lat = home_lat + pn / M_PER_DEG_LAT
-    lon = home_lon + pe / (M_PER_DEG_LAT * math.cos(math.radians(home_lat)))
-    return lat, lon
-
-
-@tick_jit
 def euler_deg(qw, qx, qy, qz):
     """(roll, pitch, yaw 0..360) [deg] of a body->NED quaternion."""
-    roll = math.atan2(2.0 * (qw * qx + qy * qz), 1.0 - 2.0 * (qx * qx + qy * qy))
-    sp = 2.0 * (qw * qy - qz * qx)
-    pitch = math.asin(min(max(sp, -1.0), 1.0))
-    yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    roll, pitch, yaw = quat_to_euler(qw, qx, qy, qz)
     yd = yaw * RAD2DEG
     if yd < 0.0:
         yd += 360.0

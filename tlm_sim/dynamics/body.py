@@ -38,6 +38,7 @@ from tlm_sim.dynamics.frame import (
 )
 from tlm_sim.dynamics.motors import motor_forces
 from tlm_sim.dynamics.wind import init_wind, update_wind
+from tlm_sim.rotation import quat_to_dcm
 
 #: body-rate limit per axis [rad/s] (2000 deg/s)
 GYRO_LIMIT: float = math.radians(2000.0)
@@ -150,15 +151,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
     # DCM body -> NED of the current attitude
-    r00 = 1.0 - 2.0 * (qy * qy + qz * qz)
-    r01 = 2.0 * (qx * qy - qw * qz)
-    r02 = 2.0 * (qx * qz + qw * qy)
-    r10 = 2.0 * (qx * qy + qw * qz)
-    r11 = 1.0 - 2.0 * (qx * qx + qz * qz)
-    r12 = 2.0 * (qy * qz - qw * qx)
-    r20 = 2.0 * (qx * qz - qw * qy)
-    r21 = 2.0 * (qy * qz + qw * qx)
-    r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
     an = x[X.VN] - x[X.WIND_N]
     ae = x[X.VE] - x[X.WIND_E]
     ad = x[X.VD] - x[X.WIND_D]
@@ -218,15 +211,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     bx = _clamp(fx / m, ACCEL_LIMIT)
     by = _clamp(fy / m, ACCEL_LIMIT)
     bz = _clamp(fz / m, ACCEL_LIMIT)
-    r00 = 1.0 - 2.0 * (qy * qy + qz * qz)
-    r01 = 2.0 * (qx * qy - qw * qz)
-    r02 = 2.0 * (qx * qz + qw * qy)
-    r10 = 2.0 * (qx * qy + qw * qz)
-    r11 = 1.0 - 2.0 * (qx * qx + qz * qz)
-    r12 = 2.0 * (qy * qz - qw * qx)
-    r20 = 2.0 * (qx * qz - qw * qy)
-    r21 = 2.0 * (qy * qz + qw * qx)
-    r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
     aen = r00 * bx + r01 * by + r02 * bz
     aee = r10 * bx + r11 * by + r12 * bz
     aed = r20 * bx + r21 * by + r22 * bz + g

@@ -144,6 +144,7 @@ from tlm_sim.ekf.layout import (
     VEL_TR,
     VN,
 )
+from tlm_sim.rotation import quat_to_euler
 
 # initial standard deviations at alignment
 INIT_TILT_SD = 0.05  # rad
@@ -446,17 +447,6 @@ def ekf_update(
     if mag_new:
         ekf_fuse_mag(ekf, cfg, mag)
     return ekf_select_primary(ekf, sel, cfg, t_us, armed)
-
-
-@njit(cache=True, nogil=True, _nrt=False)
-def quat_to_euler(qw, qx, qy, qz):
-    """ZYX Euler angles (roll, pitch, yaw) [rad] of a body -> NED quaternion."""
-    roll = math.atan2(2.0 * (qw * qx + qy * qz), 1.0 - 2.0 * (qx * qx + qy * qy))
-    sp = 2.0 * (qw * qy - qz * qx)
-    sp = min(max(sp, -1.0), 1.0)
-    pitch = math.asin(sp)
-    yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
-    return roll, pitch, yaw
 
 
 @njit(cache=True, nogil=True, _nrt=False)

@@ -10,6 +10,7 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import pressure_temperature
 from tlm_sim.rng import uniform_pm1
+from tlm_sim.rotation import quat_to_dcm
 from tlm_sim.sensors import layout as S
 
 
@@ -34,15 +35,7 @@ def mag_sample(s, x, cfg, rng):
     me = cfg[S.C_MAG_EARTH + 1]
     md = cfg[S.C_MAG_EARTH + 2]
     # R^T m with R the body->NED rotation of q
-    r00 = 1 - 2 * (qy * qy + qz * qz)
-    r01 = 2 * (qx * qy - qw * qz)
-    r02 = 2 * (qx * qz + qw * qy)
-    r10 = 2 * (qx * qy + qw * qz)
-    r11 = 1 - 2 * (qx * qx + qz * qz)
-    r12 = 2 * (qy * qz - qw * qx)
-    r20 = 2 * (qx * qz - qw * qy)
-    r21 = 2 * (qy * qz + qw * qx)
-    r22 = 1 - 2 * (qx * qx + qy * qy)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
     s[S.M_FIELD] = r00 * mn + r10 * me + r20 * md
     s[S.M_FIELD + 1] = r01 * mn + r11 * me + r21 * md
     s[S.M_FIELD + 2] = r02 * mn + r12 * me + r22 * md
