@@ -480,17 +480,20 @@ def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def build_schedule(
-    params: Params, changes: Sequence[tuple[float, str, float]]
+    params: Params,
+    changes: Sequence[tuple[float, str, float]],
+    base: tuple[np.ndarray, ...] | None = None,
 ) -> np.ndarray:
     """Rows (t_us, target, index, value) realising timed parameter changes.
 
     Each change (time [s], ArduPilot parameter name, value) is applied to the parameter set in
     time order; every configuration entry that differs from the previous configuration becomes a
     row, so any parameter the subsystems read can change in flight, exactly as in SITL.
+    ``base``: the configuration arrays of ``params`` when the caller already built them.
     """
     rows: list[tuple[float, int, int, float]] = []
     current = params
-    before = _configs(current)
+    before = base if base is not None else _configs(current)
     for t_s, name, value in sorted(changes, key=lambda c: c[0]):
         if not math.isfinite(t_s) or t_s < 0:
             raise ValueError(f"parameter change time must be a finite time >= 0 s, got {t_s}")
@@ -547,8 +550,8 @@ def fly(
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     p = params if isinstance(params, Params) else Params(params)
     changes = list(faults or ())
-    sched = build_schedule(p, changes)
     scfg, frame, g, ecfg = _configs(p)
+    sched = build_schedule(p, changes, (scfg, frame, g, ecfg))
     home = np.array(mission.home, dtype=np.float64)
     x = np.zeros(X.N_STATE)
     init_state(x, frame, math.radians(p.get("SIM_OPOS_HDG", 353.0)))
