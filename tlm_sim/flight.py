@@ -18,6 +18,7 @@ import numpy as np
 
 from tlm_sim import logger as L
 from tlm_sim._jit import tick_jit
+from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.modes import vehicle_step
@@ -117,6 +118,7 @@ def run_flight(
     q = work[2][5]
     gyro = work[2][6]
     acc_ned = work[2][7]
+    nav = work[2][8]
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
     rc_init(s, 0.0)
@@ -201,9 +203,16 @@ def run_flight(
         acc_ned[0] = e[EK.R00] * ax + e[EK.R01] * ay + e[EK.R02] * az
         acc_ned[1] = e[EK.R10] * ax + e[EK.R11] * ay + e[EK.R12] * az
         acc_ned[2] = e[EK.R20] * ax + e[EK.R21] * ay + e[EK.R22] * az + 9.80665
+        nav[FS.NAV_INNOV_VD] = e[EK.INNOV_VD]
+        nav[FS.NAV_INNOV_HGT] = e[EK.INNOV_HGT]
+        nav[FS.NAV_VEL_TR] = e[EK.VEL_TR]
+        nav[FS.NAV_POS_TR] = e[EK.POS_TR]
+        nav[FS.NAV_MAG_TR] = e[EK.MAG_TR]
+        nav[FS.NAV_BAD_IMU] = e[EK.BAD_IMU]
+        nav[FS.NAV_POS_OK] = 1.0 if e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0 else 0.0
         vehicle_step(
             c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, n_path, seg,
-            s[S.RC_LAST_FRAME_US],
+            s[S.RC_LAST_FRAME_US], nav,
             bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR], counts, L.K_MODE, L.K_EV, L.K_ERR,
         )
         # ------------------------------------------------------------- logging
@@ -470,8 +479,8 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
 def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3), and a (8, 9)
     block whose rows are imu_ok, the GPS epoch, motor PWM, EKF position, velocity, attitude,
-    gyro and NED acceleration."""
-    return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((8, 9))
+    gyro, NED acceleration and the EKF status for the failsafe checks (control.failsafe NAV_*)."""
+    return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9))
 
 
 def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

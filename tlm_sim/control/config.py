@@ -103,4 +103,10 @@ def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -
     g[C.G_THR_MIX_MAX] = p.get("ATC_THR_MIX_MAX", 0.5)
     g[C.G_FS_CRASH_CHECK] = p.get("FS_CRASH_CHECK", 1.0)
     g[C.G_DISARM_DELAY] = p.get("DISARM_DELAY", 10.0)
+    g[C.G_HRT_OMEGA] = 2.0 * math.pi * min(max(p.get("EK3_HRT_FILT", 2.0), 0.1), 30.0)
+    g[C.G_FS_VIBE_ENABLE] = p.get("FS_VIBE_ENABLE", 1.0)
+    g[C.G_FS_EKF_THRESH] = p.get("FS_EKF_THRESH", 0.8)
+    g[C.G_FS_EKF_ACTION] = p.get("FS_EKF_ACTION", 1.0)
+    filt = p.get("FS_EKF_FILT", 5.0)
+    g[C.G_FS_EKF_ALPHA] = 1.0 if filt <= 0.0 else 0.1 / (0.1 + 1.0 / (2.0 * math.pi * filt))
     return g

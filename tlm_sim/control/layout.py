@@ -78,7 +78,23 @@ CRASH_TIMER = 97
 DISARM_TIME = 98  # simulated time of disarm [s] (-1 while armed)
 YAW_RATE_CMD = 99
 BODY_RATE_T = 100  # attitude controller output: body-rate targets [rad/s] (3)
-N_CONTROL_STATE = 103
+# vertical complementary filter of the EKF height (EKF3's height-rate output), down positive
+VCF_ACC = 103  # learned acceleration offset [m/s^2]
+VCF_VEL = 104  # height rate, down [m/s]
+VCF_POS = 105  # height, down [m]
+VIBE_COMP = 106  # 1 while the vibration failsafe (vibration compensation) is on
+VIBE_FAIL_T = 107  # start of the current run of failing vibration checks [s] (-1: passing)
+VIBE_LAST_FAIL_T = 108  # last failing vibration check [s]
+EKF_FAIL_COUNT = 109  # ekf_check failure counter (0..10)
+EKF_FAILSAFE = 110  # 1 while the EKF failsafe is active
+EKF_CHECK_OK_ONCE = 111  # 1 once the EKF checks have passed
+EKF_VEL_TR_F = 112  # low-passed sqrt velocity test ratio
+EKF_POS_TR_F = 113  # low-passed sqrt position test ratio
+EKF_POS_OK = 114  # 1 while the EKF reports an absolute horizontal position
+LAND_NOGPS = 115  # 1: LAND without position control (level attitude, horizontal drift)
+LAND_PAUSE = 116  # seconds left before a failsafe LAND starts descending
+CHECK_TIMER = 117  # time of the next 10 Hz failsafe check [s]
+N_CONTROL_STATE = 118
 
 # sub-modes of AUTO / RTL / LAND
 SUB_NONE = 0
@@ -106,6 +122,7 @@ RSN_GCS = 2
 RSN_RADIO_FAILSAFE = 3
 RSN_EKF_FAILSAFE = 6
 RSN_MISSION_END = 8
+RSN_CRASH_FAILSAFE = 19
 
 # ------------------------------------------------------------ controller configuration g ------
 G_DT = 0  # main-loop period [s]
@@ -172,4 +189,9 @@ G_THR_MIX_MAX = 80
 G_FS_CRASH_CHECK = 81
 G_DISARM_DELAY = 82  # [s]
 G_ACCEL_XY_MAX = 83  # g * tan(ANGLE_MAX): horizontal acceleration limit [m/s^2]
-N_CONTROL_CFG = 84
+G_HRT_OMEGA = 84  # 2 pi EK3_HRT_FILT: height-rate complementary filter crossover [rad/s]
+G_FS_VIBE_ENABLE = 85
+G_FS_EKF_THRESH = 86
+G_FS_EKF_ACTION = 87
+G_FS_EKF_ALPHA = 88  # FS_EKF_FILT low-pass coefficient at the 10 Hz check rate
+N_CONTROL_CFG = 89

@@ -6,6 +6,10 @@ Flight sequence (as the reference SITL flights): boot in STABILIZE, GUIDED and a
 TLM_ARM_TIME, take off to the first waypoint's altitude, switch to AUTO, fly the waypoints, then
 the mission's RETURN_TO_LAUNCH (climb to RTL_ALT, return at WPNAV_SPEED, loiter RTL_LOIT_TIME,
 land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports landed.
+
+Failsafes: radio (RTL, or LAND when there is no position), EKF (FS_EKF_THRESH/FS_EKF_ACTION:
+LAND without position control after a 4 s pause, or AltHold), vibration (vibration compensation
+in the altitude controller) and the crash check (disarm); see tlm_sim.control.failsafe.
 """
 
 import math
@@ -14,6 +18,14 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import attitude_reset, attitude_update, rate_pid, rate_reset
+from tlm_sim.control.failsafe import (
+    CRASH_LEAN_COS,
+    FS_EKF_ALTHOLD,
+    FS_NONE,
+    crash_check,
+    failsafe_checks,
+    vertical_cf_update,
+)
 from tlm_sim.control.mixer import mix, output_idle
 from tlm_sim.control.position import angle_boost, xy_reset, xy_update, z_reset, z_update
 from tlm_sim.control.wpnav import path_start, path_update, prepare_path
@@ -21,6 +33,7 @@ from tlm_sim.control.wpnav import path_start, path_update, prepare_path
 SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 LAND_MAYBE_S = 0.2
+LAND_WITH_DELAY_S = 4.0  # failsafe LAND pauses this long before descending
 
 
 @tick_jit
@@ -72,8 +85,20 @@ def _start_rtl(c, g, pos, seg):
 
 
 @tick_jit
+def _start_land(c, pos, failsafe):
+    """Enter LAND here: hold the height, without position control when the EKF has no
+    position, pausing LAND_WITH_DELAY (4 s) first when a failsafe asked for it."""
+    c[C.SUBMODE] = C.SUB_LAND
+    c[C.SUB_TIMER] = 0.0
+    c[C.LAND_NOGPS] = 0.0 if c[C.EKF_POS_OK] != 0.0 and c[C.EKF_FAILSAFE] == 0.0 else 1.0
+    c[C.LAND_PAUSE] = LAND_WITH_DELAY_S if failsafe else 0.0
+    c[C.PZ_POS_T] = pos[2]
+    c[C.PZ_VEL_FF] = 0.0
+
+
+@tick_jit
 def vehicle_step(
-    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
+    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
     mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
@@ -82,7 +107,8 @@ def vehicle_step(
     gyro: body rates [rad/s] (filtered, bias removed); acc_ned: kinematic acceleration NED
     [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
     path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
-    seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time.
+    seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
+    nav: the primary EKF lane's status for the failsafe checks (control.failsafe NAV_*).
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
@@ -92,6 +118,7 @@ def vehicle_step(
     for k in range(3):
         c[C.ALP + k] += alpha * (acc_ned[k] - c[C.ALP + k])
     acc_up = -acc_ned[2]
+    vertical_cf_update(c, g, pos[2], acc_ned[2], dt)
 
     # ---------------------------------------------------------------- disarmed
     if c[C.ARMED] == 0.0:
@@ -121,12 +148,32 @@ def vehicle_step(
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
-            set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
-            _start_rtl(c, g, pos, seg)
-            sub = C.SUB_RTL_CLIMB
+            if c[C.EKF_POS_OK] != 0.0 and c[C.EKF_FAILSAFE] == 0.0:
+                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                _start_rtl(c, g, pos, seg)
+                sub = C.SUB_RTL_CLIMB
+            else:  # RTL needs a position: LAND without one, after a pause
+                set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                _start_land(c, pos, True)
+                sub = C.SUB_LAND
     elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
         E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+
+    # ------------------------------------------------- vibration and EKF failsafes (10 Hz)
+    fs = failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err)
+    if fs != FS_NONE and sub != C.SUB_GROUND_IDLE and c[C.LANDED] == 0.0:
+        needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
+            c[C.MODE] == C.MODE_RTL)
+        if needs_position or g[C.G_FS_EKF_ACTION] == 3.0:
+            if fs == FS_EKF_ALTHOLD:
+                set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                _start_land(c, pos, True)
+                c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
+            elif c[C.MODE] != C.MODE_LAND:
+                set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                _start_land(c, pos, True)
+            sub = C.SUB_LAND
 
     # ---------------------------------------------------------------- ground idle
     if sub == C.SUB_GROUND_IDLE:
@@ -194,7 +241,12 @@ def vehicle_step(
         land_vertical = True
     sub = int(c[C.SUBMODE])
 
-    if sub == C.SUB_LAND:
+    if sub == C.SUB_LAND and c[C.LAND_PAUSE] > 0.0:
+        # failsafe LAND: hold the height for LAND_WITH_DELAY before descending
+        c[C.LAND_PAUSE] -= dt
+        c[C.PZ_VEL_FF] = 0.0
+        land_vertical = False
+    elif sub == C.SUB_LAND:
         # horizontal hold at the landing point, descent rate by height
         c[C.PXY_VEL_FF] = 0.0
         c[C.PXY_VEL_FF + 1] = 0.0
@@ -211,6 +263,8 @@ def vehicle_step(
         # velocity-controlled descent: keep the position target just below the vehicle
         c[C.PZ_VEL_FF] = v_dn
         c[C.PZ_POS_T] = pos[2] + v_dn * 0.1 if land_vertical else pos[2]
+        if not land_vertical:
+            c[C.PZ_VEL_FF] = 0.0
         if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
             E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE)
             E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
@@ -221,7 +275,11 @@ def vehicle_step(
             return
 
     # ------------------------------------------------------------- controllers
-    xy_update(c, g, pos, vel, cos_yaw, sin_yaw)
+    if c[C.LAND_NOGPS] != 0.0 and sub == C.SUB_LAND:
+        c[C.ATT_ROLL_CMD] = 0.0  # no position control: level, drift with the wind
+        c[C.ATT_PITCH_CMD] = 0.0
+    else:
+        xy_update(c, g, pos, vel, cos_yaw, sin_yaw)
     c[C.ATT_YAW_CMD] = yaw_cmd
     thr = z_update(c, g, pos[2], vel[2], acc_up, c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0)
     c[C.THR_OUT] = thr
@@ -263,3 +321,18 @@ def vehicle_step(
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
             E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_NOT_LANDED)
+
+    # ------------------------------------------------------------- crash check
+    if cos_tilt < CRASH_LEAN_COS:
+        w, x, y, z = q[0], q[1], q[2], q[3]
+        roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+        pitch = math.asin(min(max(2.0 * (w * y - z * x), -1.0), 1.0))
+        if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
+            E.log_row2(err_buf, counts, k_err, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
+            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
+            c[C.ARMED] = 0.0
+            c[C.SUBMODE] = C.SUB_LANDED
+            c[C.DISARM_TIME] = t_s
+            output_idle(c, g, 0.0)
+    else:
+        c[C.CRASH_TIMER] = 0.0

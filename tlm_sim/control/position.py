@@ -14,6 +14,8 @@ from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import sqrt_ctrl
 
 GRAVITY = 9.80665
+VIBE_COMP_P_GAIN = 0.25  # throttle per (hover throttle per cm/s^2) of acceleration target
+VIBE_COMP_I_GAIN = 0.125  # integrator gain on the velocity error, x PSC_VELZ_P
 
 
 @tick_jit
@@ -105,23 +107,41 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
 
     pd, vd: EKF down position [m] and velocity [m/s]; acc_up_meas: measured up acceleration
     [m/s^2] (earth frame, gravity removed); limit_lo/hi: mixer throttle saturation flags.
+
+    With vibration compensation on (c[VIBE_COMP]) the velocity is the height-rate filter's
+    (c[VCF_VEL]) and the throttle comes from the velocity loop alone, ignoring the
+    accelerometers: P 0.25 on the acceleration target and an integrator fed by the velocity
+    error at 0.125 x PSC_VELZ_P, both scaled by hover throttle per cm/s^2 (ArduPilot's
+    POSCONTROL_VIBE_COMP gains).
     """
     dt = g[C.G_DT]
     up_max = g[C.G_WP_SPEED_UP]
     dn_max = g[C.G_WP_SPEED_DN]
+    vibe = c[C.VIBE_COMP] != 0.0
+    v_up_est = -c[C.VCF_VEL] if vibe else -vd
     err_up = -(c[C.PZ_POS_T] - pd)  # positive when the target is above
     v_up = sqrt_ctrl(err_up, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt) - c[C.PZ_VEL_FF]
     v_up = min(max(v_up, -dn_max), up_max)
     c[C.PZ_VEL_T] = -v_up
-    acc_up = g[C.G_VELZ_P] * (v_up - (-vd))
+    acc_up = g[C.G_VELZ_P] * (v_up - v_up_est)
     c[C.PZ_ACC_T] = acc_up
     c[C.PZ_ACC_MEAS] = acc_up_meas
+    imax = g[C.G_ACCZ_IMAX] * 0.001
+    if vibe:
+        thr_per_cmss = c[C.THR_HOVER] / 980.665
+        verr_cm = (v_up - v_up_est) * 100.0
+        i_new = c[C.PZ_I] + dt * thr_per_cmss * verr_cm * g[C.G_VELZ_P] * VIBE_COMP_I_GAIN
+        # integrate unless saturated, or when integrating unwinds the integrator
+        if (not (limit_lo or limit_hi) or (c[C.PZ_I] > 0.0 and verr_cm < 0.0)
+                or (c[C.PZ_I] < 0.0 and verr_cm > 0.0)):
+            c[C.PZ_I] = min(max(i_new, -imax), imax)
+        thr = VIBE_COMP_P_GAIN * thr_per_cmss * acc_up * 100.0 + c[C.PZ_I] + c[C.THR_HOVER]
+        return min(max(thr, 0.0), 1.0)
     # acceleration PID in ArduPilot units (cm/s^2 in, throttle x1000 out)
     err_cm = (acc_up - acc_up_meas) * 100.0
     c[C.PZ_ACC_EF] += g[C.G_ACCZ_FLTE] * (err_cm - c[C.PZ_ACC_EF])
     ef = c[C.PZ_ACC_EF]
     i_new = c[C.PZ_I] + g[C.G_ACCZ_I] * ef * dt * 0.001
-    imax = g[C.G_ACCZ_IMAX] * 0.001
     i_new = min(max(i_new, -imax), imax)
     if (limit_lo and i_new < c[C.PZ_I]) or (limit_hi and i_new > c[C.PZ_I]):
         i_new = c[C.PZ_I]

@@ -1,0 +1,195 @@
+"""Copter's EKF-driven checks: height-rate filter, vibration failsafe, EKF failsafe, crash check.
+
+Reference §3.2 (ekf_check, FS_EKF_THRESH), §3.6 (crash check) and ArduCopter's vibration
+failsafe (FS_VIBE_ENABLE):
+
+* Height-rate filter: EKF3 runs a third-order complementary filter on its output height, fed by
+  the corrected vertical acceleration, with all three poles at omega = 2 pi EK3_HRT_FILT
+  (Widnall & Sinha's baro-inertial vertical channel). Its rate is what the altitude controller
+  uses while vibration compensation is on: it follows the height (baro) even when the
+  accelerometers are wrong, because its integrator absorbs a constant acceleration error.
+* Vibration failsafe (10 Hz): the check fails while the EKF's vertical velocity and height
+  innovations are both positive (EKF3 sign: prediction - measurement, i.e. the EKF believes it
+  is sinking faster and is lower than the sensors say) and its velocity test ratio is >= 1, or
+  while the EKF reports itself vibration affected (its bad-IMU response is active).
+  Failing for 1 s switches vibration compensation on (ERR 29/1); 15 s without a failure
+  switches it off (ERR 29/0).
+* EKF failsafe (10 Hz, off when FS_EKF_THRESH <= 0): over threshold when the filtered position
+  test ratio and one of velocity/compass are >= FS_EKF_THRESH, or two of velocity/compass are
+  (velocity >= 2x counts twice); the checks also fail without an absolute position. Ten failing
+  checks in a row (1 s, after the checks have passed once) -> ERR 16/2, ERR 17/1 and the
+  FS_EKF_ACTION; passing checks count down and clear it (ERR 16/0, 17/0).
+
+``nav`` carries the primary lane's status into these checks (indices ``NAV_*``); innovations
+are tlm's sign (measurement - prediction), converted here.
+"""
+
+import math
+
+from tlm_sim._jit import tick_jit
+from tlm_sim.control import events as E
+from tlm_sim.control import layout as C
+
+# nav vector (filled by the flight loop from the primary EKF lane)
+NAV_INNOV_VD = 0  # GPS down-velocity innovation, measurement - prediction [m/s]
+NAV_INNOV_HGT = 1  # height innovation (down), measurement - prediction [m]
+NAV_VEL_TR = 2  # velocity test ratio (innovation^2 / (gate^2 variance))
+NAV_POS_TR = 3  # horizontal position test ratio
+NAV_MAG_TR = 4  # compass test ratio (max axis)
+NAV_POS_OK = 5  # 1 with an absolute horizontal position, not in constant-position mode
+NAV_BAD_IMU = 6  # 1 while the EKF's bad-IMU (vibration affected) response is active
+N_NAV = 7
+
+CHECK_DT_S = 0.1  # ekf_check / vibration check period
+VIBE_TRIGGER_S = 1.0
+VIBE_CLEAR_S = 15.0
+EKF_CHECK_ITERATIONS = 10
+CRASH_CHECK_S = 2.0
+CRASH_LEAN_COS = math.cos(math.radians(15.0))
+
+ERR_EKFCHECK = 16
+ERR_FAILSAFE_EKFINAV = 17
+ERR_FAILSAFE_VIBE = 29
+ERR_CODE_EKF_BAD_VARIANCE = 2
+
+# failsafe_checks results
+FS_NONE = 0
+FS_EKF_LAND = 1  # EKF failsafe: switch to LAND (no position control)
+FS_EKF_ALTHOLD = 2  # EKF failsafe with FS_EKF_ACTION 2
+
+
+@tick_jit
+def vertical_cf_reset(c, pd, vd):
+    """Start the height-rate filter at an EKF height pd [m, down] and rate vd [m/s, down]."""
+    c[C.VCF_POS] = pd
+    c[C.VCF_VEL] = vd
+    c[C.VCF_ACC] = 0.0
+
+
+@tick_jit
+def vertical_cf_update(c, g, pd, acc_down, dt):
+    """One step of the third-order height-rate filter (backward Euler, poles at G_HRT_OMEGA).
+
+    pd: EKF height, down [m]; acc_down: kinematic vertical acceleration from the IMU, down
+    [m/s^2]; dt [s]. Leaves the rate in c[VCF_VEL] (down, m/s).
+    """
+    w = g[C.G_HRT_OMEGA]
+    err = pd - c[C.VCF_POS]
+    c[C.VCF_ACC] += err * w * w * w * dt
+    c[C.VCF_VEL] += (acc_down + c[C.VCF_ACC] + err * 3.0 * w * w) * dt
+    c[C.VCF_POS] += (c[C.VCF_VEL] + err * 3.0 * w) * dt
+
+
+@tick_jit
+def _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us):
+    if g[C.G_FS_VIBE_ENABLE] == 0.0:
+        if c[C.VIBE_COMP] != 0.0:
+            c[C.VIBE_COMP] = 0.0
+            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+        return
+    # EKF3 innovations are prediction - measurement: both positive = "sinking and low"
+    failing = (-nav[NAV_INNOV_VD] > 0.0 and -nav[NAV_INNOV_HGT] > 0.0
+               and nav[NAV_VEL_TR] >= 1.0) or nav[NAV_BAD_IMU] != 0.0
+    if failing:
+        c[C.VIBE_LAST_FAIL_T] = t_s
+        if c[C.VIBE_FAIL_T] < 0.0:
+            c[C.VIBE_FAIL_T] = t_s
+        if c[C.VIBE_COMP] == 0.0 and t_s - c[C.VIBE_FAIL_T] >= VIBE_TRIGGER_S - 1e-6:
+            c[C.VIBE_COMP] = 1.0
+            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_FAILSAFE)
+    else:
+        c[C.VIBE_FAIL_T] = -1.0
+        if c[C.VIBE_COMP] != 0.0 and t_s - c[C.VIBE_LAST_FAIL_T] >= VIBE_CLEAR_S - 1e-6:
+            c[C.VIBE_COMP] = 0.0
+            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+
+
+@tick_jit
+def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
+    """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle."""
+    a = g[C.G_FS_EKF_ALPHA]
+    c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
+    c[C.EKF_POS_TR_F] += a * (math.sqrt(max(nav[NAV_POS_TR], 0.0)) - c[C.EKF_POS_TR_F])
+    thresh = g[C.G_FS_EKF_THRESH]
+    if thresh <= 0.0:
+        c[C.EKF_FAIL_COUNT] = 0.0
+        if c[C.EKF_FAILSAFE] != 0.0:
+            c[C.EKF_FAILSAFE] = 0.0
+            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_RESOLVED)
+        return FS_NONE
+    vel = c[C.EKF_VEL_TR_F]
+    pos = c[C.EKF_POS_TR_F]
+    mag = math.sqrt(max(nav[NAV_MAG_TR], 0.0))
+    n_over = 0
+    if mag >= thresh:
+        n_over += 1
+    if vel >= thresh:
+        n_over += 1
+    if vel >= 2.0 * thresh:
+        n_over += 1
+    over = (pos >= thresh and n_over > 0) or n_over >= 2
+    passed = not over and nav[NAV_POS_OK] != 0.0
+    if passed:
+        c[C.EKF_CHECK_OK_ONCE] = 1.0
+        if c[C.EKF_FAIL_COUNT] > 0.0:
+            c[C.EKF_FAIL_COUNT] -= 1.0
+            if c[C.EKF_FAIL_COUNT] == 0.0 and c[C.EKF_FAILSAFE] != 0.0:
+                c[C.EKF_FAILSAFE] = 0.0
+                E.log_row2(err_buf, counts, k_err, t_us, ERR_EKFCHECK, E.ERR_CODE_RESOLVED)
+                E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV,
+                           E.ERR_CODE_RESOLVED)
+        return FS_NONE
+    if c[C.EKF_CHECK_OK_ONCE] == 0.0 or c[C.EKF_FAILSAFE] != 0.0:
+        return FS_NONE
+    c[C.EKF_FAIL_COUNT] += 1.0
+    if c[C.EKF_FAIL_COUNT] < EKF_CHECK_ITERATIONS:
+        return FS_NONE
+    c[C.EKF_FAIL_COUNT] = EKF_CHECK_ITERATIONS
+    c[C.EKF_FAILSAFE] = 1.0
+    E.log_row2(err_buf, counts, k_err, t_us, ERR_EKFCHECK, ERR_CODE_EKF_BAD_VARIANCE)
+    E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_FAILSAFE)
+    action = g[C.G_FS_EKF_ACTION]
+    if action == 2.0:
+        return FS_EKF_ALTHOLD
+    if action == 1.0 or action == 3.0:
+        return FS_EKF_LAND
+    return FS_NONE
+
+
+@tick_jit
+def failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err):
+    """The 10 Hz vibration and EKF checks (armed only); returns an FS_* action."""
+    t_s = t_us * 1e-6
+    c[C.EKF_POS_OK] = nav[NAV_POS_OK]
+    if t_s < c[C.CHECK_TIMER]:
+        return FS_NONE
+    c[C.CHECK_TIMER] = t_s + CHECK_DT_S - 1e-7
+    if c[C.ARMED] == 0.0:
+        c[C.VIBE_FAIL_T] = -1.0
+        return FS_NONE
+    _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us)
+    return _ekf_check(c, g, nav, err_buf, counts, k_err, t_us)
+
+
+@tick_jit
+def crash_check(c, g, dt, cos_tilt, roll, pitch, ground_speed):
+    """ArduCopter's crash check; returns True when the vehicle should disarm.
+
+    Armed, not landed, FS_CRASH_CHECK on, and for 2 s: |1 Hz low-passed acceleration| < 3 m/s^2,
+    lean > 15 deg, attitude error > 30 deg (here: the angle between commanded and estimated
+    roll/pitch), ground speed < 10 m/s. roll/pitch: EKF attitude [rad]; ground_speed [m/s].
+    """
+    if g[C.G_FS_CRASH_CHECK] == 0.0 or c[C.LANDED] != 0.0:
+        c[C.CRASH_TIMER] = 0.0
+        return False
+    a_lp = math.sqrt(c[C.ALP] ** 2 + c[C.ALP + 1] ** 2 + c[C.ALP + 2] ** 2)
+    if cos_tilt >= CRASH_LEAN_COS or a_lp >= 3.0 or ground_speed >= 10.0:
+        c[C.CRASH_TIMER] = 0.0
+        return False
+    er = c[C.ATT_ROLL_CMD] - roll
+    ep = c[C.ATT_PITCH_CMD] - pitch
+    if er * er + ep * ep <= math.radians(30.0) ** 2:
+        c[C.CRASH_TIMER] = 0.0
+        return False
+    c[C.CRASH_TIMER] += dt
+    return c[C.CRASH_TIMER] >= CRASH_CHECK_S
