@@ -273,10 +273,13 @@ def test_alias_hook(monkeypatch):
     assert q == p and q.changed() == {"SIM_GPS1_ENABLE": 0.0}
 
 
-def test_no_aliases_shipped_yet():
-    assert ALIASES == {}
+def test_paper_gps_disable_alias_is_inverted():
+    assert "SIM_GPS_DISABLE" in ALIASES
+    assert Params({"SIM_GPS_DISABLE": 1})["SIM_GPS1_ENABLE"] == 0
+    assert Params({"SIM_GPS_DISABLE": 0})["SIM_GPS1_ENABLE"] == 1
+    assert Params().updated({"SIM_GPS_DISABLE": 1})["SIM_GPS1_ENABLE"] == 0
     with pytest.raises(UnknownParamError):
-        Params({"SIM_GPS_DISABLE": 1})
+        Params({"SIM_GPS_DISABLEX": 1})
 
 
 # ---------------------------------------------------------------------------------------------

@@ -30,10 +30,13 @@ from tlm_sim.dynamics.wind import seed_rng
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.lanes import ekf_init, ekf_update
+from tlm_sim.faults import FaultSchedule, jitter_nsats
+from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import Params
+from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.baro import baro_sample, mag_sample
@@ -53,6 +56,13 @@ TGT_SENSOR = 0
 TGT_FRAME = 1
 TGT_CONTROL = 2
 TGT_EKF = 3
+TGT_NONE = -1  # marks a change that alters no configuration entry (its time is still recorded)
+
+# schedule row columns and trigger kinds
+SCH_AT, SCH_KIND, SCH_TGT, SCH_IDX, SCH_VAL, SCH_CHANGE = 0, 1, 2, 3, 4, 5
+N_SCH = 6
+TRIG_TIME = 0  # SCH_AT is a time [us since boot]
+TRIG_WP = 1  # SCH_AT is a waypoint number: due once that many mission waypoints are reached
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -63,13 +73,27 @@ def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
 
 
 @tick_jit
-def _apply_schedule(sched, k, t_us, scfg, frame, g, ecfg):
-    """Apply every scheduled parameter change due at t_us (rows sorted by time); returns next k."""
-    while k < sched.shape[0] and sched[k, 0] <= t_us:
-        tgt = int(sched[k, 1])
-        idx = int(sched[k, 2])
-        v = sched[k, 3]
-        if tgt == TGT_SENSOR:
+def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
+    """Apply the scheduled rows that are due, strictly in order; returns the next row index.
+
+    A row is due when its trigger has passed: time rows at t_us >= SCH_AT, waypoint rows once
+    wp_reached >= SCH_AT. applied[change] gets the time [us] its first row was applied.
+    """
+    while k < sched.shape[0]:
+        if sched[k, SCH_KIND] == TRIG_TIME:
+            if sched[k, SCH_AT] > t_us:
+                break
+        elif wp_reached < sched[k, SCH_AT]:
+            break
+        ch = int(sched[k, SCH_CHANGE])
+        if applied[ch] < 0.0:
+            applied[ch] = t_us
+        tgt = int(sched[k, SCH_TGT])
+        idx = int(sched[k, SCH_IDX])
+        v = sched[k, SCH_VAL]
+        if tgt == TGT_NONE:
+            pass
+        elif tgt == TGT_SENSOR:
             scfg[idx] = v
         elif tgt == TGT_FRAME:
             frame[idx] = v
@@ -95,14 +119,15 @@ def _motor_pwm(c, scfg, pwm):
 
 @tick_jit
 def run_flight(
-    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, seed, t_end_us, home, gps_time,
-    bufs, counts, s, work, rng,
+    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, seed, t_end_us, home,
+    gps_time, bufs, counts, s, work, rng,
 ):
     """Fly one whole flight in place; returns the final simulated time [us].
 
     x: truth state; frame/scfg/g/ecfg: configuration arrays; ekf/sel: EKF lanes and selector;
     c: controller state; path: mission as NED points (path[0] = takeoff point); seg: scratch
-    segment; sched: (n, 4) rows (t_us, target, index, value) of parameter changes; home: (lat,
+    segment; sched: rows of parameter changes (see :func:`build_schedule`); applied: per change,
+    the time [us] it took effect (filled in, -1 if never); home: (lat,
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
     generator (tlm_sim.rng). Allocation-free.
@@ -141,7 +166,8 @@ def run_flight(
         bufs[L.K_MODE][r, 3] = 26.0
     while t_us < t_end_us:
         # ------------------------------------------------------------- physics tick (1200 Hz)
-        k_sched = _apply_schedule(sched, k_sched, t_us, scfg, frame, g, ecfg)
+        k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
+                                  applied)
         _motor_pwm(c, scfg, pwm)
         physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6)
         t_us += PHYSICS_DT_US
@@ -488,32 +514,54 @@ def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return build_sensor_config(p), build_frame(p), build_control_config(p), build_ekf_config(p)
 
 
+def _as_change(ch: Any) -> tuple[int, float, str, float]:
+    """(trigger kind, at, name, value) of a ParamChange or a (time_s, name, value) tuple."""
+    if hasattr(ch, "kind"):
+        kind = TRIG_WP if ch.kind == "wp" else TRIG_TIME
+        return kind, float(ch.at), str(ch.name), float(ch.value)
+    t_s, name, value = ch
+    return TRIG_TIME, float(t_s), str(name), float(value)
+
+
 def build_schedule(
     params: Params,
-    changes: Sequence[tuple[float, str, float]],
+    changes: Sequence[Any],
     base: tuple[np.ndarray, ...] | None = None,
 ) -> np.ndarray:
-    """Rows (t_us, target, index, value) realising timed parameter changes.
+    """Rows (at, kind, target, index, value, change) realising scheduled parameter changes.
 
-    Each change (time [s], ArduPilot parameter name, value) is applied to the parameter set in
-    time order; every configuration entry that differs from the previous configuration becomes a
-    row, so any parameter the subsystems read can change in flight, exactly as in SITL.
-    ``base``: the configuration arrays of ``params`` when the caller already built them.
+    ``changes``: ``(time_s, NAME, value)`` tuples or ``tlm_sim.faults.ParamChange`` items
+    (``kind`` "time" or "wp"). Changes are applied to the parameter set one after another:
+    by time when all are timed, else in the order given (a fault schedule's sequence order);
+    every configuration entry that differs from the previous configuration becomes a row (a
+    change that alters none gets one TGT_NONE row, so its time is still recorded), so any
+    parameter the subsystems read can change in flight, exactly as in SITL. Column ``change``
+    is the change's position in ``changes``. ``base``: the configuration arrays of ``params``
+    when the caller already built them.
     """
-    rows: list[tuple[float, int, int, float]] = []
+    items = [_as_change(ch) for ch in changes]
+    order = list(range(len(items)))
+    if all(it[0] == TRIG_TIME for it in items):
+        order.sort(key=lambda i: items[i][1])
+    rows: list[tuple[float, int, int, int, float, int]] = []
     current = params
     before = base if base is not None else _configs(current)
-    for t_s, name, value in sorted(changes, key=lambda c: c[0]):
-        if not math.isfinite(t_s) or t_s < 0:
-            raise ValueError(f"parameter change time must be a finite time >= 0 s, got {t_s}")
+    for i in order:
+        kind, at, name, value = items[i]
+        if not math.isfinite(at) or at < 0:
+            raise ValueError(f"parameter change time must be a finite time >= 0 s, got {at}")
         current = current.updated({name: value})
         after = _configs(current)
+        trigger = round(at * 1e6) if kind == TRIG_TIME else at
+        n_before = len(rows)
         for tgt, (a, b) in enumerate(zip(before, after, strict=True)):
             for idx in np.flatnonzero(a != b):
-                rows.append((round(t_s * 1e6), tgt, int(idx), float(b[idx])))
+                rows.append((trigger, kind, tgt, int(idx), float(b[idx]), i))
+        if len(rows) == n_before:
+            rows.append((trigger, kind, TGT_NONE, 0, 0.0, i))
         before = after
     if not rows:
-        return np.zeros((0, 4))
+        return np.zeros((0, N_SCH))
     return np.array(rows, dtype=np.float64)
 
 
@@ -537,19 +585,23 @@ def max_duration_s(mission: Mission, params: Mapping[str, float]) -> float:
 
 def fly(
     mission: Mission | int,
-    faults: Sequence[tuple[float, str, float]] | None = None,
+    faults: FaultSchedule | Sequence[Any] | None = None,
     params: Params | Mapping[str, float] | None = None,
     seed: int = 0,
+    profile: str = "current",
 ) -> FlightLog:
     """Fly one mission and return its FlightLog.
 
     Args:
         mission: a Mission, or 1-4 for a built-in one.
-        faults: timed SITL parameter changes ``(time_s, name, value)``, e.g.
+        faults: a :class:`tlm_sim.faults.FaultSchedule` (recorded as Eq. 4 fault records in
+            ``FlightLog.faults``), or raw SITL parameter changes ``(time_s, name, value)``, e.g.
             ``[(120, "SIM_GPS1_ENABLE", 0), (150, "SIM_GPS1_ENABLE", 1)]``; None for none.
         params: parameter overrides (ArduPilot names) on top of tlm's defaults (the reference
-            SITL logs' parameter set).
+            SITL logs' parameter set) and of the profile.
         seed: random seed of all noise draws; a flight is a pure function of its arguments.
+        profile: "current" (ArduPilot as in the reference logs) or "paper" (the paper's
+            ArduPilot 4.1/4.2 semantics), see :mod:`tlm_sim.profiles`.
     """
     if isinstance(mission, bool) or not isinstance(mission, Mission | int | np.integer):
         raise TypeError(f"mission must be a Mission or a built-in number 1-4, got {mission!r}")
@@ -557,10 +609,17 @@ def fly(
         mission = builtin_mission(int(mission))
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    p = params if isinstance(params, Params) else Params(params)
-    changes = list(faults or ())
+    p = profile_params(profile, params)
+    duration = max_duration_s(mission, p)
+    schedule = faults if isinstance(faults, FaultSchedule) else None
+    if schedule is not None:
+        schedule.validate(n_waypoints=mission.n_waypoints, max_time_s=duration)
+        changes: list[Any] = list(schedule.param_changes())
+    else:
+        changes = list(faults or ())
     scfg, frame, g, ecfg = _configs(p)
     sched = build_schedule(p, changes, (scfg, frame, g, ecfg))
+    applied = np.full(len(changes), -1.0)
     home = np.array(mission.home, dtype=np.float64)
     x = np.zeros(X.N_STATE)
     init_state(x, frame, math.radians(p.get("SIM_OPOS_HDG", 353.0)))
@@ -571,19 +630,19 @@ def fly(
     c[C.DISARM_TIME] = -1.0
     path = mission_path(mission, g)
     seg = np.zeros((2, PATH_COLS))
-    duration = max_duration_s(mission, p)
     bufs = allocate_buffers(duration, LOGGED_MESSAGES)
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
     week, ms = gps_week_ms(BOOT_UTC)
     seed_rng(int(seed))
     t_final = run_flight(
-        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, int(seed),
+        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, int(seed),
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
         np.zeros(S.N_SENSOR_STATE), new_work(), new_rng(int(seed), 1),
     )
     meta: dict[str, Any] = {
         "seed": int(seed),
+        "profile": profile,
         "duration_s": t_final * 1e-6,
         "mission": mission.name,
         "home": list(mission.home),
@@ -593,10 +652,29 @@ def fly(
         "waypoints_reached": int(c[C.WP_REACHED]),
         "n_waypoints": int(mission.n_waypoints),
         "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
-        "param_changes": [list(ch) for ch in changes],
+        "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
     }
-    return FlightLog.from_buffers(
+    log = FlightLog.from_buffers(
         {n: bufs[n] for n in L.LOG_ORDER},
         {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
         params=p, mission=mission, faults=[], meta=meta,
     )
+    mu = p.get("TLM_SAT_JITTER", 0.0)
+    if mu > 0.0 and "GPS" in log.tables and len(log.tables["GPS"]):
+        gps = log.tables["GPS"]
+        gps["NSats"] = jitter_nsats(gps["Status"].to_numpy(), int(seed), mu).astype(
+            gps["NSats"].dtype)
+    if schedule is not None:
+        log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]))
+    return log
+
+
+def _change_record(ch: Any, applied_us: float) -> dict[str, Any]:
+    """One scheduled parameter change and the log time it took effect (None if never)."""
+    kind, at, name, value = _as_change(ch)
+    rec: dict[str, Any] = {"name": name, "value": value,
+                           "at": f"wp{int(at)}" if kind == TRIG_WP else at,
+                           "time_us": int(applied_us) if applied_us >= 0 else None}
+    if hasattr(ch, "fault"):
+        rec["fault"], rec["edge"] = int(ch.fault), ch.edge
+    return rec

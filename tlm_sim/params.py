@@ -187,6 +187,10 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "", 0.0, 1.0,
         "behaviour profile: 0 = ArduPilot 2598e9d4 (current), 1 = paper era 4.1/4.2 (§6)",
         integer=True)),
+    ("TLM_SAT_JITTER", 0.0, ParamInfo(
+        "", 0.0, 100.0,
+        "mu of the paper's Eq. 3 satellite-count jitter on GPS.NSats (normal 8-20, fault "
+        "3-10); 0 = off, SITL's fixed 10 / 3")),
 )
 
 #: Defaults of the ``TLM_*`` parameters (not in the ``.parm`` file).
@@ -492,7 +496,7 @@ _STRICTLY_LESS: tuple[tuple[str, str], ...] = (
 
 
 # --------------------------------------------------------------------------------------------
-# Aliases (hook only)
+# Aliases: paper-era names (§6)
 # --------------------------------------------------------------------------------------------
 
 class Alias(NamedTuple):
@@ -502,11 +506,51 @@ class Alias(NamedTuple):
     convert: Callable[[float], float]
 
 
-#: Hook for paper-era names, consulted by every input path (constructor, ``updated``,
-#: ``from_parm``) before validation: ``name -> Alias(target, convert)``. Empty for now; a later
-#: change can add e.g. ``"SIM_GPS_DISABLE": Alias("SIM_GPS1_ENABLE", lambda v: float(v == 0))``
-#: (§6). Aliases are input-only: ``Params`` always stores and returns the current names.
-ALIASES: dict[str, Alias] = {}
+def _disable_to_enable(value: float) -> float:
+    """Paper-era ``SIM_GPSn_DISABLE`` -> ``SIM_GPSn_ENABLE``: any non-zero value disabled the
+    GPS (an ``AP_Int8`` truth test), so 0 -> 1 and everything else -> 0."""
+    return 0.0 if value != 0 else 1.0
+
+
+def _unchanged(value: float) -> float:
+    """A pure rename: same value, same unit."""
+    return value
+
+
+# Renamed SIM_* parameters whose meaning and unit did not change (§6): ArduPilot made every
+# SIM_GPS_* a SIM_GPS1_* on 2024-11-12 (a few also got shorter names to fit 16 characters) and
+# numbered the IMU-1 noise, bias and scale parameters on 2021-01-20. Vectors are listed per
+# component (ArduPilot's ``_X/_Y/_Z`` parameters). Only names whose target tlm has are listed.
+_RENAMED: dict[str, str] = {
+    "SIM_GPS_TYPE": "SIM_GPS1_TYPE",
+    "SIM_GPS_LAG_MS": "SIM_GPS1_LAG_MS",
+    "SIM_GPS_BYTELOSS": "SIM_GPS1_BYTELOS",
+    "SIM_GPS_NUMSATS": "SIM_GPS1_NUMSATS",
+    "SIM_GPS_HZ": "SIM_GPS1_HZ",
+    "SIM_GPS_DRIFTALT": "SIM_GPS1_DRFTALT",
+    "SIM_GPS_NOISE": "SIM_GPS1_NOISE",
+    "SIM_GPS_LOCKTIME": "SIM_GPS1_LCKTIME",
+    "SIM_GPS_ALT_OFS": "SIM_GPS1_ALT_OFS",
+    "SIM_GPS_HDG": "SIM_GPS1_HDG",
+    "SIM_GPS_ACC": "SIM_GPS1_ACC",
+    **{f"SIM_GPS_GLITCH_{a}": f"SIM_GPS1_GLTCH_{a}" for a in _XYZ},
+    **{f"SIM_GPS_POS_{a}": f"SIM_GPS1_POS_{a}" for a in _XYZ},
+    **{f"SIM_GPS_VERR_{a}": f"SIM_GPS1_VERR_{a}" for a in _XYZ},
+    "SIM_ACC_RND": "SIM_ACC1_RND",
+    "SIM_GYR_RND": "SIM_GYR1_RND",
+    **{f"SIM_ACC_BIAS_{a}": f"SIM_ACC1_BIAS_{a}" for a in _XYZ},
+    **{f"SIM_GYR_SCALE_{a}": f"SIM_GYR1_SCALE_{a}" for a in _XYZ},
+}
+
+#: Paper-era names, consulted by every input path (constructor, ``updated``, ``from_parm``)
+#: before validation: ``name -> Alias(target, convert)`` (§6). ``SIM_GPS_DISABLE`` 1 (the
+#: paper's GPS fault) becomes ``SIM_GPS1_ENABLE`` 0. Aliases are input-only: ``Params`` always
+#: stores and returns the current names.
+ALIASES: dict[str, Alias] = {
+    "SIM_GPS_DISABLE": Alias("SIM_GPS1_ENABLE", _disable_to_enable),
+    "SIM_GPS2_DISABLE": Alias("SIM_GPS2_ENABLE", _disable_to_enable),
+    **{old: Alias(new, _unchanged) for old, new in _RENAMED.items()},
+}
 
 
 # --------------------------------------------------------------------------------------------

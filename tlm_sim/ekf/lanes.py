@@ -122,6 +122,9 @@ from tlm_sim.ekf.layout import (
     QX,
     QY,
     QZ,
+    R20,
+    R21,
+    R22,
     SCORE,
     SEL_CHANGES,
     SEL_HEALTHY_SINCE,
@@ -140,6 +143,8 @@ from tlm_sim.ekf.layout import (
     T_LAST,
     T_POS_PASS,
     T_VEL_PASS,
+    TILT_BAD_T,
+    TILT_RESET_COUNT,
     VEL_RESET_COUNT,
     VEL_TR,
     VN,
@@ -148,6 +153,11 @@ from tlm_sim.rotation import quat_to_euler
 
 # initial standard deviations at alignment
 INIT_TILT_SD = 0.05  # rad
+STATIC_GYRO = 0.1  # rad/s: IMU at rest below this rotation rate
+STATIC_ACC = 0.5  # m/s^2: ... and with |specific force| this close to g
+STATIC_TILT_COS = math.cos(math.radians(30.0))  # re-level beyond 30 deg of tilt error
+STATIC_TIME = 0.25  # s at rest with that error before re-levelling
+GRAVITY = 9.80665
 INIT_YAW_SD = 0.1  # rad
 INIT_VEL_SD = 0.5  # m/s
 INIT_POS_SD = 1.0  # m
@@ -234,6 +244,46 @@ def _align(e, cfg, t):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
+def _static_tilt_check(e, dang, dvel, imu, dt):
+    """Re-level a lane whose tilt is grossly wrong while its IMU is at rest (tlm model choice).
+
+    After a tumble the simulated ground contact sets the vehicle level without a rotation the
+    gyros could see (SITL's NO_MOVEMENT behaviour), which leaves the error-state filter with
+    a tilt error far outside its small-angle model. EKF3 in the reference logs is level again
+    within ~1 s of the impact; tlm reproduces that by re-aligning roll/pitch from the specific
+    force (keeping yaw, resetting the attitude covariance) once the IMU has been at rest
+    (|gyro| < STATIC_GYRO, | |f| - g | < STATIC_ACC) with a tilt error > STATIC_TILT_ERR for
+    STATIC_TIME. Manoeuvres cannot trigger it: they rotate the vehicle or change |f|, and a
+    30 deg error is beyond any steady-flight difference between estimated and sensed tilt.
+    """
+    if dt <= 0.0:
+        return
+    wx = dang[imu, 0] / dt
+    wy = dang[imu, 1] / dt
+    wz = dang[imu, 2] / dt
+    fx = dvel[imu, 0] / dt
+    fy = dvel[imu, 1] / dt
+    fz = dvel[imu, 2] / dt
+    fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+    if wx * wx + wy * wy + wz * wz > STATIC_GYRO**2 or abs(fn - GRAVITY) > STATIC_ACC:
+        e[TILT_BAD_T] = 0.0
+        return
+    # estimated "down" in body axes (third row of the body->NED matrix) vs the sensed one
+    cos_err = -(e[R20] * fx + e[R21] * fy + e[R22] * fz) / fn
+    if cos_err > STATIC_TILT_COS:
+        e[TILT_BAD_T] = 0.0
+        return
+    e[TILT_BAD_T] += dt
+    if e[TILT_BAD_T] < STATIC_TIME:
+        return
+    _, _, yaw = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
+    set_quat_euler(e, math.atan2(-fy, -fz), math.atan2(fx, math.sqrt(fy * fy + fz * fz)), yaw)
+    reset_block(e, ES_ATT, 2, INIT_TILT_SD**2)
+    e[TILT_BAD_T] = 0.0
+    e[TILT_RESET_COUNT] += 1.0
+
+
+@njit(cache=True, nogil=True, _nrt=False)
 def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     """One main-loop tick of one lane (see the module docstring); t in seconds."""
     dt = cfg[C_DT] if e[T_LAST] < 0.0 else t - e[T_LAST]
@@ -255,6 +305,7 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
             _align(e, cfg, t)
         update_flags(e, cfg, t)
         return
+    _static_tilt_check(e, dang, dvel, imu, dt)
     propagate(e, dang, dvel, imu, dt)
     buffer_push(e)
     if e[ACC_DT] >= cfg[C_TARGET_DT] - 0.5 * dt:

@@ -111,8 +111,10 @@ T_BAD_IMU = 476  # last detection [s]
 BARO_LAST = 477  # latest baro altitude [m, up]
 T_BARO_LAST = 478  # time of the latest baro sample [s]
 T_GOOD_IMU = 479  # last GPS sample without bad-IMU detection (or last bad-IMU height reset) [s]
-BUF_OFS = 480  # cumulative corrections pn, pe, pd, vn, ve, vd (6)
-BUF0 = 486  # NBUF rows of BUF_ROW
+TILT_BAD_T = 480  # time the lane has been static with a large tilt error [s]
+TILT_RESET_COUNT = 481  # stationary tilt re-alignments so far
+BUF_OFS = 482  # cumulative corrections pn, pe, pd, vn, ve, vd (6)
+BUF0 = 488  # NBUF rows of BUF_ROW
 N_EKF = BUF0 + NBUF * BUF_ROW
 
 # aiding modes (EKF3 names)

@@ -61,5 +61,8 @@ def build_sensor_config(p: Mapping[str, float]) -> np.ndarray:
     c[S.C_VIB_MOT_MAX] = p.get("SIM_VIB_MOT_MAX", 0.0)
     c[S.C_FRAME_HEIGHT] = p.get("TLM_FRAME_HEIGHT", 0.1)
     c[S.C_ENGINE_MUL] = p.get("SIM_ENGINE_MUL", 1.0)
-    c[S.C_ENGINE_MASK] = p.get("SIM_ENGINE_FAIL", 0.0)
+    fail = p.get("SIM_ENGINE_FAIL", 0.0)
+    if p.get("TLM_PROFILE", 0.0) >= 0.5:  # paper era: the index of one output, 0 = motor 1
+        fail = float(1 << int(fail)) if 0 <= fail < 31 else 0.0
+    c[S.C_ENGINE_MASK] = fail
     return c

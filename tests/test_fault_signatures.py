@@ -1,0 +1,180 @@
+"""Fault signatures: the reference README's facts measured in the genuine SITL logs, and tlm's
+faults flown on the same missions at the same times measured the same way.
+
+Five tlm flights in all (one per single-fault reference and one without faults), each flown once.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from functools import lru_cache
+from typing import Any
+
+import pytest
+
+from tests.conftest import REFERENCE, reference_path
+from tlm_process.fault_signatures import fault_signature, truth_timeline
+
+SINGLE = {"gps": "gps_s12", "accel": "accel_s13", "engine": "engine_s14", "rc": "rc_s15"}
+TYPES = ["GPS", "IMU", "CTUN", "XKF1", "SIM", "MODE", "EV", "ERR"]
+RC_FS_TIMEOUT_S = 1.0  # copter.parm's RC_FS_TIMEOUT
+
+
+@lru_cache(maxsize=8)
+def _reference(name: str) -> tuple[dict, dict]:
+    from tlm_sim.flightlog import read_bin
+
+    path = reference_path(f"{name}.bin")
+    return read_bin(str(path), types=TYPES), json.loads(path.with_suffix(".json").read_text())
+
+
+def _ref_signatures(kind: str) -> list[tuple[str, dict[str, float]]]:
+    """The signature of every fault of this type in the single-fault and combined references."""
+    out = []
+    for name in (SINGLE[kind], "combined_s21"):
+        tables, side = _reference(name)
+        out += [(name, fault_signature(tables, f)) for f in side["faults"] if f["type"] == kind]
+    return out
+
+
+@lru_cache(maxsize=4)
+def _tlm(kind: str) -> tuple[dict[str, float], dict[str, Any]]:
+    """tlm flying the single-fault reference's mission and fault: (signature, flight)."""
+    from tools.fidelity_faults import fly_like_reference
+
+    reference_path(f"{SINGLE[kind]}.bin")
+    flight = fly_like_reference(REFERENCE, SINGLE[kind])
+    return fault_signature(flight["tlm"], flight["tlm_faults"][0]), flight
+
+
+@lru_cache(maxsize=1)
+def _tlm_normal():
+    from tlm_sim import Mission, fly
+
+    side = reference_path("normal_s11.json")
+    return fly(Mission.from_sidecar(str(side)), seed=11).tables
+
+
+# --- the SITL references -------------------------------------------------------------------
+
+
+def test_reference_gps_signature():
+    for name, s in _ref_signatures("gps"):
+        assert s["nofix_frac_in"] == 1.0 and s["nofix_frac_out"] == 0.0, name
+        assert (s["nsats_max_in"], s["nsats_min_out"]) == (3, 10), name
+        assert s["ekf_err_max_m"] > 100.0, name
+        assert s["auto_kept"] == 1.0, name
+        assert 10.0 < s["speed_max_ms"] < 12.5, name  # "up to 12 m/s"
+        assert 25.0 < s["pitch_max_deg"] < 36.0, name  # "pitch up to 35 deg"
+        assert s["baro_alt_range_m"] < 2.5, name  # "within about 2 m"
+        assert s["ekf_recovered_after_end_s"] < 0.5, name  # "within 0.3 s", XKF1 at 10 Hz
+
+
+def test_reference_accel_signature():
+    for name, s in _ref_signatures("accel"):
+        for i in (0, 1):
+            # SIM_ACCEL1_FAIL is cleared up to 60 ms before the window's end (the last change)
+            assert s[f"imu{i}_stuck_frac_in"] > 0.99 and s[f"imu{i}_stuck_frac_out"] == 0.0, name
+        assert 10.0 < s["climb_3s_m"] < 20.0, name  # "from about 20 m to 34-38 m within 3 s"
+        assert s["thr_max_3s"] == pytest.approx(1.0), name
+        assert s["err24_ekf_primary"] > 0 and s["err29_vibe_fs"] > 0, name
+        assert 25.0 < s["roll_max_deg"] < 35.0, name  # "roll and pitch up to +-30 deg"
+        assert s["auto_kept"] == 1.0, name
+        assert s["settle_roll_max_deg"] < 5.0, name  # "stable again within a few seconds"
+
+
+def test_reference_engine_signature():
+    for name, s in _ref_signatures("engine"):
+        assert 2.5 <= s["ground_s"] <= 2.7, name
+        assert 12.0 < s["impact_speed_ms"] < 13.5, name  # "about 12.7 m/s" (GPS.VZ at 5 Hz)
+        assert s["roll_max_3s_deg"] > 110.0, name
+        assert s["armed_kept"] == 1.0 and s["auto_kept"] == 1.0, name
+        assert s["liftoff_1m_after_end_s"] < 1.2, name  # "within about 1 s"
+        assert 4.0 < s["above_10m_after_end_s"] < 5.0, name  # "about 4.5 s after restore"
+        assert s["auto_after_end"] == 1.0 and s["path_after_10m_m"] > 50.0, name
+
+
+def test_reference_rc_signature():
+    for name, s in _ref_signatures("rc"):
+        assert s["rtl_delay_s"] == pytest.approx(1.0, abs=0.1), name
+        assert s["rtl_reason"] == 3, name
+        assert s["err2_2_late_frame"] > 0 and s["err5_1_failsafe"] > 0, name
+        assert s["err5_0_cleared"] > 0 and s["rtl_kept_after_end"] == 1.0, name
+        assert 60.0 <= s["disarm_s"] <= 85.0, name
+        assert s["final_home_dist_m"] < 1.0, name
+
+
+def test_unknown_fault_type_and_empty_window_are_refused():
+    tables, _ = _reference("rc_s15")
+    with pytest.raises(ValueError, match="unknown fault type"):
+        fault_signature(tables, {"type": "baro", "start_time_us": 1e8, "end_time_us": 2e8})
+    with pytest.raises(ValueError, match="end_time_us"):
+        fault_signature(tables, {"type": "rc", "start_time_us": 2e8, "end_time_us": 1e8})
+
+
+# --- tlm flying the same faults ------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_tlm_gps_reports_no_fix_only_inside():
+    s, _ = _tlm("gps")
+    assert s["nofix_frac_in"] == 1.0 and s["nofix_frac_out"] == 0.0
+    assert (s["nsats_max_in"], s["nsats_min_out"]) == (3, 10)
+
+
+@pytest.mark.slow
+def test_tlm_gps_ekf_drifts_while_auto_continues():
+    s, _ = _tlm("gps")
+    assert s["ekf_err_max_m"] > 50.0
+    assert s["auto_kept"] == 1.0
+
+
+@pytest.mark.slow
+def test_tlm_accel_reads_the_fail_value_only_inside():
+    s, _ = _tlm("accel")
+    for i in (0, 1):  # accel_s13 fails both IMUs
+        assert s[f"imu{i}_stuck_frac_in"] == 1.0
+        assert s[f"imu{i}_stuck_frac_out"] == 0.0
+
+
+@pytest.mark.slow
+def test_tlm_accel_climbs_like_sitl_in_3s():
+    s, _ = _tlm("accel")
+    assert 8.0 <= s["climb_3s_m"] <= 25.0
+
+
+@pytest.mark.slow
+def test_tlm_engine_falls_stays_armed_and_resumes():
+    s, _ = _tlm("engine")
+    assert s["ground_s"] <= 4.0
+    assert s["armed_kept"] == 1.0
+    assert s["liftoff_1m_after_end_s"] <= 3.0
+    assert s["auto_after_end"] == 1.0 and s["path_after_10m_m"] > 50.0
+
+
+@pytest.mark.slow
+def test_tlm_rc_failsafe_rtl_lands_home_and_disarms():
+    s, _ = _tlm("rc")
+    assert s["rtl_delay_s"] <= RC_FS_TIMEOUT_S + 0.1
+    assert s["rtl_reason"] == 3
+    assert s["final_home_dist_m"] < 3.0
+    assert math.isfinite(s["disarm_s"])
+
+
+@pytest.mark.slow
+def test_tlm_without_faults_shows_no_signature():
+    t = _tlm_normal()
+    ev = t["EV"]
+    arm = float(ev[ev.Id == 10].TimeUS.iloc[0])
+    disarm = float(ev[ev.Id == 11].TimeUS.iloc[-1])
+    whole = {"start_time_us": arm, "end_time_us": disarm}
+    assert fault_signature(t, {"type": "gps", **whole})["nofix_frac_in"] == 0.0
+    acc = fault_signature(t, {"type": "accel", **whole})
+    assert acc["imu0_stuck_frac_in"] == 0.0 and acc["imu1_stuck_frac_in"] == 0.0
+    rc = fault_signature(t, {"type": "rc", **whole})
+    assert math.isnan(rc["rtl_delay_s"]) and rc["err5_1_failsafe"] == 0
+    tl = truth_timeline(t)
+    up = tl[tl.h_m > 5.0].TimeUS
+    airborne = {"start_time_us": float(up.iloc[0]), "end_time_us": float(up.iloc[-1])}
+    assert math.isnan(fault_signature(t, {"type": "engine", **airborne})["ground_s"])

@@ -1,0 +1,223 @@
+"""Regenerate docs/fidelity-faults.md: each fault's signature in tlm vs the genuine SITL log.
+
+    python tools/fidelity_faults.py [--reference ../shared/reference/sitl]
+                                    [--out docs/fidelity-faults.md]
+
+For each fault reference (gps_s12, accel_s13, engine_s14, rc_s15, combined_s21) tlm flies the
+sidecar's mission with the same parameter changes at the same times relative to arming, and
+``tlm_process.fault_signatures.fault_signature`` measures both logs. Writes the markdown tables
+and one figure per fault type (docs/img/fault_<type>.png, from the single-fault flights), and
+prints the tables.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from tlm_process.fault_signatures import fault_signature, truth_timeline
+
+SINGLE = ("gps_s12", "accel_s13", "engine_s14", "rc_s15")
+COMBINED = "combined_s21"
+#: messages fault_signature reads (and that both SITL and tlm log)
+TYPES = ["GPS", "IMU", "CTUN", "XKF1", "SIM", "MODE", "EV", "ERR"]
+#: "close" for the note column: within this fraction of SITL's value, or the unit's floor below
+REL_CLOSE = 0.25
+#: absolute floor of "close" by metric-name suffix (s, m, deg, m/s); flags/fractions: 0.02
+ABS_CLOSE = {"_s": 0.5, "_m": 3.0, "_deg": 5.0, "_ms": 1.0}
+#: section titles by fault type
+TITLES = {"gps": "GPS", "accel": "Accelerometer", "engine": "Engine", "rc": "RC"}
+#: metrics compared for equality only (besides the *_kept flags)
+CATEGORICAL = {"rtl_reason", "auto_after_end", "nsats_max_in", "nsats_min_out"}
+
+HEADER = """# Fidelity of the faults: tlm vs genuine ArduCopter SITL
+
+Regenerate with `python tools/fidelity_faults.py` (five flights); `tests/test_fault_signatures.py`
+asserts the properties the fault model must have. The metrics are computed by
+`tlm_process.fault_signatures.fault_signature` on both logs in the same way, from the messages
+both have (GPS, IMU, CTUN, XKF1, SIM = true state, MODE, EV, ERR); its docstring defines each
+metric. "Truth" is the simulator's true state (SIM), heights are above home.
+
+**Time alignment.** tlm flies the mission recorded in each reference's sidecar
+(`Mission.from_sidecar`) with the sidecar's seed and sets the sidecar's `params_start` /
+`params_end` at the same time *after arming* as SITL did: SITL arms at EV 10 (about 42 s after
+boot), tlm at `TLM_ARM_TIME` (10 s), so `t_tlm = (start_time_us - SITL EV10 TimeUS) / 1e6 +
+TLM_ARM_TIME`. The two accelerometer parameters, which SITL set 25-60 ms apart, are set together
+in tlm. Note column: *close* = within {rel:.0%} of SITL's value or an absolute floor (0.5 s,
+3 m, 5 deg, 1 m/s; 0.02 for fractions); flags, NSats and the mode reason must be the *same*; ERR
+counts compare presence (both > 0 or both 0).
+
+"""
+
+
+def tlm_fault_schedule(sidecar: Mapping[str, Any], ref_arm_us: float, arm_s: float
+                       ) -> tuple[list[tuple[float, str, float]], list[dict[str, Any]]]:
+    """The sidecar's faults moved to tlm's time line.
+
+    Args:
+        sidecar: the reference's JSON sidecar.
+        ref_arm_us: the reference's arming time (EV 10 TimeUS) [us].
+        arm_s: tlm's arming time (TLM_ARM_TIME) [s].
+
+    Returns:
+        ``(changes, faults)``: the ``fly(faults=...)`` list ``(t_s, name, value)`` and the fault
+        records with ``start_time_us``/``end_time_us`` on tlm's time line.
+    """
+    changes: list[tuple[float, str, float]] = []
+    faults = []
+    for f in sidecar["faults"]:
+        t0 = (f["start_time_us"] - ref_arm_us) * 1e-6 + arm_s
+        t1 = (f["end_time_us"] - ref_arm_us) * 1e-6 + arm_s
+        changes += [(t0, k, float(v)) for k, v in f["params_start"].items()]
+        changes += [(t1, k, float(v)) for k, v in f["params_end"].items()]
+        faults.append(dict(f, start_time_us=t0 * 1e6, end_time_us=t1 * 1e6))
+    return changes, faults
+
+
+def fly_like_reference(ref_dir: Path, name: str) -> dict[str, Any]:
+    """Read a reference log and fly its mission and faults in tlm.
+
+    Returns:
+        dict with ``ref`` and ``tlm`` (log tables), ``ref_faults`` and ``tlm_faults`` (fault
+        records on each time line), ``sidecar`` and the tlm ``meta``.
+    """
+    from tlm_sim import Mission, fly
+    from tlm_sim.flightlog import read_bin
+    from tlm_sim.params import Params
+
+    sidecar_path = ref_dir / f"{name}.json"
+    sidecar = json.loads(sidecar_path.read_text())
+    ref = read_bin(str(ref_dir / f"{name}.bin"), types=TYPES)
+    ev = ref["EV"]
+    ref_arm_us = float(ev[ev.Id == 10].TimeUS.iloc[0])
+    arm_s = float(Params().get("TLM_ARM_TIME", 10.0))
+    changes, tlm_faults = tlm_fault_schedule(sidecar, ref_arm_us, arm_s)
+    log = fly(Mission.from_sidecar(str(sidecar_path)), faults=changes,
+              seed=int(sidecar["seed"]))
+    return {"ref": ref, "tlm": log.tables, "ref_faults": sidecar["faults"],
+            "tlm_faults": tlm_faults, "sidecar": sidecar, "meta": log.meta}
+
+
+def _close(metric: str, a: float, b: float) -> str:
+    if math.isnan(a) or math.isnan(b):
+        return "both n/a" if math.isnan(a) and math.isnan(b) else "only one has it"
+    if metric.startswith("err"):
+        return "both present" if a > 0 and b > 0 else (
+            "both absent" if a == b == 0 else ("only SITL" if b > 0 else "only tlm"))
+    if a == b:
+        return "same"
+    if metric in CATEGORICAL or metric.endswith("_kept"):
+        return "differs"
+    floor = next((v for k, v in ABS_CLOSE.items() if metric.endswith(k)), 0.02)
+    if abs(a - b) <= max(floor, REL_CLOSE * abs(b)):
+        return "close"
+    return "tlm higher" if a > b else "tlm lower"
+
+
+def comparison(tlm: Mapping[str, float], sitl: Mapping[str, float]) -> pd.DataFrame:
+    """Rows metric, tlm, sitl, note."""
+    return pd.DataFrame([{"metric": k, "tlm": tlm[k], "sitl": sitl[k],
+                          "note": _close(k, tlm[k], sitl[k])} for k in sitl])
+
+
+def _fmt(v: float) -> str:
+    return "n/a" if math.isnan(v) else f"{v:.3g}"
+
+
+def table_md(df: pd.DataFrame) -> str:
+    lines = ["| metric | tlm | SITL | note |", "|---|---|---|---|"]
+    lines += [f"| {r.metric} | {_fmt(r.tlm)} | {_fmt(r.sitl)} | {r.note} |"
+              for r in df.itertuples()]
+    return "\n".join(lines)
+
+
+def notes_md(df: pd.DataFrame) -> str:
+    """Plain-language summary generated from the note column."""
+    same = df[df.note.isin(["same", "close", "both present", "both absent", "both n/a"])]
+    diff = df.drop(same.index)
+    out = []
+    if len(same):
+        out.append(f"Matches ({len(same)} of {len(df)}): " + ", ".join(same.metric) + ".")
+    if len(diff):
+        out.append("Differs: " + "; ".join(
+            f"{r.metric} (tlm {_fmt(r.tlm)} vs SITL {_fmt(r.sitl)}, {r.note})"
+            for r in diff.itertuples()) + ".")
+    return "\n".join(out)
+
+
+def plot_fault(flight: Mapping[str, Any], i: int, path: Path) -> None:
+    """Truth height, roll/pitch and ground speed around fault i, tlm vs SITL."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
+    fr = flight["ref_faults"][i]
+    dur = (fr["end_time_us"] - fr["start_time_us"]) * 1e-6
+    for key, faults, color in (("ref", "ref_faults", "k"), ("tlm", "tlm_faults", "tab:red")):
+        t0 = flight[faults][i]["start_time_us"]
+        tl = truth_timeline(flight[key])
+        x = (tl.TimeUS - t0) * 1e-6
+        m = (x >= -10) & (x <= dur + 25)
+        label = "SITL" if key == "ref" else "tlm"
+        ax[0].plot(x[m], tl.h_m[m], color=color, label=label)
+        ax[1].plot(x[m], tl.roll_deg[m], color=color, label=f"{label} roll")
+        ax[1].plot(x[m], tl.pitch_deg[m], color=color, ls="--", label=f"{label} pitch")
+        ax[2].plot(x[m], tl.speed_ms[m], color=color, label=label)
+    for a in ax:
+        a.axvspan(0, dur, color="0.9", zorder=0)
+        a.grid(alpha=0.3)
+    ax[0].set_ylabel("true height [m]")
+    ax[1].set_ylabel("true roll, pitch [deg]")
+    ax[2].set_ylabel("true ground speed [m/s]")
+    ax[2].set_xlabel("time since fault start [s] (shaded: fault window)")
+    ax[0].legend(loc="upper right")
+    ax[1].legend(loc="upper right", ncol=2, fontsize=8)
+    ax[0].set_title(f"{fr['type']} fault: {flight['sidecar'].get('file', '')} vs tlm")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    here = Path(__file__).resolve().parents[1]
+    ap.add_argument("--reference", default=str(here.parent / "shared" / "reference" / "sitl"))
+    ap.add_argument("--out", default=str(here / "docs" / "fidelity-faults.md"))
+    args = ap.parse_args()
+    ref_dir, out = Path(args.reference), Path(args.out)
+    img_dir = out.parent / "img"
+    parts = [HEADER.format(rel=REL_CLOSE)]
+    for name in (*SINGLE, COMBINED):
+        flight = fly_like_reference(ref_dir, name)
+        for i, (fr, ft) in enumerate(zip(flight["ref_faults"], flight["tlm_faults"],
+                                         strict=True)):
+            kind = fr["type"]
+            df = comparison(fault_signature(flight["tlm"], ft), fault_signature(flight["ref"], fr))
+            title = f"{TITLES[kind]} fault" + (" (combined flight)" if name == COMBINED else "")
+            t_ref = fr["start_time_us"] * 1e-6
+            t_tlm = ft["start_time_us"] * 1e-6
+            head = (f"## {title}: `{name}.bin` vs tlm\n\n"
+                    f"Window {(fr['end_time_us'] - fr['start_time_us']) * 1e-6:.1f} s; starts at "
+                    f"{t_ref:.1f} s in SITL, {t_tlm:.1f} s in tlm; sets "
+                    f"{fr['params_start']}.\n")
+            if name != COMBINED:
+                png = img_dir / f"fault_{kind}.png"
+                plot_fault(flight, i, png)
+                head += f"\n![{kind} fault: tlm vs SITL](img/{png.name})\n"
+            print(f"\n== {name}: {kind}\n" + df.to_string(index=False))
+            parts.append(f"{head}\n{table_md(df)}\n\n{notes_md(df)}\n\n")
+    out.write_text("".join(parts).rstrip() + "\n")
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
