@@ -7,12 +7,40 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs it
+    from tlm_sim.faults import FaultSchedule, Trigger
+    from tlm_sim.flightlog import FlightLog
+    from tlm_sim.mission import Mission
+    from tlm_sim.params import Params
 
 FORMATS = ("csv", "parquet")
+
+#: A time trigger applied more than this after its time [s] is reported as late (the loop
+#: applies a change at its first tick at or after the time, well within this).
+LATE_S = 0.1
+
+FAULTS_HELP = """\
+faults (paper labels: gps 1, accel 2, engine 3, rc 4):
+  --fault TYPE:START-END   START/END are seconds since boot (log TimeUS / 1e6) or
+                           waypoints wpN (the moment waypoint N is reached)
+  --fault TYPE:START-      held until the flight ends (also TYPE:START)
+  --fault TYPE:START+DUR   held DUR seconds
+  e.g. --fault gps:60-110 --fault engine:wp40-wp48 --fault rc:200-
+  --faults FILE.json|.yaml|.yml holds the same as a list, in the order they happen:
+    {"faults": [{"fault": "gps", "start": 60, "end": 110},
+                {"fault": "engine", "start": "wp40", "end": "wp48"}]}
+  optional per fault: params_start / params_end (NAME: value, SITL parameters).
+  Faults must not overlap; a schedule is checked against the mission before flying.
+  DIR/faults.json gets one record per fault (paper Eq. 4: type, label, start/end
+  TimeUS and position, parameters); an empty list when no schedule is given.
+"""
 
 
 class UsageError(Exception):
@@ -49,6 +77,15 @@ def _load_params(args: argparse.Namespace):
     return p.updated(extra) if extra else p
 
 
+def _check_profile(name: str) -> str:
+    """The --profile name, if tlm_sim.profiles knows it."""
+    from tlm_sim.profiles import PROFILES
+
+    if name not in PROFILES:
+        raise UsageError(f"--profile: unknown profile {name!r}; choose from {', '.join(PROFILES)}")
+    return name
+
+
 def _load_mission(args: argparse.Namespace):
     from tlm_sim.mission import builtin_mission, read_wpl
 
@@ -81,50 +118,150 @@ def _prepare_out(out: str) -> Path:
     return d
 
 
+def _split_specs(items: Sequence[str]) -> list[str]:
+    """``--fault`` values, each possibly holding several specs separated by commas/spaces."""
+    return [s for it in items for s in it.replace(",", " ").split()]
+
+
+def _load_schedule(args: argparse.Namespace, mission: Mission,
+                   params: Params) -> FaultSchedule | None:
+    """The flight's FaultSchedule (None when neither --faults nor --fault is given), checked
+    against the mission's waypoint count and the longest the flight can last, before flying.
+
+    ``params``: the flight's parameters with the profile applied (they size the flight).
+    """
+    from tlm_sim.faults import FaultSchedule, FaultScheduleError
+    from tlm_sim.flight import max_duration_s
+
+    if args.faults is not None and args.fault:
+        raise UsageError("--faults and --fault are exclusive: give a schedule (paper or a file) "
+                         "or shorthand specs, not both")
+    if args.faults is None and not args.fault:
+        return None
+    if args.set:
+        raise UsageError("--set cannot be combined with --faults/--fault (a flight takes a fault "
+                         "schedule or raw parameter changes); put extra parameter values in a "
+                         "schedule file's params_start/params_end")
+    # whole seconds, rounded down: readable in messages and never past fly()'s own bound
+    bounds = {"n_waypoints": mission.n_waypoints,
+              "max_time_s": float(math.floor(max_duration_s(mission, params)))}
+    option = "--fault" if args.fault else "--faults"
+    try:
+        if args.fault:
+            return FaultSchedule.from_shorthand(_split_specs(args.fault), **bounds)
+        if args.faults.strip().lower() == "paper":
+            schedule = FaultSchedule.paper(args.seed)
+            schedule.validate(**bounds)
+            return schedule
+        return FaultSchedule.from_file(args.faults, **bounds)
+    except FaultScheduleError as e:
+        raise UsageError(f"{option}: {e}") from None
+
+
+def _fault_lines(log: FlightLog, schedule: FaultSchedule | None) -> list[str]:
+    """One line per scheduled fault: type, label, start/end (log TimeUS in s), duration; or
+    why it has no record (the flight ended before it started)."""
+    if schedule is None:
+        return []
+    started = {int(c["fault"]) for c in log.meta.get("param_changes", [])
+               if c.get("edge") == "start" and c.get("time_us") is not None}
+    records = iter(log.faults)
+    lines = []
+    for i, fault in enumerate(schedule):
+        if i not in started:
+            lines.append(f"fault {i + 1} {fault.type:<6} label {fault.label}  never started "
+                         "(the flight ended first)")
+            continue
+        r = next(records)
+        late = [f"{edge} due {trig.value:g} s"
+                for edge, trig in (("start", fault.start), ("end", fault.end))
+                if (edge == "start" or r["end_by"] == "schedule")
+                and _late(trig, r[f"{edge}_time_us"])]
+        notes = [f"late: {', '.join(late)}; waited for the boundaries before it"] if late else []
+        if r["end_by"] == "flight end":
+            notes.append("held to the end of the log")
+        note = f" ({'; '.join(notes)})" if notes else ""
+        lines.append(f"fault {i + 1} {r['type']:<6} label {r['label']}  "
+                     f"start {r['start_time_us'] * 1e-6:7.1f} s  "
+                     f"end {r['end_time_us'] * 1e-6:7.1f} s  "
+                     f"duration {r['duration_s']:5.1f} s{note}")
+    return lines
+
+
+def _late(trigger: Trigger | None, applied_us: int) -> bool:
+    """Whether a time trigger took effect well after its time [s]: it waited for an earlier
+    waypoint boundary of the schedule (time and waypoint boundaries are not comparable before
+    flying). Waypoint triggers and missing ends are never late."""
+    return (trigger is not None and trigger.kind == "time"
+            and applied_us * 1e-6 - trigger.value > LATE_S)
+
+
+def _write_faults(out: Path, log: FlightLog) -> Path:
+    """``OUT/faults.json``: ``{"faults": [...]}``, the flight's Eq. 4 fault records."""
+    from tlm_sim.flightlog.flightlog import to_jsonable
+
+    path = out / "faults.json"
+    path.write_text(json.dumps({"faults": to_jsonable(log.faults)}, indent=1) + "\n")
+    return path
+
+
 def cmd_fly(args: argparse.Namespace) -> int:
-    """Fly one mission and write its tables."""
+    """Fly one mission (with an optional fault schedule) and write its tables and faults.json."""
     from tlm_process.summary import flight_summary, format_summary, plot_trajectory
     from tlm_sim import fly
+    from tlm_sim.profiles import profile_params
 
     fmts = _parse_formats(args.format)
     params = _load_params(args)
     mission = _load_mission(args)
     changes = _parse_changes(args.set or [])
+    profile = _check_profile(args.profile)
+    schedule = _load_schedule(args, mission, profile_params(profile, params))
     out = _prepare_out(args.out)
     t0 = time.perf_counter()
-    log = fly(mission, faults=changes or None, params=params, seed=args.seed)
+    faults = schedule if schedule is not None else (changes or None)
+    log = fly(mission, faults=faults, params=params, seed=args.seed, profile=profile)
     wall = time.perf_counter() - t0
     log.write(out, formats=fmts)
+    _write_faults(out, log)
     if not args.no_plot:
         plot_trajectory(log, out / "trajectory.png", f"{mission.name}, seed {args.seed}")
     s = flight_summary(log)
     (out / "summary.json").write_text(json.dumps(s, indent=1))
     print(format_summary(s))
+    for line in _fault_lines(log, schedule):
+        print(line)
     print(f"wall time          {wall:.2f} s ({s['duration_s'] / max(wall, 1e-9):.0f}x real time, "
           "incl. compile on first run)")
     extra = "" if args.no_plot else ", trajectory.png"
-    print(f"written            {out}/ ({', '.join(fmts)}{extra})")
+    print(f"written            {out}/ ({', '.join(fmts)}, faults.json{extra})")
     return 0
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Fly a paper-style mission with a GPS loss and show where the outputs are."""
+    """Fly built-in mission 1 with the paper's fault sequence and show where the outputs are."""
     from tlm_process.summary import flight_summary, format_summary, plot_trajectory
     from tlm_sim import fly
+    from tlm_sim.faults import FaultSchedule
 
     out = _prepare_out(args.out)
-    changes = [(100.0, "SIM_GPS1_ENABLE", 0.0), (130.0, "SIM_GPS1_ENABLE", 1.0)]
-    print("flying built-in mission 1 (paper-style, ~90 waypoints) with a GPS loss 100-130 s ...")
+    schedule = FaultSchedule.paper(args.seed)
+    print(f"flying built-in mission 1 (paper-style, ~90 waypoints) with the paper's fault "
+          f"sequence GPS, accel, engine, RC (seed {args.seed}) ...")
     t0 = time.perf_counter()
-    log = fly(1, faults=changes, seed=args.seed)
+    log = fly(1, faults=schedule, seed=args.seed)
     wall = time.perf_counter() - t0
     log.write(out, formats=FORMATS)
-    plot_trajectory(log, out / "trajectory.png", "demo: mission 1, GPS loss 100-130 s")
+    _write_faults(out, log)
+    plot_trajectory(log, out / "trajectory.png",
+                    f"demo: mission 1, paper fault sequence, seed {args.seed}")
     s = flight_summary(log)
     print(format_summary(s))
+    for line in _fault_lines(log, schedule):
+        print(line)
     print(f"wall time          {wall:.2f} s (includes numba compile on the first run)")
     print(f"outputs            {out.resolve()}/ (GPS.csv, IMU.csv, RATE.csv, VIBE.csv, ... "
-          "+ .parquet, trajectory.png)")
+          "+ .parquet, faults.json, trajectory.png)")
     return 0
 
 
@@ -135,42 +272,59 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
 
     f = sub.add_parser("fly", help="fly one mission and write its log tables",
-                       description="Fly one mission (built-in 1-4 or a QGC WPL file) and write "
-                                   "DIR/GPS.csv, DIR/IMU.csv, ... and their Parquet twins.")
+                       description="Fly one mission (built-in 1-4 or a QGC WPL file), optionally "
+                                   "with faults, and write DIR/GPS.csv, DIR/IMU.csv, ... (and "
+                                   "their Parquet twins), meta.json, summary.json and "
+                                   "faults.json.",
+                       epilog=FAULTS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     f.add_argument("--mission", type=int, default=1, choices=(1, 2, 3, 4),
                    help="built-in mission number (default 1)")
     f.add_argument("--mission-file", help="QGC WPL 110 mission file instead of a built-in one")
-    f.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    f.add_argument("--seed", type=int, default=0,
+                   help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", required=True, help="output folder")
     f.add_argument("--format", default="csv,parquet", help="csv,parquet (default both)")
     f.add_argument("--params", help="ArduPilot .parm file applied on top of the defaults")
     f.add_argument("--param", action="append", metavar="NAME=VALUE",
                    help="set one parameter (repeatable), e.g. --param WPNAV_SPEED=500")
+    f.add_argument("--profile", default="current", metavar="current|paper",
+                   help="ArduPilot semantics: current (as the reference SITL logs, default) or "
+                        "paper (the paper's ArduPilot 4.1/4.2)")
+    f.add_argument("--faults", metavar="paper|FILE",
+                   help="fault schedule: 'paper' (the paper's GPS, accel, engine, RC sequence "
+                        "drawn with --seed) or a .json/.yaml/.yml schedule file (see below)")
+    f.add_argument("--fault", action="append", metavar="SPEC",
+                   help="one fault in shorthand (repeatable, in the order they happen), e.g. "
+                        "--fault gps:60-110 --fault engine:wp40-wp48 (see below)")
     f.add_argument("--set", action="append", metavar="TIME_S:NAME=VALUE",
-                   help="change a parameter in flight (repeatable), e.g. 120:SIM_GPS1_ENABLE=0")
+                   help="raw parameter change in flight (repeatable), e.g. "
+                        "120:SIM_GPS1_ENABLE=0; not with --faults/--fault, and no fault records")
     f.add_argument("--no-plot", action="store_true", help="skip trajectory.png")
     f.set_defaults(func=cmd_fly)
 
-    d = sub.add_parser("demo", help="fly a demo mission with a fault and write its outputs")
+    d = sub.add_parser("demo", help="fly mission 1 with the paper's fault sequence and write "
+                                    "its outputs")
     d.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
-    d.add_argument("--seed", type=int, default=1)
+    d.add_argument("--seed", type=int, default=1,
+                   help="seed of the flight and of its fault sequence (default 1)")
     d.set_defaults(func=cmd_demo)
     return ap
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
+    ap = build_parser()
+    args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
+    from tlm_sim.faults import FaultScheduleError
     from tlm_sim.mission import MissionError
     from tlm_sim.params import ParamError
 
-    ap = build_parser()
-    args = ap.parse_args(argv)
     if getattr(args, "seed", 0) is not None and getattr(args, "seed", 0) < 0:
         print("tlm: error: --seed must be >= 0", file=sys.stderr)
         return 2
     try:
         return args.func(args)
-    except (UsageError, ParamError, MissionError) as e:
+    except (UsageError, ParamError, MissionError, FaultScheduleError) as e:
         print(f"tlm: error: {e}", file=sys.stderr)
         return 2
     except FileNotFoundError as e:
