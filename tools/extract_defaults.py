@@ -93,12 +93,8 @@ def format_value(name: str, value: float) -> str:
 
 def render(first: dict[str, float], firmware: str, log: Path) -> str:
     """The .parm file text."""
-    try:
-        shown = log.resolve().relative_to(REPO_ROOT.parent)
-        log_txt = f"../{shown}"
-    except ValueError:
-        log_txt = log.name
-    lines = [HEADER.format(log=log_txt, fw=firmware, n=len(first))]
+    # the file name only: the reference folder's location (and symlinks to it) vary by machine
+    lines = [HEADER.format(log=f"shared/reference/sitl/{log.name}", fw=firmware, n=len(first))]
     for name in sorted(first):
         lines.append(f"{name:<16} {format_value(name, first[name])}\n")
     return "".join(lines)
