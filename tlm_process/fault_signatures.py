@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_process.reference import time_window
 from tlm_sim.geo import latlon_to_ne
 
 ARMED, DISARMED = 10, 11  # EV ids
@@ -51,10 +52,6 @@ EARLY_S = 3.0
 RESUME_S = 30.0
 
 FAULT_TYPES = ("gps", "accel", "engine", "rc")
-
-
-def _win(df: pd.DataFrame, t0: float, t1: float) -> pd.DataFrame:
-    return df[(df.TimeUS >= t0) & (df.TimeUS <= t1)]
 
 
 def _max(s: pd.Series) -> float:
@@ -147,7 +144,7 @@ class _Flight:
         return float(t0 <= self.disarm_us <= t1)
 
     def err_count(self, subsys: int, t0: float, t1: float, code: int | None = None) -> float:
-        e = _win(self.err, t0, t1)
+        e = time_window(self.err, t0, t1)
         e = e[e.Subsys == subsys]
         if code is not None:
             e = e[e.ECode == code]
@@ -158,14 +155,14 @@ def _gps(f: _Flight, t0: float, t1: float) -> dict[str, float]:
     gps = f.t["GPS"]
     gps = gps[gps.I == 0] if "I" in gps else gps
     m = EDGE_MARGIN_S * 1e6
-    inside = _win(gps, t0 + m, t1)
-    armed = _win(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
+    inside = time_window(gps, t0 + m, t1)
+    armed = time_window(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
     outside = armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + m)]
     tp, err = f.ekf_error()
     w = (tp >= t0) & (tp <= t1)
     after = np.flatnonzero((tp > t1) & (err < EKF_RECOVERED_M))
     sel = f.sel(t0, t1)
-    ctun = _win(f.t["CTUN"], t0, t1)
+    ctun = time_window(f.t["CTUN"], t0, t1)
     return {
         "nofix_frac_in": float((inside.Status < 3).mean()) if len(inside) else float("nan"),
         "nofix_frac_out": float((outside.Status < 3).mean()) if len(outside) else float("nan"),
@@ -211,7 +208,7 @@ def _accel(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]) -> dict[s
     sel = f.sel(t0, t1)
     h0 = float(f.h[sel][0])  # the first truth sample in the window
     settle = f.sel(t1 + 10e6, t1 + 20e6)
-    ctun = _win(f.t["CTUN"], t0, t0 + EARLY_S * 1e6)
+    ctun = time_window(f.t["CTUN"], t0, t0 + EARLY_S * 1e6)
     out.update({
         "climb_3s_m": float(f.h[early].max() - h0),
         "climb_max_m": float(f.h[sel].max() - h0),
@@ -232,7 +229,7 @@ def _accel(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]) -> dict[s
 def _engine(f: _Flight, t0: float, t1: float) -> dict[str, float]:
     ground = f.first_time(f.h <= GROUND_H_M, t0, t1)
     early = f.sel(t0, t0 + EARLY_S * 1e6)
-    gps = _win(f.t["GPS"], t0, t0 + 2 * EARLY_S * 1e6)
+    gps = time_window(f.t["GPS"], t0, t0 + 2 * EARLY_S * 1e6)
     up1 = f.first_time(f.h > 1.0, t1)
     up10 = f.first_time(f.h > 10.0, t1)
     return {

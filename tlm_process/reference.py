@@ -16,12 +16,13 @@ ARMED, DISARMED = 10, 11
 AUTO = 3
 
 
-def _window(df: pd.DataFrame, t0_us: float, t1_us: float) -> pd.DataFrame:
+def time_window(df: pd.DataFrame, t0_us: float, t1_us: float) -> pd.DataFrame:
+    """Rows of df with t0_us <= TimeUS <= t1_us."""
     return df[(df.TimeUS >= t0_us) & (df.TimeUS <= t1_us)]
 
 
 def _rate_hz(df: pd.DataFrame, inst: str | None, t0: float, t1: float) -> float:
-    d = _window(df, t0, t1)
+    d = time_window(df, t0, t1)
     n = len(d) if inst is None else len(d[d[inst] == 0])
     return n / ((t1 - t0) * 1e-6)
 
@@ -46,19 +47,19 @@ def flight_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, float]:
     auto_t = float(mode[mode.Mode == AUTO].TimeUS.iloc[0])
     c0, c1 = auto_t + 20e6, disarm_t - 60e6
     gps = tables["GPS"]
-    cruise_gps = _window(gps, c0, c1)
-    pre = _window(gps, armed_t, auto_t)
+    cruise_gps = time_window(gps, c0, c1)
+    pre = time_window(gps, armed_t, auto_t)
     imu = tables["IMU"]
     imu0 = imu[imu.I == 0]
-    ground = _window(imu0, armed_t - 8e6, armed_t - 0.5e6)
-    cruise_imu = _window(imu0, c0, c1)
+    ground = time_window(imu0, armed_t - 8e6, armed_t - 0.5e6)
+    cruise_imu = time_window(imu0, c0, c1)
     ctun = tables["CTUN"]
     vibe = tables["VIBE"]
     att = tables["ATT"]
     sim = tables.get("SIM")
     land = pd.DataFrame()
     if sim is not None and len(sim):
-        s = _window(sim, disarm_t - 60e6, disarm_t)
+        s = time_window(sim, disarm_t - 60e6, disarm_t)
         h = s.Alt - float(sim.Alt.iloc[0])
         s = s[(h < 3.0) & (h > 0.3)]
         if len(s) > 2:
@@ -74,14 +75,14 @@ def flight_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, float]:
         "max_speed_ms": float(gps.Spd.max()),
         "takeoff_climb_ms": float((-pre.VZ).max()) if len(pre) else float("nan"),
         "land_descent_ms": descent,
-        "cruise_throttle": float(_window(ctun, c0, c1).ThO.median()),
-        "hover_throttle_learned": float(_window(ctun, armed_t, disarm_t).ThH.iloc[-1]),
+        "cruise_throttle": float(time_window(ctun, c0, c1).ThO.median()),
+        "hover_throttle_learned": float(time_window(ctun, armed_t, disarm_t).ThH.iloc[-1]),
         "acc_noise_ground": float(ground.AccZ.std()),
         "gyr_noise_ground": float(ground.GyrX.std()),
         "acc_z_std_cruise": float(cruise_imu.AccZ.std()),
-        "vibe_x_cruise_imu0": float(_window(vibe[vibe.IMU == 0], c0, c1).VibeX.mean()),
-        "vibe_x_cruise_imu1": float(_window(vibe[vibe.IMU == 1], c0, c1).VibeX.mean()),
-        "pitch_cruise_deg": float(_window(att, c0, c1).Pitch.median()),
+        "vibe_x_cruise_imu0": float(time_window(vibe[vibe.IMU == 0], c0, c1).VibeX.mean()),
+        "vibe_x_cruise_imu1": float(time_window(vibe[vibe.IMU == 1], c0, c1).VibeX.mean()),
+        "pitch_cruise_deg": float(time_window(att, c0, c1).Pitch.median()),
         "rate_GPS_hz": _rate_hz(gps, None, armed_t, disarm_t),
         "rate_IMU_hz": _rate_hz(imu, "I", armed_t, disarm_t),
         "rate_RATE_hz": _rate_hz(tables["RATE"], None, armed_t, disarm_t),

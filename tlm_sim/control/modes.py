@@ -29,6 +29,7 @@ from tlm_sim.control.failsafe import (
 from tlm_sim.control.mixer import mix, output_idle
 from tlm_sim.control.position import angle_boost, xy_reset, xy_update, z_reset, z_update
 from tlm_sim.control.wpnav import path_start, path_update, prepare_path
+from tlm_sim.rotation import quat_to_euler
 
 SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
@@ -85,12 +86,18 @@ def _start_rtl(c, g, pos, seg):
 
 
 @tick_jit
+def _position_ok(c):
+    """ArduCopter's position_ok(): an EKF absolute position and no EKF failsafe."""
+    return c[C.EKF_POS_OK] != 0.0 and c[C.EKF_FAILSAFE] == 0.0
+
+
+@tick_jit
 def _start_land(c, pos, failsafe):
     """Enter LAND here: hold the height, without position control when the EKF has no
     position, pausing LAND_WITH_DELAY (4 s) first when a failsafe asked for it."""
     c[C.SUBMODE] = C.SUB_LAND
     c[C.SUB_TIMER] = 0.0
-    c[C.LAND_NOGPS] = 0.0 if c[C.EKF_POS_OK] != 0.0 and c[C.EKF_FAILSAFE] == 0.0 else 1.0
+    c[C.LAND_NOGPS] = 0.0 if _position_ok(c) else 1.0
     c[C.LAND_PAUSE] = LAND_WITH_DELAY_S if failsafe else 0.0
     c[C.PZ_POS_T] = pos[2]
     c[C.PZ_VEL_FF] = 0.0
@@ -148,7 +155,7 @@ def vehicle_step(
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
-            if c[C.EKF_POS_OK] != 0.0 and c[C.EKF_FAILSAFE] == 0.0:
+            if _position_ok(c):
                 set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
                 _start_rtl(c, g, pos, seg)
                 sub = C.SUB_RTL_CLIMB
@@ -324,9 +331,7 @@ def vehicle_step(
 
     # ------------------------------------------------------------- crash check
     if cos_tilt < CRASH_LEAN_COS:
-        w, x, y, z = q[0], q[1], q[2], q[3]
-        roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-        pitch = math.asin(min(max(2.0 * (w * y - z * x), -1.0), 1.0))
+        roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
             E.log_row2(err_buf, counts, k_err, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
             E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)

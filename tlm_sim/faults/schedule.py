@@ -26,7 +26,7 @@ import json
 import math
 import numbers
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -256,10 +256,17 @@ class FaultSchedule:
         if isinstance(items, str | bytes | Mapping) or not isinstance(items, Sequence):
             raise FaultScheduleError(
                 f"the faults must be a list of fault mappings, got {type(items).__name__}")
+        return cls._parse_each(items, _fault_from_dict, n_waypoints, max_time_s)
+
+    @classmethod
+    def _parse_each(cls, items: Sequence[Any], parse: Callable[[Any], Fault],
+                    n_waypoints: int | None, max_time_s: float | None) -> FaultSchedule:
+        """A schedule of ``parse(item)`` per item (errors name the item's position), checked
+        against the mission and flight bounds when they are given."""
         faults = []
         for i, item in enumerate(items):
             try:
-                faults.append(_fault_from_dict(item))
+                faults.append(parse(item))
             except FaultScheduleError as exc:
                 raise exc.at(i) from None
         schedule = cls(tuple(faults))
@@ -316,16 +323,7 @@ class FaultSchedule:
         """
         if isinstance(specs, str):
             specs = [s for s in re.split(r"[,\s]+", specs.strip()) if s]
-        faults = []
-        for i, spec in enumerate(specs):
-            try:
-                faults.append(_fault_from_shorthand(spec))
-            except FaultScheduleError as exc:
-                raise exc.at(i) from None
-        schedule = cls(tuple(faults))
-        if n_waypoints is not None or max_time_s is not None:
-            schedule.validate(n_waypoints, max_time_s)
-        return schedule
+        return cls._parse_each(specs, _fault_from_shorthand, n_waypoints, max_time_s)
 
     @classmethod
     def paper(cls, seed: int, auto_start_s: float = 20.0) -> FaultSchedule:
