@@ -20,7 +20,7 @@ if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs
     from tlm_sim.mission import Mission
     from tlm_sim.params import Params
 
-FORMATS = ("csv", "parquet")
+FORMATS = ("csv", "parquet", "bin")
 
 #: A time trigger applied more than this after its time [s] is reported as late (the loop
 #: applies a change at its first tick at or after the time, well within this).
@@ -261,7 +261,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print(line)
     print(f"wall time          {wall:.2f} s (includes numba compile on the first run)")
     print(f"outputs            {out.resolve()}/ (GPS.csv, IMU.csv, RATE.csv, VIBE.csv, ... "
-          "+ .parquet, faults.json, trajectory.png)")
+          "+ .parquet, flight.bin, faults.json, trajectory.png)")
     return 0
 
 
@@ -283,7 +283,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--seed", type=int, default=0,
                    help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", required=True, help="output folder")
-    f.add_argument("--format", default="csv,parquet", help="csv,parquet (default both)")
+    f.add_argument("--format", default="csv,parquet",
+                   help="any of csv,parquet,bin (default csv,parquet); bin writes the flight as "
+                        "an ArduPilot DataFlash log DIR/flight.bin")
     f.add_argument("--params", help="ArduPilot .parm file applied on top of the defaults")
     f.add_argument("--param", action="append", metavar="NAME=VALUE",
                    help="set one parameter (repeatable), e.g. --param WPNAV_SPEED=500")
@@ -308,6 +310,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--seed", type=int, default=1,
                    help="seed of the flight and of its fault sequence (default 1)")
     d.set_defaults(func=cmd_demo)
+
+    from tlm_process import logcmd
+
+    logcmd.add_parsers(sub)
     return ap
 
 
@@ -315,6 +321,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
     ap = build_parser()
     args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
+    from tlm_process.logcmd import LogError
     from tlm_sim.faults import FaultScheduleError
     from tlm_sim.mission import MissionError
     from tlm_sim.params import ParamError
@@ -324,7 +331,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         return args.func(args)
-    except (UsageError, ParamError, MissionError, FaultScheduleError) as e:
+    except (UsageError, ParamError, MissionError, FaultScheduleError, LogError) as e:
         print(f"tlm: error: {e}", file=sys.stderr)
         return 2
     except FileNotFoundError as e:

@@ -18,9 +18,10 @@ I uint32, q/Q int64, M uint8); f → float64 holding the exact float32 value; c/
 
 Folder layout (``write``/``read``)
 ----------------------------------
-``DIR/<NAME>.csv`` and/or ``DIR/<NAME>.parquet`` per non-empty table, and ``DIR/meta.json``
-with ``meta``, ``faults``, ``params`` (all), ``params_changed``, ``mission``, the row count of
-every table and the layout of any table whose schema is not in ``SCHEMAS``.
+``DIR/<NAME>.csv`` and/or ``DIR/<NAME>.parquet`` per non-empty table, optionally the whole
+flight as an ArduPilot DataFlash log ``DIR/flight.bin`` (``tlm_sim.flightlog.binwriter``), and
+``DIR/meta.json`` with ``meta``, ``faults``, ``params`` (all), ``params_changed``, ``mission``, the
+row count of every table and the layout of any table whose schema is not in ``SCHEMAS``.
 """
 
 from __future__ import annotations
@@ -40,11 +41,13 @@ from .quantise import frame_from_columns, quantise_column, quantise_frame
 from .schema import LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
 from .tableio import read_csv, read_parquet, write_csv, write_parquet
 
-__all__ = ["FlightLog", "allocate_buffers", "to_jsonable"]
+__all__ = ["BIN_NAME", "FlightLog", "allocate_buffers", "to_jsonable"]
 
 FORMAT_NAME = "tlm.flightlog"
 FORMAT_VERSION = 1
-_FORMATS = ("csv", "parquet")
+_FORMATS = ("csv", "parquet", "bin")
+#: Name of the DataFlash log ``write(..., formats=["bin"])`` puts in the folder.
+BIN_NAME = "flight.bin"
 
 
 def allocate_buffers(
@@ -343,14 +346,14 @@ class FlightLog:
         Args:
             out_dir: folder (created if missing). Existing files of the same names are
                 overwritten.
-            formats: any of "csv", "parquet".
+            formats: any of "csv", "parquet", "bin" (``DIR/flight.bin``).
         Returns:
             the folder.
         """
         formats = tuple(formats)
         bad = [f for f in formats if f not in _FORMATS]
-        if bad:
-            raise ValueError(f"unknown formats {bad}; use 'csv' and/or 'parquet'")
+        if bad or not formats:
+            raise ValueError(f"unknown formats {bad or formats}; use any of {', '.join(_FORMATS)}")
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         rows = {}
@@ -363,6 +366,8 @@ class FlightLog:
             if "parquet" in formats:
                 write_parquet(df, schema, out / f"{name}.parquet")
             rows[name] = len(df)
+        if "bin" in formats:
+            self.write_bin(out / BIN_NAME)
         extra = {
             n: {"fmt": s.fmt, "columns": list(s.columns), "units": s.units, "mults": s.mults}
             for n, s in self.schemas.items()
@@ -382,9 +387,16 @@ class FlightLog:
         (out / "meta.json").write_text(json.dumps(doc, indent=1) + "\n")
         return out
 
+    def write_bin(self, path: str | os.PathLike) -> Path:
+        """Write the flight as an ArduPilot DataFlash ``.bin`` (see ``binwriter``)."""
+        from .binwriter import write_bin
+
+        return write_bin(self, path)
+
     @classmethod
     def read(cls, in_dir: str | os.PathLike) -> FlightLog:
-        """Read a folder written by ``write`` (Parquet preferred, CSV where no Parquet)."""
+        """Read a folder written by ``write`` (Parquet preferred, CSV where no Parquet, the
+        tables of ``flight.bin`` when the folder holds neither)."""
         d = Path(in_dir)
         if not d.is_dir():
             raise FileNotFoundError(f"no such flight-log folder: {d}")
@@ -398,6 +410,11 @@ class FlightLog:
         order = list(doc.get("tables") or {})
         names = [n for n in order if n in names] + [n for n in names if n not in order]
         tables = {}
+        if not names and (d / BIN_NAME).exists():
+            from .binreader import read_bin
+
+            wanted = list(doc.get("tables") or LOGGED_MESSAGES)
+            tables = {n: df for n, df in read_bin(d / BIN_NAME, wanted).items() if len(df)}
         for n in names:
             if n not in schemas:
                 continue  # not a table of ours

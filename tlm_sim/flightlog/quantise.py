@@ -27,7 +27,9 @@ import pandas as pd
 
 from .schema import FORMAT_CHARS, MessageSchema
 
-__all__ = ["quantise_column", "raw_to_column", "quantise_frame", "frame_from_columns"]
+__all__ = [
+    "quantise_column", "raw_to_column", "column_to_raw", "quantise_frame", "frame_from_columns",
+]
 
 _STR_WIDTH = {"n": 4, "N": 16, "Z": 64}
 
@@ -147,6 +149,36 @@ def raw_to_column(raw: np.ndarray | Sequence, char: str) -> np.ndarray:
     if char == "Q" and arr.dtype == np.uint64:
         return np.minimum(arr, np.uint64(fc.hi)).astype(np.int64)
     return arr.astype(fc.dtype)
+
+
+def column_to_raw(values: Sequence | np.ndarray, char: str) -> np.ndarray:
+    """Raw stored values of a canonical table column (inverse of ``raw_to_column``).
+
+    Numbers come back as the little-endian numpy type of the .bin field (``c`` → int16 of
+    value × 100, ``L`` → int32 of value × 1e7, ``f`` → float32, ``Q`` → uint64, ...), strings
+    as fixed-width zero-padded bytes (``S4``/``S16``/``S64``, UTF-8, truncated), ``a`` arrays
+    as int16[32] rows. Values outside the field's range are clipped, NaN integers become 0,
+    exactly as ``quantise_column`` does, so ``raw_to_column(column_to_raw(v, c), c)`` equals
+    ``quantise_column(v, c)``.
+    """
+    fc = FORMAT_CHARS[char]
+    if fc.kind == "str":
+        width = _STR_WIDTH[char]
+        return np.array(
+            [s.encode("utf-8")[:width] for s in _to_str(values, width)], dtype=f"S{width}"
+        )
+    if fc.kind == "array":
+        arrays = _to_int16_arrays(values)
+        return np.stack(list(arrays)) if len(arrays) else np.zeros((0, 32), dtype=np.int16)
+    arr = np.asarray(values)
+    raw_dtype = np.dtype("<" + fc.struct if fc.struct not in ("b", "B") else fc.struct)
+    if fc.kind == "float":
+        with np.errstate(over="ignore"):
+            return arr.astype(np.float64, copy=False).astype(raw_dtype)
+    if char == "Q":  # tables hold Q as int64
+        return _to_raw_int(arr, 1.0, 0, 2**63 - 1, np.dtype(np.int64)).astype(np.uint64)
+    div = 1.0 if fc.kind == "int" else _divisor(fc.reader_scale)
+    return _to_raw_int(arr, div, fc.lo, fc.hi, raw_dtype)
 
 
 def frame_from_columns(schema: MessageSchema, columns: dict[str, np.ndarray]) -> pd.DataFrame:

@@ -387,6 +387,15 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         description="Mission item: total, index, MAV_CMD id, params 1-4, lat/lon (deg), "
         "alt (m), MAV_FRAME.",
     ),
+    _schema(
+        "VER", "QBHBBBBIZHBBII",
+        "TimeUS,BT,BST,Maj,Min,Pat,FWT,GH,FWS,APJ,BU,FV,IMI,ICI",
+        "s-------------", "F-------------",
+        instance_field=None, rate_hz=0, instances=1,
+        description="Firmware version: board type/subtype, major/minor/patch, firmware type, "
+        "git hash, firmware string, APJ board id, build type (2 = Copter), filter version, "
+        "IOMCU mcu id, IOMCU cpu id.",
+    ),
     # --- events ----------------------------------------------------------------------------
     _schema(
         "MODE", "QMBB",
