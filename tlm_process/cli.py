@@ -312,8 +312,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     from tlm_process import logcmd
+    from tlm_process.crosscheck import command as crosscheck_cmd
 
     logcmd.add_parsers(sub)
+    crosscheck_cmd.add_parser(sub)
     return ap
 
 
