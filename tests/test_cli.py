@@ -260,4 +260,10 @@ def test_demo_flies_the_paper_sequence(tmp_path, capsys):
     assert all(r["end_by"] == "schedule" for r in records)
     assert meta["meta"]["mission"] == builtin_mission(1).name and meta["meta"]["seed"] == 1
     assert (out / "GPS.csv").exists() and (out / "GPS.parquet").exists()
-    assert len(_fault_lines(capsys.readouterr().out)) == 4
+    assert (out / "flight.bin").exists()
+    text = capsys.readouterr().out
+    assert len(_fault_lines(text)) == 4
+    # the TLM pipeline ran on the flight: labelled tables with every class present
+    gps = pd.read_parquet(out / "tlm" / "GPS.parquet")
+    assert sorted(gps.label.unique()) == [0, 1, 2, 3, 4]
+    assert "rows per class" in text and (out / "tlm" / "report.json").exists()

@@ -136,7 +136,10 @@ def _load_schedule(args: argparse.Namespace, mission: Mission,
     if args.faults is not None and args.fault:
         raise UsageError("--faults and --fault are exclusive: give a schedule (paper or a file) "
                          "or shorthand specs, not both")
+    lam = getattr(args, "lam", None)
     if args.faults is None and not args.fault:
+        if lam is not None:
+            raise UsageError("--lambda needs a fault schedule (--faults or --fault)")
         return None
     if args.set:
         raise UsageError("--set cannot be combined with --faults/--fault (a flight takes a fault "
@@ -148,14 +151,20 @@ def _load_schedule(args: argparse.Namespace, mission: Mission,
     option = "--fault" if args.fault else "--faults"
     try:
         if args.fault:
-            return FaultSchedule.from_shorthand(_split_specs(args.fault), **bounds)
-        if args.faults.strip().lower() == "paper":
+            schedule = FaultSchedule.from_shorthand(_split_specs(args.fault), **bounds)
+        elif args.faults.strip().lower() == "paper":
             schedule = FaultSchedule.paper(args.seed)
             schedule.validate(**bounds)
-            return schedule
-        return FaultSchedule.from_file(args.faults, **bounds)
+        else:
+            schedule = FaultSchedule.from_file(args.faults, **bounds)
     except FaultScheduleError as e:
         raise UsageError(f"{option}: {e}") from None
+    if lam is None:
+        return schedule
+    try:
+        return schedule.stretched(lam, **bounds)
+    except FaultScheduleError as e:
+        raise UsageError(f"--lambda: {e}") from None
 
 
 def _fault_lines(log: FlightLog, schedule: FaultSchedule | None) -> list[str]:
@@ -239,7 +248,8 @@ def cmd_fly(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Fly built-in mission 1 with the paper's fault sequence and show where the outputs are."""
+    """Fly built-in mission 1 with the paper's fault sequence, write its log (tables and .bin)
+    and run the TLM pipeline on it (anchoring, labels, features, scaling)."""
     from tlm_process.summary import flight_summary, format_summary, plot_trajectory
     from tlm_sim import fly
     from tlm_sim.faults import FaultSchedule
@@ -260,8 +270,18 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for line in _fault_lines(log, schedule):
         print(line)
     print(f"wall time          {wall:.2f} s (includes numba compile on the first run)")
-    print(f"outputs            {out.resolve()}/ (GPS.csv, IMU.csv, RATE.csv, VIBE.csv, ... "
-          "+ .parquet, flight.bin, faults.json, trajectory.png)")
+    print("\nrunning the TLM pipeline (anchoring, labelling, feature processing, scaling) ...")
+    ds = out / "tlm"
+    process_args = build_parser().parse_args(["process", str(out), "--out", str(ds)])
+    rc = process_args.func(process_args)
+    if rc != 0:
+        return rc
+    print(f"\noutputs            {out.resolve()}/")
+    print("  flight log       GPS.csv, IMU.csv, RATE.csv, VIBE.csv, ... (+ .parquet), "
+          "flight.bin (open it in Mission Planner or `tlm info`), faults.json, trajectory.png")
+    print("  TLM data set     tlm/GPS.parquet, tlm/IMU.parquet, tlm/RATE.parquet, "
+          "tlm/VIBE.parquet (labelled, scaled), tlm/report.json, tlm/label_shares.png, "
+          "tlm/plots/")
     return 0
 
 
@@ -298,14 +318,17 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--fault", action="append", metavar="SPEC",
                    help="one fault in shorthand (repeatable, in the order they happen), e.g. "
                         "--fault gps:60-110 --fault engine:wp40-wp48 (see below)")
+    f.add_argument("--lambda", dest="lam", type=float, metavar="LAMBDA",
+                   help="stretch every fault window by LAMBDA (paper Eq. 5: longer faults in "
+                        "the flight); later faults move so the gaps keep their length")
     f.add_argument("--set", action="append", metavar="TIME_S:NAME=VALUE",
                    help="raw parameter change in flight (repeatable), e.g. "
                         "120:SIM_GPS1_ENABLE=0; not with --faults/--fault, and no fault records")
     f.add_argument("--no-plot", action="store_true", help="skip trajectory.png")
     f.set_defaults(func=cmd_fly)
 
-    d = sub.add_parser("demo", help="fly mission 1 with the paper's fault sequence and write "
-                                    "its outputs")
+    d = sub.add_parser("demo", help="fly mission 1 with the paper's fault sequence, write its "
+                                    "log and run the TLM pipeline on it")
     d.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
     d.add_argument("--seed", type=int, default=1,
                    help="seed of the flight and of its fault sequence (default 1)")
@@ -313,8 +336,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tlm_process import logcmd
     from tlm_process.crosscheck import command as crosscheck_cmd
+    from tlm_process.pipeline import command as process_cmd
 
     logcmd.add_parsers(sub)
+    process_cmd.add_parser(sub)
     crosscheck_cmd.add_parser(sub)
     return ap
 

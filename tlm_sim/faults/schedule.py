@@ -219,6 +219,63 @@ class FaultSchedule:
                     out.append(ParamChange(f.end.kind, f.end.value, name, value, i, "end"))
         return out
 
+    # -- Eq. 5 window stretching ------------------------------------------------------------
+    def stretched(self, lam: float, *, shift: bool = True, n_waypoints: int | None = None,
+                  max_time_s: float | None = None) -> FaultSchedule:
+        """Every fault window scaled by ``lam`` (λ, the paper's Eq. 5 failure time window
+        control factor): each fault keeps its start and lasts λ times as long.
+
+        * time start and end [s]: ``end = start + λ·(end − start)`` (rounded to 1 µs);
+        * waypoint start and end: the window is counted in waypoints,
+          ``end = start + max(1, round(λ·(end − start)))``;
+        * start and end of different kinds (``gps:wp10-140``): FaultScheduleError, since how
+          long such a window lasts is known only in flight;
+        * no end (held until the flight ends): unchanged.
+
+        ``shift=True`` (default) moves every later boundary of the same kind by the length
+        added (or removed, λ < 1) so far, so the normal gaps between faults keep their length
+        (the paper's sequence starts each fault U(15, 25) s after the previous one ends).
+        Time and waypoint boundaries do not shift each other (how they relate is known only in
+        flight); the loop applies boundaries in list order, so faults cannot overlap in flight
+        either. ``shift=False`` keeps every start: a stretched fault that would reach the next
+        one's start is a FaultScheduleError. With ``n_waypoints`` / ``max_time_s`` the result is
+        checked as by :meth:`validate`: a window stretched past the mission's last waypoint or
+        past the end of the flight is a FaultScheduleError (never cut short silently).
+        """
+        if not is_real(lam) or not math.isfinite(float(lam)) or float(lam) <= 0:
+            raise FaultScheduleError(f"lambda must be a finite number > 0, got {lam!r}")
+        lam = float(lam)
+        added = {"time": 0.0, "wp": 0.0}
+        faults = []
+        try:
+            for i, f in enumerate(self.faults):
+                assert f.params_start is not None and f.params_end is not None
+                kind = f.start.kind
+                start = f.start
+                if shift and added[kind]:
+                    start = Trigger(kind, round(start.value + added[kind], 6))
+                end = f.end
+                if end is not None:
+                    if end.kind != kind:
+                        raise FaultScheduleError(
+                            f"cannot stretch a window from {f.start} to {f.end}: its start and "
+                            "end must both be times or both waypoints", index=i,
+                            fault_type=f.type)
+                    span = end.value - f.start.value
+                    new_span = (round(lam * span, 6) if kind == "time"
+                                else float(max(1, round(lam * span))))
+                    end = Trigger(kind, round(start.value + new_span, 6))
+                    added[kind] += new_span - span
+                faults.append(Fault(f.type, start, end, dict(f.params_start),
+                                    dict(f.params_end) if end is not None else None))
+            out = FaultSchedule(tuple(faults))
+            if n_waypoints is not None or max_time_s is not None:
+                out.validate(n_waypoints, max_time_s)
+        except FaultScheduleError as exc:
+            raise FaultScheduleError(f"stretched by lambda {fmt_number(lam)}: {exc.reason}",
+                                     index=exc.index, fault_type=exc.fault_type) from None
+        return out
+
     # -- container ------------------------------------------------------------------------
     def __len__(self) -> int:
         return len(self.faults)

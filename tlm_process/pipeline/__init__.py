@@ -1,0 +1,50 @@
+"""The Time Line Modeling pipeline (paper §4-5): ingest, fault window anchoring (Eq. 4),
+feature processing (Algorithm 2), window stretching (Eq. 5), min-max scaling (Eq. 6), plots,
+and the ``tlm process`` command. See ``docs/pipeline.md``.
+
+Typical use::
+
+    from tlm_process.pipeline import read_flights, process_flight, build_dataset
+
+    flights = read_flights(["combined_s21.bin", "out/flight1"])
+    processed = [process_flight(f) for f in flights]
+    ds = build_dataset(processed, test_patterns=["combined_*"])
+    ds.tables["GPS"]          # flight, split, TimeUS, label + scaled features
+
+Names are imported lazily (on first use), so that ``tlm_process.pipeline.command`` (imported
+by the ``tlm`` command line for ``--help``) does not pull in pandas and tlm_sim.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS: dict[str, str] = {
+    "anchoring": "AnchorComparison FaultWindow anchor_by_position anchor_by_time anchor_flight "
+                 "compare_methods label_tables",
+    "errors": "AnchorError IngestError PipelineError",
+    "features": "DROP feature_table merge_tables",
+    "ingest": "FaultRecord Flight parse_records read_flights",
+    "process": "Dataset ProcessedFlight ProcessOptions build_dataset process_flight "
+               "write_dataset",
+    "scaling": "MinMaxScaler split_flights",
+    "stretching": "PAPER_TABLE_7 PAPER_TABLE_8 class_counts fault_share format_counts "
+                  "implied_lambda lambda_for_target stretch_schedule target_for_lambda",
+}
+_WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names.split()}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    mod = _WHERE.get(name)
+    if mod is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{mod}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
