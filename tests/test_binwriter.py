@@ -19,8 +19,9 @@ from tests.conftest import reference_path
 from tlm_process.cli import main
 from tlm_sim import fly
 from tlm_sim.faults import FaultSchedule
-from tlm_sim.faults.detect import faults_from_param_changes, in_flight_changes
+from tlm_sim.faults.detect import faults_from_param_changes
 from tlm_sim.flightlog import FORMAT_CHARS, FlightLog, read_bin
+from tlm_sim.flightlog.binreader import param_changes_from_parm
 from tlm_sim.flightlog.binwriter import FIRMWARE_STRING, encode_bin
 from tlm_sim.flightlog.mplog import format_column, read_mp_log, write_mp_log
 from tlm_sim.flightlog.quantise import column_to_raw, quantise_column, raw_to_column
@@ -108,7 +109,7 @@ def test_faults_and_parameter_changes_are_in_the_log(written):
     msg = t["MSG"].set_index("Message").TimeUS
     assert msg["tlm: fault gps (label 1) start"] == rec["start_time_us"]
     assert msg["tlm: fault gps (label 1) end"] == rec["end_time_us"]
-    changes = in_flight_changes(t["PARM"])
+    changes = param_changes_from_parm(t["PARM"])
     found = faults_from_param_changes(changes)
     assert [(f["type"], f["start_time_us"], f["end_time_us"]) for f in found] == [
         ("gps", rec["start_time_us"], rec["end_time_us"])]

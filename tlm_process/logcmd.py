@@ -25,15 +25,6 @@ if TYPE_CHECKING:
 
 CONVERT_FORMATS = ("csv", "parquet", "log")
 
-#: ModeReason numbers (AP_Vehicle/ModeReason.h) that ArduCopter logs in MODE.Rsn.
-MODE_REASONS = {
-    0: "UNKNOWN", 1: "RC_COMMAND", 2: "GCS_COMMAND", 3: "RADIO_FAILSAFE",
-    4: "BATTERY_FAILSAFE", 5: "GCS_FAILSAFE", 6: "EKF_FAILSAFE", 7: "GPS_GLITCH",
-    8: "MISSION_END", 9: "THROTTLE_LAND_ESCAPE", 10: "FENCE_BREACHED", 11: "TERRAIN_FAILSAFE",
-    12: "BRAKE_TIMEOUT", 13: "FLIP_COMPLETE", 14: "AVOIDANCE", 15: "AVOIDANCE_RECOVERY",
-    16: "THROW_COMPLETE", 17: "TERMINATE", 18: "TOY_MODE", 19: "CRASH_FAILSAFE",
-    25: "FAILSAFE", 26: "INITIALISED",
-}
 #: Parameters the autopilot rewrites by itself (statistics, mission bookkeeping, learned
 #: values): left out of "parameters changed in flight" unless --all-params.
 _HOUSEKEEPING = ("STAT_", "MIS_TOTAL", "BARO1_GND", "BARO2_GND", "BARO3_GND",
@@ -64,8 +55,8 @@ def _load(path: str) -> FlightLog:
 # --------------------------------------------------------------------------- info ----------
 def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     """Everything ``tlm info`` reports, as plain JSON-able data (times in seconds)."""
-    from tlm_sim.faults.detect import faults_from_param_changes, in_flight_changes
-    from tlm_sim.flightlog.mplog import COPTER_MODES
+    from tlm_sim.faults.detect import faults_from_param_changes
+    from tlm_sim.flightlog.binreader import COPTER_MODES, MODE_REASONS, param_changes_from_parm
 
     s = log.summary()
     t0, t1 = s["time_us"]
@@ -98,7 +89,7 @@ def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> d
          "reason": MODE_REASONS.get(int(r), str(int(r)))}
         for t, m, r in zip(mode.TimeUS, mode.ModeNum, mode.Rsn, strict=True)
     ]
-    changes = in_flight_changes(log.table("PARM"))
+    changes = param_changes_from_parm(log.table("PARM"), exclude=())
     shown = changes if all_params else changes[
         ~changes["Name"].astype(str).str.startswith(_HOUSEKEEPING)]
     info["params_changed"] = [

@@ -84,28 +84,24 @@ def _home_from_log(t: dict[str, pd.DataFrame]) -> tuple[float, float, float]:
 
 
 def mission_from_cmd(cmd: pd.DataFrame, home: tuple[float, float, float], name: str = ""):
-    """A ``Mission`` from a log's CMD messages (the last complete upload).
+    """A ``Mission`` from a log's CMD messages (the last upload, ``binreader.mission_from_cmd``).
 
     Item 0 is home; NAV_TAKEOFF gives the takeoff altitude; NAV_WAYPOINT items after it are the
-    waypoints (relative altitudes, frame 3); RTL and other commands end or are skipped.
+    waypoints (relative altitudes, frame 3); RTL and other commands are not waypoints.
     """
+    from tlm_sim.flightlog.binreader import mission_from_cmd as cmd_items
     from tlm_sim.mission import Mission
 
-    if not len(cmd):
+    items = cmd_items(cmd)
+    if not items:
         raise ScenarioError("the log has no mission (no CMD messages)")
-    starts = np.flatnonzero(cmd.CNum.to_numpy() == 0)
-    last = cmd.iloc[starts[-1]:] if len(starts) else cmd
-    last = last.drop_duplicates("CNum", keep="first").sort_values("CNum")
-    wps = last[(last.CId == _NAV_WAYPOINT) & (last.CNum > 0)]
-    if not len(wps):
+    wps = [(i["Lat"], i["Lng"], i["Alt"]) for i in items
+           if i["CId"] == _NAV_WAYPOINT and i["CNum"] > 0]
+    if not wps:
         raise ScenarioError("the log's mission has no waypoints")
-    takeoff = last[last.CId == _NAV_TAKEOFF]
-    return Mission(
-        waypoints=np.column_stack([wps.Lat, wps.Lng, wps.Alt]).astype(np.float64),
-        home=home,
-        name=name,
-        takeoff_alt=float(takeoff.Alt.iloc[0]) if len(takeoff) else None,
-    )
+    takeoff = [i["Alt"] for i in items if i["CId"] == _NAV_TAKEOFF]
+    return Mission(waypoints=np.asarray(wps, dtype=np.float64), home=home, name=name,
+                   takeoff_alt=takeoff[0] if takeoff else None)
 
 
 def _initial_params(parm: pd.DataFrame) -> dict[str, float]:
@@ -124,10 +120,11 @@ def _initial_params(parm: pd.DataFrame) -> dict[str, float]:
 
 def _faults_from_log(parm: pd.DataFrame) -> list[dict[str, Any]]:
     from tlm_sim.faults import FAULT_TYPES
-    from tlm_sim.faults.detect import faults_from_param_changes, in_flight_changes
+    from tlm_sim.faults.detect import faults_from_param_changes
+    from tlm_sim.flightlog.binreader import param_changes_from_parm
 
     out = []
-    for f in faults_from_param_changes(in_flight_changes(parm)):
+    for f in faults_from_param_changes(param_changes_from_parm(parm, exclude=())):
         ft = FAULT_TYPES[f["type"]]
         out.append(dict(f, params_start=dict(ft.params_start), params_end=dict(ft.params_end)))
     return out

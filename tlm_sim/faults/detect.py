@@ -18,30 +18,15 @@ import pandas as pd
 
 from tlm_sim.faults.types import FAULT_TYPES
 
-__all__ = ["faults_from_param_changes", "in_flight_changes"]
-
-
-def in_flight_changes(parm: pd.DataFrame) -> pd.DataFrame:
-    """PARM rows after the log-start block (rows later than the first PARM timestamp).
-
-    Args:
-        parm: a PARM table (TimeUS, Name, Value[, Default]).
-    Returns:
-        the rows written after the start-up dump, in log order, with consecutive repeats of
-        the same (Name, Value) removed.
-    """
-    if not len(parm):
-        return parm
-    later = parm[parm["TimeUS"] > parm["TimeUS"].iloc[0]]
-    prev = later.groupby("Name", sort=False)["Value"].shift()
-    return later[prev.isna() | (prev != later["Value"])].reset_index(drop=True)
+__all__ = ["faults_from_param_changes"]
 
 
 def faults_from_param_changes(changes: pd.DataFrame) -> list[dict[str, Any]]:
     """Fault windows from in-flight parameter changes.
 
     Args:
-        changes: rows with TimeUS, Name, Value in time order (e.g. ``in_flight_changes``).
+        changes: rows with TimeUS, Name, Value in time order (the parameter changes after
+            the log-start block: ``tlm_sim.flightlog.binreader.param_changes_from_parm``).
     Returns:
         one dict per fault in start order: ``type``, ``label``, ``start_time_us``,
         ``end_time_us`` (None when the log ends with the fault active), ``source`` "PARM".

@@ -4,7 +4,20 @@ See ``schema`` for the value convention (DataFrame units = what pymavlink shows)
 ``flightlog`` for the simulator's log-buffer contract.
 """
 
-from .binreader import read_bin, read_events, read_params, read_schemas
+from .binreader import (
+    BinLog,
+    read_bin,
+    read_events,
+    read_log,
+    read_messages,
+    read_mission,
+    read_modes,
+    read_param_changes,
+    read_params,
+    read_schemas,
+    split_instances,
+)
+from .binscan import BinLogError, BinLogWarning
 from .flightlog import FlightLog, allocate_buffers
 from .quantise import quantise_column, quantise_frame
 from .schema import (
@@ -18,6 +31,15 @@ from .schema import (
 )
 
 __all__ = [
+    "BinLog",
+    "BinLogError",
+    "BinLogWarning",
+    "read_log",
+    "read_messages",
+    "read_mission",
+    "read_modes",
+    "read_param_changes",
+    "split_instances",
     "EVENT_MESSAGES",
     "FORMAT_CHARS",
     "LOGGED_MESSAGES",

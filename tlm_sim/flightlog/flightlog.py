@@ -250,22 +250,19 @@ class FlightLog:
 
     @classmethod
     def from_bin(cls, path: str | os.PathLike, types: Iterable[str] | None = None) -> FlightLog:
-        """FlightLog of a DataFlash ``.bin`` log (tables as ``read_bin``; params from PARM)."""
-        from .binreader import read_bin, read_params, read_schemas
+        """FlightLog of a DataFlash ``.bin`` log, read in one pass (``binreader.read_log``).
 
-        types = None if types is None else list(types)
-        raw = read_bin(path, types)
-        log_schemas = read_schemas(path)
-        schemas = {}
-        for name in raw:
-            s = SCHEMAS.get(name)
-            ls = log_schemas.get(name)
-            if s is None or (ls is not None and (ls.fmt, ls.columns) != (s.fmt, s.columns)):
-                s = ls
-            schemas[name] = s
-        tables = {n: df for n, df in raw.items() if len(df)}
-        params = read_params(path) if types is None or "PARM" in types else None
-        return cls(tables, params=params, schemas=schemas, meta={"source": os.fspath(path)})
+        Tables as ``read_bin`` (all types when ``types`` is None), parameters at log start from
+        PARM, the mission as CMD items (``mission_from_cmd``), and in ``meta`` the source path
+        and what the reader found (size, message counts, skipped or damaged bytes).
+        """
+        from .binreader import read_log
+
+        log = read_log(path, None if types is None else list(types))
+        tables = {n: df for n, df in log.tables.items() if len(df)}
+        return cls(tables, params=log.params, mission=log.mission,
+                   schemas={n: log.schemas[n] for n in tables},
+                   meta={"source": os.fspath(path), **log.info})
 
     # --- access -------------------------------------------------------------------------------
     def table(self, name: str) -> pd.DataFrame:

@@ -31,16 +31,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from pymavlink import mavutil
 
+from .binreader import COPTER_MODES
 from .binwriter import merge_order, message_stream
 from .quantise import quantise_frame
 from .schema import FORMAT_CHARS, SCHEMAS, MessageSchema, schema_from_fmt
 
-__all__ = ["write_mp_log", "read_mp_log", "format_column", "COPTER_MODES"]
+__all__ = ["write_mp_log", "read_mp_log", "format_column"]
 
-#: ArduCopter flight-mode number → name (pymavlink's table, as Mission Planner prints them).
-COPTER_MODES: dict[int, str] = dict(mavutil.mode_mapping_acm)
 _MODE_NUMBERS = {v: k for k, v in COPTER_MODES.items()}
 SEP = ", "
 EOL = "\r\n"
