@@ -1,4 +1,5 @@
-"""Controller tests: square-root controller, mixer/thrust linearisation, closed-loop rate steps."""
+"""Controller tests: square-root controller, mixer/thrust linearisation, closed-loop rate steps,
+the vibration-failsafe gating and the thrust-loss check."""
 
 import math
 
@@ -7,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import rate_pid, sqrt_ctrl
 from tlm_sim.control.config import build_control_config
@@ -120,3 +122,78 @@ def test_rate_loop_step_response(cfg, axis, settle_s):
     settle = (outside.max() + 1) / 400.0 if outside.size else 0.0
     assert settle <= settle_s
     assert r[-40:].mean() == pytest.approx(60.0, abs=1.0)
+
+
+# ------------------------------------------------------------------- failsafe checks
+
+
+def _armed_state(g):
+    c = np.zeros(C.N_CONTROL_STATE)
+    c[C.ARMED] = 1.0
+    c[C.THR_HOVER] = 0.39
+    c[C.VIBE_FAIL_T] = -1.0
+    return c
+
+
+def _vibe_run(thresh, bad_imu, seconds=3.0):
+    """ERR rows from the 10 Hz checks with an EKF reporting sinking-and-low innovations and a
+    velocity test ratio of 4, with or without its bad-IMU flag."""
+    g = build_control_config(Params({"FS_EKF_THRESH": thresh}))
+    c = _armed_state(g)
+    nav = np.zeros(FS.N_NAV)
+    nav[FS.NAV_INNOV_VD] = -3.0  # tlm sign: measurement - prediction
+    nav[FS.NAV_INNOV_HGT] = -5.0
+    nav[FS.NAV_VEL_TR] = 16.0
+    nav[FS.NAV_POS_OK] = 1.0
+    nav[FS.NAV_BAD_IMU] = bad_imu
+    err = np.zeros((16, 3))
+    counts = np.zeros(1, dtype=np.int64)
+    for k in range(int(seconds / 0.1) + 1):
+        FS.failsafe_checks(c, g, k * 100000, nav, err, counts, 0)
+    return err[: counts[0]]
+
+
+def test_vibration_check_innovation_clause_needs_the_ekf_check():
+    """With FS_EKF_THRESH 0 ArduCopter's ekf_check never filters the variances, so only the
+    EKF's bad-IMU flag can turn vibration compensation on (as in the reference flights: ERR 29
+    ~1 s after EKF3's bad-IMU response, not after its velocity ratio exceeds 1)."""
+    assert not (_vibe_run(0.0, 0.0)[:, 1] == FS.ERR_FAILSAFE_VIBE).any()
+    on = _vibe_run(0.0, 1.0)
+    vibe = on[on[:, 1] == FS.ERR_FAILSAFE_VIBE]
+    assert len(vibe) == 1 and vibe[0, 2] == 1 and vibe[0, 0] == pytest.approx(1.0e6)
+    # with the EKF check on, the filtered ratio counts too (and the EKF failsafe also fires)
+    with_check = _vibe_run(0.8, 0.0)
+    assert (with_check[:, 1] == FS.ERR_FAILSAFE_VIBE).any()
+
+
+def _thrust_loss_run(g, roll_cmd, thr, vd, limit_hi=0.0, seconds=1.5):
+    c = _armed_state(g)
+    c[C.ATT_ROLL_CMD] = roll_cmd
+    c[C.THR_OUT] = thr
+    c[C.LIM_THR_HI] = limit_hi
+    c[C.MIX_THRUST : C.MIX_THRUST + 4] = 1.0
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    err = np.zeros((8, 3))
+    counts = np.zeros(1, dtype=np.int64)
+    dt = g[C.G_DT]
+    hits = [k for k in range(int(seconds / dt))
+            if FS.thrust_loss_check(c, dt, q, vd, err, counts, 0, k * 2500)]
+    return hits, err[: counts[0]], c
+
+
+def test_thrust_loss_check_fires_after_one_second_of_full_throttle_descent(cfg):
+    _, g = cfg
+    hits, err, c = _thrust_loss_run(g, math.radians(5.0), 0.95, 2.0)
+    assert len(hits) == 1 and hits[0] == pytest.approx(1.0 / g[C.G_DT] - 1, abs=1)
+    assert err.tolist() == [[hits[0] * 2500, 25, 1]]
+    assert c[C.THRUST_BOOST] == 1.0
+    assert _thrust_loss_run(g, 0.0, 0.5, 2.0, limit_hi=1.0)[0]  # saturated counts as full
+    assert not _thrust_loss_run(g, math.radians(20.0), 0.95, 2.0)[0]  # leaning: not thrust
+    assert not _thrust_loss_run(g, 0.0, 0.95, -1.0)[0]  # climbing
+    assert not _thrust_loss_run(g, 0.0, 0.8, 2.0)[0]  # throttle in reserve
+    assert not _thrust_loss_run(g, 0.0, 0.2, 2.0, limit_hi=1.0)[0]  # below 25 %
+    # the boost holds the check off until the motors have headroom again
+    c[C.MIX_THRUST : C.MIX_THRUST + 4] = 0.5
+    FS.thrust_loss_check(c, g[C.G_DT], np.array([1.0, 0, 0, 0]), 2.0, err, np.zeros(1, np.int64),
+                         0, 0)
+    assert c[C.THRUST_BOOST] == 0.0

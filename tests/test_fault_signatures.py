@@ -15,6 +15,7 @@ import pytest
 
 from tests.conftest import REFERENCE, reference_path
 from tlm_process.fault_signatures import fault_signature, truth_timeline
+from tools.fidelity_faults import accel_timeline
 
 SINGLE = {"gps": "gps_s12", "accel": "accel_s13", "engine": "engine_s14", "rc": "rc_s15"}
 TYPES = ["GPS", "IMU", "CTUN", "XKF1", "SIM", "MODE", "EV", "ERR"]
@@ -82,6 +83,13 @@ def test_reference_accel_signature():
         assert 25.0 < s["roll_max_deg"] < 35.0, name  # "roll and pitch up to +-30 deg"
         assert s["auto_kept"] == 1.0, name
         assert s["settle_roll_max_deg"] < 5.0, name  # "stable again within a few seconds"
+    for name in (SINGLE["accel"], "combined_s21"):
+        tables, side = _reference(name)
+        fault = next(f for f in side["faults"] if f["type"] == "accel")
+        x = accel_timeline(tables, fault)
+        # EKF3's bad-IMU response starts ~1.2 s in; the vibration check needs 1 s of it
+        assert 2.0 < x["vibe_on_s"] < 2.5, name
+        assert abs(x["height_18_28s_m"]) < 2.5, name
 
 
 def test_reference_engine_signature():
@@ -140,8 +148,29 @@ def test_tlm_accel_reads_the_fail_value_only_inside():
 
 @pytest.mark.slow
 def test_tlm_accel_climbs_like_sitl_in_3s():
+    """Both accelerometers at (1, 1, 1): throttle saturates and the vehicle climbs ~15-18 m in
+    3 s (SITL 17.8 m, the combined flight 18.3 m): the EKF believes it sinks until its bad-IMU
+    response (vD from GPS) reaches the output through the output observer."""
     s, _ = _tlm("accel")
-    assert 8.0 <= s["climb_3s_m"] <= 25.0
+    assert 14.0 <= s["climb_3s_m"] <= 20.0
+    assert s["climb_max_m"] <= 20.0
+    assert s["thr_max_3s"] == 1.0
+    assert s["drop_max_m"] < 1.0
+
+
+@pytest.mark.slow
+def test_tlm_accel_oscillates_descends_and_recovers_like_sitl():
+    """+-30 deg roll/pitch while the fault lasts, vibration compensation on ~2.2 s after the
+    start (SITL 2.25 s), back near the mission altitude 18-28 s in (SITL +0.9 m), level again
+    after the fault (SITL 0.24 deg)."""
+    s, flight = _tlm("accel")
+    assert 25.0 <= s["roll_max_deg"] <= 35.0 and 25.0 <= s["pitch_max_deg"] <= 35.0
+    assert s["err24_ekf_primary"] > 0 and s["err29_vibe_fs"] > 0
+    assert s["auto_kept"] == 1.0
+    assert s["settle_roll_max_deg"] < 2.0
+    x = accel_timeline(flight["tlm"], flight["tlm_faults"][0])
+    assert 1.8 < x["vibe_on_s"] < 2.7
+    assert abs(x["height_18_28s_m"]) < 2.5
 
 
 @pytest.mark.slow

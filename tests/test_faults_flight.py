@@ -143,12 +143,16 @@ def test_double_accel_fault_turns_vibration_compensation_on_and_off():
     vibe = err[err.Subsys == 29]
     assert list(vibe.ECode) == [1, 0]
     t_on = float(vibe.TimeUS.iloc[0]) - 100e6
-    assert 1.0e6 <= t_on <= 3.0e6  # the check must fail for 1 s first
+    # EKF3's bad-IMU response starts with the GPS sample after its first detection (~1.2 s in),
+    # the vibration check needs 1 s of it (SITL: 2.25 and 2.28 s)
+    assert 1.8e6 <= t_on <= 2.8e6
     assert float(vibe.TimeUS.iloc[1]) > 130e6 + 15e6  # off 15 s after the EKF recovers
-    # the altitude stays bounded while it is on (no runaway climb)
+    # full throttle until the response reaches the EKF output: a 14-20 m climb in 3 s (SITL
+    # 17.8 and 18.3 m), then bounded while the fault lasts (no runaway climb)
     sim = log.tables["SIM"]
     z0 = float(_window(sim, 99e6, 100e6).Alt.mean())
-    assert _window(sim, 100e6, 130e6).Alt.max() - z0 < 25.0
+    assert 14.0 <= _window(sim, 100e6, 103e6).Alt.max() - z0 <= 20.0
+    assert _window(sim, 100e6, 130e6).Alt.max() - z0 < 22.0
 
 
 def test_engine_fault_ekf_is_level_again_soon_after_the_impact():

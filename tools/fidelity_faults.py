@@ -42,7 +42,10 @@ Regenerate with `python tools/fidelity_faults.py` (five flights); `tests/test_fa
 asserts the properties the fault model must have. The metrics are computed by
 `tlm_process.fault_signatures.fault_signature` on both logs in the same way, from the messages
 both have (GPS, IMU, CTUN, XKF1, SIM = true state, MODE, EV, ERR); its docstring defines each
-metric. "Truth" is the simulator's true state (SIM), heights are above home.
+metric. Accelerometer faults add `vibe_on_s` (first ERR 29/1 after the start) and
+`height_18_28s_m` (mean true height 18-28 s after the start minus the height at the start),
+see `tools/fidelity_faults.py`. "Truth" is the simulator's true state (SIM), heights are above
+home.
 
 **Time alignment.** tlm flies the mission recorded in each reference's sidecar
 (`Mission.from_sidecar`) with the sidecar's seed and sets the sidecar's `params_start` /
@@ -54,6 +57,38 @@ in tlm. Note column: *close* = within {rel:.0%} of SITL's value or an absolute f
 counts compare presence (both > 0 or both 0).
 
 """
+
+
+#: ERR subsystem of the vibration failsafe
+ERR_VIBE_FS = 29
+
+
+def accel_timeline(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
+                   ) -> dict[str, float]:
+    """Two accelerometer-fault facts beyond ``fault_signature`` (same conventions).
+
+    Returns:
+        ``vibe_on_s``: first ERR 29/1 (vibration compensation on) after the start [s after the
+        start, NaN if none]; ``height_18_28s_m``: mean true height 18-28 s after the start minus
+        the height at the start [m] (SITL is back near the mission altitude by then).
+    """
+    t0 = float(fault["start_time_us"])
+    err = tables["ERR"]
+    on = err[(err.Subsys == ERR_VIBE_FS) & (err.ECode == 1) & (err.TimeUS >= t0)]
+    tl = truth_timeline(tables)
+    x = (tl.TimeUS - t0) * 1e-6
+    h0 = float(tl.h_m[x >= 0].iloc[0])
+    back = float(tl.h_m[(x >= 18.0) & (x <= 28.0)].mean()) - h0
+    vibe = (float(on.TimeUS.iloc[0]) - t0) * 1e-6 if len(on) else float("nan")
+    return {"vibe_on_s": vibe, "height_18_28s_m": back}
+
+
+def signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]) -> dict[str, float]:
+    """``fault_signature`` plus, for accelerometer faults, :func:`accel_timeline`."""
+    out = fault_signature(tables, fault)
+    if fault["type"] == "accel":
+        out.update(accel_timeline(tables, fault))
+    return out
 
 
 def tlm_fault_schedule(sidecar: Mapping[str, Any], ref_arm_us: float, arm_s: float
@@ -201,7 +236,7 @@ def main() -> None:
         for i, (fr, ft) in enumerate(zip(flight["ref_faults"], flight["tlm_faults"],
                                          strict=True)):
             kind = fr["type"]
-            df = comparison(fault_signature(flight["tlm"], ft), fault_signature(flight["ref"], fr))
+            df = comparison(signature(flight["tlm"], ft), signature(flight["ref"], fr))
             title = f"{TITLES[kind]} fault" + (" (combined flight)" if name == COMBINED else "")
             t_ref = fr["start_time_us"] * 1e-6
             t_tlm = ft["start_time_us"] * 1e-6

@@ -1,4 +1,5 @@
-"""Copter's EKF-driven checks: height-rate filter, vibration failsafe, EKF failsafe, crash check.
+"""Copter's EKF-driven checks: height-rate filter, vibration failsafe, EKF failsafe, crash check,
+thrust-loss check.
 
 Reference §3.2 (ekf_check, FS_EKF_THRESH), §3.6 (crash check) and ArduCopter's vibration
 failsafe (FS_VIBE_ENABLE):
@@ -8,10 +9,16 @@ failsafe (FS_VIBE_ENABLE):
   (Widnall & Sinha's baro-inertial vertical channel). Its rate is what the altitude controller
   uses while vibration compensation is on: it follows the height (baro) even when the
   accelerometers are wrong, because its integrator absorbs a constant acceleration error.
-* Vibration failsafe (10 Hz): the check fails while the EKF's vertical velocity and height
-  innovations are both positive (EKF3 sign: prediction - measurement, i.e. the EKF believes it
-  is sinking faster and is lower than the sensors say) and its velocity test ratio is >= 1, or
-  while the EKF reports itself vibration affected (its bad-IMU response is active).
+* Vibration failsafe (10 Hz, after ekf_check): the check fails while the EKF reports itself
+  vibration affected (its bad-IMU response is active), or while its vertical velocity and
+  height innovations are both positive (EKF3 sign: prediction - measurement, i.e. the EKF
+  believes it is sinking faster and is lower than the sensors say) and ekf_check's low-passed
+  velocity test ratio (square root) is > 1. That filtered ratio is only maintained while
+  ekf_check runs its variance comparison, i.e. with FS_EKF_THRESH > 0: ArduCopter's ekf_check
+  returns before filtering when the check is disabled, which leaves the variances invalid for
+  the vibration check. With FS_EKF_THRESH 0 (the reference flights) only the bad-IMU flag can
+  trigger it -- in the reference accelerometer logs ERR 29 comes ~1 s after the EKF's bad-IMU
+  response starts, not 1 s after the velocity test ratio first exceeds 1.
   Failing for 1 s switches vibration compensation on (ERR 29/1); 15 s without a failure
   switches it off (ERR 29/0).
 * EKF failsafe (10 Hz, off when FS_EKF_THRESH <= 0): over threshold when the filtered position
@@ -19,6 +26,14 @@ failsafe (FS_VIBE_ENABLE):
   (velocity >= 2x counts twice); the checks also fail without an absolute position. Ten failing
   checks in a row (1 s, after the checks have passed once) -> ERR 16/2, ERR 17/1 and the
   FS_EKF_ACTION; passing checks count down and clear it (ERR 16/0, 17/0).
+
+* Thrust-loss check (every tick, reference section 3.6): armed, not landed, thrust boost off,
+  and for 1 s: lean target < 15 deg, throttle in >= 90 % or at the upper limit (and >= 25 %),
+  the EKF descending, attitude error < 30 deg -> ERR 25/1 ("Potential Thrust Loss") and the
+  motors' thrust boost on. The boost changes nothing in tlm's quad mixer (ArduPilot's motor-loss
+  compensation needs six or more motors); it only holds the check off until the motors no
+  longer need it (every motor's thrust below 90 %, as the motor library switches it off when
+  the commanded output is achievable again).
 
 ``nav`` carries the primary lane's status into these checks (indices ``NAV_*``); innovations
 are tlm's sign (measurement - prediction), converted here.
@@ -29,6 +44,7 @@ import math
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
+from tlm_sim.rotation import quat_to_euler
 
 # nav vector (filled by the flight loop from the primary EKF lane)
 NAV_INNOV_VD = 0  # GPS down-velocity innovation, measurement - prediction [m/s]
@@ -46,6 +62,11 @@ VIBE_CLEAR_S = 15.0
 EKF_CHECK_ITERATIONS = 10
 CRASH_CHECK_S = 2.0
 CRASH_LEAN_COS = math.cos(math.radians(15.0))
+THRUST_LOSS_S = 1.0  # THRUST_LOSS_CHECK_TRIGGER_SEC
+THRUST_LOSS_LEAN = math.radians(15.0)  # THRUST_LOSS_CHECK_ANGLE_DEVIATION_CD
+THRUST_LOSS_MIN_THR = 0.9  # THRUST_LOSS_CHECK_MINIMUM_THROTTLE
+THRUST_BOOST_OFF = 0.9  # boost off once every motor's thrust is below this fraction
+ATT_ERR_MAX = math.radians(30.0)  # CRASH_CHECK_ANGLE_DEVIATION_DEG
 
 ERR_EKFCHECK = 16
 ERR_FAILSAFE_EKFINAV = 17
@@ -87,9 +108,11 @@ def _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us):
             c[C.VIBE_COMP] = 0.0
             E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
         return
-    # EKF3 innovations are prediction - measurement: both positive = "sinking and low"
-    failing = (-nav[NAV_INNOV_VD] > 0.0 and -nav[NAV_INNOV_HGT] > 0.0
-               and nav[NAV_VEL_TR] >= 1.0) or nav[NAV_BAD_IMU] != 0.0
+    # EKF3 innovations are prediction - measurement: both positive = "sinking and low"; the
+    # filtered velocity ratio is only valid while ekf_check filters it (FS_EKF_THRESH > 0)
+    innov = (g[C.G_FS_EKF_THRESH] > 0.0 and -nav[NAV_INNOV_VD] > 0.0
+             and -nav[NAV_INNOV_HGT] > 0.0 and c[C.EKF_VEL_TR_F] > 1.0)
+    failing = innov or nav[NAV_BAD_IMU] != 0.0
     if failing:
         c[C.VIBE_LAST_FAIL_T] = t_s
         if c[C.VIBE_FAIL_T] < 0.0:
@@ -106,10 +129,11 @@ def _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us):
 
 @tick_jit
 def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
-    """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle."""
-    a = g[C.G_FS_EKF_ALPHA]
-    c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
-    c[C.EKF_POS_TR_F] += a * (math.sqrt(max(nav[NAV_POS_TR], 0.0)) - c[C.EKF_POS_TR_F])
+    """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle.
+
+    With FS_EKF_THRESH <= 0 it only clears the failsafe and returns before filtering the test
+    ratios (as ArduCopter's ekf_check does).
+    """
     thresh = g[C.G_FS_EKF_THRESH]
     if thresh <= 0.0:
         c[C.EKF_FAIL_COUNT] = 0.0
@@ -117,6 +141,9 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
             c[C.EKF_FAILSAFE] = 0.0
             E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_RESOLVED)
         return FS_NONE
+    a = g[C.G_FS_EKF_ALPHA]
+    c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
+    c[C.EKF_POS_TR_F] += a * (math.sqrt(max(nav[NAV_POS_TR], 0.0)) - c[C.EKF_POS_TR_F])
     vel = c[C.EKF_VEL_TR_F]
     pos = c[C.EKF_POS_TR_F]
     mag = math.sqrt(max(nav[NAV_MAG_TR], 0.0))
@@ -158,7 +185,7 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
 
 @tick_jit
 def failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err):
-    """The 10 Hz vibration and EKF checks (armed only); returns an FS_* action."""
+    """The 10 Hz EKF and vibration checks (armed only, in that order); returns an FS_* action."""
     t_s = t_us * 1e-6
     c[C.EKF_POS_OK] = nav[NAV_POS_OK]
     if t_s < c[C.CHECK_TIMER]:
@@ -167,8 +194,9 @@ def failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err):
     if c[C.ARMED] == 0.0:
         c[C.VIBE_FAIL_T] = -1.0
         return FS_NONE
+    fs = _ekf_check(c, g, nav, err_buf, counts, k_err, t_us)
     _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us)
-    return _ekf_check(c, g, nav, err_buf, counts, k_err, t_us)
+    return fs
 
 
 @tick_jit
@@ -193,3 +221,42 @@ def crash_check(c, g, dt, cos_tilt, roll, pitch, ground_speed):
         return False
     c[C.CRASH_TIMER] += dt
     return c[C.CRASH_TIMER] >= CRASH_CHECK_S
+
+
+@tick_jit
+def thrust_loss_check(c, dt, q, vd, err_buf, counts, k_err, t_us):
+    """ArduCopter's thrust-loss check, once per main-loop tick (after the mixer).
+
+    q: EKF attitude quaternion body -> NED; vd: EKF down velocity [m/s]. Uses the attitude
+    targets (ATT_ROLL_CMD/ATT_PITCH_CMD), the throttle into the attitude controller (THR_OUT,
+    before angle boost), the mixer's upper throttle limit and per-motor thrusts. Logs ERR 25/1
+    and sets THRUST_BOOST when the symptoms last THRUST_LOSS_S; returns True on that tick.
+    """
+    if c[C.THRUST_BOOST] != 0.0:
+        top = 0.0
+        for i in range(4):
+            top = max(top, c[C.MIX_THRUST + i])
+        if top < THRUST_BOOST_OFF:
+            c[C.THRUST_BOOST] = 0.0
+        return False
+    tr = c[C.ATT_ROLL_CMD]
+    tp = c[C.ATT_PITCH_CMD]
+    thr = c[C.THR_OUT]
+    if (c[C.ARMED] == 0.0 or c[C.LANDED] != 0.0 or tr * tr + tp * tp > THRUST_LOSS_LEAN**2
+            or (thr < THRUST_LOSS_MIN_THR and c[C.LIM_THR_HI] == 0.0) or thr < 0.25
+            or not vd > 0.0):
+        c[C.THRUST_LOSS_T] = 0.0
+        return False
+    roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
+    er = tr - roll
+    ep = tp - pitch
+    if er * er + ep * ep >= ATT_ERR_MAX**2:
+        c[C.THRUST_LOSS_T] = 0.0
+        return False
+    c[C.THRUST_LOSS_T] += dt
+    if c[C.THRUST_LOSS_T] < THRUST_LOSS_S - 1e-9:
+        return False
+    c[C.THRUST_LOSS_T] = 0.0
+    c[C.THRUST_BOOST] = 1.0
+    E.log_row2(err_buf, counts, k_err, t_us, E.ERR_THRUST_LOSS_CHECK, E.ERR_CODE_FAILSAFE)
+    return True

@@ -94,7 +94,9 @@ EKF_POS_OK = 114  # 1 while the EKF reports an absolute horizontal position
 LAND_NOGPS = 115  # 1: LAND without position control (level attitude, horizontal drift)
 LAND_PAUSE = 116  # seconds left before a failsafe LAND starts descending
 CHECK_TIMER = 117  # time of the next 10 Hz failsafe check [s]
-N_CONTROL_STATE = 118
+THRUST_LOSS_T = 118  # time the thrust-loss symptoms have lasted [s]
+THRUST_BOOST = 119  # 1 while the motors' thrust boost is on (after a thrust-loss detection)
+N_CONTROL_STATE = 120
 
 # sub-modes of AUTO / RTL / LAND
 SUB_NONE = 0

@@ -9,7 +9,8 @@ land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports
 
 Failsafes: radio (RTL, or LAND when there is no position), EKF (FS_EKF_THRESH/FS_EKF_ACTION:
 LAND without position control after a 4 s pause, or AltHold), vibration (vibration compensation
-in the altitude controller) and the crash check (disarm); see tlm_sim.control.failsafe.
+in the altitude controller), the crash check (disarm) and the thrust-loss check (ERR 25); see
+tlm_sim.control.failsafe.
 """
 
 import math
@@ -24,6 +25,7 @@ from tlm_sim.control.failsafe import (
     FS_NONE,
     crash_check,
     failsafe_checks,
+    thrust_loss_check,
     vertical_cf_update,
 )
 from tlm_sim.control.mixer import mix, output_idle
@@ -329,7 +331,8 @@ def vehicle_step(
             c[C.LANDED] = 0.0
             E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_NOT_LANDED)
 
-    # ------------------------------------------------------------- crash check
+    # ------------------------------------------------------------- crash and thrust-loss checks
+    thrust_loss_check(c, dt, q, vel[2], err_buf, counts, k_err, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):

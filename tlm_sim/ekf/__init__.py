@@ -8,15 +8,21 @@ Design (``ardupilot-reference.md`` sections 3.2-3.4, 3.8):
 * State propagation every 400 Hz tick from each lane's own IMU deltas; covariance prediction
   when >= 12 ms of IMU data has accumulated (every 5 ticks = 80 Hz, as EKF3), block-sparse.
 * Sequential scalar fusion: GPS velocity N/E/D and position N/E against the lane's stored past
-  state (ring buffer, delay GPS1_DELAY_MS, default 0.2 s), baro height (EK3_HGT_DELAY), 3-axis
+  state (ring buffer, delay GPS1_DELAY_MS, default 0.12 s), baro height (EK3_HGT_DELAY), 3-axis
   magnetometer (current time); EKF3 innovation gates and test ratios.
 * Aiding: GPS timeouts 7 s (horizontal position/velocity invalid), 15 s (constant-position
   mode, EK3_NOAID_M_NSE); reset to GPS on timeout, on variance > EK3_GLITCH_RAD^2 and when
   GPS returns. EKF3's bad-IMU response (vertical velocity from GPS, gates bypassed, 5 m/s^2
   accel noise, height reset after 1 s) for accelerometer failures.
+* Output observer (EKF3's output complementary filter, EK3_TAU_OUTPUT): controllers and logs
+  read each lane's output, which follows the filter's velocity/position corrections with a
+  first-order lag of 0.25 s (EKF3 adds a small integral term); resets move both at once.
+  This matters where the filter state jumps without a reset, e.g. the bad-IMU response
+  setting the vertical velocity to GPS: the output (and the altitude controller) keeps the old
+  belief for a few tenths of a second, as ArduCopter's does.
 * Lane health, error score, relative errors and the ERR 24-style primary switch (section 3.4).
-* Not modelled: the output complementary filter (controllers see the lane state directly, with
-  small steps at fusion times), earth/body magnetic field learning, wind, GPS-quality checks.
+* Not modelled: the output observer for the attitude (corrections are applied at once),
+  earth/body magnetic field learning, wind, GPS-quality checks.
 
 Public API (all per-tick functions are ``@njit`` and allocation-free):
 

@@ -47,7 +47,8 @@ def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     EK3_ERR_THRESH (0.2), EK3_HGT_DELAY (ms, 60), EK3_ACC_BIAS_LIM (m/s^2, 1.0),
     GPS1_DELAY_MS (ms, 0 = driver default, see :func:`gps_delay_s`), TLM_MAG_DEC_DEG (deg, 12.5),
     TLM_MAG_INC_DEG (deg, -66), TLM_MAG_INT_GA (gauss, 0.58), TLM_LOOP_HZ (Hz, 400),
-    TLM_EKF_TARGET_DT (s, 0.012: covariance prediction interval target, as EKF3).
+    TLM_EKF_TARGET_DT (s, 0.012: covariance prediction interval target, as EKF3),
+    EK3_TAU_OUTPUT (cs, 25: output observer time constant, limited to 10..50 cs as EKF3).
     """
     p = params
     c = np.zeros(L.N_CFG)
@@ -92,6 +93,7 @@ def build_ekf_config(params: Mapping[str, float]) -> np.ndarray:
     c[L.C_BAD_IMU_ACC_NSE] = 5.0
     c[L.C_BAD_IMU_HOLD] = 10.0
     c[L.C_BAD_IMU_TIMEOUT] = 1.0
+    c[L.C_TAU_OUTPUT] = min(max(0.01 * float(p.get("EK3_TAU_OUTPUT", 25.0)), 0.1), 0.5)
     imus = lane_imus(params)
     c[L.C_N_LANES] = len(imus)
     for i, imu in enumerate(imus):

@@ -19,6 +19,11 @@ Model (error state dx = [phi, dv, dp, dbg, dba], earth-frame attitude error phi)
 
 The covariance prediction exploits that only the attitude, velocity and position rows/columns of
 F differ from the identity (about 650 multiply-adds instead of 2 x 15^3 for dense products).
+
+Output observer: the nominal velocity/position slots and the ring buffer are EKF3's *output*
+states; the filter state is the output plus the tracking error OUT_E* (:func:`filter_get`,
+:func:`filter_now`). Measurement corrections change the filter state (:func:`apply_correction`),
+:func:`output_track` pulls the output after it every tick, resets move both (:func:`shift_output`).
 Measurement updates are scalar and sequential: K = P h / (h P h + r), P -= K (P h)^T, which equals
 the Joseph form for the optimal gain.
 """
@@ -47,6 +52,10 @@ from tlm_sim.ekf.layout import (
     BUF_ROW,
     NBUF,
     NS,
+    OUT_EPN,
+    OUT_EVN,
+    OUT_IPN,
+    OUT_IVN,
     P0,
     PD,
     PE,
@@ -401,10 +410,11 @@ def fuse_h3(e, j0, h0, h1, h2, innov, r):
 
 @njit(cache=True, nogil=True, _nrt=False)
 def apply_correction(e, gb_lim, ab_lim):
-    """Inject the batch correction dx into the nominal state, then zero dx.
+    """Inject the batch correction dx into the filter state, then zero dx.
 
-    Attitude: q <- dq(phi) * q (earth-frame error); velocity/position corrections also shift the
-    ring buffer (cumulative offset) so delayed measurements see corrected past states.
+    Attitude: q <- dq(phi) * q (earth-frame error), applied at once. Velocity and position:
+    the correction goes to the filter state only (the tracking error OUT_E*); the output the
+    controllers read follows through :func:`output_track`, as EKF3's output observer does.
     Biases are limited to +-gb_lim [rad/s] and +-ab_lim [m/s^2].
     """
     px = 0.5 * e[SCR_DX + 0]
@@ -425,15 +435,80 @@ def apply_correction(e, gb_lim, ab_lim):
     e[QZ] = nz * inv
     quat_to_rot(e)
     for i in range(3):
-        dv = e[SCR_DX + 3 + i]
-        dp = e[SCR_DX + 6 + i]
-        e[VN + i] += dv
-        e[PN + i] += dp
-        e[BUF_OFS + 3 + i] += dv
-        e[BUF_OFS + i] += dp
+        e[OUT_EVN + i] += e[SCR_DX + 3 + i]
+        e[OUT_EPN + i] += e[SCR_DX + 6 + i]
         e[BGX + i] = min(max(e[BGX + i] + e[SCR_DX + 9 + i], -gb_lim), gb_lim)
         e[BAX + i] = min(max(e[BAX + i] + e[SCR_DX + 12 + i], -ab_lim), ab_lim)
     clear_dx(e)
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def filter_get(e, k, col):
+    """Filter-state value ``col`` (0..5: pn, pe, pd, vn, ve, vd) ``k`` ticks ago.
+
+    The stored output history plus the current tracking error: EKF3 applies its output
+    corrections to the whole output history, so the filter state at the fusion time horizon is
+    the output there plus the present error.
+    """
+    return buffer_get(e, k, col) + e[OUT_EPN + col]
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def filter_now(e, col):
+    """Current filter-state value ``col`` (0..5: pn, pe, pd, vn, ve, vd)."""
+    if col < 3:
+        return e[PN + col] + e[OUT_EPN + col]
+    return e[VN + col - 3] + e[OUT_EPN + col]
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def shift_output(e, col, delta):
+    """Move output ``col`` (0..5: pn, pe, pd, vn, ve, vd) and its whole stored history by delta.
+
+    A reset that moves the filter state by ``delta`` calls this too, so the tracking error is
+    unchanged (EKF3 shifts the output history by a reset's jump).
+    """
+    if col < 3:
+        e[PN + col] += delta
+    else:
+        e[VN + col - 3] += delta
+    e[BUF_OFS + col] += delta
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def output_track(e, dt, tau, k, bad_imu):
+    """One step of the output observer: the output velocity/position move towards the filter's.
+
+    EKF3's proportional-integral tracking loop, in continuous form: correction rate
+    ``err / tau + 0.1 * integral(err) / tau^2`` per axis (EKF3 applies ``g err + 0.1 g^2 sum(err)``
+    with ``g = dt_ekf / tau`` at every filter update, which is the same loop); dt: step [s];
+    tau: EK3_TAU_OUTPUT [s]. The integral term removes the steady offset a continuing
+    disagreement would leave. While the bad-IMU response is active (bad_imu) EKF3 integrates,
+    for the vertical velocity, the filter's value at the fusion time horizon (``k`` ticks ago)
+    minus the *current* output, with 0.07 instead of 0.1: the output vertical velocity is
+    driven to the filter's delayed one. The filter position integrates the filter velocity, so
+    the position error first grows by the velocity error times dt. Each correction shifts the
+    stored output history too.
+    """
+    kp = dt / tau
+    ki = 0.1 * dt / (tau * tau)
+    for i in range(3):
+        ev = e[OUT_EVN + i]
+        ep = e[OUT_EPN + i] + ev * dt
+        e[OUT_IPN + i] += ep * dt
+        if i == 2 and bad_imu:
+            e[OUT_IVN + i] += (buffer_get(e, k, 5) + ev - e[VD]) * dt
+            cv = kp * ev + 0.7 * ki * e[OUT_IVN + i]
+        else:
+            e[OUT_IVN + i] += ev * dt
+            cv = kp * ev + ki * e[OUT_IVN + i]
+        cp = kp * ep + ki * e[OUT_IPN + i]
+        e[VN + i] += cv
+        e[BUF_OFS + 3 + i] += cv
+        e[OUT_EVN + i] = ev - cv
+        e[PN + i] += cp
+        e[BUF_OFS + i] += cp
+        e[OUT_EPN + i] = ep - cp
 
 
 @njit(cache=True, nogil=True, _nrt=False)

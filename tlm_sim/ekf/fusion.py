@@ -1,10 +1,12 @@
 """Measurements of one lane: GPS velocity/position, baro height, magnetometer, constant position.
 
 Every function takes one lane row ``e`` and the configuration ``cfg``; times ``t`` are seconds.
-Delayed measurements (GPS, baro) are compared with the lane's stored past state (ring buffer)
-and the correction is applied to the current state. Innovation test ratios follow EKF3:
-``innovation^2 / (gate^2 * innovation variance)`` (velocity and position summed over their
-components), and a group is fused only when its ratio is below 1.
+Delayed measurements (GPS, baro) are compared with the lane's past filter state (stored output
+history plus the output tracking error, :func:`tlm_sim.ekf.core.filter_get`); corrections change
+the filter state and reach the output through the output observer, resets move both.
+Innovation test ratios follow EKF3: ``innovation^2 / (gate^2 * innovation variance)``
+(velocity and position summed over their components), and a group is fused only when its ratio
+is below 1.
 """
 
 from __future__ import annotations
@@ -15,12 +17,14 @@ from numba import njit
 
 from tlm_sim.ekf.core import (
     apply_correction,
-    buffer_get,
     clear_dx,
+    filter_get,
+    filter_now,
     fuse_h3,
     fuse_index,
     innov_var_h3,
     reset_block,
+    shift_output,
 )
 from tlm_sim.ekf.layout import (
     AID_ABSOLUTE,
@@ -29,7 +33,6 @@ from tlm_sim.ekf.layout import (
     ALIGNED,
     BAD_IMU,
     BARO_LAST,
-    BUF_OFS,
     C_ABIAS_LIM,
     C_ALT_NSE,
     C_BAD_IMU_HOLD,
@@ -87,6 +90,8 @@ from tlm_sim.ekf.layout import (
     MAG_LZ,
     MAG_TR,
     NS,
+    OUT_EPD,
+    OUT_EVD,
     P0,
     PD,
     PE,
@@ -132,24 +137,20 @@ def _delay_ticks(cfg, delay_s):
 def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago.
 
-    The jump (GPS minus the stored past state) is added to the current state and to the ring
-    buffer; the states are decorrelated and given the GPS noise variances.
+    The jump (GPS minus the past filter state) moves the filter state and the whole output
+    history alike (the output tracking error is kept, as EKF3's resets shift the output
+    buffer); the states are decorrelated and given the GPS noise variances.
     """
-    dn = pn - buffer_get(e, k, 0)
-    de = pe - buffer_get(e, k, 1)
-    dvn = vn - buffer_get(e, k, 3)
-    dve = ve - buffer_get(e, k, 4)
-    dvd = vd - buffer_get(e, k, 5)
-    e[PN] += dn
-    e[PE] += de
-    e[BUF_OFS + 0] += dn
-    e[BUF_OFS + 1] += de
-    e[VN] += dvn
-    e[VE] += dve
-    e[VD] += dvd
-    e[BUF_OFS + 3] += dvn
-    e[BUF_OFS + 4] += dve
-    e[BUF_OFS + 5] += dvd
+    dn = pn - filter_get(e, k, 0)
+    de = pe - filter_get(e, k, 1)
+    dvn = vn - filter_get(e, k, 3)
+    dve = ve - filter_get(e, k, 4)
+    dvd = vd - filter_get(e, k, 5)
+    shift_output(e, 0, dn)
+    shift_output(e, 1, de)
+    shift_output(e, 3, dvn)
+    shift_output(e, 4, dve)
+    shift_output(e, 5, dvd)
     reset_block(e, ES_POS, 2, cfg[C_POSNE_NSE] ** 2)
     reset_block(e, ES_VEL, 2, cfg[C_VELNE_NSE] ** 2)
     reset_block(e, ES_VEL + 2, 1, cfg[C_VELD_NSE] ** 2)
@@ -166,41 +167,54 @@ def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
+def reset_height(e, r_hgt, pd_new, k):
+    """EKF3's height reset: the filter height ``k`` ticks ago becomes pd_new [m, down].
+
+    As EKF3's ResetHeight, the output height and vertical velocity (and their history) are set
+    to the filter's: the vertical output tracking errors are cleared.
+    """
+    dpd = pd_new - filter_get(e, k, 2)
+    shift_output(e, 2, dpd + e[OUT_EPD])
+    e[OUT_EPD] = 0.0
+    shift_output(e, 5, e[OUT_EVD])
+    e[OUT_EVD] = 0.0
+    reset_block(e, ES_POS + 2, 1, r_hgt)
+    e[HGT_RESET_COUNT] += 1.0
+
+
+@njit(cache=True, nogil=True, _nrt=False)
 def _bad_imu_check(e, cfg, t, vd_gps, k, r_vd):
     """EKF3's bad-IMU (accel aliasing) check and response; returns True while it is active.
 
     Detection: with a baro sample less than 0.2 s old, the height and vertical-velocity errors
-    (state minus measurement, at the GPS time horizon) have the same sign and both exceed
-    gain * R (gain 1 within 1.5 hold times of the last detection, 4 within 2, else 9).
-    Response for C_BAD_IMU_HOLD seconds: vertical velocity set to the GPS value, GPS and baro
-    fused without innovation gates, accel process noise raised to C_BAD_IMU_ACC_NSE; after
-    C_BAD_IMU_TIMEOUT seconds of continuous detections the height is reset to the baro (at most
-    once per timeout).
+    (filter state minus measurement, at the GPS time horizon) have the same sign and both exceed
+    gain * R (gain 1 within 1.5 hold times of the previous detection, 4 within 2, else 9).
+    Response while the *previous* detection is less than C_BAD_IMU_HOLD seconds old (as EKF3
+    measures the hold time before recording the new detection, the response starts with the GPS
+    sample after the first detection): the filter's vertical velocity is set to the GPS value,
+    GPS and baro are fused without innovation gates, accel process noise is raised to
+    C_BAD_IMU_ACC_NSE; after C_BAD_IMU_TIMEOUT seconds without a passing check the height is
+    reset to the baro (at most once per timeout).
     """
     hold = cfg[C_BAD_IMU_HOLD]
     r_hgt = cfg[C_ALT_NSE] ** 2
+    since = t - e[T_BAD_IMU]  # time since the previous detection
     if t - e[T_BARO_LAST] < 0.2:
-        hgt_err = buffer_get(e, k, 2) + e[BARO_LAST]
-        vd_err = buffer_get(e, k, 5) - vd_gps
-        since = t - e[T_BAD_IMU]
+        hgt_err = filter_get(e, k, 2) + e[BARO_LAST]
+        vd_err = filter_get(e, k, 5) - vd_gps
         gain = 9.0 if since > 2.0 * hold else (4.0 if since > 1.5 * hold else 1.0)
         if hgt_err * vd_err > 0.0 and hgt_err**2 > gain * r_hgt and vd_err**2 > gain * r_vd:
             e[T_BAD_IMU] = t
         else:
             e[T_GOOD_IMU] = t
-    bad = t - e[T_BAD_IMU] < hold
+    bad = since < hold
     e[BAD_IMU] = 1.0 if bad else 0.0
     if bad:
-        dvd = vd_gps - buffer_get(e, k, 5)
-        e[VD] += dvd
-        e[BUF_OFS + 5] += dvd
+        # the filter's vertical velocity is set to GPS; the output follows (output observer)
+        e[OUT_EVD] += vd_gps - filter_get(e, k, 5)
         if t - e[T_GOOD_IMU] > cfg[C_BAD_IMU_TIMEOUT] and t - e[T_BARO_LAST] < 0.2:
             # bad for longer than the timeout: reset the height to the baro
-            dpd = -e[BARO_LAST] - buffer_get(e, k, 2)
-            e[PD] += dpd
-            e[BUF_OFS + 2] += dpd
-            reset_block(e, ES_POS + 2, 1, r_hgt)
-            e[HGT_RESET_COUNT] += 1.0
+            reset_height(e, r_hgt, -e[BARO_LAST], k)
             e[T_GOOD_IMU] = t
     return bad
 
@@ -227,11 +241,11 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     r_vd = cfg[C_VELD_NSE] ** 2
     r_p = cfg[C_POSNE_NSE] ** 2
     bad = _bad_imu_check(e, cfg, t, vel[2], k, r_vd)
-    yvn = vel[0] - buffer_get(e, k, 3)
-    yve = vel[1] - buffer_get(e, k, 4)
-    yvd = vel[2] - buffer_get(e, k, 5)
-    ypn = pos[0] - buffer_get(e, k, 0)
-    ype = pos[1] - buffer_get(e, k, 1)
+    yvn = vel[0] - filter_get(e, k, 3)
+    yve = vel[1] - filter_get(e, k, 4)
+    yvd = vel[2] - filter_get(e, k, 5)
+    ypn = pos[0] - filter_get(e, k, 0)
+    ype = pos[1] - filter_get(e, k, 1)
     d = NS + 1
     svn = e[P0 + (ES_VEL + 0) * d] + r_vne
     sve = e[P0 + (ES_VEL + 1) * d] + r_vne
@@ -277,17 +291,27 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
 def lane_fuse_baro(e, cfg, t, alt):
     """Fuse a baro altitude above the origin [m, up], delayed by EK3_HGT_DELAY.
 
-    After C_HGT_RETRY seconds of rejected samples the height is reset to the baro. The gate is
-    bypassed while the bad-IMU response is active.
+    After C_HGT_RETRY seconds of rejected samples the height is reset to the baro. While the
+    bad-IMU response is active the gate is bypassed and the height variance is held at least at
+    the baro measurement variance R (tlm model choice, from the reference logs: in both SITL
+    accelerometer-failure flights EKF3's height innovation variance, (XKF3.IPD / (5 XKF4.SH))^2,
+    is 4.2 m^2 (R = 4 plus P_pd = 0.2) before its bad-IMU response and 8 m^2 and more once it
+    runs, and the height innovation then halves at every baro sample, i.e. P_pd >= R; the EKF3
+    mechanism was not identified. The effect: the height follows the baro closely while the
+    accelerometers are known to be bad, and the vehicle descends back to the mission altitude
+    during the fault as in SITL).
     """
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
         return
     e[BARO_LAST] = alt
     e[T_BARO_LAST] = t
     k = _delay_ticks(cfg, cfg[C_HGT_DELAY])
-    y = -alt - buffer_get(e, k, 2)
+    y = -alt - filter_get(e, k, 2)
     r = cfg[C_ALT_NSE] ** 2
-    s = e[P0 + (ES_POS + 2) * (NS + 1)] + r
+    jj = P0 + (ES_POS + 2) * (NS + 1)
+    if e[BAD_IMU] != 0.0 and e[jj] < r:
+        e[jj] = r
+    s = e[jj] + r
     tr = y * y / (cfg[C_HGT_GATE] ** 2 * s)
     e[HGT_TR] = tr
     e[INNOV_HGT] = y
@@ -297,10 +321,7 @@ def lane_fuse_baro(e, cfg, t, alt):
         apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
         e[T_HGT_PASS] = t
     elif t - e[T_HGT_PASS] > cfg[C_HGT_RETRY]:
-        e[PD] += y
-        e[BUF_OFS + 2] += y
-        reset_block(e, ES_POS + 2, 1, r)
-        e[HGT_RESET_COUNT] += 1.0
+        reset_height(e, r, -alt, k)
         e[T_HGT_PASS] = t
 
 
@@ -371,8 +392,8 @@ def lane_fuse_constpos(e, cfg, t, armed):
     e[T_CONSTPOS] = t
     nse = cfg[C_NOAID_NSE] if armed else cfg[C_ONGROUND_NSE]
     r = nse * nse
-    yn = e[CONSTPOS_N] - e[PN]
-    ye = e[CONSTPOS_E] - e[PE]
+    yn = e[CONSTPOS_N] - filter_now(e, 0)
+    ye = e[CONSTPOS_E] - filter_now(e, 1)
     d = NS + 1
     s = e[P0 + ES_POS * d] + e[P0 + (ES_POS + 1) * d] + 2.0 * r
     e[POS_TR] = (yn * yn + ye * ye) / (cfg[C_POS_GATE] ** 2 * s)

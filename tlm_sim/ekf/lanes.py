@@ -2,7 +2,8 @@
 
 Call order per 400 Hz main-loop tick (or use :func:`ekf_update`, which does exactly this):
 
-1. :func:`ekf_predict` -- every lane integrates its own IMU's delta angle/velocity; covariance
+1. :func:`ekf_predict` -- every lane integrates its own IMU's delta angle/velocity and moves
+   its output towards its filter state (output observer, EK3_TAU_OUTPUT); covariance
    prediction runs when >= EKF3's 12 ms target of IMU data has accumulated (every 5 ticks);
    alignment, aiding-mode transitions, constant-position fusion and status flags.
 2. :func:`ekf_fuse_gps` / :func:`ekf_fuse_baro` / :func:`ekf_fuse_mag` when a new sample arrived.
@@ -20,6 +21,8 @@ from numba import njit
 
 from tlm_sim.ekf.core import (
     buffer_push,
+    filter_now,
+    output_track,
     predict_covariance,
     propagate,
     reset_block,
@@ -58,6 +61,7 @@ from tlm_sim.ekf.layout import (
     C_DT,
     C_ERR_THRESH,
     C_GBIAS_PNSE,
+    C_GPS_DELAY,
     C_GYRO_PNSE,
     C_LANE_IMU,
     C_LANE_INIT_T,
@@ -65,6 +69,7 @@ from tlm_sim.ekf.layout import (
     C_MAG_N,
     C_SELECT_T,
     C_TARGET_DT,
+    C_TAU_OUTPUT,
     C_TILT_DRIFT,
     CONSTPOS_E,
     CONSTPOS_N,
@@ -114,8 +119,9 @@ from tlm_sim.ekf.layout import (
     O_VEL_RESET_COUNT,
     O_VN,
     O_YAW,
+    OUT_EPN,
+    OUT_IPN,
     P0,
-    PN,
     POS_RESET_COUNT,
     POS_TR,
     QW,
@@ -241,6 +247,8 @@ def _align(e, cfg, t):
     e[BUF_COUNT] = 0.0
     for j in range(6):
         e[BUF_OFS + j] = 0.0
+        e[OUT_EPN + j] = 0.0
+        e[OUT_IPN + j] = 0.0
 
 
 @njit(cache=True, nogil=True, _nrt=False)
@@ -307,6 +315,8 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
         return
     _static_tilt_check(e, dang, dvel, imu, dt)
     propagate(e, dang, dvel, imu, dt)
+    output_track(e, dt, cfg[C_TAU_OUTPUT], int(cfg[C_GPS_DELAY] / cfg[C_DT] + 0.5),
+                 e[BAD_IMU] != 0.0)
     buffer_push(e)
     if e[ACC_DT] >= cfg[C_TARGET_DT] - 0.5 * dt:
         tt = e[ACC_DT]
@@ -333,8 +343,8 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
         drift = cfg[C_TILT_DRIFT]
         if t - e[T_POS_PASS] > drift and t - e[T_VEL_PASS] > drift:
             e[AID_MODE] = AID_NONE
-            e[CONSTPOS_N] = e[PN]
-            e[CONSTPOS_E] = e[PN + 1]
+            e[CONSTPOS_N] = filter_now(e, 0)
+            e[CONSTPOS_E] = filter_now(e, 1)
             e[T_CONSTPOS] = t - cfg[C_TARGET_DT]
     if e[AID_MODE] == AID_NONE:
         lane_fuse_constpos(e, cfg, t, armed)

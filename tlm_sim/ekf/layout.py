@@ -19,6 +19,13 @@ Error state (covariance ordering, 15 states): attitude error as a small rotation
 earth frame (``R_true = (I + [phi x]) R_est``), velocity NED, position NED, gyro bias (body, rad/s),
 accel bias (body, m/s^2). The nominal state has 16 numbers (quaternion 4 + 12).
 
+Output and filter state (EKF3's output observer): the lane's velocity and position slots
+(``VN..PD``) and the ring buffer hold the *output* -- what controllers and the XKF1 log read.
+The filter's own velocity/position is the output plus the tracking error ``OUT_EPN..OUT_EVD``:
+measurement corrections and the bad-IMU vertical-velocity assignment change the filter state
+only, and the output converges to it with the time constant EK3_TAU_OUTPUT; resets (GPS
+position/velocity, height) shift both, as EKF3's resets shift the output history.
+
 Times stored in the arrays are seconds (``t_us * 1e-6``). Test ratios are EKF3's normalised
 innovation test ratios (innovation^2 / (gate^2 * innovation variance), fusion skipped when >= 1);
 ekf_check reads their square roots (see :func:`tlm_sim.ekf.lanes.ekf_output`).
@@ -101,8 +108,8 @@ HGT_RESET_COUNT = 470
 # configuration of the lane
 IMU_INDEX = 471  # which IMU instance this lane integrates
 N_PREDICT = 472  # covariance predictions so far
-# ring buffer of past states (stored minus the cumulative correction offset, so corrections
-# applied later shift all stored entries at O(1) cost)
+# ring buffer of past output states (stored minus the cumulative shift BUF_OFS, so shifts
+# applied later move all stored entries at O(1) cost)
 BUF_HEAD = 473  # index of the newest row
 BUF_COUNT = 474  # rows filled (<= NBUF)
 # bad-IMU handling (EKF3: vertical GPS velocity and height innovations both large, same sign)
@@ -113,8 +120,17 @@ T_BARO_LAST = 478  # time of the latest baro sample [s]
 T_GOOD_IMU = 479  # last GPS sample without bad-IMU detection (or last bad-IMU height reset) [s]
 TILT_BAD_T = 480  # time the lane has been static with a large tilt error [s]
 TILT_RESET_COUNT = 481  # stationary tilt re-alignments so far
-BUF_OFS = 482  # cumulative corrections pn, pe, pd, vn, ve, vd (6)
-BUF0 = 488  # NBUF rows of BUF_ROW
+# output tracking error: filter state minus output state (pn, pe, pd, vn, ve, vd), EKF3's
+# output-observer error. The lane's VN..PD hold the *output* (what controllers and logs read);
+# measurement corrections change the filter state only, and the output follows with the time
+# constant EK3_TAU_OUTPUT (see tlm_sim.ekf.core.output_track). Ordered like a ring-buffer row.
+OUT_EPN, OUT_EPE, OUT_EPD = 482, 483, 484  # [m]
+OUT_EVN, OUT_EVE, OUT_EVD = 485, 486, 487  # [m/s]
+# time integrals of the tracking errors (the observer's integral term), same order
+OUT_IPN, OUT_IPE, OUT_IPD = 488, 489, 490  # [m s]
+OUT_IVN, OUT_IVE, OUT_IVD = 491, 492, 493  # [m]
+BUF_OFS = 494  # cumulative output shifts pn, pe, pd, vn, ve, vd (6)
+BUF0 = 500  # NBUF rows of BUF_ROW
 N_EKF = BUF0 + NBUF * BUF_ROW
 
 # aiding modes (EKF3 names)
@@ -170,7 +186,8 @@ C_LANE_IMU = 35  # IMU instance of each lane (MAX_LANES)
 C_BAD_IMU_ACC_NSE = C_LANE_IMU + MAX_LANES  # accel process noise while the IMU is bad [m/s^2]
 C_BAD_IMU_HOLD = C_BAD_IMU_ACC_NSE + 1  # bad-IMU response hold time [s]
 C_BAD_IMU_TIMEOUT = C_BAD_IMU_HOLD + 1  # continuous bad-IMU time before a height reset [s]
-N_CFG = C_BAD_IMU_TIMEOUT + 1
+C_TAU_OUTPUT = C_BAD_IMU_TIMEOUT + 1  # EK3_TAU_OUTPUT: output observer time constant [s]
+N_CFG = C_TAU_OUTPUT + 1
 
 # ------------------------------------------------------------------ output vector --------------
 # filled by tlm_sim.ekf.lanes.ekf_output from the primary lane
