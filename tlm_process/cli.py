@@ -214,6 +214,22 @@ def _write_faults(out: Path, log: FlightLog) -> Path:
     return path
 
 
+def _from_manifest(args: argparse.Namespace):
+    """(mission, schedule, params, seed, profile) of ``--from-manifest DS --flight N``."""
+    from tlm_process.generate.manifest import scenario_from_manifest
+
+    if args.flight is None:
+        raise UsageError("--from-manifest needs --flight N")
+    clash = [opt for opt, v in (("--mission-file", args.mission_file), ("--faults", args.faults),
+                                ("--fault", args.fault), ("--set", args.set),
+                                ("--param", args.param), ("--params", args.params),
+                                ("--lambda", args.lam)) if v]
+    if clash:
+        raise UsageError(f"--from-manifest flies the data set's own scenario: drop "
+                         f"{', '.join(clash)}")
+    return scenario_from_manifest(args.from_manifest, args.flight)
+
+
 def cmd_fly(args: argparse.Namespace) -> int:
     """Fly one mission (with an optional fault schedule) and write its tables and faults.json."""
     from tlm_process.summary import flight_summary, format_summary, plot_trajectory
@@ -221,20 +237,25 @@ def cmd_fly(args: argparse.Namespace) -> int:
     from tlm_sim.profiles import profile_params
 
     fmts = _parse_formats(args.format)
-    params = _load_params(args)
-    mission = _load_mission(args)
-    changes = _parse_changes(args.set or [])
-    profile = _check_profile(args.profile)
-    schedule = _load_schedule(args, mission, profile_params(profile, params))
+    if args.from_manifest is not None:
+        mission, schedule, params, seed, profile = _from_manifest(args)
+        changes = []
+    else:
+        params = _load_params(args)
+        mission = _load_mission(args)
+        changes = _parse_changes(args.set or [])
+        profile = _check_profile(args.profile)
+        schedule = _load_schedule(args, mission, profile_params(profile, params))
+        seed = args.seed
     out = _prepare_out(args.out)
     t0 = time.perf_counter()
     faults = schedule if schedule is not None else (changes or None)
-    log = fly(mission, faults=faults, params=params, seed=args.seed, profile=profile)
+    log = fly(mission, faults=faults, params=params, seed=seed, profile=profile)
     wall = time.perf_counter() - t0
     log.write(out, formats=fmts)
     _write_faults(out, log)
     if not args.no_plot:
-        plot_trajectory(log, out / "trajectory.png", f"{mission.name}, seed {args.seed}")
+        plot_trajectory(log, out / "trajectory.png", f"{mission.name}, seed {seed}")
     s = flight_summary(log)
     (out / "summary.json").write_text(json.dumps(s, indent=1))
     print(format_summary(s))
@@ -324,6 +345,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--set", action="append", metavar="TIME_S:NAME=VALUE",
                    help="raw parameter change in flight (repeatable), e.g. "
                         "120:SIM_GPS1_ENABLE=0; not with --faults/--fault, and no fault records")
+    f.add_argument("--from-manifest", metavar="DS",
+                   help="fly flight --flight N of a `tlm generate` data set again, alone "
+                        "(its mission, faults, parameters and seed; identical tables)")
+    f.add_argument("--flight", type=int, metavar="N", help="flight number for --from-manifest")
     f.add_argument("--no-plot", action="store_true", help="skip trajectory.png")
     f.set_defaults(func=cmd_fly)
 
@@ -336,9 +361,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tlm_process import logcmd
     from tlm_process.crosscheck import command as crosscheck_cmd
+    from tlm_process.generate import command as generate_cmd
     from tlm_process.pipeline import command as process_cmd
 
     logcmd.add_parsers(sub)
+    generate_cmd.add_parser(sub)
     process_cmd.add_parser(sub)
     crosscheck_cmd.add_parser(sub)
     return ap
@@ -348,6 +375,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
     ap = build_parser()
     args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
+    from tlm_process.generate.errors import GenerateError
     from tlm_process.logcmd import LogError
     from tlm_sim.faults import FaultScheduleError
     from tlm_sim.mission import MissionError
@@ -358,7 +386,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         return args.func(args)
-    except (UsageError, ParamError, MissionError, FaultScheduleError, LogError) as e:
+    except (UsageError, ParamError, MissionError, FaultScheduleError, LogError,
+            GenerateError) as e:
         print(f"tlm: error: {e}", file=sys.stderr)
         return 2
     except FileNotFoundError as e:

@@ -17,8 +17,7 @@ by the ``tlm`` command line for ``--help``) does not pull in pandas and tlm_sim.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from tlm_process._lazy import lazy_exports
 
 _EXPORTS: dict[str, str] = {
     "anchoring": "AnchorComparison FaultWindow anchor_by_position anchor_by_time anchor_flight "
@@ -32,19 +31,4 @@ _EXPORTS: dict[str, str] = {
     "stretching": "PAPER_TABLE_7 PAPER_TABLE_8 class_counts fault_share format_counts "
                   "implied_lambda lambda_for_target stretch_schedule target_for_lambda",
 }
-_WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names.split()}
-
-__all__ = sorted(_WHERE)
-
-
-def __getattr__(name: str) -> Any:
-    mod = _WHERE.get(name)
-    if mod is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{mod}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

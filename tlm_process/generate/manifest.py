@@ -1,0 +1,202 @@
+"""The manifest of a generated data set: its settings, and what happened to every flight.
+
+``DS/manifest.json`` (the header): format, tlm version, a hash of the simulator's source, the
+run seed, the settings every flight was drawn and written with, λ, the state of the data set
+(``running`` while a run writes, ``complete`` or ``incomplete`` after), flight counts and one
+entry per run (executor, workers, wall time).
+
+``DS/flights.jsonl`` (the journal): one JSON line per finished flight, appended once its files
+are in place: ``flight``, ``status`` (``ok`` / ``failed``), ``scenario`` (everything needed to
+fly it again, :class:`~tlm_process.generate.scenario.Scenario`), ``summary``, ``timing``,
+``worker``, ``error`` and ``traceback`` for a failed flight. The last line of a flight counts.
+
+``DS/manifest.parquet``: the journal as a table, one row per flight (written at the end of a
+run, also after Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from tlm_process.generate.errors import GenerateError
+from tlm_process.generate.scenario import FlightSpec, Scenario
+
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "HEADER",
+    "JOURNAL",
+    "MANIFEST_TABLE",
+    "check_compatible",
+    "manifest_frame",
+    "read_header",
+    "read_journal",
+    "scenario_from_manifest",
+    "sim_fingerprint",
+    "write_json_atomic",
+]
+
+FORMAT = "tlm.dataset"
+FORMAT_VERSION = 1
+HEADER = "manifest.json"
+JOURNAL = "flights.jsonl"
+MANIFEST_TABLE = "manifest.parquet"
+
+
+def sim_fingerprint() -> dict[str, str]:
+    """tlm's version and a hash of tlm_sim's source (flights differ when either does)."""
+    import tlm_sim
+    from tlm_sim._cache import source_hash
+
+    return {"tlm_version": tlm_sim.__version__,
+            "sim_source": source_hash(Path(tlm_sim.__file__).resolve().parent)}
+
+
+def write_json_atomic(path: Path, doc: Any) -> None:
+    """Write JSON to ``path`` through a temporary file and a rename."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    os.replace(tmp, path)
+
+
+def read_header(ds: Path) -> dict[str, Any] | None:
+    """The header of data set ``ds``; None when the folder holds none.
+
+    Raises GenerateError when the file is unreadable or not a tlm data set header."""
+    path = ds / HEADER
+    if not path.exists():
+        return None
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise GenerateError(f"{path}: cannot read the data set manifest: {exc}") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise GenerateError(f"{path} is not a tlm data set manifest")
+    return doc
+
+
+def check_compatible(header: Mapping[str, Any], wanted: Mapping[str, Any], ds: Path) -> None:
+    """Raise GenerateError unless data set ``ds`` (its ``header``) was made like ``wanted``:
+    same format version, tlm version, simulator source, seed and settings."""
+    if header.get("format_version") != FORMAT_VERSION:
+        raise GenerateError(f"{ds} has data set format version {header.get('format_version')}; "
+                            f"this tlm writes version {FORMAT_VERSION}; use another --out")
+    for key, what in (("tlm_version", "tlm version"), ("sim_source", "simulator source")):
+        if header.get(key) != wanted.get(key):
+            raise GenerateError(f"{ds} was made with {what} {header.get(key)} (this tlm: "
+                                f"{wanted.get(key)}), whose flights differ; use another --out")
+    if header.get("seed") != wanted.get("seed"):
+        raise GenerateError(f"{ds} was made with --seed {header.get('seed')} (this run: "
+                            f"{wanted.get('seed')}); use another --out, or the same settings "
+                            "to continue it")
+    old, new = header.get("settings", {}), wanted.get("settings", {})
+    for key in sorted(set(old) | set(new)):
+        if old.get(key) != new.get(key):
+            detail = _first_difference(old.get(key), new.get(key), key)
+            raise GenerateError(f"{ds} was made with other settings ({detail}); use another "
+                                "--out, or the same settings to continue it")
+
+
+def _first_difference(a: Any, b: Any, where: str) -> str:
+    if isinstance(a, Mapping) and isinstance(b, Mapping):
+        for k in sorted(set(a) | set(b), key=str):
+            if a.get(k) != b.get(k):
+                return _first_difference(a.get(k), b.get(k), f"{where}.{k}")
+    return f"{where}: {json.dumps(a)} there, {json.dumps(b)} now"
+
+
+def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
+    """The last journal entry of every flight, and how many lines could not be read (a line
+    cut short by a hard kill)."""
+    path = ds / JOURNAL
+    entries: dict[int, dict[str, Any]] = {}
+    bad = 0
+    if not path.exists():
+        return entries, 0
+    with path.open("r", encoding="utf-8") as fh:
+        for line in fh:
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                rec = json.loads(line)
+                entries[int(rec["flight"])] = rec
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+                bad += 1
+    return entries, bad
+
+
+def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
+    """One row per flight: status, kind, seeds, mission, faults, λ, timings, error, scenario
+    (JSON)."""
+    rows = []
+    for flight in sorted(entries):
+        e = entries[flight]
+        sc = e.get("scenario") or {}
+        sm = e.get("summary") or {}
+        tm = e.get("timing") or {}
+        m = sc.get("mission") or {}
+        mission = (f"builtin-{m.get('id')}" if m.get("source") == "builtin"
+                   else f"random-{m.get('seed')}" if m else None)
+        rows.append({
+            "flight": flight,
+            "status": e.get("status"),
+            "kind": sc.get("kind"),
+            "seed": sc.get("seed"),
+            "mission": mission,
+            "faults": ",".join(f["fault"] for f in (sc.get("faults") or {}).get("faults", [])),
+            "faults_recorded": ",".join(sm.get("faults", [])),
+            "lam": sc.get("lam", math.nan),
+            "duration_s": sm.get("duration_s", math.nan),
+            "waypoints_reached": sm.get("waypoints_reached"),
+            "landed": sm.get("landed"),
+            "gps_rows": sm.get("gps_rows"),
+            "gps_fault_rows": sm.get("gps_fault_rows"),
+            "wall_s": tm.get("total_s", math.nan),
+            "fly_s": tm.get("fly_s", math.nan),
+            "worker": e.get("worker"),
+            "error": e.get("error"),
+            "scenario": json.dumps(sc, sort_keys=True),
+        })
+    cols = ["flight", "status", "kind", "seed", "mission", "faults", "faults_recorded", "lam",
+            "duration_s", "waypoints_reached", "landed", "gps_rows", "gps_fault_rows", "wall_s",
+            "fly_s", "worker", "error", "scenario"]
+    df = pd.DataFrame(rows, columns=cols)
+    for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows"):
+        df[c] = df[c].astype("Int64")
+    df["landed"] = df["landed"].astype("boolean")
+    return df
+
+
+def scenario_from_manifest(ds: str | os.PathLike, flight: int, *,
+                           strict: bool = True) -> FlightSpec:
+    """``(mission, schedule, params, seed, profile)`` of flight ``flight`` of data set ``ds``,
+    to fly it again alone (``tlm_sim.fly(*spec)`` gives the tables the data set holds).
+
+    Raises GenerateError: not a data set, no such flight, or (``strict``) a data set made by
+    another simulator source, whose flights would not come out the same."""
+    root = Path(ds)
+    header = read_header(root)
+    if header is None:
+        raise GenerateError(f"{root} is not a tlm data set (no {HEADER})")
+    if isinstance(flight, bool) or not isinstance(flight, int) or flight < 0:
+        raise GenerateError(f"--flight must be a whole number >= 0, got {flight!r}")
+    entries, _ = read_journal(root)
+    entry = entries.get(flight)
+    if entry is None or not entry.get("scenario"):
+        n = int(header.get("flights") or 0)
+        raise GenerateError(f"{root} has no flight {flight} (flights 0..{max(n - 1, 0)}, "
+                            f"{len(entries)} of them finished)")
+    fp = sim_fingerprint()
+    if strict and header.get("sim_source") != fp["sim_source"]:
+        raise GenerateError(f"{root} was made by another simulator source "
+                            f"({header.get('sim_source')}; this tlm: {fp['sim_source']}): "
+                            "its flights would not come out the same")
+    return Scenario.from_dict(entry["scenario"]).realise()

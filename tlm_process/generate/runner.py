@@ -1,0 +1,467 @@
+"""``generate()``: fly many sampled flights on an executor and write them into a data set.
+
+The calling thread samples nothing and flies nothing: it hands out small jobs (flight index,
+run seed, settings), keeps about two jobs per worker in flight, writes each finished flight
+(:class:`~tlm_process.generate.writer.DatasetWriter`) and shows progress. Flight ``i`` is a
+pure function of the run seed, ``i`` and the settings, so the tables do not depend on the
+executor, the worker count or the order flights finish in.
+
+Re-running with the same settings continues a data set: flights the journal lists as ok are
+skipped, failed ones are flown again. Ctrl-C stops handing out flights, lets the running ones
+finish (a second Ctrl-C drops them), and closes the data set consistently.
+
+``target_fault_ratio`` (γ): λ = γ / α (:func:`tlm_process.pipeline.stretching.lambda_for_target`,
+the paper's Eq. 5), with α the fault share of GPS rows measured on pilot flights (the first
+``pilot_flights`` scenarios flown with λ = 1, nothing written). λ is stored in the manifest and
+reused when the data set is continued.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import difflib
+import json
+import math
+import sys
+import time
+from collections import deque
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tlm_process.generate.errors import GenerateError
+from tlm_process.generate.executors import ExecutorHandle, open_executor
+from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprint
+from tlm_process.generate.scenario import ScenarioConfig, sample_scenario
+from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
+from tlm_process.generate.writer import DatasetWriter
+
+__all__ = ["GenerateOptions", "GenerateReport", "generate"]
+
+#: Jobs kept in flight per executor slot (the parent writes one while the workers fly).
+JOBS_PER_SLOT = 2
+#: How long running flights may take to finish after Ctrl-C [s].
+DRAIN_TIMEOUT_S = 60.0
+
+
+@dataclass
+class GenerateOptions:
+    """Settings of a ``tlm generate`` run (see :func:`generate`)."""
+
+    out: Path
+    flights: int
+    seed: int = 0
+    config: ScenarioConfig = field(default_factory=ScenarioConfig)
+    target_fault_ratio: float | None = None
+    tables: Sequence[str] | None = None
+    bin_log: bool = False
+    executor: str = "auto"
+    workers: int | None = None
+    scheduler: str | None = None
+    dask_local: int | None = None
+    progress: bool | None = None
+    pilot_flights: int = 16
+    connect_timeout_s: float = 10.0
+
+
+@dataclass
+class GenerateReport:
+    """What a run did (all times wall-clock seconds unless named ``sim``)."""
+
+    out: Path
+    flights: int
+    skipped: int = 0
+    ok: int = 0
+    failed: int = 0
+    interrupted: bool = False
+    state: str = ""
+    executor: str = ""
+    slots: int = 0
+    wall_s: float = 0.0
+    sim_s: float = 0.0
+    fly_s: float = 0.0
+    encode_s: float = 0.0
+    first_flight_s: float = 0.0
+    bytes_written: int = 0
+    lam: float = 1.0
+    alpha_pilot: float | None = None
+    target_fault_ratio: float | None = None
+    gps_rows: int = 0
+    gps_fault_rows: int = 0
+    peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    parent_peak_rss_mb: float = 0.0
+    restarts: int = 0
+    errors: list[str] = field(default_factory=list)
+
+    @property
+    def ran(self) -> int:
+        """Flights finished in this run (ok or failed)."""
+        return self.ok + self.failed
+
+    @property
+    def flights_per_min(self) -> float:
+        """Finished flights per wall-clock minute of this run."""
+        return 60.0 * self.ran / self.wall_s if self.wall_s > 0 else math.nan
+
+    @property
+    def fault_share(self) -> float:
+        """Share of GPS rows inside fault windows, flights of this run."""
+        return self.gps_fault_rows / self.gps_rows if self.gps_rows else math.nan
+
+    def lines(self) -> list[str]:
+        """Human-readable summary."""
+        out = [f"data set           {self.out} ({self.state})",
+               f"flights            {self.ok} ok, {self.failed} failed this run"
+               + (f", {self.skipped} already done" if self.skipped else "")
+               + (" (interrupted: run the same command again to continue)"
+                  if self.interrupted else "")]
+        if self.ran:
+            rt = self.sim_s / self.wall_s if self.wall_s > 0 else math.nan
+            out.append(f"wall time          {self.wall_s:.1f} s on {self.executor}: "
+                       f"{self.flights_per_min:.0f} flights/min, {rt:.0f}x real time overall")
+            if self.ok:
+                out.append(f"per flight         {self.sim_s / self.ok:.0f} s simulated, "
+                           f"fly {self.fly_s / self.ok:.3f} s + encode "
+                           f"{self.encode_s / self.ok:.3f} s of worker time")
+            out.append(f"written            {self.bytes_written / 1e6:.1f} MB")
+            if self.peak_rss_mb:
+                out.append(f"peak memory        {max(self.peak_rss_mb.values()):.0f} MB per "
+                           f"worker process (largest of {len(self.peak_rss_mb)})")
+        lam = f"lambda             {self.lam:g}"
+        if self.alpha_pilot is not None:
+            lam += f" (pilot fault share alpha {100 * self.alpha_pilot:.1f} %)"
+        out.append(lam)
+        if self.gps_rows:
+            target = ("" if self.target_fault_ratio is None
+                      else f" (target {100 * self.target_fault_ratio:.1f} %)")
+            out.append(f"fault share        {100 * self.fault_share:.1f} % of GPS rows{target}")
+        if self.restarts:
+            out.append(f"worker pool        restarted {self.restarts} time(s): a worker process "
+                       "died")
+        out += [f"failed             {e}" for e in self.errors[:5]]
+        if len(self.errors) > 5:
+            out.append(f"                   ... {len(self.errors) - 5} more in the manifest")
+        return out
+
+
+def _check_tables(tables: Sequence[str] | None) -> list[str] | None:
+    from tlm_sim.flightlog import LOGGED_MESSAGES
+
+    if tables is None:
+        return None
+    out = []
+    for t in tables:
+        name = str(t).strip().upper()
+        if name not in LOGGED_MESSAGES:
+            close = difflib.get_close_matches(name, LOGGED_MESSAGES, n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise GenerateError(f"--tables: tlm logs no table {t!r}{hint}; tables: "
+                                f"{', '.join(LOGGED_MESSAGES)}")
+        if name not in out:
+            out.append(name)
+    if not out:
+        raise GenerateError("--tables: name at least one table")
+    return sorted(out)
+
+
+def _check(opts: GenerateOptions) -> list[str] | None:
+    for what, v, lo in (("--flights", opts.flights, 1), ("--seed", opts.seed, 0),
+                        ("pilot flights", opts.pilot_flights, 1)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise GenerateError(f"{what} must be a whole number >= {lo}, got {v!r}")
+    g = opts.target_fault_ratio
+    if g is not None:
+        if isinstance(g, bool) or not isinstance(g, int | float) or not 0 < g < 1:
+            raise GenerateError(f"--target-fault-ratio must be a number in (0, 1), got {g!r}")
+        if opts.config.lam != 1.0:
+            raise GenerateError("give --lambda or --target-fault-ratio, not both")
+    return _check_tables(opts.tables)
+
+
+def _settings(opts: GenerateOptions, tables: list[str] | None) -> dict[str, Any]:
+    scenario = opts.config.to_dict()
+    lam = scenario.pop("lam")
+    return {"scenario": scenario,
+            "lambda": None if opts.target_fault_ratio is not None else lam,
+            "target_fault_ratio": opts.target_fault_ratio,
+            "tables": tables, "bin": bool(opts.bin_log)}
+
+
+class _Run:
+    """One run's loop: hand out jobs (``window`` in flight), collect results, pass them on.
+
+    A worker process that dies breaks its whole pool (every job in it is lost, and which one
+    killed it is unknown): the pool is restarted and the lost jobs are flown again one at a
+    time, so a job that breaks the pool while flying alone is the culprit and is recorded as
+    failed; the others come out as usual."""
+
+    def __init__(self, handle: ExecutorHandle, jobs: Iterator[dict[str, Any]], window: int,
+                 on_result: Callable[[Mapping[str, Any]], None]) -> None:
+        self.handle = handle
+        self.jobs = jobs
+        self.window = max(1, window)
+        self.on_result = on_result
+        self.pending: dict[cf.Future, tuple[int, dict[str, Any]]] = {}
+        self.retry: deque[tuple[int, dict[str, Any]]] = deque()
+        self.exhausted = False
+        self.draining = False
+
+    @property
+    def busy(self) -> bool:
+        """Jobs are handed out, waiting to be retried, or still to come."""
+        return bool(self.pending or self.retry or not (self.exhausted or self.draining))
+
+    def _submit(self, job: dict[str, Any], tries: int) -> None:
+        try:
+            fut = self.handle.pool.submit(fly_job, job)
+        except BrokenProcessPool:
+            self._broken([])
+            self.retry.appendleft((tries, job))
+            return
+        self.pending[fut] = (tries, job)
+
+    def fill(self) -> None:
+        """Hand out jobs up to the window (a retried job only when nothing else runs)."""
+        while not self.draining:
+            if self.retry:
+                if not self.pending:
+                    tries, job = self.retry.popleft()
+                    self._submit(job, tries)
+                return
+            if self.exhausted or len(self.pending) >= self.window:
+                return
+            job = next(self.jobs, None)
+            if job is None:
+                self.exhausted = True
+                return
+            self._submit(job, 0)
+
+    def step(self, timeout: float | None = None) -> int:
+        """Fill, then wait up to ``timeout`` for finished jobs and pass their results on;
+        returns how many finished."""
+        self.fill()
+        if not self.pending:
+            return 0
+        done, _ = cf.wait(list(self.pending), timeout=timeout,
+                          return_when=cf.FIRST_COMPLETED)
+        n = 0
+        for fut in sorted(done, key=lambda f: self.pending.get(f, (0, {"flight": -1}))[1][
+                "flight"]):
+            if fut not in self.pending:
+                continue  # lost with a broken pool, already queued again
+            tries, job = self.pending.pop(fut)
+            if fut.cancelled():
+                continue
+            try:
+                res = fut.result()
+            except BrokenProcessPool:
+                self._broken([(tries, job)])
+                continue
+            except Exception as exc:  # noqa: BLE001 - e.g. a Dask worker lost
+                res = _failed(job, f"{type(exc).__name__}: {exc}".splitlines()[0][:500])
+            self.on_result(_with_scenario(res, job))
+            n += 1
+        return n
+
+    def _broken(self, first: list[tuple[int, dict[str, Any]]]) -> None:
+        lost = first + list(self.pending.values())
+        self.pending.clear()
+        self.handle.restart()
+        for tries, job in sorted(lost, key=lambda x: x[1]["flight"]):
+            if tries >= 1 and len(lost) == 1:  # it ran alone: it killed the worker
+                res = _failed(job, "the worker process died while flying it")
+                self.on_result(_with_scenario(res, job))
+            else:
+                self.retry.append((tries + 1, job))
+
+    def stop(self) -> None:
+        """Hand out nothing more and cancel the jobs that have not started."""
+        self.draining = True
+        self.retry.clear()
+        for fut in list(self.pending):
+            if fut.cancel():
+                self.pending.pop(fut)
+
+
+def _failed(job: Mapping[str, Any], error: str) -> dict[str, Any]:
+    """The result of a job that produced none (the executor raised)."""
+    return {"flight": job["flight"], "status": "failed", "error": error, "traceback": None,
+            "scenario": None, "summary": {}, "timing": {}, "parts": {}, "bin": None,
+            "worker": None}
+
+
+def _with_scenario(res: dict[str, Any], job: Mapping[str, Any]) -> dict[str, Any]:
+    """A failed result without its scenario gets it here, so the manifest says what the
+    flight was (unless drawing it fails here too)."""
+    if res.get("status") != "ok" and res.get("scenario") is None:
+        try:
+            config = ScenarioConfig.from_dict(json.loads(job["config"]))
+            res["scenario"] = sample_scenario(int(job["run_seed"]), int(job["flight"]),
+                                              config).to_dict()
+        except Exception:  # noqa: BLE001 - the recorded error is what counts
+            pass
+    return res
+
+
+def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
+                  progress: bool | None) -> tuple[float, float]:
+    """λ = γ / α from pilot flights (see the module docstring); returns (λ, α)."""
+    from tlm_process.pipeline.stretching import lambda_for_target
+
+    k = opts.pilot_flights
+    config = opts.config.with_lambda(1.0)
+    rows = [0, 0]
+    errors: list[str] = []
+
+    def take(res: Mapping[str, Any]) -> None:
+        if res.get("status") == "ok":
+            rows[0] += int(res["summary"]["gps_fault_rows"])
+            rows[1] += int(res["summary"]["gps_rows"])
+        else:
+            errors.append(f"flight {res['flight']}: {res.get('error')}")
+
+    jobs = (make_job(i, opts.seed, config, tables=None, bin_log=False, pilot=True)
+            for i in range(k))
+    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take)
+    bar = _bar(k, "pilot flights", progress)
+    try:
+        while run.busy:
+            bar.update(run.step())
+    finally:
+        bar.close()
+    if rows[1] == 0:
+        why = f" ({errors[0]})" if errors else ""
+        raise GenerateError(f"--target-fault-ratio: no pilot flight finished{why}")
+    alpha = rows[0] / rows[1]
+    if alpha <= 0:
+        raise GenerateError("--target-fault-ratio: the pilot flights have no fault rows (do "
+                            "the kinds give any faults?)")
+    try:
+        lam = lambda_for_target(alpha, gamma)
+    except ValueError as exc:
+        raise GenerateError(f"--target-fault-ratio: {exc}") from None
+    return float(lam), float(alpha)
+
+
+def _bar(total: int, desc: str, progress: bool | None) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="flight", dynamic_ncols=True, smoothing=0.05,
+                file=sys.stderr, disable=None if progress is None else not progress)
+
+
+def generate(opts: GenerateOptions) -> GenerateReport:
+    """Generate (or continue) the data set ``opts.out``; see the module docstring.
+
+    With the default ``process`` executor, call it under ``if __name__ == "__main__":`` in a
+    script: worker processes are started with ``spawn`` and import the main module.
+
+    Raises:
+        GenerateError: bad settings, an unwritable or foreign output folder, a data set made
+            with other settings or another tlm, an unreachable Dask scheduler.
+    """
+    t_start = time.perf_counter()
+    tables = _check(opts)
+    settings = _settings(opts, tables)
+    wanted = {"format": FORMAT, "format_version": FORMAT_VERSION, **sim_fingerprint(),
+              "seed": opts.seed, "flights": opts.flights, "settings": settings}
+    writer = DatasetWriter(opts.out)
+    status = writer.open(wanted)
+    report = GenerateReport(Path(opts.out), opts.flights,
+                            target_fault_ratio=opts.target_fault_ratio)
+    done = {f for f, st in status.items() if st == "ok"}
+    todo = [i for i in range(opts.flights) if i not in done]
+    report.skipped = opts.flights - len(todo)
+    handle = None
+    run_info: dict[str, Any] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    try:
+        config = opts.config
+        gamma = opts.target_fault_ratio
+        need_pilot = gamma is not None and writer.header.get("lambda") is None
+        if todo or need_pilot:
+            handle = open_executor(opts.executor, opts.workers, scheduler=opts.scheduler,
+                                   dask_local=opts.dask_local,
+                                   timeout_s=opts.connect_timeout_s)
+            report.executor, report.slots = handle.description, handle.slots
+            run_info.update(executor=handle.description, slots=handle.slots)
+        if gamma is not None:
+            if need_pilot:
+                assert handle is not None
+                lam, alpha = _pilot_lambda(opts, handle, gamma, opts.progress)
+                writer.header["lambda"] = lam
+                writer.header["pilot"] = {"flights": opts.pilot_flights, "alpha": alpha}
+                report.alpha_pilot = alpha
+            else:
+                report.alpha_pilot = (writer.header.get("pilot") or {}).get("alpha")
+            config = config.with_lambda(float(writer.header["lambda"]))
+        else:
+            writer.header["lambda"] = config.lam
+        report.lam = config.lam
+        if todo:
+            assert handle is not None
+            _fly_all(opts, handle, writer, report, config, tables, todo, t_start)
+    except KeyboardInterrupt:
+        report.interrupted = True
+    finally:
+        if handle is not None:
+            report.restarts = handle.restarts
+            handle.close(cancel=True)
+        report.wall_s = time.perf_counter() - t_start
+        report.parent_peak_rss_mb = peak_rss_mb()
+        run_info.update(wall_s=round(report.wall_s, 3), ok=report.ok, failed=report.failed,
+                        interrupted=report.interrupted)
+        header = writer.close(run_info)
+        report.state = header.get("state", "")
+    return report
+
+
+def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWriter,
+             report: GenerateReport, config: ScenarioConfig, tables: list[str] | None,
+             todo: list[int], t_start: float) -> None:
+    """Fly the flights ``todo`` and write them (the body of :func:`generate`)."""
+    bar = _bar(len(todo), "flights", opts.progress)
+
+    def take(res: Mapping[str, Any]) -> None:
+        entry = writer.put(res)
+        report.bytes_written += int(entry.get("bytes", 0))
+        tm = res.get("timing") or {}
+        if entry["status"] == "ok":
+            report.ok += 1
+            sm = res["summary"]
+            report.sim_s += float(sm.get("duration_s", 0.0))
+            report.gps_rows += int(sm.get("gps_rows", 0))
+            report.gps_fault_rows += int(sm.get("gps_fault_rows", 0))
+            report.fly_s += float(tm.get("fly_s", 0.0))
+            report.encode_s += float(tm.get("encode_s", 0.0))
+        else:
+            report.failed += 1
+            report.errors.append(f"flight {res['flight']}: {res.get('error')}")
+            bar.set_postfix(failed=report.failed, refresh=False)
+        if tm.get("first"):
+            report.first_flight_s = max(report.first_flight_s, float(tm.get("total_s", 0.0)))
+        w = res.get("worker")
+        if w:
+            key = f"{w.get('host')}:{w.get('pid')}"
+            report.peak_rss_mb[key] = max(report.peak_rss_mb.get(key, 0.0),
+                                          float(w.get("peak_rss_mb", 0.0)))
+        bar.update(1)
+
+    jobs = (make_job(i, opts.seed, config, tables=tables, bin_log=opts.bin_log) for i in todo)
+    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take)
+    try:
+        while run.busy:
+            run.step()
+    except KeyboardInterrupt:
+        report.interrupted = True
+        run.stop()
+        bar.set_description("finishing running flights (Ctrl-C again to drop them)")
+        deadline = time.perf_counter() + DRAIN_TIMEOUT_S
+        try:
+            while run.pending and time.perf_counter() < deadline:
+                run.step(max(0.0, deadline - time.perf_counter()))
+        except KeyboardInterrupt:
+            pass
+    finally:
+        bar.close()

@@ -1,0 +1,454 @@
+"""Monte Carlo scenarios: everything one flight of a generated data set needs, drawn from the
+run seed.
+
+Flight ``i`` of a run with seed ``S`` draws from ``numpy.random.SeedSequence(S,
+spawn_key=(i, stream))`` (what ``SeedSequence(S).spawn`` gives its i-th child, one level deeper
+per stream), so it is the same flight whatever the number of flights, the executor or the
+worker count. One stream per aspect keeps them apart: changing the mission mix does not move
+any fault time. Streams:
+
+0. **kind**: ``none`` (no fault), ``single`` (one fault) or ``paper`` (all four faults in one
+   flight, the paper's §3.2 / §4.3 sequence), by :attr:`ScenarioConfig.kinds` shares.
+1. **mission**: a built-in shape (1-4, uniform) or a random Algorithm 1 mission around
+   :attr:`ScenarioConfig.home` (:func:`tlm_sim.mission.random_loop` + ``make_mission``: six raw
+   points on a jittered loop, ~90 interpolated waypoints), by :attr:`ScenarioConfig.missions`
+   shares. The altitude profile is drawn for both: uniform in ``alt_range`` per waypoint,
+   Savitzky-Golay smoothed (built-in shapes keep their own profile with
+   ``builtin_altitudes="keep"``).
+2. **faults**: types, order, start times and holds (all rounded to 0.1 s; times in seconds
+   since boot, AUTO taken to start at ``auto_start_s``):
+
+   * ``single``: one type by ``fault_weights``, starting U(``single_start_s``) s after AUTO;
+   * ``paper``: GPS, accel, engine in a random order (the paper's order with
+     ``shuffle=False``) and then RC (its failsafe sends the copter home, so it comes last);
+     the first starts U(``gap_s``) s after AUTO, each later one U(``gap_s``) s after the
+     previous one ends;
+
+   every hold is U(``hold_s``) s times λ (``lam``, Eq. 5's window factor). A fault whose
+   boundary would come after the longest the flight can last is dropped with those after it.
+3. **environment**: each parameter of :attr:`ScenarioConfig.ranges` uniform in its range
+   (wind speed, direction and turbulence, sensor noise amplitudes; rounded to 0.001).
+4. **flight seed**: the seed of all the flight's own noise draws (IMU, GPS, baro, compass,
+   gusts), 0 .. 2**31 - 1.
+
+A :class:`Scenario` holds the outcome as plain data (a mission recipe, the fault schedule's
+file form, parameter overrides, the flight seed, the profile), so a flight can be re-flown
+from the manifest alone (:meth:`Scenario.realise`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from functools import lru_cache
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tlm_process.generate.errors import GenerateError
+from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
+from tlm_sim.flight import max_duration_s
+from tlm_sim.geo import HOME_CMAC
+from tlm_sim.mission import (
+    BUILTIN_IDS,
+    Mission,
+    MissionError,
+    builtin_mission,
+    make_mission,
+    random_loop,
+)
+from tlm_sim.params import ParamError, Params
+from tlm_sim.profiles import PROFILES, profile_params
+
+__all__ = [
+    "KINDS",
+    "MISSION_SOURCES",
+    "FlightSpec",
+    "Scenario",
+    "ScenarioConfig",
+    "mission_from_recipe",
+    "sample_scenario",
+]
+
+#: Flight kinds, in the order their shares are drawn.
+KINDS: tuple[str, ...] = ("none", "single", "paper")
+#: Mission sources, in the order their shares are drawn.
+MISSION_SOURCES: tuple[str, ...] = ("builtin", "random")
+#: Faults of a paper-style flight before the RC fault (shuffled unless ``shuffle=False``).
+PAPER_FIRST: tuple[str, ...] = ("gps", "accel", "engine")
+
+_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED = range(5)
+
+#: Default draws of the environment (uniform, per flight): wind as ArduPilot's SITL takes it
+#: and sensor noise amplitudes on top of the simulator's built-in noise.
+DEFAULT_RANGES: dict[str, tuple[float, float]] = {
+    "SIM_WIND_SPD": (0.0, 5.0),  # m/s at full-strength height
+    "SIM_WIND_DIR": (0.0, 360.0),  # deg, direction the wind comes from
+    "SIM_WIND_TURB": (0.0, 1.0),  # m/s
+    "SIM_GYR1_RND": (0.0, 0.5),  # deg/s at full throttle
+    "SIM_GYR2_RND": (0.0, 0.5),
+    "SIM_BARO_RND": (0.0, 0.2),  # m
+    "SIM_BAR2_RND": (0.0, 0.2),
+    "SIM_MAG_RND": (0.0, 20.0),  # mGauss
+}
+
+
+def _shares(d: Mapping[str, Any], known: tuple[str, ...], what: str) -> dict[str, float]:
+    """Validated shares in ``known`` order (missing names get 0); at least one > 0."""
+    if not isinstance(d, Mapping):
+        raise GenerateError(f"{what} must be a mapping name -> share, got {type(d).__name__}")
+    unknown = [k for k in d if k not in known]
+    if unknown:
+        raise GenerateError(f"{what}: unknown {unknown[0]!r}; choose from {', '.join(known)}")
+    out = {}
+    for k in known:
+        v = d.get(k, 0.0)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0:
+            raise GenerateError(f"{what}: share of {k!r} must be a number >= 0, got {v!r}")
+        out[k] = float(v)
+    if sum(out.values()) <= 0:
+        raise GenerateError(f"{what}: at least one share must be > 0")
+    return out
+
+
+def _range(v: Any, what: str, lo_min: float = 0.0) -> tuple[float, float]:
+    try:
+        lo, hi = (float(x) for x in v)
+    except (TypeError, ValueError):
+        raise GenerateError(f"{what} must be a pair (low, high), got {v!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < lo_min or hi < lo:
+        raise GenerateError(f"{what} must be finite with {lo_min:g} <= low <= high, got "
+                            f"({lo:g}, {hi:g})")
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class ScenarioConfig:
+    """What the scenario sampler draws from (all times in seconds, see the module docstring).
+
+    Attributes:
+        kinds: share of ``none`` / ``single`` / ``paper`` flights (normalised).
+        missions: share of ``builtin`` / ``random`` missions (normalised).
+        home: (lat deg, lon deg, alt m AMSL) of random missions.
+        n_waypoints: waypoints of a random mission (Algorithm 1 target count).
+        alt_range: (low, high) waypoint altitudes, metres above home (paper: 15-25 m).
+        builtin_altitudes: ``"redraw"`` (a fresh altitude profile per flight) or ``"keep"``.
+        fault_weights: relative weight of each fault type in ``single`` flights.
+        auto_start_s: when AUTO starts, s since boot (the switch is at ~20 s in tlm flights).
+        gap_s: normal flight before each fault of a ``paper`` flight.
+        hold_s: how long a fault is held before λ.
+        single_start_s: start of a ``single`` fault after AUTO.
+        shuffle: shuffle GPS/accel/engine in ``paper`` flights (RC stays last).
+        lam: λ, every hold is multiplied by it (> 0).
+        ranges: parameter name -> (low, high), drawn uniformly per flight.
+        params: parameter overrides for every flight (ArduPilot names).
+        profile: ``current`` or ``paper`` (see :mod:`tlm_sim.profiles`).
+    """
+
+    kinds: Mapping[str, float] = field(
+        default_factory=lambda: {"none": 0.2, "single": 0.4, "paper": 0.4})
+    missions: Mapping[str, float] = field(
+        default_factory=lambda: {"builtin": 0.5, "random": 0.5})
+    home: tuple[float, float, float] = HOME_CMAC
+    n_waypoints: int = 90
+    alt_range: tuple[float, float] = (15.0, 25.0)
+    builtin_altitudes: str = "redraw"
+    fault_weights: Mapping[str, float] = field(
+        default_factory=lambda: {"gps": 1.0, "accel": 1.0, "engine": 1.0, "rc": 1.0})
+    auto_start_s: float = 20.0
+    gap_s: tuple[float, float] = (15.0, 25.0)
+    hold_s: tuple[float, float] = (20.0, 40.0)
+    single_start_s: tuple[float, float] = (15.0, 240.0)
+    shuffle: bool = True
+    lam: float = 1.0
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=lambda: dict(DEFAULT_RANGES))
+    params: Mapping[str, float] = field(default_factory=dict)
+    profile: str = "current"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "kinds", _shares(self.kinds, KINDS, "kinds"))
+        set_(self, "missions", _shares(self.missions, MISSION_SOURCES, "missions"))
+        set_(self, "fault_weights", _shares(self.fault_weights, tuple(FAULT_TYPES),
+                                            "fault_weights"))
+        try:
+            home = tuple(float(v) for v in self.home)
+        except (TypeError, ValueError):
+            raise GenerateError(f"home must be (lat, lon, alt_amsl_m), got {self.home!r}") from None
+        if len(home) != 3 or not all(math.isfinite(v) for v in home) or abs(home[0]) > 90 or abs(
+                home[1]) > 180:
+            raise GenerateError(f"home must be (lat, lon, alt_amsl_m) in degrees/metres, got "
+                                f"{self.home!r}")
+        set_(self, "home", home)
+        if isinstance(self.n_waypoints, bool) or not isinstance(
+                self.n_waypoints, int | np.integer) or not 2 <= self.n_waypoints <= 10_000:
+            raise GenerateError(f"n_waypoints must be a whole number 2..10000, got "
+                                f"{self.n_waypoints!r}")
+        set_(self, "n_waypoints", int(self.n_waypoints))
+        set_(self, "alt_range", _range(self.alt_range, "alt_range"))
+        if self.builtin_altitudes not in ("redraw", "keep"):
+            raise GenerateError(f"builtin_altitudes must be 'redraw' or 'keep', got "
+                                f"{self.builtin_altitudes!r}")
+        for name in ("gap_s", "hold_s", "single_start_s"):
+            set_(self, name, _range(getattr(self, name), name))
+        if self.hold_s[0] <= 0:
+            raise GenerateError(f"hold_s must be > 0 s, got {self.hold_s}")
+        a = self.auto_start_s
+        if isinstance(a, bool) or not isinstance(a, int | float) or not math.isfinite(a) or a < 0:
+            raise GenerateError(f"auto_start_s must be a number >= 0, got {a!r}")
+        set_(self, "auto_start_s", float(a))
+        lam = self.lam
+        if isinstance(lam, bool) or not isinstance(lam, int | float) or not math.isfinite(
+                lam) or lam <= 0:
+            raise GenerateError(f"lambda must be a finite number > 0, got {lam!r}")
+        set_(self, "lam", float(lam))
+        set_(self, "shuffle", bool(self.shuffle))
+        if self.profile not in PROFILES:
+            raise GenerateError(f"unknown profile {self.profile!r}; choose from "
+                                f"{', '.join(PROFILES)}")
+        if not isinstance(self.ranges, Mapping) or not isinstance(self.params, Mapping):
+            raise GenerateError("ranges and params must be mappings by parameter name")
+        ranges = {str(k): _range(v, f"range of {k}", -math.inf)
+                  for k, v in sorted(self.ranges.items())}
+        params = {str(k): v for k, v in sorted(self.params.items())}
+        clash = sorted(set(ranges) & set(params))
+        if clash:
+            raise GenerateError(f"{clash[0]} is both drawn (ranges) and fixed (params)")
+        try:  # names and value ranges, both ends of every draw
+            Params({**params, **{k: lo for k, (lo, _) in ranges.items()}})
+            Params({**params, **{k: hi for k, (_, hi) in ranges.items()}})
+        except ParamError as exc:
+            raise GenerateError(f"parameters: {exc}") from None
+        set_(self, "ranges", ranges)
+        set_(self, "params", {k: float(params[k]) for k in sorted(params)})
+
+    def with_lambda(self, lam: float) -> ScenarioConfig:
+        """The same configuration with λ = ``lam``."""
+        return ScenarioConfig(**{**self.to_dict(), "lam": lam})
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON form (:meth:`from_dict` reads it back to an equal configuration)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, tuple):
+                v = list(v)
+            elif isinstance(v, Mapping):
+                v = {k: list(x) if isinstance(x, tuple) else x for k, x in v.items()}
+            out[f.name] = v
+        return out
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> ScenarioConfig:
+        """A configuration from :meth:`to_dict`'s form (or any subset of its keys)."""
+        if not isinstance(d, Mapping):
+            raise GenerateError(f"a scenario configuration must be a mapping, got "
+                                f"{type(d).__name__}")
+        names = {f.name for f in fields(cls)}
+        unknown = [k for k in d if k not in names]
+        if unknown:
+            raise GenerateError(f"unknown scenario setting {unknown[0]!r}; known: "
+                                f"{', '.join(sorted(names))}")
+        return cls(**dict(d))
+
+
+class FlightSpec(NamedTuple):
+    """The arguments of :func:`tlm_sim.fly` for one flight."""
+
+    mission: Mission
+    schedule: FaultSchedule
+    params: Params
+    seed: int
+    profile: str
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One flight of a data set, as plain data (JSON-ready through :meth:`to_dict`).
+
+    Attributes:
+        flight: flight index in the data set (0-based).
+        seed: the flight's seed (all noise draws in flight).
+        kind: ``none``, ``single`` or ``paper``.
+        mission: recipe, see :func:`mission_from_recipe`.
+        faults: the fault schedule in file form (``FaultSchedule.to_dict``), λ applied.
+        params: parameter overrides (drawn environment + fixed parameters).
+        profile: ArduPilot profile of the flight.
+        lam: λ the holds were scaled by.
+        mission_sha1: hash of the mission's waypoints, checked when the mission is rebuilt.
+        dropped: faults left out because they would start after the flight can end.
+    """
+
+    flight: int
+    seed: int
+    kind: str
+    mission: dict[str, Any]
+    faults: dict[str, Any]
+    params: dict[str, float]
+    profile: str = "current"
+    lam: float = 1.0
+    mission_sha1: str | None = None
+    dropped: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Scenario:
+        """Read :meth:`to_dict`'s form back."""
+        try:
+            return cls(**{f.name: d[f.name] for f in fields(cls) if f.name in d})
+        except TypeError as exc:
+            raise GenerateError(f"not a scenario record: {exc}") from None
+
+    @property
+    def fault_types(self) -> list[str]:
+        """Fault types of the schedule, in order."""
+        return [f["fault"] for f in self.faults.get("faults", [])]
+
+    def realise(self) -> FlightSpec:
+        """Mission, fault schedule, parameters, seed and profile to fly (``tlm_sim.fly``).
+
+        Raises GenerateError when the rebuilt mission's hash differs from ``mission_sha1``
+        (the scenario was drawn by a tlm whose mission generator differs)."""
+        mission = mission_from_recipe(self.mission)
+        if self.mission_sha1 is not None and mission_hash(mission) != self.mission_sha1:
+            raise GenerateError(f"flight {self.flight}: the mission rebuilt from its recipe "
+                                "differs from the one flown (the data set was made by another "
+                                "tlm version)")
+        try:
+            schedule = FaultSchedule.from_dict(self.faults)
+            params = Params(self.params)
+        except (FaultScheduleError, ParamError) as exc:
+            raise GenerateError(f"flight {self.flight}: {exc}") from None
+        return FlightSpec(mission, schedule, params, int(self.seed), self.profile)
+
+
+def mission_hash(mission: Mission) -> str:
+    """SHA-1 (hex, 16 characters) of a mission's home and waypoints (float64 bytes)."""
+    h = hashlib.sha1(np.asarray(mission.home, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(mission.waypoints, dtype=np.float64).tobytes())
+    return h.hexdigest()[:16]
+
+
+def mission_from_recipe(recipe: Mapping[str, Any]) -> Mission:
+    """Build a mission from its recipe.
+
+    ``{"source": "builtin", "id": k}``: built-in mission k as is; with ``"alt_seed": s`` (and
+    ``"alt_range"``) its shape with a fresh altitude profile (``rng.uniform`` per waypoint from
+    ``default_rng(s)``, Savitzky-Golay 21/3). ``{"source": "random", "seed": s, "home": [...],
+    "n_waypoints": n, "alt_range": [lo, hi]}``: ``random_loop(home, default_rng(s))`` and
+    ``make_mission`` drawing the altitudes from the same generator (as the reference driver).
+    """
+    try:
+        return _mission_cached(_freeze(recipe))
+    except (MissionError, KeyError, TypeError, ValueError) as exc:
+        raise GenerateError(f"bad mission recipe {dict(recipe)!r}: {exc}") from None
+
+
+def _freeze(d: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
+    return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in d.items()))
+
+
+@lru_cache(maxsize=64)
+def _mission_cached(frozen: tuple[tuple[str, Any], ...]) -> Mission:
+    r = dict(frozen)
+    source = r["source"]
+    if source == "builtin":
+        base = builtin_mission(int(r["id"]))
+        if r.get("alt_seed") is None:
+            return base
+        rng = np.random.default_rng(int(r["alt_seed"]))
+        return make_mission(base.raw_waypoints, base.n_waypoints, tuple(r["alt_range"]),
+                            seed=int(r["alt_seed"]), savgol=base.savgol, home=base.home, rng=rng,
+                            name=f"builtin-{int(r['id'])}-alt{int(r['alt_seed'])}")
+    if source == "random":
+        seed = int(r["seed"])
+        home = tuple(float(v) for v in r["home"])
+        rng = np.random.default_rng(seed)
+        raw = random_loop(home, rng)
+        return make_mission(raw, int(r["n_waypoints"]), tuple(r["alt_range"]), seed=seed,
+                            home=home, rng=rng, name=f"random-{seed}")
+    raise ValueError(f"unknown mission source {source!r}")
+
+
+def _stream(run_seed: int, flight: int, stream: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(run_seed, spawn_key=(flight, stream)))
+
+
+def _pick(rng: np.random.Generator, shares: Mapping[str, float]) -> str:
+    """One name by its share (one uniform draw; names in the mapping's order)."""
+    names = list(shares)
+    w = np.array([shares[n] for n in names], dtype=np.float64)
+    cum = np.cumsum(w) / w.sum()
+    i = int(np.searchsorted(cum, rng.random(), side="right"))
+    return names[min(i, len(names) - 1)]
+
+
+def _draw_faults(rng: np.random.Generator, kind: str, cfg: ScenarioConfig) -> list[tuple[str,
+                                                                                         float,
+                                                                                         float]]:
+    """(type, start s, end s) per fault, holds scaled by λ, rounded to 0.1 s."""
+    if kind == "none":
+        return []
+    t = cfg.auto_start_s
+    if kind == "single":
+        ftype = _pick(rng, cfg.fault_weights)
+        start = round(t + float(rng.uniform(*cfg.single_start_s)), 1)
+        hold = round(float(rng.uniform(*cfg.hold_s)) * cfg.lam, 1)
+        return [(ftype, start, round(start + max(hold, 0.1), 1))]
+    order = [PAPER_FIRST[i] for i in rng.permutation(len(PAPER_FIRST))] if cfg.shuffle else list(
+        PAPER_FIRST)
+    out = []
+    for ftype in [*order, "rc"]:
+        start = round(t + float(rng.uniform(*cfg.gap_s)), 1)
+        hold = round(float(rng.uniform(*cfg.hold_s)) * cfg.lam, 1)
+        t = round(start + max(hold, 0.1), 1)
+        out.append((ftype, start, t))
+    return out
+
+
+def _draw_mission(rng: np.random.Generator, cfg: ScenarioConfig) -> dict[str, Any]:
+    source = _pick(rng, cfg.missions)
+    if source == "builtin":
+        k = int(BUILTIN_IDS[int(rng.integers(len(BUILTIN_IDS)))])
+        alt_seed = int(rng.integers(2**31))
+        if cfg.builtin_altitudes == "keep":
+            return {"source": "builtin", "id": k}
+        return {"source": "builtin", "id": k, "alt_seed": alt_seed,
+                "alt_range": list(cfg.alt_range)}
+    return {"source": "random", "seed": int(rng.integers(2**31)), "home": list(cfg.home),
+            "n_waypoints": cfg.n_waypoints, "alt_range": list(cfg.alt_range)}
+
+
+def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario:
+    """Flight ``flight`` of the run seeded ``run_seed`` (see the module docstring).
+
+    Pure: the same arguments give the same scenario in any process.
+    """
+    for what, v in (("seed", run_seed), ("flight", flight)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 0:
+            raise GenerateError(f"{what} must be a whole number >= 0, got {v!r}")
+    run_seed, flight = int(run_seed), int(flight)
+    kind = _pick(_stream(run_seed, flight, _S_KIND), cfg.kinds)
+    recipe = _draw_mission(_stream(run_seed, flight, _S_MISSION), cfg)
+    mission = mission_from_recipe(recipe)
+    drawn = _draw_faults(_stream(run_seed, flight, _S_FAULTS), kind, cfg)
+    env = _stream(run_seed, flight, _S_ENV)
+    params = dict(cfg.params)
+    for name, (lo, hi) in cfg.ranges.items():
+        params[name] = round(float(env.uniform(lo, hi)), 3)
+    seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
+    seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
+    # drop faults that could not happen: past the longest the flight can last (whole seconds)
+    limit = math.floor(max_duration_s(mission, profile_params(cfg.profile, params)))
+    kept = drawn[:next((k for k, d in enumerate(drawn) if d[2] > limit), len(drawn))]
+    faults = [Fault(t, Trigger("time", s), Trigger("time", e)) for t, s, e in kept]
+    schedule = FaultSchedule(tuple(faults))
+    return Scenario(flight=flight, seed=seed, kind=kind, mission=recipe,
+                    faults=schedule.to_dict(), params=params, profile=cfg.profile,
+                    lam=cfg.lam, mission_sha1=mission_hash(mission),
+                    dropped=len(drawn) - len(kept))
