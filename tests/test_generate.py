@@ -301,3 +301,22 @@ def test_unusable_output_folders_are_one_line_errors(dataset, tmp_path, capsys):
         "scenario"]["seed"]
     with pytest.raises(GenerateError, match="has no flight 7"):
         scenario_from_manifest(dataset, 7)
+
+
+def test_tlm_fly_from_manifest_reflies_one_flight(dataset, tmp_path, capsys):
+    from tlm_process.cli import main
+
+    out = tmp_path / "again"
+    assert main(["fly", "--from-manifest", str(dataset), "--flight", "1", "--out", str(out),
+                 "--format", "parquet", "--no-plot"]) == 0
+    mine = pd.read_parquet(out / "GPS.parquet")
+    theirs = pd.read_parquet(dataset / "GPS.parquet")
+    theirs = theirs[theirs["flight"] == 1].drop(columns="flight").reset_index(drop=True)
+    pd.testing.assert_frame_equal(mine[theirs.columns], theirs, check_dtype=False,
+                                  check_exact=True)
+    assert json.loads((out / "faults.json").read_text())["faults"][0]["type"] == "rc"
+    assert main(["fly", "--from-manifest", str(dataset), "--out", str(out)]) == 2
+    assert "--flight" in capsys.readouterr().err
+    assert main(["fly", "--from-manifest", str(dataset), "--flight", "1", "--out", str(out),
+                 "--fault", "gps:60-80"]) == 2
+    assert "drop --fault" in capsys.readouterr().err
