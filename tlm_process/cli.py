@@ -361,12 +361,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tlm_process import logcmd
     from tlm_process.crosscheck import command as crosscheck_cmd
+    from tlm_process.evaluate import command as evaluate_cmd
     from tlm_process.generate import command as generate_cmd
     from tlm_process.pipeline import command as process_cmd
 
     logcmd.add_parsers(sub)
     generate_cmd.add_parser(sub)
     process_cmd.add_parser(sub)
+    evaluate_cmd.add_parser(sub)
     crosscheck_cmd.add_parser(sub)
     return ap
 

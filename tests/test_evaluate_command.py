@@ -1,0 +1,151 @@
+"""``tlm evaluate`` end to end on a tiny data set of three tlm flights (built once per test
+session), transfer to a reference SITL log, determinism and user errors."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from tests.conftest import reference_path
+from tlm_process.evaluate.command import main
+
+FAST = "ZeroR,OneR,J48,RandomTree,WindowHGB"
+
+
+@pytest.fixture(scope="session")
+def tiny_ds(tmp_path_factory):
+    """Missions 1-3 with the paper's fault sequence (seeds 1-3); mission 3 is the test
+    flight."""
+    from tlm_process.pipeline.ingest import Flight, parse_records
+    from tlm_process.pipeline.process import build_dataset, process_flight, write_dataset
+    from tlm_sim import fly
+    from tlm_sim.faults import FaultSchedule
+
+    processed = []
+    root = tmp_path_factory.mktemp("eval")
+    for m in (1, 2, 3):
+        log = fly(m, faults=FaultSchedule.paper(m), seed=m)
+        if m == 3:
+            log.write(root / "m3_folder", formats=("parquet",))
+        fl = Flight(id=f"m{m}", source=f"tlm mission {m}", kind="tlm",
+                    tables=dict(log.tables), records=parse_records(log.faults))
+        p = process_flight(fl)
+        p.release()
+        processed.append(p)
+    ds = build_dataset(processed, test_patterns=["m3"])
+    out = root / "ds"
+    write_dataset(ds, out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def tiny_flight_folder(tiny_ds):
+    """Mission 3's flight (the tiny data set's test flight) as a ``tlm fly`` folder."""
+    return tiny_ds.parent / "m3_folder"
+
+
+def _run(capsys, *argv):
+    rc = main(["evaluate", *map(str, argv)])
+    cap = capsys.readouterr()
+    return rc, cap.out, cap.err
+
+
+def test_evaluate_end_to_end_table_json_and_pngs(tiny_ds, tmp_path, capsys):
+    pytest.importorskip("torch")
+    rj = tmp_path / "r.json"
+    rc, out, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", FAST + ",CNN",
+                        "--cnn-epochs", "1", "--json", rj, "--out", tmp_path / "png")
+    assert rc == 0, err
+    head = next(line for line in out.splitlines() if line.startswith("Method"))
+    assert head.split()[:8] == ["Method", "Correct%", "Incorrect%", "TP", "FP", "Precision",
+                                "Recall", "F1"]
+    zeror = next(line for line in out.splitlines() if line.startswith("ZeroR"))
+    assert zeror.split()[5] == "?"  # never predicts a fault: precision undefined
+    assert "precision undefined" in out and "[GPS] J48:" in err and "CNN epoch 1/1" in err
+    res = json.loads(rj.read_text())
+    assert list(res) == ["GPS"] and list(res["GPS"]) == FAST.split(",") + ["CNN"]
+    r = res["GPS"]["J48"]
+    for key in ("accuracy", "macro_f1", "weighted_precision", "weighted_recall", "weighted_f1",
+                "weighted_tp_rate", "weighted_fp_rate", "per_class", "confusion"):
+        assert key in r
+    assert sum(map(sum, r["confusion"])) == r["n_test"] > 0
+    assert res["GPS"]["ZeroR"]["weighted_precision"] is None
+    assert res["GPS"]["WindowHGB"]["macro_f1"] > res["GPS"]["ZeroR"]["macro_f1"]
+    pngs = {p.name for p in (tmp_path / "png").iterdir()}
+    assert {"GPS_J48_confusion.png", "GPS_CNN_training.png", "report.txt"} <= pngs
+
+
+def test_evaluate_is_deterministic_given_the_seed(tiny_ds, tmp_path, capsys):
+    def once(name, *extra):
+        rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models",
+                          "RandomTree,RandomForest", "--seed", "4", "--quiet",
+                          "--json", tmp_path / name, *extra)
+        assert rc == 0, err
+        res = json.loads((tmp_path / name).read_text())["GPS"]
+        return {m: (r["confusion"], r["macro_f1"]) for m, r in res.items()}
+
+    a, b = once("a.json"), once("b.json")
+    assert a == b
+    rnd = once("c.json", "--split", "random")
+    assert rnd != a
+
+
+def test_evaluate_transfer_to_a_reference_sitl_log(tiny_ds, tmp_path, capsys):
+    log = reference_path("combined_s21.bin")
+    rj = tmp_path / "t.json"
+    rc, out, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "OneR,WindowHGB",
+                        "--test-on", log, "--json", rj, "--out", tmp_path / "o")
+    assert rc == 0, err
+    t = json.loads(rj.read_text())["GPS"]["WindowHGB"]["transfer"]
+    assert t["n"] > 1000 and len(t["confusion"]) == 5
+    assert t["per_class"]["GPS"]["support"] > 100  # combined_s21 has a ~29 s GPS fault
+    assert "xfer macro-F1" in out and "largest feature distribution differences" in out
+    assert (tmp_path / "o" / "feature_shift.csv").exists()
+    assert (tmp_path / "o" / "GPS_OneR_transfer_confusion.png").exists()
+
+
+def test_evaluate_cross_validation_refits_on_every_flight_for_transfer(
+        tiny_ds, tiny_flight_folder, tmp_path, capsys):
+    rj = tmp_path / "cv.json"
+    rc, out, err = _run(capsys, tiny_ds, "--table", "RATE", "--models", "ZeroR,J48",
+                        "--folds", "3", "--test-on", tiny_flight_folder, "--json", rj)
+    assert rc == 0, err
+    r = json.loads(rj.read_text())["RATE"]["J48"]
+    total = sum(map(sum, r["confusion"]))
+    assert r["folds"] == 3 and r["n_test"] == total  # every row tested once
+    assert "flight split, 3 folds" in out
+    # the folder is flight m3 read again: same rows as in the data set; and it is one of the
+    # flights the transfer model was refitted on, so the tree knows it better than CV's
+    m3 = pd.read_parquet(tiny_ds / "RATE.parquet").query("flight == 'm3'")
+    assert r["transfer"]["n"] == len(m3)
+    assert r["transfer"]["accuracy"] > r["accuracy"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["{missing}"], "no such data set folder"),
+    (["{empty}"], "not a 'tlm process' output folder"),
+    (["{ds}", "--table", "BARO"], "unknown table 'BARO'"),
+    (["{ds}", "--models", "J48,C4.5"], "unknown model 'C4.5'"),
+    (["{ds}", "--test-frac", "0.3"], "--split random only"),
+    (["{ds}", "--test-on", "{missing}"], "no such file or folder"),
+])
+def test_evaluate_user_errors_are_one_line_exit_2(tiny_ds, tmp_path, capsys, args, message):
+    (tmp_path / "empty").mkdir()
+    subst = {"missing": tmp_path / "nope", "empty": tmp_path / "empty", "ds": tiny_ds}
+    argv = [a.format(**subst) for a in args]
+    if "--models" not in args:
+        argv += ["--models", "ZeroR"]
+    rc, _, err = _run(capsys, *argv)
+    assert rc == 2
+    errors = [line for line in err.splitlines() if line.startswith("tlm: error: ")]
+    assert len(errors) == 1 and message in errors[0]
+
+
+def test_evaluate_help_lists_models_and_splits(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["evaluate", "--help"])
+    assert e.value.code == 0
+    out = capsys.readouterr().out
+    assert "WindowHGB" in out and "--split" in out and "--test-on" in out

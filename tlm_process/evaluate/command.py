@@ -1,0 +1,303 @@
+"""``tlm evaluate DS``: the paper's classifiers, its CNN and a time-window model on a data set.
+
+Wiring (in ``tlm_process/cli.py``)::
+
+    from tlm_process.evaluate import command as evaluate_cmd
+    evaluate_cmd.add_parser(sub)             # sub = ap.add_subparsers(...)
+    # dispatch: args.func(args) -> evaluate_cmd.run(args)
+
+``run`` reports user mistakes itself (one line on stderr, exit code 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = ["add_parser", "run"]
+
+MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
+               "RandomForest", "RandomTree", "CNN", "WindowHGB")
+TABLE_NAMES = ("GPS", "IMU", "RATE", "VIBE")
+
+DESCRIPTION = """\
+Evaluate fault classifiers on a 'tlm process' data set as the paper's section 5 does, and
+more honestly: the ten Weka classifiers of Table 11 (as scikit-learn estimators), the paper's
+row-image CNN and WindowHGB, a model that sees the last seconds of each flight. Prints the
+Table 11-style table per data table (Weka's weighted TP rate, FP rate, precision, recall, F1;
+'?' where precision is undefined because a class is never predicted) plus macro-F1.
+"""
+
+EPILOG = f"""\
+models: all, or a comma list of {', '.join(MODEL_NAMES)}
+
+splits:
+  --split flight   (default) no flight in both training and test: the data set's own
+                   train/test flights (tlm process --test-frac/--test-flight), else grouped
+                   k-fold over flights (--folds, default 5)
+  --split random   the paper's random row split (stratified; test share as the data set's,
+                   or --test-frac); --folds K gives row k-fold CV. Neighbouring rows of one
+                   flight then land on both sides: compare with --split flight to see the leak
+
+transfer:
+  --test-on LOG... trains on the data set and also tests on these logs (.bin + sidecar as
+                   the reference SITL logs, tlm fly folders, ...), processed with the data
+                   set's options and scaled with its scaler; adds a 'transfer' entry per model
+                   and, with --out, DIR/feature_shift.csv (per feature and class: KS statistic
+                   and percentiles of data set vs transfer rows)
+
+outputs:
+  stdout           Table 11 per table; confusion matrix and per-class scores (Tables 12-18)
+                   of the best model by macro-F1 (all models with --details)
+  --json R.json    {{TABLE: {{MODEL: {{accuracy, macro_f1, weighted_precision, weighted_recall,
+                   weighted_f1, weighted_tp_rate, weighted_fp_rate, per_class, confusion,
+                   transfer, ...}}}}}}; undefined values are null
+  --out DIR        DIR/<TABLE>_<MODEL>_confusion.png (+ _transfer_confusion.png),
+                   DIR/<TABLE>_CNN_training.png (Figs. 20-21), DIR/report.txt
+
+examples:
+  tlm evaluate ds --table GPS --models RandomForest,J48,WindowHGB
+  tlm evaluate ds --table all --split random --json random.json
+  tlm evaluate ds --table GPS --test-on ../shared/reference/sitl/*.bin --out eval-out
+"""
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError("must be >= 0")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    v = _count(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError("must be >= 1")
+    return v
+
+
+def _folds(text: str) -> int:
+    v = _count(text)
+    if v < 2:
+        raise argparse.ArgumentTypeError("must be >= 2")
+    return v
+
+
+def _fraction(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0 < v < 1:
+        raise argparse.ArgumentTypeError(f"{text} is not in (0, 1)")
+    return v
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add the ``evaluate`` subcommand to ``tlm``'s subparsers; returns its parser."""
+    p = subparsers.add_parser(
+        "evaluate", help="train and score fault classifiers on a 'tlm process' data set",
+        description=DESCRIPTION, epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dataset", metavar="DS", help="a 'tlm process' output folder")
+    p.add_argument("--table", default="all", metavar="GPS|IMU|RATE|VIBE|all",
+                   help="data table(s), comma-separated (default all)")
+    p.add_argument("--models", default="all", metavar="all|NAME,NAME",
+                   help="models to run (default all; see below)")
+    p.add_argument("--split", choices=("flight", "random"), default="flight",
+                   help="flight: whole flights (default); random: the paper's row split")
+    p.add_argument("--folds", type=_folds, default=None, metavar="K",
+                   help="K-fold cross-validation (over flights, or rows with --split random) "
+                        "instead of one hold-out")
+    p.add_argument("--test-frac", type=_fraction, default=None, metavar="F",
+                   help="--split random: share of rows tested (default: the data set's test "
+                        "share, else 0.25)")
+    p.add_argument("--seed", type=_count, default=0,
+                   help="seed of the splits and models (default 0); same seed, same results")
+    p.add_argument("--json", metavar="R.json", help="write the results as JSON")
+    p.add_argument("--test-on", nargs="+", action="extend", default=[], metavar="LOG",
+                   help="transfer test: also test on these logs (.bin + sidecar, tlm fly "
+                        "folders, ...)")
+    p.add_argument("--out", metavar="DIR", help="write confusion-matrix PNGs, the CNN's "
+                                                "training curves and report.txt here")
+    p.add_argument("--details", action="store_true",
+                   help="print every model's confusion matrix and per-class scores")
+    p.add_argument("--jobs", type=_positive_int, default=1, metavar="N",
+                   help="CPU threads for RandomForest and KNN (default 1)")
+    p.add_argument("--cnn-epochs", type=_positive_int, default=None, metavar="N",
+                   help="CNN training epochs (default 10)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(func=run)
+    return p
+
+
+def _err(msg: str) -> int:
+    print(f"tlm: error: {msg}", file=sys.stderr)
+    return 2
+
+
+def _tables(text: str) -> list[str]:
+    from tlm_process.evaluate.data import EvaluateError
+
+    items = [s.strip().upper() for s in text.split(",") if s.strip()]
+    if not items:
+        raise EvaluateError("--table: no table given")
+    if "ALL" in items:
+        return list(TABLE_NAMES)
+    bad = [s for s in items if s not in TABLE_NAMES]
+    if bad:
+        raise EvaluateError(f"--table: unknown table {bad[0]!r}; choose from "
+                         f"{', '.join(TABLE_NAMES)} or all")
+    return list(dict.fromkeys(items))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``tlm evaluate``; 0 on success, 2 on a user error (one line on stderr)."""
+    from tlm_process.pipeline.errors import PipelineError
+
+    try:
+        return _run(args)
+    except PipelineError as e:
+        return _err(str(e))
+    except OSError as e:
+        return _err(f"{e.filename or ''}: {e.strerror or e}".lstrip(": "))
+
+
+def _best(results: dict, key: str = "macro_f1", transfer: bool = False) -> str | None:
+    best, score = None, -1.0
+    for m, r in results.items():
+        v = (r.get("transfer") or {}).get(key) if transfer else r.get(key)
+        if v is not None and v == v and v > score:
+            best, score = m, v
+    return best
+
+
+def _run(args: argparse.Namespace) -> int:
+    from tlm_process.evaluate.data import EvaluateError
+    from tlm_process.evaluate.runner import resolve_models
+
+    tables = _tables(args.table)
+    models = resolve_models(args.models)
+    if args.split != "random" and args.test_frac is not None:
+        raise EvaluateError("--test-frac applies to --split random only (the flight split "
+                            "uses the data set's test flights or --folds)")
+    if args.split == "random" and args.test_frac is not None and args.folds is not None:
+        raise EvaluateError("--test-frac and --folds exclude each other")
+    if args.json and Path(args.json).is_dir():
+        raise EvaluateError(f"--json {args.json}: is a folder")
+    if "CNN" in models:
+        from tlm_process.evaluate.cnn import require_torch
+
+        try:
+            require_torch()
+        except ImportError as e:
+            raise EvaluateError(str(e)) from None
+    import numpy as np
+
+    from tlm_process.evaluate.data import load_dataset, load_transfer
+    from tlm_process.evaluate.metrics import (
+        format_confusion,
+        format_per_class,
+        format_results_table,
+        to_jsonable,
+    )
+    from tlm_process.evaluate.runner import evaluate
+
+    t_start = time.perf_counter()
+    quiet = args.quiet
+
+    def say(msg: str) -> None:
+        if not quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    ds = load_dataset(args.dataset, tables)
+    transfer = None
+    if args.test_on:
+        say(f"reading {len(args.test_on)} transfer log(s) with the data set's options and "
+            f"scaler")
+        transfer = load_transfer(args.test_on, ds, tables)
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+    np.seterr(all="ignore")
+    results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
+                       folds=args.folds, test_frac=args.test_frac, transfer=transfer,
+                       out_dir=out, progress=say, n_jobs=args.jobs,
+                       cnn_epochs=args.cnn_epochs)
+    lines: list[str] = []
+    for t, res in results.items():
+        first = next(iter(res.values()))
+        how = (f"{args.split} split, {first['folds']} folds" if first["folds"] > 1 else
+               f"{args.split} split")
+        lines.append(format_results_table(
+            res, f"{t}: {first['n_test']:,} test rows, {first['n_train'] // first['folds']:,}"
+                 f" training rows per fold ({how}, seed {args.seed})"
+                 + (f"; transfer: {first['transfer']['n']:,} rows of "
+                    f"{len(args.test_on)} log(s)" if "transfer" in first else ""),
+            transfer="transfer" in first))
+        shown = list(res) if args.details else [m for m in {_best(res)} if m]
+        if transfer is not None and not args.details:
+            bt = _best(res, transfer=True)
+            if bt and bt not in shown:
+                shown.append(bt)
+        for m in shown:
+            r = res[m]
+            lines.append("")
+            lines.append(format_confusion(r["confusion"], title=f"{t} {m}: confusion matrix "
+                                                                 "(rows true, columns predicted)"))
+            lines.append(format_per_class(r, title=f"{t} {m}: per class"))
+            if "transfer" in r:
+                lines.append(format_confusion(r["transfer"]["confusion"],
+                                              title=f"{t} {m}: confusion on the transfer logs"))
+                lines.append(format_per_class(r["transfer"],
+                                              title=f"{t} {m}: per class on the transfer logs"))
+        undefined = {m: r["undefined_precision"] for m, r in res.items()
+                     if r["undefined_precision"]}
+        if undefined:
+            lines.append("")
+            lines.append("'?': precision undefined (paper: NaN) because the model never "
+                         "predicts " + "; ".join(f"{m}: {', '.join(c)}"
+                                                 for m, c in undefined.items()))
+        lines.append("")
+    if transfer is not None:
+        from tlm_process.evaluate.shift import feature_shift, format_shift
+
+        scaled = bool((ds.report.get("scaling") or {}).get("applied", True))
+        shift = feature_shift(ds.tables, transfer, ds.features, ds.scaler, scaled)
+        lines.append(format_shift(shift))
+        if out is not None:
+            shift.to_csv(out / "feature_shift.csv", index=False, float_format="%.6g")
+    text = "\n".join(lines).rstrip() + "\n"
+    print(text, end="")
+    if out is not None:
+        (out / "report.txt").write_text(text)
+    if args.json:
+        jp = Path(args.json)
+        if jp.parent != Path(""):
+            jp.parent.mkdir(parents=True, exist_ok=True)
+        jp.write_text(json.dumps(to_jsonable(results), indent=1) + "\n")
+    say(f"done in {time.perf_counter() - t_start:.1f} s"
+        + (f"; wrote {args.json}" if args.json else "")
+        + (f"; plots in {out}/" if out is not None else ""))
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Stand-alone entry point (``python -m tlm_process.evaluate.command``) until ``tlm``
+    wires the subcommand."""
+    ap = argparse.ArgumentParser(prog="tlm")
+    sub = ap.add_subparsers(dest="command", required=True)
+    add_parser(sub)
+    args = ap.parse_args(argv)
+    return run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,462 @@
+"""The ten classifiers of the paper's Table 11 as scikit-learn estimators mirroring Weka's.
+
+The paper ran Weka 3.8 with default options. Each name below is built by :func:`make_model`
+with Weka's defaults translated to scikit-learn (the table in ``docs/evaluation.md`` lists
+them, with what differs):
+
+==============  =============================================================================
+NaiveBayes      :class:`WekaNaiveBayes`: Gaussian per class and feature, standard deviation
+                floored at Weka's estimator precision / 6
+Logistic        standardise + multinomial logistic regression, ridge 1e-8 (C = 1 / (2 ridge))
+SMO             min-max normalise + linear SVM (C = 1, hinge loss), pairwise one-vs-one
+KNN             IBk: 1 nearest neighbour, Euclidean distance on range-normalised features
+AdaBoost        :class:`AdaBoostM1`: 10 rounds of decision stumps, reweighting, M1's stop rule
+OneR            :class:`OneR`: Holte's 1R, minimum bucket size 6
+ZeroR           the training set's most frequent class
+J48             :class:`J48`: entropy tree, min 2 per leaf, C4.5 pessimistic pruning (CF 0.25)
+RandomForest    100 entropy trees on bootstrap samples, int(log2(M) + 1) features per split
+RandomTree      one entropy tree, int(log2(M) + 1) random features per split, unpruned
+==============  =============================================================================
+
+``CNN`` (:mod:`.cnn`) and ``WindowHGB`` (:mod:`.temporal`) are built here too, so that every
+model name of ``tlm evaluate`` comes from one place. Missing values (NaN) are replaced by the
+training mean for the models Weka runs through ``ReplaceMissingValues`` (Logistic, SMO, KNN);
+the others handle NaN themselves.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from scipy.stats import norm
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.dummy import DummyClassifier
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.impute import SimpleImputer
+from sklearn.linear_model import LogisticRegression
+from sklearn.multiclass import OneVsOneClassifier
+from sklearn.naive_bayes import GaussianNB
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import MinMaxScaler, StandardScaler
+from sklearn.svm import LinearSVC
+from sklearn.tree import DecisionTreeClassifier
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+__all__ = [
+    "ALL_MODELS",
+    "PAPER_MODELS",
+    "TIME_MODELS",
+    "AdaBoostM1",
+    "J48",
+    "OneR",
+    "WekaNaiveBayes",
+    "c45_added_errors",
+    "make_model",
+    "weka_num_features",
+]
+
+#: Table 11's models, in the paper's order.
+PAPER_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR",
+                                 "ZeroR", "J48", "RandomForest", "RandomTree")
+#: Models that look at a window of consecutive rows (beyond the paper; :mod:`.temporal`).
+TIME_MODELS: tuple[str, ...] = ("WindowHGB",)
+#: Every model ``tlm evaluate --models all`` runs.
+ALL_MODELS: tuple[str, ...] = PAPER_MODELS + ("CNN",) + TIME_MODELS
+
+#: Weka's default ridge of ``weka.classifiers.functions.Logistic``.
+LOGISTIC_RIDGE = 1e-8
+
+
+def weka_num_features(n_features: int) -> int:
+    """Features tried per split by Weka's RandomTree/RandomForest with K = 0:
+    ``int(log2(M) + 1)``."""
+    return max(1, int(math.log2(max(n_features, 1)) + 1))
+
+
+def _tags_allow_nan(tags: Any) -> Any:
+    tags.input_tags.allow_nan = True
+    return tags
+
+
+# ---------------------------------------------------------------------------------------------
+# OneR
+# ---------------------------------------------------------------------------------------------
+
+class OneR(ClassifierMixin, BaseEstimator):
+    """Holte's 1R (Weka ``weka.classifiers.rules.OneR``): a rule on one feature.
+
+    For every feature the training rows are sorted by value and cut into intervals: an
+    interval grows until its most frequent class has at least ``min_bucket_size`` rows and
+    the next value's most frequent class differs (rows with equal values are never split);
+    adjacent intervals with the same class are merged; the breakpoints lie half-way between
+    neighbouring values. Missing values (NaN) form their own bucket. The feature whose rule
+    classifies the most training rows correctly is chosen (the first on ties).
+
+    Attributes: ``feature_`` (index of the chosen feature), ``breakpoints_`` (ascending),
+    ``interval_classes_`` (``len(breakpoints_) + 1`` classes: value < breakpoints_[0] gives
+    the first), ``missing_class_``, ``train_accuracy_`` (per feature), ``classes_``.
+    """
+
+    def __init__(self, min_bucket_size: int = 6) -> None:
+        self.min_bucket_size = min_bucket_size
+
+    def __sklearn_tags__(self) -> Any:
+        return _tags_allow_nan(super().__sklearn_tags__())
+
+    def fit(self, X: Any, y: Any) -> OneR:
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", dtype=np.float64)
+        check_classification_targets(y)
+        if not isinstance(self.min_bucket_size, int | np.integer) or self.min_bucket_size < 1:
+            raise ValueError(f"min_bucket_size must be a positive integer, got "
+                             f"{self.min_bucket_size!r}")
+        self.classes_, yi = np.unique(y, return_inverse=True)
+        k = len(self.classes_)
+        majority = int(np.argmax(np.bincount(yi, minlength=k)))
+        best: tuple[int, np.ndarray, np.ndarray, int] | None = None
+        best_correct = -1
+        acc = np.zeros(X.shape[1])
+        for j in range(X.shape[1]):
+            bps, cls, miss_cls, correct = self._rule(X[:, j], yi, k, majority)
+            acc[j] = correct / len(yi)
+            if correct > best_correct:
+                best_correct = correct
+                best = (j, bps, cls, miss_cls)
+        assert best is not None
+        self.feature_, self.breakpoints_, self.interval_classes_, self.missing_class_ = best
+        self.train_accuracy_ = acc
+        return self
+
+    def _rule(self, x: np.ndarray, y: np.ndarray, k: int,
+              majority: int) -> tuple[np.ndarray, np.ndarray, int, int]:
+        """(breakpoints, interval classes, missing class, correct training rows) of one
+        feature."""
+        nan = np.isnan(x)
+        correct = 0
+        miss_cls = majority
+        if nan.any():
+            c = np.bincount(y[nan], minlength=k)
+            miss_cls = int(np.argmax(c))
+            correct += int(c.max())
+        xv, yv = x[~nan], y[~nan]
+        if not len(xv):
+            return np.empty(0), np.array([majority]), miss_cls, correct
+        values, inv = np.unique(xv, return_inverse=True)
+        counts = np.zeros((len(values), k), dtype=np.int64)
+        np.add.at(counts, (inv, yv), 1)
+        group_major = counts.argmax(axis=1)
+        # 1. intervals of at least min_bucket_size rows of their majority class
+        cut_after: list[int] = []
+        cur = np.zeros(k, dtype=np.int64)
+        for g in range(len(values) - 1):
+            cur += counts[g]
+            m = int(cur.argmax())
+            if cur[m] >= self.min_bucket_size and group_major[g + 1] != m:
+                cut_after.append(g)
+                cur[:] = 0
+        bounds = [0] + [g + 1 for g in cut_after] + [len(values)]
+        interval_counts = [counts[a:b].sum(axis=0) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                     strict=True)]
+        classes = [int(c.argmax()) for c in interval_counts]
+        # 2. merge neighbours predicting the same class
+        bps: list[float] = []
+        merged: list[int] = [classes[0]]
+        for i, g in enumerate(cut_after):
+            if classes[i + 1] == merged[-1]:
+                continue
+            bps.append((values[g] + values[g + 1]) / 2.0)
+            merged.append(classes[i + 1])
+        correct += int(sum(c.max() for c in interval_counts))
+        return np.asarray(bps, dtype=np.float64), np.asarray(merged), miss_cls, correct
+
+    def _class_index(self, X: Any) -> np.ndarray:
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan", dtype=np.float64)
+        x = X[:, self.feature_]
+        idx = self.interval_classes_[np.searchsorted(self.breakpoints_, x, side="right")
+                                     .clip(0, len(self.interval_classes_) - 1)]
+        return np.where(np.isnan(x), self.missing_class_, idx)
+
+    def predict(self, X: Any) -> np.ndarray:
+        idx = self._class_index(X)
+        return self.classes_[idx]
+
+    def predict_proba(self, X: Any) -> np.ndarray:
+        """One-hot: a rule gives one class (as Weka's OneR distribution)."""
+        idx = self._class_index(X)
+        out = np.zeros((len(idx), len(self.classes_)))
+        out[np.arange(len(idx)), idx] = 1.0
+        return out
+
+    def rule_text(self, feature_names: list[str] | None = None) -> str:
+        """The rule as Weka prints it: ``Spd: < 0.12 -> 3, < 0.5 -> 0, >= 0.5 -> 4``."""
+        check_is_fitted(self)
+        name = (feature_names[self.feature_] if feature_names is not None
+                else f"x{self.feature_}")
+        parts = [f"< {b:.6g} -> {self.classes_[c]}" for b, c in
+                 zip(self.breakpoints_, self.interval_classes_[:-1], strict=True)]
+        last = self.breakpoints_[-1] if len(self.breakpoints_) else None
+        parts.append(f">= {last:.6g} -> {self.classes_[self.interval_classes_[-1]]}"
+                     if last is not None else f"-> {self.classes_[self.interval_classes_[-1]]}")
+        return f"{name}: " + ", ".join(parts)
+
+
+# ---------------------------------------------------------------------------------------------
+# AdaBoost.M1
+# ---------------------------------------------------------------------------------------------
+
+class AdaBoostM1(ClassifierMixin, BaseEstimator):
+    """Freund & Schapire's AdaBoost.M1 with decision stumps (Weka ``AdaBoostM1`` with its
+    default ``DecisionStump``, 10 iterations, reweighting).
+
+    Each round fits an entropy stump to the weighted rows; with weighted error ``e`` the
+    round gets the vote ``log((1 - e) / e)`` and the weights of correctly classified rows are
+    multiplied by ``e / (1 - e)``. Boosting stops when ``e >= 0.5`` or ``e == 0`` (in the
+    first round that stump is kept alone, with vote 1) — with five classes a stump often
+    cannot get below 0.5, which is why the paper's AdaBoost predicts only some classes
+    (undefined precision in Table 11). scikit-learn's SAMME differs exactly there (it adds
+    ``log(K - 1)`` and stops only at ``e >= 1 - 1/K``).
+    """
+
+    def __init__(self, n_estimators: int = 10, random_state: int | None = None) -> None:
+        self.n_estimators = n_estimators
+        self.random_state = random_state
+
+    def __sklearn_tags__(self) -> Any:
+        return _tags_allow_nan(super().__sklearn_tags__())
+
+    def fit(self, X: Any, y: Any) -> AdaBoostM1:
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", dtype=np.float64)
+        check_classification_targets(y)
+        if not isinstance(self.n_estimators, int | np.integer) or self.n_estimators < 1:
+            raise ValueError(f"n_estimators must be a positive integer, got "
+                             f"{self.n_estimators!r}")
+        self.classes_, yi = np.unique(y, return_inverse=True)
+        w = np.full(len(yi), 1.0 / len(yi))
+        self.estimators_: list[DecisionTreeClassifier] = []
+        votes: list[float] = []
+        self.errors_: list[float] = []
+        for m in range(self.n_estimators):
+            stump = DecisionTreeClassifier(max_depth=1, criterion="entropy",
+                                           random_state=self.random_state)
+            stump.fit(X, yi, sample_weight=w)
+            miss = stump.predict(X) != yi
+            err = float(w[miss].sum() / w.sum())
+            self.errors_.append(err)
+            if err >= 0.5 or err == 0.0:
+                if m == 0:
+                    self.estimators_.append(stump)
+                    votes.append(1.0)
+                break
+            self.estimators_.append(stump)
+            votes.append(math.log((1.0 - err) / err))
+            total = w.sum()
+            w = np.where(miss, w, w * err / (1.0 - err))
+            w *= total / w.sum()
+        self.estimator_weights_ = np.asarray(votes)
+        return self
+
+    def _scores(self, X: Any) -> np.ndarray:
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan", dtype=np.float64)
+        s = np.zeros((X.shape[0], len(self.classes_)))
+        rows = np.arange(X.shape[0])
+        for est, a in zip(self.estimators_, self.estimator_weights_, strict=True):
+            s[rows, est.predict(X).astype(int)] += a
+        return s
+
+    def predict(self, X: Any) -> np.ndarray:
+        scores = self._scores(X)
+        return self.classes_[scores.argmax(axis=1)]
+
+    def predict_proba(self, X: Any) -> np.ndarray:
+        s = self._scores(X)
+        return s / s.sum(axis=1, keepdims=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# J48 (C4.5)
+# ---------------------------------------------------------------------------------------------
+
+def c45_added_errors(n: float, e: float, cf: float = 0.25) -> float:
+    """C4.5's pessimistic extra errors for a leaf with ``n`` rows of which ``e`` are
+    misclassified: the upper limit of the binomial confidence interval at confidence ``cf``
+    (Quinlan 1993; the leaf's estimated errors are ``e + c45_added_errors(n, e, cf)``)."""
+    if n <= 0:
+        return 0.0
+    if e < 1.0:
+        base = n * (1.0 - cf ** (1.0 / n))
+        if e == 0.0:
+            return base
+        return base + e * (c45_added_errors(n, 1.0, cf) - base)
+    if e + 0.5 >= n:
+        return max(n - e, 0.0)
+    z = float(norm.ppf(1.0 - cf))
+    f = (e + 0.5) / n
+    r = (f + z * z / (2 * n) + z * math.sqrt(f / n - f * f / n + z * z / (4 * n * n))) \
+        / (1.0 + z * z / n)
+    return r * n - e
+
+
+class J48(ClassifierMixin, BaseEstimator):
+    """C4.5 as Weka's J48 (default ``-C 0.25 -M 2``): an entropy tree with at least
+    ``min_samples_leaf`` rows per leaf, pruned bottom-up by subtree replacement with C4.5's
+    pessimistic error (confidence ``confidence``): a subtree becomes a leaf when the leaf's
+    estimated errors are at most the subtree's + 0.1 (as Weka compares them).
+
+    Differences from Weka: the split criterion is information gain (C4.5 uses gain ratio;
+    for binary splits of numeric features the two rank splits alike except for the split
+    information term) and subtree raising is not done.
+
+    Attributes: ``tree_`` (the unpruned scikit-learn tree), ``pruned_node_`` (for every node
+    the node that answers for it after pruning), ``n_leaves_`` (after pruning).
+    """
+
+    def __init__(self, confidence: float = 0.25, min_samples_leaf: int = 2,
+                 random_state: int | None = None) -> None:
+        self.confidence = confidence
+        self.min_samples_leaf = min_samples_leaf
+        self.random_state = random_state
+
+    def __sklearn_tags__(self) -> Any:
+        return _tags_allow_nan(super().__sklearn_tags__())
+
+    def fit(self, X: Any, y: Any) -> J48:
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", dtype=np.float64)
+        check_classification_targets(y)
+        if not 0.0 < float(self.confidence) < 0.5:
+            raise ValueError(f"confidence must be in (0, 0.5), got {self.confidence!r}")
+        self.classes_, yi = np.unique(y, return_inverse=True)
+        self.tree_model_ = DecisionTreeClassifier(
+            criterion="entropy", min_samples_leaf=self.min_samples_leaf,
+            random_state=self.random_state).fit(X, yi)
+        t = self.tree_model_.tree_
+        self.tree_ = t
+        counts = t.value[:, 0, :] * t.weighted_n_node_samples[:, None]
+        n = t.weighted_n_node_samples
+        leaf_err = n - counts.max(axis=1)
+        left, right = t.children_left, t.children_right
+        est = np.zeros(t.node_count)
+        collapsed = np.zeros(t.node_count, dtype=bool)
+        # nodes are numbered depth-first: children after parents, so go backwards
+        for node in range(t.node_count - 1, -1, -1):
+            as_leaf = leaf_err[node] + c45_added_errors(n[node], leaf_err[node],
+                                                         self.confidence)
+            if left[node] == -1:
+                est[node] = as_leaf
+                continue
+            subtree = est[left[node]] + est[right[node]]
+            if as_leaf <= subtree + 0.1:
+                collapsed[node] = True
+                est[node] = as_leaf
+            else:
+                est[node] = subtree
+        answer = np.arange(t.node_count)
+        for node in range(t.node_count):  # parents first: inherit a collapsed ancestor
+            for child in (left[node], right[node]):
+                if child != -1:
+                    answer[child] = answer[node] if (collapsed[node] or
+                                                     answer[node] != node) else child
+        self.pruned_node_ = answer
+        is_leaf = (answer == np.arange(t.node_count)) & ((left == -1) | collapsed)
+        self.n_leaves_ = int(is_leaf.sum())
+        self._proba = t.value[:, 0, :]
+        return self
+
+    def predict_proba(self, X: Any) -> np.ndarray:
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan", dtype=np.float64)
+        leaves = self.tree_model_.apply(X)
+        return self._proba[self.pruned_node_[leaves]]
+
+    def predict(self, X: Any) -> np.ndarray:
+        proba = self.predict_proba(X)
+        return self.classes_[proba.argmax(axis=1)]
+
+
+# ---------------------------------------------------------------------------------------------
+# Naive Bayes
+# ---------------------------------------------------------------------------------------------
+
+class WekaNaiveBayes(GaussianNB):
+    """Gaussian naive Bayes with Weka's floor on the standard deviation.
+
+    Weka's ``NaiveBayes`` models each numeric feature per class with a normal distribution
+    whose standard deviation is at least ``precision / 6``, where ``precision`` is the mean
+    gap between the feature's distinct training values (0.01 when it has one value). A
+    feature that is constant within a class (e.g. ``GPS.Status`` in every class but GPS
+    failure) then has a narrow but finite density instead of scikit-learn's variance
+    ``var_smoothing * max variance``. Rows with NaN are not supported (Weka skips missing
+    values; impute first).
+    """
+
+    def __init__(self, *, priors: Any = None, var_smoothing: float = 1e-9,
+                 default_precision: float = 0.01) -> None:
+        super().__init__(priors=priors, var_smoothing=var_smoothing)
+        self.default_precision = default_precision
+
+    def fit(self, X: Any, y: Any, sample_weight: Any = None) -> WekaNaiveBayes:
+        super().fit(X, y, sample_weight=sample_weight)
+        X = np.asarray(X, dtype=np.float64)
+        prec = np.full(X.shape[1], float(self.default_precision))
+        for j in range(X.shape[1]):
+            v = np.unique(X[:, j][np.isfinite(X[:, j])])
+            if len(v) > 1:
+                prec[j] = (v[-1] - v[0]) / (len(v) - 1)
+        self.precision_ = prec
+        self.var_ = np.maximum(self.var_, (prec / 6.0) ** 2)
+        return self
+
+
+# ---------------------------------------------------------------------------------------------
+# Factory
+# ---------------------------------------------------------------------------------------------
+
+def _impute(est: Any) -> Any:
+    return make_pipeline(SimpleImputer(strategy="mean", keep_empty_features=True), est)
+
+
+def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
+               progress: Callable[[str], None] | None = None,
+               cnn_epochs: int | None = None) -> Any:
+    """A fresh estimator for model ``name`` (one of :data:`ALL_MODELS`) on ``n_features``
+    features, seeded with ``seed``. ``progress`` receives one line per epoch from the
+    neural network; ``cnn_epochs`` overrides its epoch count."""
+    s = int(seed)
+    k = weka_num_features(n_features)
+    builders: dict[str, Callable[[], Any]] = {
+        "NaiveBayes": lambda: _impute(WekaNaiveBayes()),
+        "Logistic": lambda: _impute(make_pipeline(StandardScaler(), LogisticRegression(
+            C=1.0 / (2.0 * LOGISTIC_RIDGE), max_iter=500, tol=1e-6))),
+        "SMO": lambda: _impute(make_pipeline(MinMaxScaler(), OneVsOneClassifier(
+            LinearSVC(C=1.0, loss="hinge", dual=True, max_iter=20000, random_state=s)))),
+        "KNN": lambda: _impute(make_pipeline(MinMaxScaler(), KNeighborsClassifier(
+            n_neighbors=1, n_jobs=n_jobs))),
+        "AdaBoost": lambda: AdaBoostM1(n_estimators=10, random_state=s),
+        "OneR": lambda: OneR(min_bucket_size=6),
+        "ZeroR": lambda: DummyClassifier(strategy="most_frequent"),
+        "J48": lambda: J48(confidence=0.25, min_samples_leaf=2, random_state=s),
+        "RandomForest": lambda: RandomForestClassifier(
+            n_estimators=100, criterion="entropy", max_features=k, bootstrap=True,
+            random_state=s, n_jobs=n_jobs),
+        "RandomTree": lambda: DecisionTreeClassifier(criterion="entropy", max_features=k,
+                                                     random_state=s),
+    }
+    if name in builders:
+        return builders[name]()
+    if name == "CNN":
+        from tlm_process.evaluate.cnn import RowImageCNN
+
+        kw: dict[str, Any] = {"seed": s, "progress": progress, "n_threads": n_jobs}
+        if cnn_epochs is not None:
+            kw["epochs"] = cnn_epochs
+        return RowImageCNN(**kw)
+    if name == "WindowHGB":
+        from tlm_process.evaluate.temporal import window_hgb
+
+        return window_hgb(seed=s)
+    raise ValueError(f"unknown model {name!r}; choose from {', '.join(ALL_MODELS)}")

@@ -1,0 +1,153 @@
+"""A model that looks at time (beyond the paper): trailing-window statistics per flight +
+gradient boosting (``WindowHGB``).
+
+The paper classifies single rows. A single GPS row of a flight under RC failsafe (RTL: a
+straight line home at WPNAV_SPEED) is a row of normal cruise; an accelerometer fault shows as
+vertical speed swinging by metres per second within seconds; an engine fault as a fall and a
+vehicle lying still. What tells them apart is how the signals move over a few seconds, so
+``WindowHGB`` gives every row the statistics of the rows before it in the same flight:
+
+* for every feature, over trailing windows of ``seconds`` (default 2 s and 10 s, converted to
+  rows with the table's logging rate, e.g. 10 and 50 GPS rows at 5 Hz): mean, standard
+  deviation, minimum, maximum, mean absolute row-to-row change, and the change over the
+  window (now minus the window's first row); plus the row's own value;
+* a circular feature (``GPS.GCrs``, course over ground, 0-360°) is used only through its
+  wrapped row-to-row change (turn rate: mean and maximum over each window), never its value:
+  the heading depends on where the route goes, not on a fault.
+
+Windows are causal (only the row and earlier rows of its flight; the first rows of a flight
+repeat the first value), so the model could run on board as rows arrive. Windows never cross
+flights. The classifier is scikit-learn's ``HistGradientBoostingClassifier``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+__all__ = ["CIRCULAR_DEG", "WindowFeatures", "row_rate_hz", "window_features", "window_hgb"]
+
+#: Circular features (table -> feature -> period in the raw unit, degrees).
+CIRCULAR_DEG: Mapping[str, Mapping[str, float]] = {"GPS": {"GCrs": 360.0}}
+
+
+def row_rate_hz(df: pd.DataFrame) -> float:
+    """Logging rate of a table [Hz]: 1e6 / the median TimeUS step within flights."""
+    ordered = df[["flight", "TimeUS"]].sort_values(["flight", "TimeUS"], kind="stable")
+    steps = ordered.groupby("flight", sort=False)["TimeUS"].diff().dropna()
+    steps = steps[steps > 0]
+    if not len(steps):
+        return 1.0
+    return float(1e6 / np.median(steps.to_numpy(np.float64)))
+
+
+@dataclass(frozen=True)
+class WindowFeatures:
+    """How rows are turned into window statistics (see the module docstring).
+
+    ``seconds``: trailing window lengths [s]. ``circular``: feature -> period in the units
+    the feature has in the table (for min-max scaled GCrs: 360 / (max - min)).
+    """
+
+    seconds: tuple[float, ...] = (2.0, 10.0)
+    circular: Mapping[str, float] = field(default_factory=dict)
+
+    def names(self, features: Sequence[str]) -> list[str]:
+        out: list[str] = []
+        for f in features:
+            if f in self.circular:
+                for s in self.seconds:
+                    out += [f"{f}_turn_mean{s:g}s", f"{f}_turn_max{s:g}s"]
+                continue
+            out.append(f)
+            for s in self.seconds:
+                out += [f"{f}_{st}{s:g}s" for st in
+                        ("mean", "std", "min", "max", "absdiff", "change")]
+        return out
+
+
+def _trailing_sum(x: np.ndarray, w: int) -> np.ndarray:
+    """Sum of x[t - w + 1 .. t], the start padded with x[0]."""
+    padded = np.concatenate([np.full(w - 1, x[0]), x])
+    c = np.concatenate([[0.0], np.cumsum(padded)])
+    return c[w:] - c[:-w]
+
+
+def _trailing_filter(fn, x: np.ndarray, w: int) -> np.ndarray:
+    """``fn`` (a scipy.ndimage 1-D min/max filter) over x[t - w + 1 .. t], the start padded
+    with x[0]."""
+    padded = np.concatenate([np.full(w - 1, x[0]), x])
+    centred = fn(padded, size=w, mode="nearest")  # centre c covers c - w//2 .. c - w//2 + w - 1
+    return centred[w // 2: w // 2 + len(x)]
+
+
+def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
+                  rows: Sequence[int]) -> np.ndarray:
+    """Window features of one flight's rows (time order), shape (n, n_out)."""
+    cols: list[np.ndarray] = []
+    n = len(x)
+    for j, f in enumerate(feats):
+        v = x[:, j]
+        v = np.where(np.isfinite(v), v, np.nanmean(v) if np.isfinite(v).any() else 0.0)
+        d = np.diff(v, prepend=v[0])
+        if f in spec.circular:
+            p = spec.circular[f]
+            turn = np.abs((d + p / 2) % p - p / 2)
+            for w in rows:
+                cols.append(_trailing_sum(turn, w) / w)
+                cols.append(_trailing_filter(maximum_filter1d, turn, w))
+            continue
+        cols.append(v)
+        ad = np.abs(d)
+        for w in rows:
+            s1 = _trailing_sum(v, w)
+            s2 = _trailing_sum(v * v, w)
+            mean = s1 / w
+            cols.append(mean)
+            cols.append(np.sqrt(np.maximum(s2 / w - mean * mean, 0.0)))
+            cols.append(_trailing_filter(minimum_filter1d, v, w))
+            cols.append(_trailing_filter(maximum_filter1d, v, w))
+            cols.append(_trailing_sum(ad, w) / w)
+            first = np.concatenate([np.full(min(w - 1, n), v[0]), v])[:n]
+            cols.append(v - first)
+    return np.column_stack(cols) if cols else np.empty((n, 0))
+
+
+def window_features(df: pd.DataFrame, features: Sequence[str],
+                    spec: WindowFeatures | None = None,
+                    rate_hz: float | None = None) -> tuple[np.ndarray, list[str]]:
+    """Window statistics of every row of ``df`` (columns ``flight``, ``TimeUS`` and
+    ``features``), in ``df``'s row order; returns (matrix, column names). ``rate_hz``: the
+    table's logging rate (default: measured, :func:`row_rate_hz`)."""
+    spec = spec or WindowFeatures()
+    rate = rate_hz if rate_hz is not None else row_rate_hz(df)
+    rows = [max(2, int(round(s * rate))) for s in spec.seconds]
+    names = spec.names(features)
+    out = np.empty((len(df), len(names)), dtype=np.float32)
+    order = np.lexsort((df["TimeUS"].to_numpy(), df["flight"].astype(str).to_numpy()))
+    flights = df["flight"].astype(str).to_numpy()[order]
+    x = df[list(features)].to_numpy(np.float64)[order]
+    bounds = np.flatnonzero(flights[1:] != flights[:-1]) + 1
+    starts = np.concatenate([[0], bounds])
+    ends = np.concatenate([bounds, [len(df)]])
+    for a, b in zip(starts, ends, strict=True):
+        if b > a:
+            out[order[a:b]] = _flight_block(x[a:b], features, spec, rows)
+    return out, names
+
+
+def window_hgb(seed: int = 0):
+    """The ``WindowHGB`` classifier (fed with :func:`window_features`): 150 rounds of
+    histogram gradient boosting, learning rate 0.1, at most 31 leaves of at least 50 rows
+    each (10 s of GPS rows: neighbouring rows are near copies, a smaller leaf learns one
+    flight's moment), L2 regularisation 1 on the leaf values, no early stopping (its
+    validation rows would be drawn at random, i.e. leak)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier
+
+    return HistGradientBoostingClassifier(max_iter=150, learning_rate=0.1, max_leaf_nodes=31,
+                                          min_samples_leaf=50, l2_regularization=1.0,
+                                          early_stopping=False, random_state=seed)
