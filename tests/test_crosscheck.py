@@ -16,16 +16,19 @@ from tlm_process.crosscheck import crosscheck, gate, reconstruct
 LOGS = ("normal_s11", "gps_s12", "accel_s13", "engine_s14", "rc_s15", "combined_s21")
 
 #: log -> (max |flight time difference| as a fraction, max trajectory RMS [m]).
-#: normal: the issue's targets (10 %, 3 m). combined: 10 % is met; the 3 m target is NOT met
-#: (13.7 m measured: after the GPS loss and the accelerometer fault tlm's vehicle is left
-#: elsewhere than SITL's and flies back along another line), so the bound pins today's value.
+#: The issue's targets are 10 % and 3 m on the normal and combined flights; measured after the
+#: calibration: flight time within 0.7-3.9 %, trajectory RMS 0.06 m (normal), 0.2-0.4 m (accel,
+#: engine, rc), 4.4 m (gps) and 10.5 m (combined). The combined flight does NOT meet the 3 m
+#: target: after the GPS loss (tlm's EKF drifts 105 m, SITL's 190 m) and the accelerometer fault
+#: tlm's vehicle is left elsewhere than SITL's and flies back along another line, so that bound
+#: pins today's value with a margin.
 TOLERANCES = {
-    "normal_s11": (0.10, 3.0),
-    "gps_s12": (0.10, 6.0),
-    "accel_s13": (0.10, 1.5),
-    "engine_s14": (0.10, 1.5),
-    "rc_s15": (0.10, 1.5),
-    "combined_s21": (0.10, 20.0),
+    "normal_s11": (0.05, 0.3),
+    "gps_s12": (0.05, 6.0),
+    "accel_s13": (0.05, 0.6),
+    "engine_s14": (0.05, 0.6),
+    "rc_s15": (0.05, 1.0),
+    "combined_s21": (0.06, 13.0),
 }
 
 
@@ -47,9 +50,45 @@ def test_fidelity_within_documented_tolerances(results, name):
 
 def test_normal_flight_profiles_agree(results):
     r = results["normal_s11"]
-    assert r["altitude_rms_m"] < 1.5 and r["speed_rms_ms"] < 1.5
+    assert r["altitude_rms_m"] < 1.0 and r["speed_rms_ms"] < 1.0
     assert r["max_alt_m"]["tlm"] == pytest.approx(r["max_alt_m"]["sitl"], abs=1.0)
     assert r["imu_acc_std"]["tlm"] == pytest.approx(r["imu_acc_std"]["sitl"], rel=0.3)
+
+
+@pytest.mark.parametrize("name", LOGS)
+def test_cruise_throttle_agrees(results, name):
+    """Motor air-density compensation and the battery monitor's resting-voltage estimate: the
+    cruise throttle is SITL's (0.365) rather than the frame's hover thrust (0.383 before)."""
+    r = results[name]["cruise_throttle"]
+    assert r["tlm"] == pytest.approx(r["sitl"], abs=0.005)
+
+
+def test_normal_cruise_rates_and_vertical_vibration_agree(results):
+    """The S-curve corner blends, the rotor momentum-drag damping and the whole-microsecond PWM
+    bring tlm's cruise within SITL's: RATE tracking error (was 0.96 / 1.1 / 4.8 deg/s against
+    SITL's 0.14 / 0.14 / 2.7), IMU0 AccZ power (was 65x / 40x SITL's at 2-6 / 6-12.5 Hz) and
+    VIBE z."""
+    r = results["normal_s11"]
+    for ax in ("roll", "pitch"):
+        assert r[f"rate_err_{ax}"]["tlm"] == pytest.approx(r[f"rate_err_{ax}"]["sitl"], abs=0.06)
+    assert r["rate_err_yaw"]["tlm"] == pytest.approx(r["rate_err_yaw"]["sitl"], rel=0.2)
+    for band in ("0_2hz", "2_6hz", "6_12.5hz"):
+        a, b = r[f"imu_acc_psd_{band}"]["tlm"], r[f"imu_acc_psd_{band}"]["sitl"]
+        assert b / 4.0 < a < b * 4.0, band
+    assert r["vibe_z"]["tlm"] == pytest.approx(r["vibe_z"]["sitl"], rel=0.2)
+
+
+@pytest.mark.parametrize("name", ["engine_s14", "combined_s21"])
+def test_engine_fall_agrees(results, name):
+    """Motor 1 cut: the coning fall (thrust-axis-first attitude control, heading error capped,
+    yaw left alone beyond 60 deg of thrust error) reaches the ground in SITL's time at SITL's
+    speed."""
+    f = [x for x in results[name]["faults"] if x["type"] == "engine"][0]
+    tlm, sitl = f["tlm"], f["sitl"]
+    assert tlm["ground_s"] == pytest.approx(sitl["ground_s"], abs=0.3)
+    assert tlm["impact_speed_ms"] == pytest.approx(sitl["impact_speed_ms"], abs=1.0)
+    assert tlm["roll_max_3s_deg"] == pytest.approx(sitl["roll_max_3s_deg"], abs=20.0)
+    assert tlm["above_10m_after_end_s"] == pytest.approx(sitl["above_10m_after_end_s"], abs=1.5)
 
 
 def test_rc_fault_signature_matches(results):

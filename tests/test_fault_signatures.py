@@ -183,6 +183,31 @@ def test_tlm_engine_falls_stays_armed_and_resumes():
 
 
 @pytest.mark.slow
+def test_engine_impact_shows_in_the_imu_and_trips_no_vibration_failsafe():
+    """SITL's sensor smoothing makes the ground impact a deceleration spike in the IMU (about
+    -96 m/s^2 in engine_s14.bin), so the EKF stops with the vehicle: no bad-IMU response, no
+    vibration failsafe (ERR 29/1) in SITL's engine faults nor in tlm's (combined_s21 clears
+    the accelerometer fault's failsafe, ERR 29/0, just after its engine fault starts)."""
+    for name in ("engine_s14", "combined_s21"):
+        tables, side = _reference(name)
+        for f in (f for f in side["faults"] if f["type"] == "engine"):
+            err = tables["ERR"]
+            inside = err[(err.TimeUS >= f["start_time_us"]) & (err.TimeUS <= f["end_time_us"])]
+            assert not ((inside.Subsys == 29) & (inside.ECode == 1)).any(), name
+    s, flight = _tlm("engine")
+    fault = flight["tlm_faults"][0]
+    t = flight["tlm"]
+    err = t.get("ERR")
+    if err is not None:
+        inside = err[(err.TimeUS >= fault["start_time_us"]) & (err.TimeUS <= fault["end_time_us"])]
+        assert not ((inside.Subsys == 29) & (inside.ECode == 1)).any()
+    imu = t["IMU"]
+    hit = imu[(imu.TimeUS >= fault["start_time_us"] + 1e6 * (s["ground_s"] - 0.2))
+              & (imu.TimeUS <= fault["start_time_us"] + 1e6 * (s["ground_s"] + 0.3))]
+    assert (imu.loc[hit.index, ["AccX", "AccY", "AccZ"]].abs().max(axis=1) > 50.0).any()
+
+
+@pytest.mark.slow
 def test_tlm_rc_failsafe_rtl_lands_home_and_disarms():
     s, _ = _tlm("rc")
     assert s["rtl_delay_s"] <= RC_FS_TIMEOUT_S + 0.1

@@ -176,6 +176,12 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "", 0.1, 2.0,
         "S-curve leg-speed factor: cruise on a leg of length L is K*(L*sqrt(WPNAV_JERK)/2)^(2/3), "
         "fitted to the reference SITL logs (~3.4 m/s on 13.5 m legs)")),
+    ("TLM_BATT_SAG_HOV", 0.075, ParamInfo(
+        "V", 0.0, 2.0,
+        "voltage the battery monitor's resting-voltage estimate adds at hover thrust (scaled with "
+        "the thrust), which the motors' voltage compensation uses; fitted to normal_s11.bin BAT: "
+        "VoltR - Volt = 0.07-0.08 V at 28 A (AP_BattMonitor's resistance estimate 0.0026-0.0028 "
+        "ohm, with SITL's constant 12.6 V)")),
     ("TLM_INS1_NSE_SC", 0.5, ParamInfo(
         "", 0.0, 100.0,
         "scale of IMU0's base accel/gyro noise; fitted: in the reference SITL logs IMU0 shows "

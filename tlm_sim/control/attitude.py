@@ -1,9 +1,10 @@
 """ArduCopter-style attitude and rate control (AC_AttitudeControl structure, our implementation).
 
 Angle targets are shaped with a square-root controller (gain 1/ATC_INPUT_TC, acceleration limits
-ATC_ACCEL_*_MAX), the attitude error between the shaped target and the EKF attitude is turned into
-body-rate targets by a square-root controller (ATC_ANG_*_P) plus rate feed-forward, and per-axis
-rate PIDs (ATC_RAT_*) produce roll/pitch/yaw outputs in motor units (+-1).
+ATC_ACCEL_*_MAX; the heading with the commanded heading rate as feed-forward), the attitude error
+between the shaped target and the EKF attitude is turned into body-rate targets by a square-root
+controller (ATC_ANG_*_P) plus rate feed-forward, and per-axis rate PIDs (ATC_RAT_*) produce
+roll/pitch/yaw outputs in motor units (+-1).
 """
 
 import math
@@ -77,11 +78,22 @@ def attitude_reset(c, roll, pitch, yaw):
     c[C.ATT_YAW_RATE_T] = 0.0
 
 
+#: thrust-vector error beyond which the feed-forward fades out and yaw is left alone [rad]
+#: (AC_AttitudeControl's AC_ATTITUDE_THRUST_ERROR_ANGLE, 30 deg)
+THRUST_ERROR_ANGLE = math.radians(30.0)
+
+
 @tick_jit
-def attitude_update(c, g, q, body_rate_out):
+def attitude_update(c, g, q, gyro, body_rate_out):
     """Shape the commanded angles (ATT_*_CMD) and compute body-rate targets [rad/s].
 
-    q: EKF attitude quaternion body->NED (w, x, y, z). Writes body_rate_out[0:3].
+    q: EKF attitude quaternion body->NED (w, x, y, z); gyro: body rates [rad/s]. Writes
+    body_rate_out[0:3]. The attitude error is split into a tilt of the thrust axis and a heading
+    error about it (limited to G_YAW_ERR_MAX, the target heading dragged along beyond that), as
+    AC_AttitudeControl does. When the thrust vector is more than 30 deg off its target the
+    feed-forward fades out and the yaw-rate target blends into the measured yaw rate, fully
+    at 60 deg (ArduCopter recovers the thrust direction first: a copter tumbling after a motor
+    loss does not also fight its heading).
     """
     dt = g[C.G_DT]
     tc = g[C.G_INPUT_TC]
@@ -89,9 +101,9 @@ def attitude_update(c, g, q, body_rate_out):
     _shape_axis(c, C.ATT_ROLL_T, C.ATT_ROLL_RATE_T, c[C.ATT_ROLL_CMD], tc, amax, dt, False)
     amax = g[C.G_ACCEL_MAX + 1]
     _shape_axis(c, C.ATT_PITCH_T, C.ATT_PITCH_RATE_T, c[C.ATT_PITCH_CMD], tc, amax, dt, False)
-    # heading: slew-limited towards the command
+    # heading: towards the command with its rate (YAW_RATE_CMD) as feed-forward, slew-limited
     yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
-    yrate = sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
+    yrate = c[C.YAW_RATE_CMD] + sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
     smax = g[C.G_SLEW_YAW]
     yrate = min(max(yrate, -smax), smax)
     yr0 = c[C.ATT_YAW_RATE_T]
@@ -119,15 +131,45 @@ def attitude_update(c, g, q, body_rate_out):
     ez = qw * tz + qx * ty - qy * tx + qz * tw
     if ew < 0.0:
         ew, ex, ey, ez = -ew, -ex, -ey, -ez
-    vn = math.sqrt(ex * ex + ey * ey + ez * ez)
-    if vn > 1e-12:
-        ang = 2.0 * math.atan2(vn, ew)
-        k = ang / vn
+    # split the error as ArduCopter does: first the rotation that tilts the body's thrust axis
+    # (z) onto the target's (about an axis in the body x-y plane), then the remaining rotation
+    # about the thrust axis (the heading error)
+    zx = 2.0 * (ex * ez + ew * ey)  # target z axis in the body frame
+    zy = 2.0 * (ey * ez - ew * ex)
+    zz = min(max(1.0 - 2.0 * (ex * ex + ey * ey), -1.0), 1.0)
+    # half-angle sine and cosine of the thrust-vector error angle te
+    sh = math.sqrt(0.5 * (1.0 - zz))
+    ch = math.sqrt(0.5 * (1.0 + zz))
+    if sh < 0.05:  # te = 2 asin(sh), series exact to double precision here
+        s2 = sh * sh
+        te = 2.0 * sh * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * 5.0 / 112.0)))
     else:
-        k = 2.0
-    e0 = ex * k
-    e1 = ey * k
-    e2 = ez * k
+        te = 2.0 * math.asin(min(sh, 1.0))
+    sxy = math.sqrt(zx * zx + zy * zy)
+    if sxy > 1e-12:
+        ax = -zy / sxy
+        ay = zx / sxy
+    else:
+        ax = 1.0
+        ay = 0.0
+    e0 = ax * te
+    e1 = ay * te
+    hw = ch * ew + sh * (ax * ex + ay * ey)
+    hz = ch * ez - sh * (ax * ey - ay * ex)
+    if hw > 0.0 and abs(hz) < 0.05 * hw:  # 2 atan(hz / hw), series
+        r = hz / hw
+        r2 = r * r
+        e2 = 2.0 * r * (1.0 - r2 * (1.0 / 3.0 - r2 * (0.2 - r2 / 7.0)))
+    else:
+        e2 = wrap_pi(2.0 * math.atan2(hz, hw))
+    # a heading error beyond what saturates the yaw-rate loop drags the target along
+    hmax = g[C.G_YAW_ERR_MAX]
+    if e2 > hmax:
+        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - hmax))
+        e2 = hmax
+    elif e2 < -hmax:
+        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 + hmax))
+        e2 = -hmax
     # feed-forward: target euler rates -> body rates (at the target attitude)
     # (full-angle sines/cosines from the half angles above)
     sin_r = 2.0 * sr * cr
@@ -140,9 +182,23 @@ def attitude_update(c, g, q, body_rate_out):
     ff0 = dr - sin_p * dy
     ff1 = cos_r * dp + sin_r * cos_p * dy
     ff2 = -sin_r * dp + cos_r * cos_p * dy
-    body_rate_out[0] = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt) + ff0
-    body_rate_out[1] = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt) + ff1
-    body_rate_out[2] = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt) + ff2
+    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt)
+    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt)
+    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt)
+    if te <= THRUST_ERROR_ANGLE:
+        body_rate_out[0] = r0 + ff0
+        body_rate_out[1] = r1 + ff1
+        body_rate_out[2] = r2 + ff2
+    else:
+        if te > 2.0 * THRUST_ERROR_ANGLE:
+            body_rate_out[0] = r0
+            body_rate_out[1] = r1
+            body_rate_out[2] = gyro[2]
+        else:
+            k = 1.0 - (te - THRUST_ERROR_ANGLE) / THRUST_ERROR_ANGLE
+            body_rate_out[0] = r0 + ff0 * k
+            body_rate_out[1] = r1 + ff1 * k
+            body_rate_out[2] = gyro[2] * (1.0 - k) + (r2 + ff2) * k
 
 
 @tick_jit

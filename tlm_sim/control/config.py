@@ -10,6 +10,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from tlm_sim.control import layout as C
+from tlm_sim.dynamics.atmosphere import RHO0, air_density, air_density_gradient
 
 LOOP_HZ = 400.0
 
@@ -109,4 +110,29 @@ def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -
     g[C.G_FS_EKF_ACTION] = p.get("FS_EKF_ACTION", 1.0)
     filt = p.get("FS_EKF_FILT", 5.0)
     g[C.G_FS_EKF_ALPHA] = 1.0 if filt <= 0.0 else 0.1 / (0.1 + 1.0 / (2.0 * math.pi * filt))
+    # the barometer's air density ratio for the motors' density compensation: the 1976
+    # atmosphere at the home altitude (field elevation) plus the height above it
+    home_alt = p.get("SIM_OPOS_ALT", 584.0)
+    g[C.G_RHO_RATIO_HOME] = air_density(home_alt) / RHO0
+    g[C.G_RHO_RATIO_GRAD] = air_density_gradient(home_alt) / RHO0
+    g[C.G_BATT_SAG_HOVER] = p.get("TLM_BATT_SAG_HOV", 0.075)
+    tc = p.get("ATC_ANG_LIM_TC", 1.0)
+    g[C.G_ANG_LIM_ALPHA] = 1.0 if tc <= 0.0 else dt / (dt + tc)
+    g[C.G_YAW_ERR_MAX] = yaw_error_max(g[C.G_RAT_P + 2], g[C.G_ANG_P + 2], g[C.G_ACCEL_MAX + 2])
     return g
+
+
+def yaw_error_max(rate_p: float, angle_p: float, accel_max: float) -> float:
+    """Largest heading error [rad] the attitude controller acts on: the error whose square-root
+    controller output (ATC_ANG_YAW_P, half the yaw acceleration limit, kept within 10..120
+    deg/s^2) saturates the yaw-rate loop (a rate error of 1/ATC_RAT_YAW_P), at most 45 deg
+    (AC_AttitudeControl's heading error limit). With the SITL defaults: 45 deg, which is the
+    heading error engine_s14.bin holds for 25 s on the ground after the crash (DesYaw 337 vs
+    Yaw 291 deg)."""
+    cap = math.radians(45.0)
+    if rate_p <= 0.0 or angle_p <= 0.0:
+        return cap
+    out = 1.0 / rate_p
+    d = min(max(0.5 * accel_max, math.radians(10.0)), math.radians(120.0))
+    err = out / angle_p if out <= d / angle_p else out * out / (2.0 * d) + d / (2.0 * angle_p**2)
+    return min(err, cap)

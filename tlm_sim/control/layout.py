@@ -76,7 +76,7 @@ TAKEOFF_ALT = 95  # takeoff target altitude above home [m]
 LAND_DESCENT_STARTED = 96
 CRASH_TIMER = 97
 DISARM_TIME = 98  # simulated time of disarm [s] (-1 while armed)
-YAW_RATE_CMD = 99
+YAW_RATE_CMD = 99  # heading-rate feed-forward of the path's heading [rad/s]
 BODY_RATE_T = 100  # attitude controller output: body-rate targets [rad/s] (3)
 # vertical complementary filter of the EKF height (EKF3's height-rate output), down positive
 VCF_ACC = 103  # learned acceleration offset [m/s^2]
@@ -96,7 +96,14 @@ LAND_PAUSE = 116  # seconds left before a failsafe LAND starts descending
 CHECK_TIMER = 117  # time of the next 10 Hz failsafe check [s]
 THRUST_LOSS_T = 118  # time the thrust-loss symptoms have lasted [s]
 THRUST_BOOST = 119  # 1 while the motors' thrust boost is on (after a thrust-loss detection)
-N_CONTROL_STATE = 120
+PZ_ACC_FF = 120  # feed-forward down acceleration of the path [m/s^2]
+PATH_STOP_T = 121  # time into the jerk-limited stop at the path's end [s] (-1: not stopping)
+PATH_STOP_V0 = 122  # target speed when that stop began [m/s]
+AIR_RHO_RATIO = 123  # air density / 1.225 at the vehicle (motor density compensation; 0: off)
+PATH_STOP_A = 124  # acceleration limit of that stop [m/s^2]
+ALTHOLD_LEAN = 125  # lean-angle limit from the throttle headroom, filtered [rad] (see position)
+PXY_LIMIT = 126  # last horizontal acceleration target before it was limited, NE (2; 0: none)
+N_CONTROL_STATE = 128
 
 # sub-modes of AUTO / RTL / LAND
 SUB_NONE = 0
@@ -196,4 +203,9 @@ G_FS_VIBE_ENABLE = 85
 G_FS_EKF_THRESH = 86
 G_FS_EKF_ACTION = 87
 G_FS_EKF_ALPHA = 88  # FS_EKF_FILT low-pass coefficient at the 10 Hz check rate
-N_CONTROL_CFG = 89
+G_RHO_RATIO_HOME = 89  # air density / 1.225 at home (1976 atmosphere, SIM_OPOS_ALT)
+G_RHO_RATIO_GRAD = 90  # its change per metre of height above home [1/m]
+G_BATT_SAG_HOVER = 91  # battery monitor's resting-voltage estimate minus voltage at hover [V]
+G_ANG_LIM_ALPHA = 92  # ATC_ANG_LIM_TC low-pass coefficient at the loop rate
+G_YAW_ERR_MAX = 93  # largest heading error the attitude controller acts on [rad]
+N_CONTROL_CFG = 94

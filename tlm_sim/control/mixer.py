@@ -1,9 +1,11 @@
 """Quad "+" motor mixer with thrust linearisation (AP_MotorsMatrix structure, our implementation).
 
 Roll/pitch/yaw demands (+-1 motor units) and throttle (0..1 thrust fraction) are compensated for
-battery voltage (1/lift_max), mixed with roll/pitch priority over yaw (yaw limited to the headroom,
-at least MOT_YAW_HEADROOM), the throttle placed for best attitude authority, then each motor's
-thrust fraction is linearised through MOT_THST_EXPO into an actuator value and a PWM (us).
+battery voltage (1/lift_max, from the battery monitor's resting-voltage estimate) and air density
+(1/(rho/1.225), AP_MOTORS_DENSITY_COMP), mixed with roll/pitch priority over yaw (yaw limited to
+the headroom, at least MOT_YAW_HEADROOM), the throttle placed for best attitude authority, then
+each motor's thrust fraction is linearised through MOT_THST_EXPO into an actuator value and a
+whole-microsecond PWM.
 """
 
 import math
@@ -43,10 +45,37 @@ def thrust_to_actuator(g, thrust, ratio, lift):
 
 
 @tick_jit
+def density_gain(c):
+    """Air-density compensation gain 1/rho_ratio of the motor outputs (AP_Motors thrust
+    linearisation: the ratio is used while within 0.3..1.5, clamped to 0.5..1.25; 1 when no
+    ratio is set). It is why SITL hovers at ThO 0.363 where the frame's hover thrust is 0.39:
+    at CMAC (604 m AMSL in flight) rho/1.225 = 0.943."""
+    r = c[C.AIR_RHO_RATIO]
+    if r <= 0.3 or r >= 1.5:
+        return 1.0
+    return 1.0 / min(max(r, 0.5), 1.25)
+
+
+@tick_jit
+def resting_voltage_estimate(c, g, v_batt):
+    """The battery monitor's resting-voltage estimate [V]: the voltage plus the sag it infers
+    from the current, modelled as G_BATT_SAG_HOVER (TLM_BATT_SAG_HOV) times the mean motor
+    thrust fraction over MOT_THST_HOVER (the current follows the thrust)."""
+    sag = g[C.G_BATT_SAG_HOVER]
+    hover = c[C.THR_HOVER]
+    if sag == 0.0 or hover <= 0.0:
+        return v_batt
+    t = 0.25 * (c[C.MIX_THRUST] + c[C.MIX_THRUST + 1] + c[C.MIX_THRUST + 2] + c[C.MIX_THRUST + 3])
+    return v_batt + sag * t / hover
+
+
+@tick_jit
 def mix(c, g, roll, pitch, yaw, throttle, v_batt):
-    """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM and the LIM_* saturation flags."""
-    ratio, lift = lift_max(g, v_batt)
-    comp = 1.0 / lift
+    """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM and the LIM_* saturation flags.
+
+    v_batt: battery voltage [V] (the resting-voltage estimate is formed here)."""
+    ratio, lift = lift_max(g, resting_voltage_estimate(c, g, v_batt))
+    comp = density_gain(c) / lift
     roll *= comp
     pitch *= comp
     yaw *= comp
@@ -111,11 +140,23 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
         c[C.MIX_THRUST + i] = v
         a = thrust_to_actuator(g, v, ratio, lift)
         c[C.MIX_ACT + i] = a
-        c[C.MIX_PWM + i] = g[C.G_MOT_PWM_MIN] + (g[C.G_MOT_PWM_MAX] - g[C.G_MOT_PWM_MIN]) * a
+        c[C.MIX_PWM + i] = pwm_out(g, a)
     c[C.LIM_RP] = lim_rp
     c[C.LIM_YAW] = lim_yaw
     c[C.LIM_THR_LO] = lim_lo
     c[C.LIM_THR_HI] = lim_hi
+
+
+@tick_jit
+def pwm_out(g, actuator):
+    """PWM [us] of an actuator value 0..1 as the motor library outputs it: a whole number of
+    microseconds, the fraction dropped (AP_MotorsMulticopter::output_to_pwm returns an int16
+    and SITL's servo input is uint16 microseconds). The 1 us steps make the collective thrust
+    jitter by ~0.02 N per motor: the broadband vertical acceleration (and VIBE z) that SITL's
+    IMU shows in flight on top of the sensor noise (normal_s11, cruise: IMU0 AccZ Welch power
+    ~1e-6 (m/s^2)^2/Hz at 2-5 Hz on both IMUs, X unaffected)."""
+    pwm = g[C.G_MOT_PWM_MIN] + (g[C.G_MOT_PWM_MAX] - g[C.G_MOT_PWM_MIN]) * actuator
+    return float(int(pwm))
 
 
 @tick_jit
@@ -124,7 +165,7 @@ def output_idle(c, g, spin):
     for i in range(4):
         c[C.MIX_THRUST + i] = 0.0
         c[C.MIX_ACT + i] = spin
-        c[C.MIX_PWM + i] = g[C.G_MOT_PWM_MIN] + (g[C.G_MOT_PWM_MAX] - g[C.G_MOT_PWM_MIN]) * spin
+        c[C.MIX_PWM + i] = pwm_out(g, spin)
     c[C.LIM_RP] = 1.0
     c[C.LIM_YAW] = 1.0
     c[C.LIM_THR_LO] = 1.0

@@ -3,7 +3,8 @@
 Horizontal: position error -> square-root velocity demand (PSC_POSXY_P) + feed-forward ->
 velocity PID (PSC_VELXY_*) -> acceleration -> lean angles in the heading frame, limited to
 ANGLE_MAX. Vertical: position error -> velocity demand (PSC_POSZ_P) -> acceleration demand
-(PSC_VELZ_P) -> acceleration PID (PSC_ACCZ_*, ArduPilot's cm/s^2 units, x0.001) + hover throttle.
+(PSC_VELZ_P) + the path's acceleration feed-forward -> acceleration PID (PSC_ACCZ_*, ArduPilot's
+cm/s^2 units, x0.001) + hover throttle.
 NED positions/velocities in m, m/s; PZ_ACC_T is "up" acceleration like ArduPilot's ADes.
 """
 
@@ -14,6 +15,13 @@ from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import sqrt_ctrl
 
 GRAVITY = 9.80665
+#: the lean-angle limit from the throttle headroom never goes below this (AC_AttitudeControl's
+#: AC_ATTITUDE_CONTROL_ANGLE_LIMIT_MIN, 10 deg); engine_s14.bin shows it on the ground after the
+#: crash: throttle saturated, the lean target held at 10 deg (accel target 1.73 m/s^2) for 25 s
+LEAN_LIMIT_MIN = math.radians(10.0)
+#: throttle fraction (of the maximum thrust) above which the lean is limited
+#: (AC_ATTITUDE_CONTROL_ANGLE_LIMIT_THROTTLE_MAX)
+LEAN_LIMIT_THROTTLE = 0.8
 VIBE_COMP_P_GAIN = 0.25  # throttle per (hover throttle per cm/s^2) of acceleration target
 VIBE_COMP_I_GAIN = 0.125  # integrator gain on the velocity error, x PSC_VELZ_P
 
@@ -32,17 +40,66 @@ def xy_reset(c, pn, pe, vn, ve):
         c[C.PXY_EF + k] = 0.0
         c[C.PXY_DF + k] = 0.0
         c[C.PXY_EPREV + k] = 0.0
+        c[C.PXY_LIMIT + k] = 0.0
     c[C.PXY_VEL_T] = 0.0
+
+
+@tick_jit
+def xy_init_stopping_point(c, g, pos, vel):
+    """Restart the horizontal controller without a bump (AC_PosControl's
+    init_xy_controller_stopping_point); returns the stopping point (north, east) [m].
+
+    The new target is where the vehicle would stop, at the distance the square-root position
+    controller (PSC_POSXY_P, WPNAV_ACCEL) needs from its current speed, so that the position
+    loop at first asks for exactly the current velocity; the velocity integrator takes the
+    current acceleration target (the present lean), and the filters restart from zero error.
+    """
+    kp = g[C.G_POSXY_P]
+    accel = g[C.G_WP_ACCEL]
+    vn, ve = vel[0], vel[1]
+    v = math.sqrt(vn * vn + ve * ve)
+    sn, se = pos[0], pos[1]
+    if v > 1e-6 and kp > 0.0 and accel > 0.0:
+        lin = accel / kp
+        d = v / kp if v <= lin else 0.5 * accel / (kp * kp) + v * v / (2.0 * accel)
+        sn += vn * d / v
+        se += ve * d / v
+    imax = g[C.G_VELXY_IMAX]
+    for k in range(2):
+        c[C.PXY_I + k] = min(max(c[C.PXY_ACC_T + k], -imax), imax)
+        c[C.PXY_LIMIT + k] = 0.0
+        c[C.PXY_VEL_FF + k] = 0.0
+        c[C.PXY_ACC_FF + k] = 0.0
+        c[C.PXY_EF + k] = 0.0
+        c[C.PXY_DF + k] = 0.0
+        c[C.PXY_EPREV + k] = 0.0
+    c[C.PXY_POS_T] = sn
+    c[C.PXY_POS_T + 1] = se
+    return sn, se
+
+
+@tick_jit
+def althold_lean_update(c, g, throttle):
+    """Update the lean-angle limit from the throttle demand (0..1): acos(throttle / 0.8) low-passed
+    with ATC_ANG_LIM_TC, so that a saturated throttle leaves thrust for height before lean
+    (AC_AttitudeControl_Multi's althold lean angle limit)."""
+    target = math.acos(min(max(throttle / LEAN_LIMIT_THROTTLE, 0.0), 1.0))
+    c[C.ALTHOLD_LEAN] += g[C.G_ANG_LIM_ALPHA] * (target - c[C.ALTHOLD_LEAN])
 
 
 @tick_jit
 def xy_update(c, g, pos, vel, cy, sy):
     """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD.
 
-    cy, sy: cosine and sine of the vehicle heading.
+    cy, sy: cosine and sine of the vehicle heading. The acceleration is limited to the lean
+    angle min(ANGLE_MAX, max(ALTHOLD_LEAN, 10 deg)), keeping the part across the desired
+    velocity first; while limited, the velocity integrator does not grow along the limit.
     """
     dt = g[C.G_DT]
+    lean = max(c[C.ALTHOLD_LEAN], LEAN_LIMIT_MIN)
     accel_max = g[C.G_ACCEL_XY_MAX]
+    if lean < g[C.G_ANGLE_MAX]:
+        accel_max = GRAVITY * math.tan(lean)
     # position -> velocity (square-root shaped along the error vector)
     en = c[C.PXY_POS_T] - pos[0]
     ee = c[C.PXY_POS_T + 1] - pos[1]
@@ -56,9 +113,11 @@ def xy_update(c, g, pos, vel, cy, sy):
         vce = 0.0
     c[C.PXY_VEL_T] = c[C.PXY_VEL_FF] + vcn
     c[C.PXY_VEL_T + 1] = c[C.PXY_VEL_FF + 1] + vce
-    # velocity PID (per axis)
+    # velocity PID (2-D: the integrator may not grow along last tick's limited acceleration)
     an = c[C.PXY_ACC_FF]
     ae = c[C.PXY_ACC_FF + 1]
+    di_n = 0.0
+    di_e = 0.0
     for k in range(2):
         err = c[C.PXY_VEL_T + k] - vel[k]
         ef_prev = c[C.PXY_EF + k]
@@ -66,18 +125,56 @@ def xy_update(c, g, pos, vel, cy, sy):
         ef = c[C.PXY_EF + k]
         d = (ef - ef_prev) / dt
         c[C.PXY_DF + k] += g[C.G_VELXY_FLTD] * (d - c[C.PXY_DF + k])
-        i_new = c[C.PXY_I + k] + g[C.G_VELXY_I] * ef * dt
-        imax = g[C.G_VELXY_IMAX]
-        c[C.PXY_I + k] = min(max(i_new, -imax), imax)
-        a = g[C.G_VELXY_P] * ef + g[C.G_VELXY_D] * c[C.PXY_DF + k] + c[C.PXY_I + k]
+        if k == 0:
+            di_n = g[C.G_VELXY_I] * ef * dt
+        else:
+            di_e = g[C.G_VELXY_I] * ef * dt
+    ln, le = c[C.PXY_LIMIT], c[C.PXY_LIMIT + 1]
+    if di_n * ln + di_e * le > 0.0:
+        di_n = 0.0
+        di_e = 0.0
+    i_n = c[C.PXY_I] + di_n
+    i_e = c[C.PXY_I + 1] + di_e
+    imax = g[C.G_VELXY_IMAX]
+    im = math.sqrt(i_n * i_n + i_e * i_e)
+    if im > imax:
+        i_n *= imax / im
+        i_e *= imax / im
+    c[C.PXY_I] = i_n
+    c[C.PXY_I + 1] = i_e
+    for k in range(2):
+        a = g[C.G_VELXY_P] * c[C.PXY_EF + k] + g[C.G_VELXY_D] * c[C.PXY_DF + k] + c[C.PXY_I + k]
         if k == 0:
             an += a
         else:
             ae += a
-    amag = math.sqrt(an * an + ae * ae)
-    if amag > accel_max:
-        an *= accel_max / amag
-        ae *= accel_max / amag
+    c[C.PXY_LIMIT] = 0.0
+    c[C.PXY_LIMIT + 1] = 0.0
+    amag2 = an * an + ae * ae
+    if amag2 > accel_max * accel_max:
+        c[C.PXY_LIMIT] = an
+        c[C.PXY_LIMIT + 1] = ae
+        # limit, keeping the acceleration across the desired velocity first (limit_accel_xy)
+        vn, ve = c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1]
+        vm = math.sqrt(vn * vn + ve * ve)
+        if vm > 1e-6:
+            un, ue = vn / vm, ve / vm
+            a_dir = un * an + ue * ae
+            xn, xe = an - un * a_dir, ae - ue * a_dir
+            xm = math.sqrt(xn * xn + xe * xe)
+            if xm > accel_max:
+                xn *= accel_max / xm
+                xe *= accel_max / xm
+                a_dir = 0.0
+            else:
+                a_lim = math.sqrt(max(accel_max * accel_max - xm * xm, 0.0))
+                a_dir = min(max(a_dir, -a_lim), a_lim)
+            an = xn + un * a_dir
+            ae = xe + ue * a_dir
+        else:
+            k = accel_max / math.sqrt(amag2)
+            an *= k
+            ae *= k
     c[C.PXY_ACC_T] = an
     c[C.PXY_ACC_T + 1] = ae
     # acceleration -> lean angles in the heading frame
@@ -96,6 +193,7 @@ def z_reset(c, g, pd, vd, throttle):
     c[C.PZ_POS_T] = pd
     c[C.PZ_VEL_T] = 0.0
     c[C.PZ_VEL_FF] = 0.0
+    c[C.PZ_ACC_FF] = 0.0
     c[C.PZ_ACC_T] = 0.0
     c[C.PZ_ACC_EF] = 0.0
     c[C.PZ_I] = throttle - c[C.THR_HOVER]
@@ -123,7 +221,7 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
     v_up = sqrt_ctrl(err_up, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt) - c[C.PZ_VEL_FF]
     v_up = min(max(v_up, -dn_max), up_max)
     c[C.PZ_VEL_T] = -v_up
-    acc_up = g[C.G_VELZ_P] * (v_up - v_up_est)
+    acc_up = g[C.G_VELZ_P] * (v_up - v_up_est) - c[C.PZ_ACC_FF]
     c[C.PZ_ACC_T] = acc_up
     c[C.PZ_ACC_MEAS] = acc_up_meas
     imax = g[C.G_ACCZ_IMAX] * 0.001

@@ -1,13 +1,35 @@
 """Waypoint navigation along a polyline (AC_WPNav behaviour, our implementation).
 
 A target point moves along the legs of a path (NED, m) at a speed limited per leg, with the
-acceleration limit WPNAV_ACCEL and jerk limit WPNAV_JERK while speeding up; it slows for corners
-(to cos(turn angle) of the leg speed) and stops at the path's end. ArduCopter plans every leg as an
-S-curve that could stop at its end; on the short (~13 m) legs of Algorithm 1 missions that caps the
-cruise speed well below WPNAV_SPEED (the reference SITL logs cruise at ~3.4 m/s with WPNAV_SPEED
-6 m/s). We model that cap as v_leg = K * (L * sqrt(J) / 2)^(2/3), the peak speed of a jerk-limited
-rest-to-rest move over the leg length L, with K (TLM_WP_LEG_K) fitted to the reference logs.
+acceleration limit along the leg (WPNAV_ACCEL and WPNAV_ACCEL_Z, as AC_WPNav's S-curve takes
+them along the track) and jerk limit WPNAV_JERK, and stops at the path's end with the S-curve's
+jerk-limited deceleration. ArduCopter plans every leg as an S-curve that could stop at its
+end; on the short (~13 m) legs of Algorithm 1 missions that caps the cruise speed well below
+WPNAV_SPEED (the reference SITL logs cruise at ~3.4 m/s with WPNAV_SPEED 6 m/s). We model
+that cap as v_leg = K * (L * sqrt(J) / 2)^(2/3), the peak speed of a jerk-limited rest-to-rest
+move over the leg length L, with K (TLM_WP_LEG_K) fitted to the reference logs.
 The target waits for the vehicle when it falls behind (position error beyond 2 m).
+
+Corners. ArduCopter does not stop at an intermediate waypoint: it starts the next leg's S-curve
+while the current one decelerates, so that the current leg's speed ramps down (jerk-limited)
+while the next one's ramps up and the velocity vector turns smoothly from one leg's direction to
+the next (the speed dips to v cos(turn/2) half-way). We reproduce that overlap geometrically:
+around each corner the path is blended over +-b along the legs, b = v T / 2 with T the
+jerk-limited time to reach the corner speed v from rest (2 sqrt(v/J), or v/A + A/J above
+A^2/J), at most half of either leg. With the blend weight w rising along the distance x from
+-b to +b as the S-curve's (2 sigma^2, then 1 - 2 (1 - sigma)^2, sigma = (x + b)/(2b); the jerk
+changes spread over pi/2 ATC_INPUT_TC as ArduPilot's snap limit does, see smooth_step), the
+target's direction is (1 - w) u_in + w u_out, its position the integral of that (the blended
+path leaves and rejoins the legs at +-b), and at constant speed the target's acceleration
+rises and falls linearly in time as in the overlapping S-curves. The reference logs show it:
+normal_s11 turns 95 deg at ~128-132 s with the speed dipping from 3.39 to 2.31 m/s
+(3.39 cos 47.5 deg = 2.29) over 3.9 s (T = 3.7 s), and its vertical velocity target changes
+smoothly across every waypoint instead of stepping.
+
+Position, velocity and acceleration targets (the S-curve's feed-forwards) all come from the
+blended path: velocity = v dp/ds, acceleration = a dp/ds + v^2 d2p/ds2, and the heading is
+the direction of the horizontal velocity with its rate as feed-forward (AC_WPNav's yaw and
+yaw rate, as ArduCopter's AUTO yaw follows them).
 """
 
 import math
@@ -19,8 +41,13 @@ from tlm_sim.control import layout as C
 P_LEN = 3  # leg length [m]
 P_UN, P_UE, P_UD = 4, 5, 6  # leg unit vector NED
 P_VLEG = 7  # leg speed limit [m/s]
-P_CORNER = 8  # cos of the turn at the end of the leg (0 at the path's end / beyond 90 deg)
-PATH_COLS = 9
+P_CORNER = 8  # 1 if the path goes on after this leg, 0 at the path's end
+P_BLEND = 9  # half-length [m] of the corner blend at the END of this leg (0: none)
+P_RAMP = 10  # jerk ramp of that blend as a fraction of its duration (see smooth_step)
+P_ALEG = 11  # acceleration limit along this leg [m/s^2] (WPNAV_ACCEL, WPNAV_ACCEL_Z)
+P_RAMP_C = 12  # normalisation of that blend's S-curve (step_norm(P_RAMP))
+P_DEND = 13  # path length after this leg's end point [m]
+PATH_COLS = 14
 
 
 @tick_jit
@@ -39,14 +66,108 @@ def leg_speed(g, length, dd):
 
 
 @tick_jit
+def _step_half(sig, r):
+    """Jerk shape j and its integrals J1, J2, J3 from 0 to sig (0 <= sig <= 0.5) of the
+    snap-limited profile of :func:`smooth_step` (unnormalised)."""
+    pi = math.pi
+    if r <= 0.0:
+        return 1.0, sig, 0.5 * sig * sig, sig * sig * sig / 6.0
+    if sig <= r:
+        a = pi * sig / r
+        q = r * r / (2.0 * pi * pi)
+        return (0.5 * (1.0 - math.cos(a)), 0.5 * sig - r / (2.0 * pi) * math.sin(a),
+                0.25 * sig * sig + q * (math.cos(a) - 1.0),
+                sig * sig * sig / 12.0 + q * (r / pi * math.sin(a) - sig))
+    j1 = 0.5 * r
+    j2 = r * r * (0.25 - 1.0 / (pi * pi))
+    j3 = r * r * r * (1.0 / 12.0 - 0.5 / (pi * pi))
+    s3 = 0.5 - r
+    u = min(sig, s3) - r
+    # constant jerk from r to s3
+    j1, j2, j3 = j1 + u, j2 + j1 * u + 0.5 * u * u, j3 + j2 * u + 0.5 * j1 * u * u + u * u * u / 6.0
+    if sig <= s3:
+        return 1.0, j1, j2, j3
+    k = pi / (2.0 * r)
+    u = sig - s3
+    sk = math.sin(k * u)
+    ck = math.cos(k * u)
+    return (ck, j1 + sk / k, j2 + j1 * u + (1.0 - ck) / (k * k),
+            j3 + j2 * u + 0.5 * j1 * u * u + (u - sk / k) / (k * k))
+
+
+@tick_jit
+def step_norm(r):
+    """Normalisation constant of :func:`smooth_step` for the jerk ramp r (0..0.25)."""
+    return 0.5 / _step_half(0.5, min(max(r, 0.0), 0.25))[2]
+
+
+@tick_jit
+def smooth_step(sig, r, c):
+    """A rest-to-rest S-curve of unit length and unit duration at time sig (0..1).
+
+    Returns (w, dw, ddw, W): position, speed, acceleration and the integral of w from 0. The
+    jerk is +J for the first half and -J for the second, each change of jerk spread over a
+    raised-cosine ramp of r (0..0.25) of the duration: ArduPilot's S-curves limit the snap to
+    jerk / ATC_INPUT_TC, a ramp of pi/2 ATC_INPUT_TC (0.24 s). r = 0 gives the constant-jerk
+    curve (w = 2 sig^2 on the first half). w(sig) + w(1 - sig) = 1. c: step_norm(r).
+    """
+    r = min(max(r, 0.0), 0.25)
+    if sig <= 0.5:
+        j, j1, j2, j3 = _step_half(max(sig, 0.0), r)
+        return c * j2, c * j1, c * j, c * j3
+    j, j1, j2, j3 = _step_half(max(1.0 - sig, 0.0), r)
+    return 1.0 - c * j2, c * j1, -c * j, sig - 0.5 + c * j3
+
+
+@tick_jit
+def jerk_ramp(g, duration):
+    """Fraction r of an S-curve of ``duration`` [s] spent ramping the jerk (pi/2 ATC_INPUT_TC
+    each), for :func:`smooth_step`."""
+    if duration <= 0.0:
+        return 0.25
+    return min(0.5 * math.pi * g[C.G_INPUT_TC] / duration, 0.25)
+
+
+@tick_jit
+def leg_accel(g, un, ue, ud):
+    """Acceleration limit [m/s^2] along a leg of unit direction (un, ue, ud): the largest whose
+    horizontal and vertical parts stay within WPNAV_ACCEL and WPNAV_ACCEL_Z (AC_WPNav's S-curve
+    takes its limits along the track this way)."""
+    a = g[C.G_WP_ACCEL]
+    h = math.sqrt(un * un + ue * ue)
+    if h > 1e-9:
+        a = a / h
+    az = g[C.G_WP_ACCEL_Z]
+    if abs(ud) > 1e-9 and az > 0.0:
+        a = min(a, az / abs(ud))
+    return a
+
+
+@tick_jit
+def blend_half_length(g, v, a):
+    """Half-length b [m] of a corner blend at speed v [m/s]: v T / 2, T the jerk-limited time
+    (WPNAV_JERK, acceleration limit a [m/s^2]) to reach v from rest; also the distance of a
+    jerk-limited stop from v."""
+    j = g[C.G_WP_JERK]
+    if v <= 0.0 or j <= 0.0:
+        return 0.0
+    if a <= 0.0 or v <= a * a / j:
+        t = 2.0 * math.sqrt(v / j)
+    else:
+        t = v / a + a / j
+    return 0.5 * v * t
+
+
+@tick_jit
 def prepare_path(path, n, g):
-    """Fill the leg columns (P_LEN..P_CORNER) of path[0:n] from its points (NED in 0:3)."""
+    """Fill the leg columns (P_LEN..P_DEND) of path[0:n] from its points (NED in 0:3)."""
     path[0, P_LEN] = 0.0
     path[0, P_UN] = 0.0
     path[0, P_UE] = 0.0
     path[0, P_UD] = 0.0
     path[0, P_VLEG] = g[C.G_WP_SPEED]
     path[0, P_CORNER] = 1.0
+    path[0, P_ALEG] = g[C.G_WP_ACCEL]
     for i in range(1, n):
         dn = path[i, 0] - path[i - 1, 0]
         de = path[i, 1] - path[i - 1, 1]
@@ -62,15 +183,71 @@ def prepare_path(path, n, g):
             path[i, P_UE] = 0.0
             path[i, P_UD] = 0.0
         path[i, P_VLEG] = leg_speed(g, length, dd)
+        path[i, P_ALEG] = leg_accel(g, path[i, P_UN], path[i, P_UE], path[i, P_UD])
+    path[0, P_BLEND] = 0.0
+    path[0, P_RAMP] = 0.0
+    path[0, P_RAMP_C] = step_norm(0.0)
     for i in range(1, n):
+        path[i, P_BLEND] = 0.0
+        path[i, P_RAMP] = 0.0
+        path[i, P_RAMP_C] = step_norm(0.0)
         if i >= n - 1:
             path[i, P_CORNER] = 0.0
-        elif path[i, P_LEN] < 1e-6 or path[i + 1, P_LEN] < 1e-6:
-            path[i, P_CORNER] = 1.0
-        else:
-            cosang = (path[i, P_UN] * path[i + 1, P_UN] + path[i, P_UE] * path[i + 1, P_UE]
-                      + path[i, P_UD] * path[i + 1, P_UD])
-            path[i, P_CORNER] = max(cosang, 0.0)
+            continue
+        path[i, P_CORNER] = 1.0
+        if path[i, P_LEN] > 1e-6 and path[i + 1, P_LEN] > 1e-6:
+            v_c = min(path[i, P_VLEG], path[i + 1, P_VLEG])
+            a_c = min(path[i, P_ALEG], path[i + 1, P_ALEG])
+            b = min(blend_half_length(g, v_c, a_c), 0.5 * path[i, P_LEN],
+                    0.5 * path[i + 1, P_LEN])
+            path[i, P_BLEND] = b
+            path[i, P_RAMP] = jerk_ramp(g, 2.0 * b / v_c)
+            path[i, P_RAMP_C] = step_norm(path[i, P_RAMP])
+    rest = 0.0
+    for i in range(n - 1, -1, -1):
+        path[i, P_DEND] = rest
+        rest += path[i, P_LEN]
+
+
+@tick_jit
+def path_point(path, n, i, s):
+    """Point of the blended path at distance s [m] along leg i of path[0:n] (prepared).
+
+    Returns (pn, pe, pd, dn, de, dd, kn, ke, kd): the position [m], its derivative dp/ds (the
+    direction, unit length outside the blends) and second derivative d2p/ds2 [1/m].
+    """
+    length = path[i, P_LEN]
+    un = path[i, P_UN]
+    ue = path[i, P_UE]
+    ud = path[i, P_UD]
+    b_end = path[i, P_BLEND]
+    b_start = path[i - 1, P_BLEND] if i >= 2 else 0.0
+    if b_end > 0.0 and s > length - b_end and i + 1 < n:
+        b = b_end
+        ramp = path[i, P_RAMP]
+        norm = path[i, P_RAMP_C]
+        x = s - length
+        cn, ce, cd = path[i, 0], path[i, 1], path[i, 2]
+        an, ae, ad = un, ue, ud
+        bn, be, bd = path[i + 1, P_UN], path[i + 1, P_UE], path[i + 1, P_UD]
+    elif b_start > 0.0 and s < b_start:
+        b = b_start
+        ramp = path[i - 1, P_RAMP]
+        norm = path[i - 1, P_RAMP_C]
+        x = s
+        cn, ce, cd = path[i - 1, 0], path[i - 1, 1], path[i - 1, 2]
+        an, ae, ad = path[i - 1, P_UN], path[i - 1, P_UE], path[i - 1, P_UD]
+        bn, be, bd = un, ue, ud
+    else:
+        return (path[i - 1, 0] + un * s, path[i - 1, 1] + ue * s, path[i - 1, 2] + ud * s,
+                un, ue, ud, 0.0, 0.0, 0.0)
+    sig = min(max((x + b) / (2.0 * b), 0.0), 1.0)
+    w, w1, _, w_int = smooth_step(sig, ramp, norm)
+    big_w = 2.0 * b * w_int
+    wp = w1 / (2.0 * b)
+    jn, je, jd = bn - an, be - ae, bd - ad
+    return (cn + an * x + jn * big_w, ce + ae * x + je * big_w, cd + ad * x + jd * big_w,
+            an + jn * w, ae + je * w, ad + jd * w, jn * wp, je * wp, jd * wp)
 
 
 @tick_jit
@@ -80,14 +257,45 @@ def path_start(c):
     c[C.PATH_S] = 0.0
     c[C.PATH_V] = 0.0
     c[C.PATH_A] = 0.0
+    c[C.PATH_STOP_T] = -1.0
+
+
+@tick_jit
+def stop_profile(g, v0, tau, amax):
+    """Speed [m/s] and acceleration [m/s^2] at time tau [s] into a jerk-limited stop from v0
+    (WPNAV_JERK, acceleration limit amax): the decelerating half of an S-curve, which covers
+    blend_half_length(g, v0, amax) metres."""
+    j = g[C.G_WP_JERK]
+    if amax <= 0.0 or v0 <= amax * amax / j:
+        # constant-jerk halves with snap-limited jerk changes: v = v0 (1 - w(tau / T))
+        t_end = 2.0 * math.sqrt(v0 / j)
+        if tau >= t_end:
+            return 0.0, 0.0
+        r = jerk_ramp(g, t_end)
+        w, w1, _, _ = smooth_step(tau / t_end, r, step_norm(r))
+        return v0 * (1.0 - w), -v0 * w1 / t_end
+    else:
+        t1 = amax / j
+        t_end = v0 / amax + t1
+        t2 = t_end - t1
+    if tau < t1:
+        return v0 - 0.5 * j * tau * tau, -j * tau
+    if tau < t2:
+        return v0 - 0.5 * amax * t1 - amax * (tau - t1), -amax
+    if tau < t_end:
+        r = t_end - tau
+        return 0.5 * j * r * r, -j * r
+    return 0.0, 0.0
 
 
 @tick_jit
 def path_update(c, g, path, n, pos, speed_cap):
     """Advance the target along path[0:n] (prepared by prepare_path) and set the position
-    controller targets. pos: EKF position NED [m]; speed_cap [m/s] (<= 0: none).
+    controller targets and feed-forwards. pos: EKF position NED [m]; speed_cap [m/s] (<= 0:
+    none). Sets c[YAW_RATE_CMD] to the heading's rate [rad/s] (0 without a heading).
 
-    Returns (leg heading [rad], nan for a vertical leg; 1.0 when the end is reached).
+    Returns (heading of the horizontal velocity [rad], nan for a vertical leg; 1.0 when the end
+    is reached).
     """
     dt = g[C.G_DT]
     i = int(c[C.WP_INDEX])
@@ -98,37 +306,81 @@ def path_update(c, g, path, n, pos, speed_cap):
     v_leg = path[i, P_VLEG]
     if speed_cap > 0.0:
         v_leg = min(v_leg, speed_cap)
-    a_max = g[C.G_WP_ACCEL]
-    # speed allowed by the distance to the next corner / the end (two legs of look-ahead)
+    a_max = path[i, P_ALEG]
+    # speed allowed by the next leg's speed / the end (two legs of look-ahead)
     d_rem = max(length - s, 0.0)
     v_corner = v_leg * path[i, P_CORNER]
     if i + 1 < n:
         v_corner = min(v_corner, path[i + 1, P_VLEG])
-    v_allow = min(v_leg, math.sqrt(v_corner * v_corner + a_max * d_rem))
+    v_allow = v_leg
+    q = v_corner * v_corner + a_max * d_rem
+    if q < v_allow * v_allow:
+        v_allow = math.sqrt(q)
     if i + 1 < n:
         v_c2 = path[i + 1, P_VLEG] * path[i + 1, P_CORNER]
-        v_allow = min(v_allow, math.sqrt(v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])))
-    # the target waits for a vehicle that falls behind
-    en = path[i - 1, 0] + path[i, P_UN] * s - pos[0]
-    ee = path[i - 1, 1] + path[i, P_UE] * s - pos[1]
-    ed = path[i - 1, 2] + path[i, P_UD] * s - pos[2]
-    err = math.sqrt(en * en + ee * ee + ed * ed)
-    if err > 2.0:
-        v_allow *= max(0.0, 1.0 - (err - 2.0) / 3.0)
-    # speed with accel and jerk limits (jerk only shapes speeding up)
+        if i + 2 < n:
+            v_c2 = min(v_c2, path[i + 2, P_VLEG])
+        q = v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])
+        if q < v_allow * v_allow:
+            v_allow = math.sqrt(q)
+    # the target waits for a vehicle that falls behind (distance to the last target)
+    en = c[C.PXY_POS_T] - pos[0]
+    ee = c[C.PXY_POS_T + 1] - pos[1]
+    ed = c[C.PZ_POS_T] - pos[2]
+    err2 = en * en + ee * ee + ed * ed
+    if err2 > 4.0:
+        v_allow *= max(0.0, 1.0 - (math.sqrt(err2) - 2.0) / 3.0)
+    # speed: a jerk-limited (WPNAV_JERK) tracker of the allowed speed, and at the path's end the
+    # S-curve's own jerk-limited stop, started when the end is its stopping distance away
     v = c[C.PATH_V]
     a = c[C.PATH_A]
-    if v_allow > v:
-        a = min(a + g[C.G_WP_JERK] * dt, a_max)
-        a = max(a, 0.0)
-        v = min(v + a * dt, v_allow)
+    jerk = g[C.G_WP_JERK]
+    if c[C.PATH_STOP_T] < 0.0 and jerk > 0.0 and v > 0.0:
+        d_end = length - s + path[i, P_DEND]
+        # (a bound of the stopping distance without the square root first)
+        if a_max > 0.0 and d_end <= v * (max(a_max / jerk, 0.5 * (v / a_max + a_max / jerk))
+                                         + dt):
+            if d_end <= blend_half_length(g, v, a_max) + v * dt:
+                c[C.PATH_STOP_T] = 0.0
+                c[C.PATH_STOP_V0] = v
+                c[C.PATH_STOP_A] = a_max
+    stopped = False
+    if c[C.PATH_STOP_T] >= 0.0:
+        c[C.PATH_STOP_T] += dt
+        v_new, a = stop_profile(g, c[C.PATH_STOP_V0], c[C.PATH_STOP_T], c[C.PATH_STOP_A])
+        stopped = v_new <= 0.0
+    elif jerk > 0.0 and a == 0.0 and v == v_allow:
+        v_new = v  # cruising at the allowed speed
+    elif jerk > 0.0:
+        e = v_allow - v
+        if e >= 0.0:
+            a_des = min(math.sqrt(2.0 * jerk * e), a_max)
+        else:
+            a_des = -min(math.sqrt(-2.0 * jerk * e), a_max)
+        a += min(max(a_des - a, -jerk * dt), jerk * dt)
+        v_new = v + a * dt
+        if (v_new - v_allow) * e >= 0.0 and abs(a) <= jerk * dt:
+            v_new = v_allow  # arrived (or passed by less than a tick's jerk): settle exactly
+            a = 0.0
+        if v_new < 0.0:
+            v_new = 0.0
+            a = 0.0
     else:
-        a = 0.0
-        v = max(v_allow, v - 2.0 * a_max * dt)
+        v_new = min(v_allow, v + a_max * dt) if v_allow > v else max(v_allow, v - a_max * dt)
+        a = (v_new - v) / dt
+    v = v_new
     c[C.PATH_A] = a
     c[C.PATH_V] = v
     s += v * dt
     done = 0.0
+    if stopped:
+        # the stop is complete: the target is at the path's end (to within a tick's travel)
+        while i < n - 1:
+            i += 1
+            c[C.WP_REACHED] += 1.0
+        c[C.WP_INDEX] = float(i)
+        length = path[i, P_LEN]
+        s = length
     if s >= length:
         if i < n - 1:
             s -= length
@@ -141,19 +393,23 @@ def path_update(c, g, path, n, pos, speed_cap):
             s = length
             done = 1.0
     c[C.PATH_S] = s
-    un = path[i, P_UN]
-    ue = path[i, P_UE]
-    ud = path[i, P_UD]
-    c[C.PXY_POS_T] = path[i - 1, 0] + un * s
-    c[C.PXY_POS_T + 1] = path[i - 1, 1] + ue * s
-    c[C.PZ_POS_T] = path[i - 1, 2] + ud * s
+    pn, pe, pd, dn, de, dd, kn, ke, kd = path_point(path, n, i, s)
+    c[C.PXY_POS_T] = pn
+    c[C.PXY_POS_T + 1] = pe
+    c[C.PZ_POS_T] = pd
     vff = 0.0 if done > 0.0 else v
-    c[C.PXY_VEL_FF] = un * vff
-    c[C.PXY_VEL_FF + 1] = ue * vff
-    c[C.PZ_VEL_FF] = ud * vff
-    c[C.PXY_ACC_FF] = un * a
-    c[C.PXY_ACC_FF + 1] = ue * a
+    aff = 0.0 if done > 0.0 else a
+    v2 = vff * vff
+    c[C.PXY_VEL_FF] = dn * vff
+    c[C.PXY_VEL_FF + 1] = de * vff
+    c[C.PZ_VEL_FF] = dd * vff
+    c[C.PXY_ACC_FF] = dn * aff + kn * v2
+    c[C.PXY_ACC_FF + 1] = de * aff + ke * v2
+    c[C.PZ_ACC_FF] = dd * aff + kd * v2
     heading = math.nan
-    if length * math.sqrt(un * un + ue * ue) > 0.5:
-        heading = math.atan2(ue, un)
+    c[C.YAW_RATE_CMD] = 0.0
+    hh = dn * dn + de * de
+    if hh > 0.01 and length * math.sqrt(path[i, P_UN] ** 2 + path[i, P_UE] ** 2) > 0.5:
+        heading = math.atan2(de, dn)
+        c[C.YAW_RATE_CMD] = vff * (dn * ke - de * kn) / hh
     return heading, done

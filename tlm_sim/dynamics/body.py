@@ -2,7 +2,8 @@
 
 Sequence of :func:`physics_step`: wind -> body airspeed and air density -> motors and frame
 sum -> semi-implicit Euler (rates first, attitude with the new rates, then velocity and
-position) -> accelerometer specific force -> ground contact -> battery.
+position) -> accelerometer specific force -> ground contact -> battery -> the sensors' view of
+the truth (SITL's sensor smoothing, :mod:`tlm_sim.dynamics.smoothing`).
 
 Differences from SITL, on purpose:
 
@@ -37,6 +38,7 @@ from tlm_sim.dynamics.frame import (
     N_MOTORS,
 )
 from tlm_sim.dynamics.motors import motor_forces
+from tlm_sim.dynamics.smoothing import smooth_sensors, smoothing_reset
 from tlm_sim.dynamics.wind import init_wind, update_wind
 from tlm_sim.rotation import quat_to_dcm
 
@@ -119,6 +121,7 @@ def init_state(x: np.ndarray, frame: np.ndarray, yaw_rad: float) -> None:
     update_air_density(x, frame)
     init_battery(x, frame)
     init_wind(x, frame)
+    smoothing_reset(x)
 
 
 @tick_jit
@@ -134,6 +137,7 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
         x[X.M1 + i] = command
     x[X.RHO_ANCHOR] = 0.0
     update_air_density(x, frame)
+    smoothing_reset(x)
 
 
 @tick_jit
@@ -256,6 +260,9 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     # --- battery ------------------------------------------------------------------------
     update_battery(x, frame, current, dt)
+
+    # --- what the sensors see ------------------------------------------------------------
+    smooth_sensors(x, dt)
 
 
 @tick_jit

@@ -46,5 +46,18 @@ WIND_UN, WIND_UE, WIND_UD = 49, 50, 51
 # air density cache: altitude [m AMSL] where RHO_ANCHOR [kg/m^3] and its gradient RHO_GRAD
 # [kg/m^4] were evaluated (RHO is interpolated linearly within a few metres of it)
 RHO_ALT, RHO_ANCHOR, RHO_GRAD = 52, 53, 54
+# what the sensors see (SITL's "sensor smoothing", tlm_sim.dynamics.smoothing): a kinematic
+# shadow of the truth that follows it with a 0.1 s time constant, so that a ground impact (the
+# truth stops instantly) shows up in the IMU as a deceleration. Position NED [m], velocity NED
+# [m/s], attitude quaternion body -> NED, specific force in its body frame [m/s^2] and body rate
+# [rad/s]; the IMU, GPS and baro read these, the SIM log the truth above.
+SPN, SPE, SPD = 55, 56, 57
+SVN, SVE, SVD = 58, 59, 60
+SQW, SQX, SQY, SQZ = 61, 62, 63, 64
+SFX, SFY, SFZ = 65, 66, 67
+SWX, SWY, SWZ = 68, 69, 70
+# 1.0 while the shadow differs from the truth (after a ground contact), else 0.0: the shadow
+# is then the truth itself
+SMOOTH_ACTIVE = 71
 
-N_STATE = 55
+N_STATE = 72

@@ -16,8 +16,11 @@ from tlm_sim.sensors import layout as S
 
 @tick_jit
 def baro_sample(s, x, cfg, rng):
-    """Take a baro sample from truth x: altitude above home ground [m], pressure, temperature."""
-    h = -x[X.PD] - cfg[S.C_FRAME_HEIGHT]
+    """Take a baro sample: altitude above home ground [m], pressure, temperature.
+
+    Reads the sensors' view of the truth's height (SITL's sensor smoothing, ``X.SPD``).
+    """
+    h = -x[X.SPD] - cfg[S.C_FRAME_HEIGHT]
     alt = h + cfg[S.C_BARO_RND] * uniform_pm1(rng) + cfg[S.C_BARO_GLITCH]
     s[S.B_ALT_PREV] = s[S.B_ALT]
     s[S.B_ALT] = alt

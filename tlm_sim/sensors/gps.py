@@ -27,7 +27,10 @@ def gps_init(s, t_us):
 
 @tick_jit
 def gps_push_truth(s, x, t_s):
-    """Append the current true position/velocity to the delay line (call every main-loop tick)."""
+    """Append the current position/velocity to the delay line (call every main-loop tick).
+
+    Reads the sensors' view of the truth (SITL's sensor smoothing, ``X.SPN``/``X.SVN``).
+    """
     g = S.GPS_BASE
     head = (int(s[g + S.G_HEAD]) + 1) % S.GPS_HIST_N
     s[g + S.G_HEAD] = head
@@ -36,8 +39,8 @@ def gps_push_truth(s, x, t_s):
     r = g + S.G_HIST + head * S.G_ROW
     s[r] = t_s
     for k in range(3):
-        s[r + 1 + k] = x[X.PN + k]
-        s[r + 4 + k] = x[X.VN + k]
+        s[r + 1 + k] = x[X.SPN + k]
+        s[r + 4 + k] = x[X.SVN + k]
 
 
 @tick_jit

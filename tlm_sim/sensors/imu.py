@@ -1,8 +1,9 @@
 """Two simulated IMUs (accelerometer + gyro) as ArduPilot SITL samples them.
 
 Samples at each instance's own rate (IMU0 gyro/accel 1000/1000 Hz, IMU1 760/800 Hz) from the
-latest physics state (zero-order hold), adds SITL's noise, bias, gyro drift and failure
-overrides (SIM_ACCELn_FAIL), then does what the autopilot does with raw samples: accumulates
+latest physics state (zero-order hold; the sensors' view of it, ``X.SWX``/``X.SFX``, SITL's
+sensor smoothing, see tlm_sim.dynamics.smoothing), adds SITL's noise, bias, gyro drift and
+failure overrides (SIM_ACCELn_FAIL), then does what the autopilot does with raw samples: accumulates
 them for the EKF, low-pass filters them at INS_GYRO_FILTER / INS_ACCEL_FILTER (2nd-order
 Butterworth) for the controllers and the IMU log, and computes the VIBE metric and clip count.
 Body frame FRD; accel in m/s^2 (specific force, about (0, 0, -g) at rest), gyro in rad/s.
@@ -65,6 +66,8 @@ def imu_init(s, cfg, t_us):
         s[b + S.I_NEXT_GYR_US] = t_us
         s[b + S.I_NEXT_ACC_US] = t_us
         s[b + S.I_ACC_OK] = 1.0
+        s[b + S.I_T_SAMPLE_US] = t_us
+        s[b + S.I_T_TAKE_US] = -1.0
 
 
 @tick_jit
@@ -79,6 +82,7 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
     drift = gyro_drift(t_s, cfg)
     for i in range(S.N_IMU):
         b = S.IMU_BASE + i * S.IMU_STRIDE
+        s[b + S.I_T_SAMPLE_US] = t_us
         if t_us >= s[b + S.I_NEXT_GYR_US]:
             s[b + S.I_NEXT_GYR_US] += cfg[S.C_GYR_PERIOD_US + i]
             sc = cfg[S.C_NOISE_SCALE + i]
@@ -87,7 +91,7 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
             else:
                 a_g = cfg[S.C_GYR_NOISE] * sc
             for k in range(3):
-                g = x[X.WX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
+                g = x[X.SWX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
                 g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
                 if a_g != 0.0:
                     g += a_g * uniform_pm1(rng)
@@ -104,7 +108,7 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
                 if abs(fail) > 1e-6:
                     a = fail
                 else:
-                    a = x[X.FX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
+                    a = x[X.SFX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
                     a += cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng)
                     if motors_on and cfg[S.C_ACC_RND + i] != 0.0 and cfg[S.C_VIB_MOT_MAX] != 0.0:
                         # motor vibration: a sinusoid at the motor rotation rate (SIM_VIB_MOT_MAX)
@@ -131,10 +135,21 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
 def imu_take_deltas(s, i, dt, dang, dvel):
     """Hand IMU i's samples of this main-loop tick to the EKF and reset the accumulators.
 
-    Writes the mean rate times the loop period dt [s] into dang[i] [rad] and dvel[i] [m/s].
+    Writes the mean rate times the time since the previous call into dang[i] [rad] and dvel[i]
+    [m/s]: the physics time of the latest :func:`imu_sample` call minus that of the previous
+    take, i.e. the interval the EKF integrates over (the 400 Hz loop runs on the 833 us physics
+    clock, so it lasts 2499 us and, every ~2 s, 3332 us, as in SITL); dt [s] (the nominal loop
+    period) on the first call. Integrating the deltas over the nominal period instead leaves the
+    EKF's gravity term uncompensated for the extra 833 us: a 8 mm/s vertical velocity step every
+    2.08 s that the altitude controller answers with a throttle and pitch kick.
     Returns 1.0 if the accel delivered samples this tick, else 0.0 (and holds the last value).
     """
     b = S.IMU_BASE + i * S.IMU_STRIDE
+    t_now = s[b + S.I_T_SAMPLE_US]
+    t_prev = s[b + S.I_T_TAKE_US]
+    s[b + S.I_T_TAKE_US] = t_now
+    if t_prev >= 0.0 and 0.0 < t_now - t_prev < 1e5:
+        dt = (t_now - t_prev) * 1e-6
     ng = s[b + S.I_GYR_COUNT]
     na = s[b + S.I_ACC_COUNT]
     for k in range(3):

@@ -28,7 +28,9 @@ I_ACC_COUNT = 40  # accel samples accumulated this tick
 I_EG = 41  # gyro error count
 I_EA = 42  # accel error count
 I_ACC_OK = 43  # 1 while the accel delivers samples this tick
-IMU_STRIDE = 44
+I_T_SAMPLE_US = 44  # physics time of the latest sampling call [us]
+I_T_TAKE_US = 45  # physics time at which the EKF last took the deltas [us] (-1: never)
+IMU_STRIDE = 46
 
 # ---- GPS ---------------------------------------------------------------------------------------
 GPS_BASE = IMU_BASE + N_IMU * IMU_STRIDE
