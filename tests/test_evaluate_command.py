@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
-from tlm_process.evaluate.command import main
+from tlm_process.cli import main
 
 FAST = "ZeroR,OneR,J48,RandomTree,WindowHGB"
 

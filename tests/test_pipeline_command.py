@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from conftest import reference_path
 
-from tlm_process.pipeline.command import main
+from tlm_process.cli import main
 
 FEATURES = {"GPS": 6, "IMU": 8, "RATE": 13, "VIBE": 3}
 

@@ -15,7 +15,6 @@ import argparse
 import json
 import sys
 import time
-from collections.abc import Sequence
 from pathlib import Path
 
 __all__ = ["add_parser", "run"]
@@ -288,16 +287,3 @@ def _run(args: argparse.Namespace) -> int:
         + (f"; plots in {out}/" if out is not None else ""))
     return 0
 
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Stand-alone entry point (``python -m tlm_process.evaluate.command``) until ``tlm``
-    wires the subcommand."""
-    ap = argparse.ArgumentParser(prog="tlm")
-    sub = ap.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = ap.parse_args(argv)
-    return run(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Sequence
 from pathlib import Path
 
 __all__ = ["add_parser", "run"]
@@ -236,16 +235,3 @@ def _run(args: argparse.Namespace) -> int:
           f"report.json, {len(plots)} plots) in {time.perf_counter() - t0:.1f} s")
     return 0
 
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Stand-alone entry point (``python -m tlm_process.pipeline.command``) until ``tlm``
-    wires the subcommand."""
-    ap = argparse.ArgumentParser(prog="tlm")
-    sub = ap.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = ap.parse_args(argv)
-    return run(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())
