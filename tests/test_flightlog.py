@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from pymavlink import DFReader
 
+from tests.conftest import REFERENCE, reference_path
 from tlm_sim.flightlog import (
     FORMAT_CHARS,
     LOGGED_MESSAGES,
@@ -32,8 +33,7 @@ from tlm_sim.flightlog import (
     read_schemas,
 )
 
-REF_DIR = Path(__file__).resolve().parents[2] / "shared" / "reference" / "sitl"
-NORMAL = REF_DIR / "normal_s11.bin"
+NORMAL = REFERENCE / "normal_s11.bin"
 needs_ref = pytest.mark.skipif(not NORMAL.exists(), reason="reference SITL logs not found")
 
 REF_TYPES = ("GPS", "IMU", "RATE", "VIBE", "MODE", "EV", "ERR", "MSG", "PARM")
@@ -42,17 +42,13 @@ REF_TYPES = ("GPS", "IMU", "RATE", "VIBE", "MODE", "EV", "ERR", "MSG", "PARM")
 # --- fixtures --------------------------------------------------------------------------------
 @pytest.fixture(scope="session")
 def ref_tables() -> dict[str, pd.DataFrame]:
-    if not NORMAL.exists():
-        pytest.skip("reference SITL logs not found")
-    return read_bin(NORMAL, REF_TYPES)
+    return read_bin(reference_path(NORMAL.name), REF_TYPES)
 
 
 @pytest.fixture(scope="session")
 def ref_self_description() -> dict:
     """FMT / FMTU / UNIT / MULT of the reference log, read with pymavlink alone."""
-    if not NORMAL.exists():
-        pytest.skip("reference SITL logs not found")
-    r = DFReader.DFReader_binary(str(NORMAL))
+    r = DFReader.DFReader_binary(str(reference_path(NORMAL.name)))
     fmts = {f.name: f for f in r.formats.values()}
     by_type = {f.type: f.name for f in r.formats.values()}
     fmtu, units, mults = {}, {}, {}

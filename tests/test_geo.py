@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.conftest import reference_path
 from tlm_sim.geo import (
     HOME_CMAC,
     HOME_HEADING_DEG,
@@ -19,8 +19,6 @@ from tlm_sim.geo import (
     ne_to_latlon,
     ne_to_latlon_scalar,
 )
-
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "sitl"
 
 
 def test_constants():
@@ -86,9 +84,7 @@ def test_matches_sitl_truth_sim_vs_sim2():
     6371 km model would be ~0.25 m off there. SIM's lat/lon are logged to 1e-7 deg (1.1 cm) and
     the two messages are stamped at different times (SIM2 interpolated), hence the 5 cm.
     """
-    log = REF / "rc_s15.bin"
-    if not log.exists():
-        pytest.skip(f"reference log {log} not found (needs ../shared/reference/sitl)")
+    log = reference_path("rc_s15.bin")
     from pymavlink import DFReader
 
     r = DFReader.DFReader_binary(str(log))

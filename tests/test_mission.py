@@ -5,13 +5,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from tests.conftest import reference_path
 from tlm_sim.geo import HOME_CMAC, latlon_to_ne, ne_to_latlon
 from tlm_sim.mission import (
     BUILTIN_IDS,
@@ -27,7 +27,6 @@ from tlm_sim.mission import (
     write_wpl,
 )
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "sitl"
 SIDECARS = ["normal_s11", "gps_s12", "accel_s13", "engine_s14", "rc_s15", "combined_s21"]
 # The reference driver drew the loop and then the altitudes from one
 # np.random.default_rng(seed); this many doubles of the stream went to the loop first
@@ -44,9 +43,7 @@ LATLON_TOL = 1e-12  # deg (~0.1 um); 2 of the 540 reference lat values differ by
 
 
 def _sidecar(name: str) -> dict:
-    path = REF / f"{name}.json"
-    if not path.exists():
-        pytest.skip(f"reference sidecar {path} not found (needs ../shared/reference/sitl)")
+    path = reference_path(f"{name}.json")
     return json.loads(path.read_text())["mission"]
 
 
@@ -96,7 +93,7 @@ def test_sidecar_whole_mission_from_seed(name):
 @pytest.mark.parametrize("name", SIDECARS)
 def test_from_sidecar(name):
     m = _sidecar(name)
-    mis = Mission.from_sidecar(REF / f"{name}.json")
+    mis = Mission.from_sidecar(reference_path(f"{name}.json"))
     assert mis.name == name and mis.seed == m["seed"]
     assert mis.home == HOME_CMAC
     assert mis.savgol == (21, 3)

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from tests.conftest import REFERENCE, REPO
 from tlm_sim import params as pm
 from tlm_sim.params import (
     ALIASES,
@@ -26,9 +27,7 @@ from tlm_sim.params import (
     UnknownParamError,
 )
 
-REPO = Path(__file__).resolve().parents[1]
-REF = REPO.parent / "shared" / "reference" / "sitl"
-REF_LOG = REF / "normal_s11.bin"
+REF_LOG = REFERENCE / "normal_s11.bin"
 needs_ref = pytest.mark.skipif(not REF_LOG.is_file(), reason="reference SITL logs not present")
 
 
