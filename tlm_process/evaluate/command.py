@@ -17,6 +17,8 @@ import sys
 import time
 from pathlib import Path
 
+from tlm_process.argtypes import number, whole_number
+
 __all__ = ["add_parser", "run"]
 
 MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
@@ -65,35 +67,22 @@ examples:
 """
 
 
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError("must be >= 0")
-    return v
-
-
 def _positive_int(text: str) -> int:
-    v = _count(text)
+    v = whole_number(text)
     if v < 1:
         raise argparse.ArgumentTypeError("must be >= 1")
     return v
 
 
 def _folds(text: str) -> int:
-    v = _count(text)
+    v = whole_number(text)
     if v < 2:
         raise argparse.ArgumentTypeError("must be >= 2")
     return v
 
 
 def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    v = number(text)
     if not 0 < v < 1:
         raise argparse.ArgumentTypeError(f"{text} is not in (0, 1)")
     return v
@@ -118,7 +107,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--test-frac", type=_fraction, default=None, metavar="F",
                    help="--split random: share of rows tested (default: the data set's test "
                         "share, else 0.25)")
-    p.add_argument("--seed", type=_count, default=0,
+    p.add_argument("--seed", type=whole_number, default=0,
                    help="seed of the splits and models (default 0); same seed, same results")
     p.add_argument("--json", metavar="R.json", help="write the results as JSON")
     p.add_argument("--test-on", nargs="+", action="extend", default=[], metavar="LOG",

@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+from tlm_process.argtypes import number, whole_number
+
 __all__ = ["add_parser", "run"]
 
 DESCRIPTION = """\
@@ -52,10 +54,7 @@ examples:
 
 
 def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    v = number(text)
     if not 0 <= v < 1:
         raise argparse.ArgumentTypeError(f"{text} is not in [0, 1)")
     return v
@@ -76,21 +75,8 @@ def _instance(text: str) -> int | None:
     raise argparse.ArgumentTypeError(f"{text!r}: use 0, 1 or all")
 
 
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError("must be >= 0")
-    return v
-
-
 def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    v = number(text)
     if not v > 0:
         raise argparse.ArgumentTypeError("must be > 0")
     return v
@@ -122,13 +108,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--test-frac", type=_fraction, default=0.0, metavar="F",
                    help="else: fraction of flights (rounded down) drawn as test flights "
                         "(default 0)")
-    p.add_argument("--seed", type=_count, default=0, help="seed of the --test-frac draw")
+    p.add_argument("--seed", type=whole_number, default=0, help="seed of the --test-frac draw")
     p.add_argument("--no-scale", action="store_true",
                    help="write raw feature values (scaler.json is still written)")
     p.add_argument("--target-fault-ratio", type=_ratio, default=None, metavar="GAMMA",
                    help="also report the window stretching factor lambda = gamma / alpha "
                         "per table (Eq. 5)")
-    p.add_argument("--plots", type=_count, default=5, metavar="N",
+    p.add_argument("--plots", type=whole_number, default=5, metavar="N",
                    help="trajectory and per-fault plots for the first N flights (default 5; "
                         "0 for none)")
     p.add_argument("--quiet", action="store_true", help="no per-flight lines")
