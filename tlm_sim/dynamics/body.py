@@ -40,7 +40,7 @@ from tlm_sim.dynamics.frame import (
 from tlm_sim.dynamics.motors import motor_forces
 from tlm_sim.dynamics.smoothing import smooth_sensors, smoothing_reset
 from tlm_sim.dynamics.wind import init_wind, update_wind
-from tlm_sim.rotation import quat_to_dcm
+from tlm_sim.rotation import quat_mul_normalised, quat_to_dcm, rotation_half_angle
 
 #: body-rate limit per axis [rad/s] (2000 deg/s)
 GYRO_LIMIT: float = math.radians(2000.0)
@@ -174,26 +174,9 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     wz = _clamp(x[X.WZ] + (tz / izz - damp * x[X.WZ]) * dt, GYRO_LIMIT)
 
     # rotation over the step: dq = (c, u) = (cos(th/2), w_hat sin(th/2)), th = |w| dt
-    h2 = 0.25 * (wx * wx + wy * wy + wz * wz) * dt * dt  # (th/2)^2
-    if h2 < 2.5e-3:
-        # th/2 < 0.05 (always at 1200 Hz, |w| <= 2000 deg/s): series exact to double precision
-        k = 0.5 * dt * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)))
-        c = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)))
-    else:
-        wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-        k = math.sin(0.5 * wn * dt) / wn
-        c = math.cos(0.5 * wn * dt)
+    c, k = rotation_half_angle(wx, wy, wz, dt)
     ux, uy, uz = k * wx, k * wy, k * wz
-    nw = qw * c - qx * ux - qy * uy - qz * uz
-    nx = qw * ux + qx * c + qy * uz - qz * uy
-    ny = qw * uy - qx * uz + qy * c + qz * ux
-    nz = qw * uz + qx * uy - qy * ux + qz * c
-    n2 = nw * nw + nx * nx + ny * ny + nz * nz
-    if abs(n2 - 1.0) < 1.0e-8:
-        inv = 1.5 - 0.5 * n2  # one Newton step of 1/sqrt(n2) from 1: exact to O((n2-1)^2)
-    else:
-        inv = 1.0 / math.sqrt(n2)
-    qw, qx, qy, qz = nw * inv, nx * inv, ny * inv, nz * inv
+    qw, qx, qy, qz = quat_mul_normalised(qw, qx, qy, qz, c, ux, uy, uz)
     x[X.QW], x[X.QX], x[X.QY], x[X.QZ] = qw, qx, qy, qz
 
     if frame[F_GYRO] >= 0.5:

@@ -41,6 +41,7 @@ import numpy as np
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS
+from tlm_sim.rotation import quat_mul_normalised, rotation_half_angle
 
 #: time constant of the shadow [s] (SITL's smoothing time constant, 0.1 s)
 SMOOTH_TC_S: float = 0.1
@@ -137,22 +138,9 @@ def smooth_sensors(x: np.ndarray, dt: float) -> None:
     x[X.SWX], x[X.SWY], x[X.SWZ] = wx, wy, wz
 
     # integrate the shadow's attitude with its own rate (exact exponential over the tick)
-    h2 = 0.25 * (wx * wx + wy * wy + wz * wz) * dt * dt
-    if h2 < 2.5e-3:
-        kk = 0.5 * dt * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)))
-        c = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)))
-    else:
-        wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-        kk = math.sin(0.5 * wn * dt) / wn
-        c = math.cos(0.5 * wn * dt)
-    ux, uy, uz = kk * wx, kk * wy, kk * wz
-    nw = sw * c - sx * ux - sy * uy - sz * uz
-    nx = sw * ux + sx * c + sy * uz - sz * uy
-    ny = sw * uy - sx * uz + sy * c + sz * ux
-    nz = sw * uz + sx * uy - sy * ux + sz * c
-    n2 = nw * nw + nx * nx + ny * ny + nz * nz
-    inv_n = 1.5 - 0.5 * n2 if abs(n2 - 1.0) < 1.0e-8 else 1.0 / math.sqrt(n2)
-    x[X.SQW], x[X.SQX], x[X.SQY], x[X.SQZ] = nw * inv_n, nx * inv_n, ny * inv_n, nz * inv_n
+    c, kk = rotation_half_angle(wx, wy, wz, dt)
+    x[X.SQW], x[X.SQX], x[X.SQY], x[X.SQZ] = quat_mul_normalised(
+        sw, sx, sy, sz, c, kk * wx, kk * wy, kk * wz)
 
     # translation
     vn = x[X.SVN] + an * dt
