@@ -161,7 +161,7 @@ def run_flight(
     last_gps_ms = 0.0
     stop_at = -1
     dt_loop = LOOP_DT_US * 1e-6
-    r = L.new_row(bufs, counts, L.K_MODE, 0.0)  # boot in STABILIZE, ModeReason INITIALISED
+    r = L.new_row(bufs, counts, L.K_MODE, 0)  # boot in STABILIZE, ModeReason INITIALISED
     if r >= 0:
         bufs[L.K_MODE][r, 3] = 26.0
     while t_us < t_end_us:
@@ -208,7 +208,7 @@ def run_flight(
             baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], c[C.ARMED] != 0.0,
         )
         if switched:  # ERR EKF_PRIMARY with the new lane index
-            r = L.new_row(bufs, counts, L.K_ERR, float(t_us))
+            r = L.new_row(bufs, counts, L.K_ERR, t_us)
             if r >= 0:
                 bufs[L.K_ERR][r, 1] = 24.0
                 bufs[L.K_ERR][r, 2] = sel[EK.SEL_PRIMARY]

@@ -32,8 +32,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.layout import (
     ACC_DT,
     ACC_DVD,
@@ -90,7 +89,7 @@ VAR_MAX_POS = 1.0e6  # m^2
 VAR_MIN = 1.0e-12
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def quat_to_rot(e):
     """Refresh the cached rotation matrix (body -> NED) from the lane's quaternion."""
     w = e[QW]
@@ -117,7 +116,7 @@ def quat_to_rot(e):
     e[R22] = 1.0 - 2.0 * (xx + yy)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def set_quat_euler(e, roll, pitch, yaw):
     """Set the lane quaternion from ZYX Euler angles [rad] and refresh the rotation matrix."""
     cr = math.cos(0.5 * roll)
@@ -133,7 +132,7 @@ def set_quat_euler(e, roll, pitch, yaw):
     quat_to_rot(e)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def propagate(e, dang, dvel, imu, dt):
     """Integrate one IMU interval into the nominal state and the covariance accumulators.
 
@@ -193,7 +192,7 @@ def propagate(e, dang, dvel, imu, dt):
     quat_to_rot(e)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def buffer_push(e):
     """Store the current position/velocity (minus the cumulative correction) in the ring buffer."""
     head = int(e[BUF_HEAD]) + 1
@@ -211,7 +210,7 @@ def buffer_push(e):
     e[b + 5] = e[VD] - e[BUF_OFS + 5]
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def buffer_get(e, k, col):
     """Past value ``col`` (0..5: pn, pe, pd, vn, ve, vd) from ``k`` ticks ago, corrections applied.
 
@@ -232,7 +231,7 @@ def buffer_get(e, k, col):
     return e[BUF0 + idx * BUF_ROW + col] + e[BUF_OFS + col]
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def predict_covariance(e, q_att, q_vel, q_gb, q_ab):
     """P <- F P F^T + Q over the accumulated interval, then clear the accumulators.
 
@@ -336,14 +335,14 @@ def predict_covariance(e, q_att, q_vel, q_gb, q_ab):
     e[ACC_DT] = 0.0
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def clear_dx(e):
     """Zero the error-state correction accumulated by a measurement batch."""
     for i in range(NS):
         e[SCR_DX + i] = 0.0
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def _update_with_column(e, s, y):
     """P -= c c^T / s and dx += c y / s, with c = P h^T in SCR_C (upper triangle, mirrored)."""
     inv = 1.0 / s
@@ -362,7 +361,7 @@ def _update_with_column(e, s, y):
             e[d] = VAR_MIN
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def fuse_index(e, j, innov, r):
     """Scalar update for a measurement of error state ``j`` (h = unit vector).
 
@@ -380,7 +379,7 @@ def fuse_index(e, j, innov, r):
     return s
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def innov_var_h3(e, j0, h0, h1, h2, r):
     """Innovation variance h P h^T + r for h nonzero only at j0..j0+2."""
     s = r
@@ -391,7 +390,7 @@ def innov_var_h3(e, j0, h0, h1, h2, r):
     return s
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def fuse_h3(e, j0, h0, h1, h2, innov, r):
     """Scalar update with h nonzero only at states j0..j0+2 (e.g. a magnetometer axis).
 
@@ -408,7 +407,7 @@ def fuse_h3(e, j0, h0, h1, h2, innov, r):
     return s
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def apply_correction(e, gb_lim, ab_lim):
     """Inject the batch correction dx into the filter state, then zero dx.
 
@@ -442,7 +441,7 @@ def apply_correction(e, gb_lim, ab_lim):
     clear_dx(e)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def filter_get(e, k, col):
     """Filter-state value ``col`` (0..5: pn, pe, pd, vn, ve, vd) ``k`` ticks ago.
 
@@ -453,7 +452,7 @@ def filter_get(e, k, col):
     return buffer_get(e, k, col) + e[OUT_EPN + col]
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def filter_now(e, col):
     """Current filter-state value ``col`` (0..5: pn, pe, pd, vn, ve, vd)."""
     if col < 3:
@@ -461,7 +460,7 @@ def filter_now(e, col):
     return e[VN + col - 3] + e[OUT_EPN + col]
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def shift_output(e, col, delta):
     """Move output ``col`` (0..5: pn, pe, pd, vn, ve, vd) and its whole stored history by delta.
 
@@ -475,7 +474,7 @@ def shift_output(e, col, delta):
     e[BUF_OFS + col] += delta
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def output_track(e, dt, tau, k, bad_imu):
     """One step of the output observer: the output velocity/position move towards the filter's.
 
@@ -511,7 +510,7 @@ def output_track(e, dt, tau, k, bad_imu):
         e[OUT_EPN + i] = ep - cp
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def reset_block(e, j0, n, var):
     """Decorrelate states j0..j0+n-1 from all others and set their variances to ``var``."""
     for j in range(j0, j0 + n):

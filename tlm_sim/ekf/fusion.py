@@ -13,8 +13,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.core import (
     apply_correction,
     clear_dx,
@@ -128,12 +127,12 @@ from tlm_sim.ekf.layout import (
 )
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def _delay_ticks(cfg, delay_s):
     return int(delay_s / cfg[C_DT] + 0.5)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago.
 
@@ -166,7 +165,7 @@ def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     e[T_GPS_FUSED] = t
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def reset_height(e, r_hgt, pd_new, k):
     """EKF3's height reset: the filter height ``k`` ticks ago becomes pd_new [m, down].
 
@@ -182,7 +181,7 @@ def reset_height(e, r_hgt, pd_new, k):
     e[HGT_RESET_COUNT] += 1.0
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def _bad_imu_check(e, cfg, t, vd_gps, k, r_vd):
     """EKF3's bad-IMU (accel aliasing) check and response; returns True while it is active.
 
@@ -219,7 +218,7 @@ def _bad_imu_check(e, cfg, t, vd_gps, k, r_vd):
     return bad
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_fuse_gps(e, cfg, t, pos, vel):
     """Fuse one 3-D-fix GPS sample: pos[0:2] NE [m] from the origin, vel[0:3] NED [m/s].
 
@@ -287,7 +286,7 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     update_flags(e, cfg, t)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_fuse_baro(e, cfg, t, alt):
     """Fuse a baro altitude above the origin [m, up], delayed by EK3_HGT_DELAY.
 
@@ -325,7 +324,7 @@ def lane_fuse_baro(e, cfg, t, alt):
         e[T_HGT_PASS] = t
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_fuse_mag(e, cfg, mag):
     """Fuse a body-frame magnetometer sample mag[0:3] [gauss] (3-axis, fixed earth field).
 
@@ -380,7 +379,7 @@ def lane_fuse_mag(e, cfg, mag):
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_fuse_constpos(e, cfg, t, armed):
     """Constant-position pseudo-measurement (aiding mode NONE), every C_CONSTPOS_DT seconds.
 
@@ -405,7 +404,7 @@ def lane_fuse_constpos(e, cfg, t, armed):
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def is_finite_lane(e):
     """False if the quaternion, velocity, position or any covariance diagonal is not finite."""
     s = e[0] + e[VN] + e[VE] + e[VD] + e[PN] + e[PE] + e[PD]
@@ -414,7 +413,7 @@ def is_finite_lane(e):
     return math.isfinite(s)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def update_flags(e, cfg, t):
     """Refresh the lane status flags (layout F_*) for time t [s]."""
     aligned = e[ALIGNED] != 0.0 and e[FAULT] == 0.0

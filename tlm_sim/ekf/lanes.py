@@ -17,8 +17,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.core import (
     buffer_push,
     filter_now,
@@ -171,7 +170,7 @@ INIT_GBIAS_SD = math.radians(2.5)  # rad/s (EKF3: 2.5 deg/s)
 INIT_ABIAS_SD = 0.1  # m/s^2
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_init(ekf, sel, cfg):
     """Reset all lanes to "waiting for alignment" and the selector to lane 0 primary.
 
@@ -198,7 +197,7 @@ def ekf_init(ekf, sel, cfg):
         sel[SEL_T_PRIMARY + i] = -1.0e9
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def _align(e, cfg, t):
     """Tilt from the averaged specific force, yaw from the magnetometer; initialise P."""
     f = 1.0 / e[ALIGN_DT]
@@ -251,7 +250,7 @@ def _align(e, cfg, t):
         e[OUT_IPN + j] = 0.0
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def _static_tilt_check(e, dang, dvel, imu, dt):
     """Re-level a lane whose tilt is grossly wrong while its IMU is at rest (tlm model choice).
 
@@ -291,7 +290,7 @@ def _static_tilt_check(e, dang, dvel, imu, dt):
     e[TILT_RESET_COUNT] += 1.0
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     """One main-loop tick of one lane (see the module docstring); t in seconds."""
     dt = cfg[C_DT] if e[T_LAST] < 0.0 else t - e[T_LAST]
@@ -351,7 +350,7 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     update_flags(e, cfg, t)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
     """Predict all lanes by one main-loop tick.
 
@@ -364,7 +363,7 @@ def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
         lane_predict(ekf[i], cfg, t, dang, dvel, imu_ok, armed)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
     """New GPS sample: pos[0:3] NED [m] from the origin (only N, E are used; height comes from
     the baro), vel[0:3] NED [m/s], lagged by the assumed GPS delay (cfg C_GPS_DELAY). Nothing is
@@ -376,7 +375,7 @@ def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
         lane_fuse_gps(ekf[i], cfg, t, pos, vel)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_fuse_baro(ekf, cfg, t_us, alt):
     """New baro sample: altitude above the origin [m, up]."""
     t = t_us * 1e-6
@@ -384,14 +383,14 @@ def ekf_fuse_baro(ekf, cfg, t_us, alt):
         lane_fuse_baro(ekf[i], cfg, t, alt)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_fuse_mag(ekf, cfg, mag):
     """New magnetometer sample: body-frame field mag[0:3] [gauss]."""
     for i in range(ekf.shape[0]):
         lane_fuse_mag(ekf[i], cfg, mag)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_score(e):
     """EKF3 error score max(0.5 (vel + pos), hgt) of a lane (0 before alignment)."""
     if e[ALIGNED] == 0.0:
@@ -399,7 +398,7 @@ def lane_score(e):
     return max(0.5 * (e[VEL_TR] + e[POS_TR]), e[HGT_TR])
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def lane_healthy(e, cfg, t):
     """Lane health: aligned, IMU delivering, no fault, out of its first second, and not all of
     the velocity, position and height test ratios above 1."""
@@ -410,7 +409,7 @@ def lane_healthy(e, cfg, t):
     return not (e[VEL_TR] > 1.0 and e[POS_TR] > 1.0 and e[HGT_TR] > 1.0)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     """Update lane scores/health and switch the primary lane as EKF3 does (section 3.4).
 
@@ -473,7 +472,7 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     return True
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_update(
     ekf,
     sel,
@@ -510,7 +509,7 @@ def ekf_update(
     return ekf_select_primary(ekf, sel, cfg, t_us, armed)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_output(ekf, sel, out):
     """Fill out[N_OUT] (layout O_*) from the primary lane: attitude, velocity, position, biases,
     Euler angles, status flags, square roots of the test ratios (what ekf_check compares with
@@ -544,7 +543,7 @@ def ekf_output(ekf, sel, out):
     out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@tick_jit
 def ekf_primary(sel):
     """Index of the primary lane."""
     return int(sel[SEL_PRIMARY])
