@@ -660,12 +660,15 @@ def fly(
         params=p, mission=mission, faults=[], meta=meta,
     )
     mu = p.get("TLM_SAT_JITTER", 0.0)
-    if mu > 0.0 and "GPS" in log.tables and len(log.tables["GPS"]):
+    if mu > 0.0 and log.n_rows("GPS"):
         gps = log.tables["GPS"]
         gps["NSats"] = jitter_nsats(gps["Status"].to_numpy(), int(seed), mu).astype(
             gps["NSats"].dtype)
     if schedule is not None:
-        log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]))
+        t_last = max((float(log.columns(n)["TimeUS"][-1]) for n in log.tables
+                      if log.n_rows(n)), default=0.0)
+        log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
+                                   t_last)
     return log
 
 

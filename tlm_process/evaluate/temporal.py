@@ -49,12 +49,18 @@ def row_rate_hz(df: pd.DataFrame) -> float:
 class WindowFeatures:
     """How rows are turned into window statistics (see the module docstring).
 
-    ``seconds``: trailing window lengths [s]. ``circular``: feature -> period in the units
-    the feature has in the table (for min-max scaled GCrs: 360 / (max - min)).
+    ``seconds``: window lengths [s]. ``circular``: feature -> period in the units the feature
+    has in the table (for min-max scaled GCrs: 360 / (max - min)). ``centred``: windows
+    centred on the row (rows t - w//2 .. t + w - 1 - w//2: offline only, they see the
+    future) instead of trailing ones. ``history``: add whole-history statistics of every
+    non-circular feature (mean, minimum, maximum over the flight's rows up to and including
+    the row: causal, but they remember every earlier fault of the flight).
     """
 
     seconds: tuple[float, ...] = (2.0, 10.0)
     circular: Mapping[str, float] = field(default_factory=dict)
+    centred: bool = False
+    history: bool = False
 
     def names(self, features: Sequence[str]) -> list[str]:
         out: list[str] = []
@@ -67,6 +73,8 @@ class WindowFeatures:
             for s in self.seconds:
                 out += [f"{f}_{st}{s:g}s" for st in
                         ("mean", "std", "min", "max", "absdiff", "change")]
+            if self.history:
+                out += [f"{f}_hist_{st}" for st in ("mean", "min", "max")]
         return out
 
 
@@ -87,7 +95,10 @@ def _trailing_filter(fn, x: np.ndarray, w: int) -> np.ndarray:
 
 def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
                   rows: Sequence[int]) -> np.ndarray:
-    """Window features of one flight's rows (time order), shape (n, n_out)."""
+    """Window features of one flight's rows (time order), shape (n, n_out).
+
+    Centred windows are trailing windows of the series padded at its end with its last value
+    and read ``w - 1 - w//2`` rows later."""
     cols: list[np.ndarray] = []
     n = len(x)
     for j, f in enumerate(feats):
@@ -98,22 +109,30 @@ def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
             p = spec.circular[f]
             turn = np.abs((d + p / 2) % p - p / 2)
             for w in rows:
-                cols.append(_trailing_sum(turn, w) / w)
-                cols.append(_trailing_filter(maximum_filter1d, turn, w))
+                lead = (w - 1 - w // 2) if spec.centred else 0
+                te = np.concatenate([turn, np.zeros(lead)])
+                cols.append((_trailing_sum(te, w) / w)[lead:lead + n])
+                cols.append(_trailing_filter(maximum_filter1d, te, w)[lead:lead + n])
             continue
         cols.append(v)
-        ad = np.abs(d)
         for w in rows:
-            s1 = _trailing_sum(v, w)
-            s2 = _trailing_sum(v * v, w)
+            lead = (w - 1 - w // 2) if spec.centred else 0
+            ve = np.concatenate([v, np.full(lead, v[-1])])
+            ade = np.abs(np.diff(ve, prepend=ve[0]))
+            m = len(ve)
+            s1 = _trailing_sum(ve, w)
+            s2 = _trailing_sum(ve * ve, w)
             mean = s1 / w
-            cols.append(mean)
-            cols.append(np.sqrt(np.maximum(s2 / w - mean * mean, 0.0)))
-            cols.append(_trailing_filter(minimum_filter1d, v, w))
-            cols.append(_trailing_filter(maximum_filter1d, v, w))
-            cols.append(_trailing_sum(ad, w) / w)
-            first = np.concatenate([np.full(min(w - 1, n), v[0]), v])[:n]
-            cols.append(v - first)
+            first = np.concatenate([np.full(min(w - 1, m), ve[0]), ve])[:m]
+            for c in (mean, np.sqrt(np.maximum(s2 / w - mean * mean, 0.0)),
+                      _trailing_filter(minimum_filter1d, ve, w),
+                      _trailing_filter(maximum_filter1d, ve, w),
+                      _trailing_sum(ade, w) / w, ve - first):
+                cols.append(c[lead:lead + n])
+        if spec.history:
+            cols.append(np.cumsum(v) / np.arange(1, n + 1))
+            cols.append(np.minimum.accumulate(v))
+            cols.append(np.maximum.accumulate(v))
     return np.column_stack(cols) if cols else np.empty((n, 0))
 
 

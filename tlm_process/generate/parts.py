@@ -77,12 +77,17 @@ def _column(values: np.ndarray, char: str) -> pa.Array:
     return pa.array(values.astype(FORMAT_CHARS[char].dtype, copy=False))
 
 
-def table_part(df: pd.DataFrame, schema: MessageSchema, flight: int) -> pa.Table:
-    """One flight's table as Arrow: ``flight`` (int32) + the schema's columns."""
-    arrays = [pa.array(np.full(len(df), flight, dtype=np.int32))]
+def table_part(columns: pd.DataFrame | Mapping[str, np.ndarray], schema: MessageSchema,
+               flight: int) -> pa.Table:
+    """One flight's table as Arrow: ``flight`` (int32) + the schema's columns.
+
+    ``columns``: the canonical table, as a DataFrame or as column name -> array
+    (``FlightLog.columns``)."""
+    values = [np.asarray(columns[c]) for c in schema.columns]
+    arrays = [pa.array(np.full(len(values[0]), flight, dtype=np.int32))]
     names = ["flight"]
-    for c, f in zip(schema.columns, schema.fmt, strict=True):
-        arrays.append(_column(df[c].to_numpy(), f))
+    for c, f, v in zip(schema.columns, schema.fmt, values, strict=True):
+        arrays.append(_column(v, f))
         names.append(c)
     table = pa.Table.from_arrays(arrays, names=names)
     return table.replace_schema_metadata(_schema_metadata(schema))

@@ -105,7 +105,7 @@ def fly_job(job: Mapping[str, Any]) -> dict[str, Any]:
                   profile=spec.profile)
         t2 = time.perf_counter()
         timing["fly_s"] = t2 - t1
-        gps_t = log.table("GPS")["TimeUS"].to_numpy()
+        gps_t = log.columns("GPS")["TimeUS"] if log.n_rows("GPS") else np.zeros(0)
         out["summary"] = {
             "duration_s": float(log.meta["duration_s"]),
             "waypoints_reached": int(log.meta["waypoints_reached"]),
@@ -119,15 +119,15 @@ def fly_job(job: Mapping[str, Any]) -> dict[str, Any]:
         if not job.get("pilot"):
             wanted = job.get("tables")
             names = [n for n in log.tables if wanted is None or n in wanted]
-            parts = {n: to_parquet_bytes(table_part(log.tables[n], log.schemas[n], flight))
-                     for n in names if len(log.tables[n])}
+            parts = {n: to_parquet_bytes(table_part(log.columns(n), log.schemas[n], flight))
+                     for n in names if log.n_rows(n)}
             parts["faults"] = to_parquet_bytes(fault_table(log.faults, flight))
             out["parts"] = parts
             if job.get("bin"):
                 from tlm_sim.flightlog.binwriter import encode_bin
 
                 out["bin"] = encode_bin(log)
-            out["summary"]["rows"] = {n: len(log.tables[n]) for n in names}
+            out["summary"]["rows"] = {n: log.n_rows(n) for n in names}
         timing["encode_s"] = time.perf_counter() - t2
         out["status"] = "ok"
     except Exception as exc:  # noqa: BLE001 - a failed flight is recorded, the run goes on

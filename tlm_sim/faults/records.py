@@ -57,15 +57,17 @@ def fault_records(
     applied_us: np.ndarray,
     tables: Mapping[str, pd.DataFrame],
     home_alt: float,
+    t_last_us: float,
 ) -> list[dict[str, Any]]:
     """Eq. 4 records of a flown schedule.
 
     changes: ``schedule.param_changes()`` as flown; applied_us[i]: TimeUS at which change i took
     effect (< 0 if the flight ended first: the fault then ends with the log, ``end_by`` says
-    so). home_alt: home altitude AMSL [m].
+    so). tables: the flight's tables (``POS`` and ``SIM`` are read). home_alt: home altitude
+    AMSL [m]. t_last_us: TimeUS of the log's last row (the end of a fault the flight outlived).
     """
     records: list[dict[str, Any]] = []
-    t_last = max((float(df.TimeUS.iloc[-1]) for df in tables.values() if len(df)), default=0.0)
+    t_last = float(t_last_us)
     for i, fault in enumerate(schedule):
         starts = [applied_us[k] for k, ch in enumerate(changes)
                   if ch.fault == i and ch.edge == "start" and applied_us[k] >= 0]

@@ -30,7 +30,7 @@ import dataclasses
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, MutableMapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +41,7 @@ from .quantise import frame_from_columns, quantise_column, quantise_frame
 from .schema import LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
 from .tableio import read_csv, read_parquet, write_csv, write_parquet
 
-__all__ = ["BIN_NAME", "FlightLog", "allocate_buffers", "to_jsonable"]
+__all__ = ["BIN_NAME", "FlightLog", "LazyTables", "allocate_buffers", "to_jsonable"]
 
 FORMAT_NAME = "tlm.flightlog"
 FORMAT_VERSION = 1
@@ -93,9 +93,14 @@ def to_jsonable(obj: Any) -> Any:
     raise TypeError(f"cannot store {type(obj).__name__} in meta.json")
 
 
+_PLAIN = (float, int, str, bool)
+
+
 def _params_dict(params: Any) -> dict[str, Any] | None:
     if params is None:
         return None
+    if isinstance(params, Mapping) and all(type(v) in _PLAIN for v in params.values()):
+        return {str(k): v for k, v in params.items()}  # already JSON (fly's parameter dict)
     d = to_jsonable(params)
     if not isinstance(d, dict):
         raise TypeError("params must be a mapping, dataclass or NamedTuple of ArduPilot names")
@@ -150,6 +155,58 @@ def _as_named(
     return dict(zip(LOGGED_MESSAGES, values, strict=True))
 
 
+class LazyTables(MutableMapping[str, pd.DataFrame]):
+    """Message name -> DataFrame, each built on first access from canonical column arrays.
+
+    ``FlightLog.from_buffers`` fills it, so a flight whose caller reads a few tables (or
+    only their columns, :meth:`FlightLog.columns`) pays for no other DataFrame. Assigning a
+    DataFrame replaces the table; iteration follows insertion order.
+    """
+
+    def __init__(self, schemas: Mapping[str, MessageSchema]) -> None:
+        self._schemas = schemas
+        self._columns: dict[str, dict[str, np.ndarray]] = {}
+        self._frames: dict[str, pd.DataFrame] = {}
+        self._order: dict[str, None] = {}
+
+    def add_columns(self, name: str, columns: dict[str, np.ndarray]) -> None:
+        """Add table ``name`` as canonical columns (built into a DataFrame when read)."""
+        self._columns[name] = columns
+        self._frames.pop(name, None)
+        self._order[name] = None
+
+    def columns(self, name: str) -> Mapping[str, np.ndarray] | None:
+        """The canonical column arrays of a table not yet built or replaced, else None."""
+        return self._columns.get(name) if name not in self._frames else None
+
+    def __getitem__(self, name: str) -> pd.DataFrame:
+        df = self._frames.get(name)
+        if df is None:
+            df = frame_from_columns(self._schemas[name], self._columns[name])
+            self._frames[name] = df
+            del self._columns[name]
+        return df
+
+    def __setitem__(self, name: str, df: pd.DataFrame) -> None:
+        self._frames[name] = df
+        self._columns.pop(name, None)
+        self._order[name] = None
+
+    def __delitem__(self, name: str) -> None:
+        del self._order[name]
+        self._frames.pop(name, None)
+        self._columns.pop(name, None)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(self._order))
+
+    def __len__(self) -> int:
+        return len(self._order)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._order
+
+
 class FlightLog:
     """Tables of one flight (ArduPilot message names and columns) plus its context.
 
@@ -180,13 +237,16 @@ class FlightLog:
         params_changed: Mapping[str, Any] | None = None,
     ) -> None:
         self.schemas: dict[str, MessageSchema] = {}
-        self.tables: dict[str, pd.DataFrame] = {}
-        for name, df in tables.items():
+        for name in tables:
             schema = (schemas or {}).get(name) or SCHEMAS.get(name)
             if schema is None:
                 raise KeyError(f"no schema for table {name!r}: pass schemas={{...}}")
             self.schemas[name] = schema
-            self.tables[name] = df
+        self.tables: MutableMapping[str, pd.DataFrame]
+        if isinstance(tables, LazyTables):
+            self.tables = tables
+        else:
+            self.tables = dict(tables)
         self.params: dict[str, Any] | None = _params_dict(params)
         self.params_changed: dict[str, Any] | None = (
             dict(params_changed) if params_changed is not None else _params_changed(params)
@@ -222,7 +282,7 @@ class FlightLog:
         """
         bufs = _as_named(buffers, "buffers")
         cnts = _as_named(counts, "counts")
-        tables: dict[str, pd.DataFrame] = {}
+        tables = LazyTables(SCHEMAS)
         for name, buf in bufs.items():
             if name not in SCHEMAS:
                 raise KeyError(f"unknown message {name!r}")
@@ -245,7 +305,7 @@ class FlightLog:
             cols = {schema.columns[0]: t[order]}
             for k in range(1, len(schema.columns)):
                 cols[schema.columns[k]] = quantise_column(rows[order, k], schema.fmt[k])
-            tables[name] = frame_from_columns(schema, cols)
+            tables.add_columns(name, cols)
         return cls(tables, params=params, mission=mission, faults=faults, meta=meta)
 
     @classmethod
@@ -265,6 +325,26 @@ class FlightLog:
                    meta={"source": os.fspath(path), **log.info})
 
     # --- access -------------------------------------------------------------------------------
+    def columns(self, name: str) -> Mapping[str, np.ndarray]:
+        """Table ``name`` as column name -> numpy array, without building its DataFrame when
+        it has not been built yet (``from_buffers``); KeyError if the flight logged none."""
+        if isinstance(self.tables, LazyTables):
+            cols = self.tables.columns(name)
+            if cols is not None:
+                return cols
+        df = self.tables[name]
+        return {c: df[c].to_numpy() for c in df.columns}
+
+    def n_rows(self, name: str) -> int:
+        """Rows of table ``name`` (0 if the flight logged none)."""
+        if name not in self.tables:
+            return 0
+        if isinstance(self.tables, LazyTables):
+            cols = self.tables.columns(name)
+            if cols is not None:
+                return len(next(iter(cols.values()))) if cols else 0
+        return len(self.tables[name])
+
     def table(self, name: str) -> pd.DataFrame:
         """Table ``name``; an empty, correctly typed table if the flight logged none."""
         if name in self.tables:
@@ -278,7 +358,7 @@ class FlightLog:
         return name in self.tables
 
     def __repr__(self) -> str:
-        rows = ", ".join(f"{n}={len(df)}" for n, df in self.tables.items())
+        rows = ", ".join(f"{n}={self.n_rows(n)}" for n in self.tables)
         return f"FlightLog({rows}; faults={len(self.faults)})"
 
     def summary(self) -> dict[str, Any]:

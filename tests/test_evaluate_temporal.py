@@ -1,0 +1,108 @@
+"""Window features (trailing, centred, whole-history) and the WindowHGB models on synthetic
+flights with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tlm_process.evaluate.temporal import (
+    WINDOW_MODELS,
+    WindowFeatures,
+    window_features,
+    window_hgb,
+    window_spec_for,
+)
+
+
+def _two_flights(n: int = 30) -> pd.DataFrame:
+    t = np.arange(n) * 200_000  # 5 Hz
+    return pd.DataFrame({
+        "flight": ["a"] * n + ["b"] * n, "TimeUS": np.concatenate([t, t]), "label": 0,
+        "Spd": np.concatenate([np.arange(n, dtype=float), np.full(n, 100.0)])})
+
+
+def _cols(df: pd.DataFrame, spec: WindowFeatures) -> dict[str, np.ndarray]:
+    X, names = window_features(df, ["Spd"], spec)
+    assert X.shape == (len(df), len(names))
+    return {n: X[:, i] for i, n in enumerate(names)}
+
+
+def test_centred_windows_see_both_sides_but_never_another_flight():
+    df = _two_flights()
+    col = _cols(df, WindowFeatures(seconds=(1.0,), centred=True))  # 5 rows: t-2 .. t+2
+    assert col["Spd_mean1s"][10] == pytest.approx(10.0)
+    assert col["Spd_min1s"][10] == 8 and col["Spd_max1s"][10] == 12
+    assert col["Spd_change1s"][10] == pytest.approx(4.0)  # last minus first of the window
+    # flight a's last rows repeat its last value (29), they do not reach flight b's 100
+    assert col["Spd_max1s"][29] == 29 and col["Spd_mean1s"][29] == pytest.approx(
+        np.mean([27, 28, 29, 29, 29]))
+    assert col["Spd_min1s"][30] == 100  # flight b's first row does not see flight a
+    # an even window (4 rows: t-2 .. t+1)
+    even = _cols(df, WindowFeatures(seconds=(0.8,), centred=True))
+    assert even["Spd_mean0.8s"][10] == pytest.approx(np.mean([8, 9, 10, 11]))
+
+
+def test_trailing_windows_and_history_are_causal():
+    df = _two_flights()
+    spec = WindowFeatures(seconds=(1.0,), history=True)
+    col = _cols(df, spec)
+    assert col["Spd_hist_mean"][10] == pytest.approx(5.0)  # mean of 0..10
+    assert col["Spd_hist_min"][10] == 0 and col["Spd_hist_max"][10] == 10
+    assert col["Spd_hist_min"][30] == 100  # a new flight starts a new history
+    changed = df.copy()
+    changed.loc[20, "Spd"] = -1e6  # later rows must not change earlier rows' features
+    X, _ = window_features(df, ["Spd"], spec)
+    X2, _ = window_features(changed, ["Spd"], spec)
+    assert np.array_equal(X2[:20], X[:20]) and not np.array_equal(X2[20:], X[20:])
+    assert np.array_equal(X2[30:], X[30:])  # nor another flight's
+    # centred windows do see the next rows (that is why they are offline only)
+    cen = WindowFeatures(seconds=(1.0,), centred=True)
+    Xc, _ = window_features(df, ["Spd"], cen)
+    Xc2, _ = window_features(changed, ["Spd"], cen)
+    assert not np.array_equal(Xc2[18:20], Xc[18:20]) and np.array_equal(Xc2[:18], Xc[:18])
+
+
+def _noise_flights(n_flights: int, seed: int) -> pd.DataFrame:
+    """Flights whose class shows only in how a signal moves: 'fault' segments are noise of
+    standard deviation 1 around 0, 'normal' segments a slow ramp within -1 .. 1. Single rows
+    overlap; a 2-s window's spread separates them."""
+    rng = np.random.default_rng(seed)
+    frames = []
+    for i in range(n_flights):
+        lab = np.repeat([0, 1, 0, 1, 0], 60)
+        x = np.where(lab == 1, rng.normal(0.0, 1.0, lab.size),
+                     np.sin(np.arange(lab.size) / 40.0))
+        frames.append(pd.DataFrame({"flight": f"f{i}", "TimeUS": np.arange(lab.size) * 200_000,
+                                    "label": lab, "x": x}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def test_window_hgb_learns_what_single_rows_cannot_show():
+    from sklearn.ensemble import HistGradientBoostingClassifier
+
+    train, test = _noise_flights(6, 1), _noise_flights(3, 2)
+    spec = WindowFeatures(seconds=(2.0,))
+    Xtr, _ = window_features(train, ["x"], spec)
+    Xte, _ = window_features(test, ["x"], spec)
+    model = window_hgb(seed=0).fit(Xtr, train["label"])
+    acc = float((model.predict(Xte) == test["label"].to_numpy()).mean())
+    row = HistGradientBoostingClassifier(max_iter=50, random_state=0).fit(train[["x"]],
+                                                                          train["label"])
+    row_acc = float((row.predict(test[["x"]]) == test["label"].to_numpy()).mean())
+    assert acc > 0.9 and row_acc < 0.8, (acc, row_acc)
+    again = window_hgb(seed=0).fit(Xtr, train["label"]).predict_proba(Xte)
+    assert np.array_equal(again, model.predict_proba(Xte))  # seeded: repeats
+
+
+def test_window_model_specs():
+    assert set(WINDOW_MODELS) >= {"WindowHGB"}
+    base = window_spec_for("WindowHGB", {"GCrs": 2.0})
+    assert base.seconds == (2.0, 10.0) and not base.centred and not base.history
+    assert base.circular == {"GCrs": 2.0}
+    for name in WINDOW_MODELS:
+        spec = window_spec_for(name, {})
+        assert spec.seconds and all(s > 0 for s in spec.seconds)
+    with pytest.raises(ValueError, match="unknown"):
+        window_spec_for("nope", {})
