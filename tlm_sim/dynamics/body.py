@@ -166,12 +166,13 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     # --- forces and torques --------------------------------------------------------------
     fx, fy, fz, tx, ty, tz, current = motor_forces(x, pwm, frame, dt)
     ixx, iyy, izz = frame[F_IXX], frame[F_IYY], frame[F_IZZ]
+    rxx, ryy, rzz = 1.0 / ixx, 1.0 / iyy, 1.0 / izz  # three divisions instead of six
     damp = frame[F_ROT_DAMP]
 
     # --- rates (semi-implicit: rates first, attitude with the new rates) ---------------------
-    wx = _clamp(x[X.WX] + (tx / ixx - damp * x[X.WX]) * dt, GYRO_LIMIT)
-    wy = _clamp(x[X.WY] + (ty / iyy - damp * x[X.WY]) * dt, GYRO_LIMIT)
-    wz = _clamp(x[X.WZ] + (tz / izz - damp * x[X.WZ]) * dt, GYRO_LIMIT)
+    wx = _clamp(x[X.WX] + (tx * rxx - damp * x[X.WX]) * dt, GYRO_LIMIT)
+    wy = _clamp(x[X.WY] + (ty * ryy - damp * x[X.WY]) * dt, GYRO_LIMIT)
+    wz = _clamp(x[X.WZ] + (tz * rzz - damp * x[X.WZ]) * dt, GYRO_LIMIT)
 
     # rotation over the step: dq = (c, u) = (cos(th/2), w_hat sin(th/2)), th = |w| dt
     c, k = rotation_half_angle(wx, wy, wz, dt)
@@ -188,16 +189,16 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
         ccx = uy * cz - uz * cy
         ccy = uz * cx - ux * cz
         ccz = ux * cy - uy * cx
-        wx = (lx - 2.0 * c * cx + 2.0 * ccx) / ixx
-        wy = (ly - 2.0 * c * cy + 2.0 * ccy) / iyy
-        wz = (lz - 2.0 * c * cz + 2.0 * ccz) / izz
+        wx = (lx - 2.0 * c * cx + 2.0 * ccx) * rxx
+        wy = (ly - 2.0 * c * cy + 2.0 * ccy) * ryy
+        wz = (lz - 2.0 * c * cz + 2.0 * ccz) * rzz
     x[X.WX], x[X.WY], x[X.WZ] = wx, wy, wz
 
     # --- translation -------------------------------------------------------------------
-    m = frame[F_MASS]
-    bx = _clamp(fx / m, ACCEL_LIMIT)
-    by = _clamp(fy / m, ACCEL_LIMIT)
-    bz = _clamp(fz / m, ACCEL_LIMIT)
+    rm = 1.0 / frame[F_MASS]
+    bx = _clamp(fx * rm, ACCEL_LIMIT)
+    by = _clamp(fy * rm, ACCEL_LIMIT)
+    bz = _clamp(fz * rm, ACCEL_LIMIT)
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
     aen = r00 * bx + r01 * by + r02 * bz
     aee = r10 * bx + r11 * by + r12 * bz

@@ -28,10 +28,11 @@ from tlm_sim.dynamics.frame import (
     F_MOT_YAW,
     F_POWER_FACTOR,
     F_PROFILE,
+    F_PWM_HI,
+    F_PWM_LO,
     F_SLEW_MAX,
     F_VEL_MAX,
     N_MOTORS,
-    pwm_to_command,
 )
 
 #: paper-era rotor torque per unit command and voltage scale [N m] (radians(40))
@@ -39,16 +40,13 @@ PAPER_YAW_SCALE: float = math.radians(40.0)
 
 
 @tick_jit
-def slew_command(pwm: float, last: float, frame: np.ndarray, dt: float) -> float:
-    """Motor command 0..1 for ``pwm`` [us], rate limited to ``slew_max * dt`` from ``last``."""
-    a = pwm_to_command(pwm, frame)
-    slew = frame[F_SLEW_MAX]
-    if slew > 0.0:
-        step = slew * dt
-        if a > last + step:
-            a = last + step
-        elif a < last - step:
-            a = last - step
+def slew_command(pwm: float, last: float, pwm_lo: float, per_us: float, step: float) -> float:
+    """Motor command 0..1 for ``pwm`` [us] (SITL ``pwm_to_command``: ``(pwm - pwm_lo) *
+    per_us`` clamped, ``per_us = 1 / (pwm_hi - pwm_lo)``), rate limited to ``step`` from
+    ``last`` (``step = slew_max * dt``; no limit when 0)."""
+    a = min(max((pwm - pwm_lo) * per_us, 0.0), 1.0)
+    if step > 0.0:
+        a = min(max(a, last - step), last + step)
     return a
 
 
@@ -88,8 +86,11 @@ def motor_forces(
     tz = 0.0
     thrust_sum = 0.0
     current = 0.0
+    pwm_lo = frame[F_PWM_LO]
+    per_us = 1.0 / (frame[F_PWM_HI] - pwm_lo)
+    step = frame[F_SLEW_MAX] * dt
     for i in range(N_MOTORS):
-        a = slew_command(pwm[i], x[X.M1 + i], frame, dt)
+        a = slew_command(pwm[i], x[X.M1 + i], pwm_lo, per_us, step)
         x[X.M1 + i] = a
         if dead:
             x[X.T1 + i] = 0.0

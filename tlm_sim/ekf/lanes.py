@@ -265,16 +265,18 @@ def _static_tilt_check(e, dang, dvel, imu, dt):
     """
     if dt <= 0.0:
         return
-    wx = dang[imu, 0] / dt
-    wy = dang[imu, 1] / dt
-    wz = dang[imu, 2] / dt
-    fx = dvel[imu, 0] / dt
-    fy = dvel[imu, 1] / dt
-    fz = dvel[imu, 2] / dt
-    fn = math.sqrt(fx * fx + fy * fy + fz * fz)
-    if wx * wx + wy * wy + wz * wz > STATIC_GYRO**2 or abs(fn - GRAVITY) > STATIC_ACC:
+    # the rest tests on the deltas (|dang| > STATIC_GYRO dt, ...): no divisions on the
+    # every-tick path, which nearly always ends here
+    ax, ay, az = dang[imu, 0], dang[imu, 1], dang[imu, 2]
+    if ax * ax + ay * ay + az * az > (STATIC_GYRO * dt) ** 2:
         e[TILT_BAD_T] = 0.0
         return
+    vx, vy, vz = dvel[imu, 0], dvel[imu, 1], dvel[imu, 2]
+    dv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if abs(dv - GRAVITY * dt) > STATIC_ACC * dt:
+        e[TILT_BAD_T] = 0.0
+        return
+    fx, fy, fz, fn = vx / dt, vy / dt, vz / dt, dv / dt
     # estimated "down" in body axes (third row of the body->NED matrix) vs the sensed one
     cos_err = -(e[R20] * fx + e[R21] * fy + e[R22] * fz) / fn
     if cos_err > STATIC_TILT_COS:
