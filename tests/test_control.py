@@ -250,7 +250,8 @@ def _fly_path(g, points, ticks=40000):
     c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T] = pos
     rows = []
     for _ in range(ticks):
-        heading, done = path_update(c, g, path, len(points), pos, 0.0)
+        vel = np.array([c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF]])
+        heading, done = path_update(c, g, path, len(points), pos, vel, 0.0, True)
         pos[:] = c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T]
         rows.append([*pos, c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF],
                      c[C.PXY_ACC_FF], c[C.PXY_ACC_FF + 1], c[C.PZ_ACC_FF], c[C.YAW_RATE_CMD],
@@ -341,3 +342,80 @@ def test_tilted_copter_recovers_its_thrust_axis_before_its_heading(cfg):
     assert out[0] < -1.0  # roll back
     # the heading target was dragged to within 45 deg of the copter's
     assert abs(c[C.ATT_YAW_T]) <= math.radians(45.0) + 1e-6
+
+
+# ------------------------------------------------- position jumps (EKF stopping/resuming aiding)
+
+
+def test_position_error_limit_is_ac_p_2d_error_max(cfg):
+    """A target far from the position estimate is moved to PSC's error_max (8.45 m for
+    WPNAV_SPEED 6 m/s, PSC_POSXY_P 1, WPNAV_ACCEL 2.5 m/s^2: gps_s12.bin's PSCN/PSCE target sat
+    8.45 m from the zero position estimate while the EKF had no position), along the same
+    direction, and the correction asks for exactly WPNAV_SPEED on top of the feed-forward."""
+    from tlm_sim.control.config import inv_sqrt_ctrl
+    from tlm_sim.control.position import xy_update
+
+    _, g = cfg
+    assert g[C.G_POSXY_ERR_MAX] == pytest.approx(8.45)
+    assert sqrt_ctrl(g[C.G_POSXY_ERR_MAX], g[C.G_POSXY_P], g[C.G_WP_ACCEL], 0.0) == (
+        pytest.approx(g[C.G_WP_SPEED]))
+    # the vertical ones ask for WPNAV_SPEED_UP / _DN (combined_s21.bin: PSCD 1.625 m below)
+    assert g[C.G_POSZ_ERR_DN] == pytest.approx(1.625)
+    assert g[C.G_POSZ_ERR_UP] == pytest.approx(3.625)
+    assert inv_sqrt_ctrl(0.5, 1.0, 2.5) == pytest.approx(0.5)  # linear region
+    c = np.zeros(C.N_CONTROL_STATE)
+    c[C.ALTHOLD_LEAN] = g[C.G_ANGLE_MAX]
+    c[C.PXY_POS_T], c[C.PXY_POS_T + 1] = -136.9, -2.9  # the path target before the jump
+    c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1] = -3.21, -0.07
+    xy_update(c, g, np.zeros(3), np.zeros(3), -1.0, 0.0)  # estimate jumped to the origin
+    t = c[C.PXY_POS_T : C.PXY_POS_T + 2]
+    assert np.hypot(*t) == pytest.approx(8.45)
+    assert t[1] / t[0] == pytest.approx(2.9 / 136.9)
+    corr = c[C.PXY_VEL_T : C.PXY_VEL_T + 2] - c[C.PXY_VEL_FF : C.PXY_VEL_FF + 2]
+    assert np.hypot(*corr) == pytest.approx(6.0)
+    assert c[C.PXY_VEL_T] == pytest.approx(-9.21, abs=0.01)  # SITL's PSCN.TVN
+    # the lean saturates at ANGLE_MAX towards the target (gps_s12: DesPitch -30 deg)
+    assert c[C.ATT_PITCH_CMD] == pytest.approx(-g[C.G_ANGLE_MAX], abs=1e-3)
+
+
+def test_track_scaler_freezes_the_path_but_keeps_the_feed_forward(cfg):
+    """AC_WPNav's S-curve time: 1 while the vehicle keeps up, 0 when it is far behind, low-passed
+    with WPNAV_ACCEL / WPNAV_JERK; the path target then stops while the feed-forward velocity
+    keeps its value (gps_s12.bin: DPN frozen, DVN -3.21 m/s for 19 s)."""
+    from tlm_sim.control.wpnav import (
+        PATH_COLS,
+        path_start,
+        path_update,
+        prepare_path,
+        track_scaler,
+    )
+
+    _, g = cfg
+    points = [(0.0, 0.0, -20.0), (-200.0, 0.0, -20.0)]
+    path = np.zeros((2, PATH_COLS))
+    path[:, :3] = points
+    prepare_path(path, 2, g)
+    c = np.zeros(C.N_CONTROL_STATE)
+    path_start(c)
+    pos = np.array(points[0])
+    for _ in range(4000):  # 10 s of perfect tracking: up to cruise, scaler 1
+        vel = np.array([c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF]])
+        path_update(c, g, path, 2, pos, vel, 0.0, True)
+        pos[:] = c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T]
+    assert c[C.TRACK_K] == pytest.approx(1.0)
+    v_ff = c[C.PXY_VEL_FF]
+    assert v_ff < -1.0
+    # the vehicle now 8.45 m behind and not moving: the target slows to a stop
+    pos[0] = c[C.PXY_POS_T] + 8.45
+    s0 = c[C.PATH_S]
+    k = []
+    for _ in range(4000):
+        path_update(c, g, path, 2, pos, np.zeros(3), 0.0, True)
+        c[C.PXY_POS_T] = pos[0] - 8.45  # (as the position controller's error limit leaves it)
+        k.append(c[C.TRACK_K])
+    tc = g[C.G_WP_ACCEL] / g[C.G_WP_JERK]
+    assert k[int(tc / g[C.G_DT])] == pytest.approx(math.exp(-1.0), abs=0.01)
+    assert k[-1] < 0.02
+    assert c[C.PATH_S] - s0 < 3.0 * abs(v_ff)  # about tc x speed, then stopped
+    assert c[C.PXY_VEL_FF] == pytest.approx(v_ff)  # the feed-forward is kept
+    assert track_scaler(c, g, pos, np.zeros(3)) < 0.02

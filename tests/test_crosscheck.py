@@ -16,19 +16,21 @@ from tlm_process.crosscheck import crosscheck, gate, reconstruct
 LOGS = ("normal_s11", "gps_s12", "accel_s13", "engine_s14", "rc_s15", "combined_s21")
 
 #: log -> (max |flight time difference| as a fraction, max trajectory RMS [m]).
-#: The issue's targets are 10 % and 3 m on the normal and combined flights; measured after the
-#: calibration: flight time within 0.7-3.9 %, trajectory RMS 0.06 m (normal), 0.2-0.4 m (accel,
-#: engine, rc), 4.4 m (gps) and 10.5 m (combined). The combined flight does NOT meet the 3 m
-#: target: after the GPS loss (tlm's EKF drifts 105 m, SITL's 190 m) and the accelerometer fault
-#: tlm's vehicle is left elsewhere than SITL's and flies back along another line, so that bound
-#: pins today's value with a margin.
+#: The issue's targets are 10 % and 3 m on the normal and combined flights; measured (issue 8,
+#: after modelling what ArduCopter does without GPS: the position estimate at the EKF origin in
+#: constant-position mode, AC_P_2D's error limit, AC_WPNav's S-curve time scaler, the AUTO
+#: takeoff's completion): flight time within 0.2-1.1 %, trajectory RMS 0.06 m (normal), 0.1-0.2 m
+#: (accel, engine, rc), 2.0 m (gps) and 2.5 m (combined). The combined flight meets the 3 m
+#: target but not robustly: its RMS comes from where the vehicle is along the route when the
+#: later faults start (tlm gains ~5 s on SITL during the accelerometer fault), and a 0.3 %
+#: change of the cruise speed moves it between 2.5 and 4.4 m.
 TOLERANCES = {
-    "normal_s11": (0.05, 0.3),
-    "gps_s12": (0.05, 6.0),
-    "accel_s13": (0.05, 0.6),
-    "engine_s14": (0.05, 0.6),
-    "rc_s15": (0.05, 1.0),
-    "combined_s21": (0.06, 13.0),
+    "normal_s11": (0.02, 0.2),
+    "gps_s12": (0.02, 3.0),
+    "accel_s13": (0.02, 0.4),
+    "engine_s14": (0.02, 0.6),
+    "rc_s15": (0.03, 0.4),
+    "combined_s21": (0.03, 3.0),
 }
 
 
@@ -49,8 +51,11 @@ def test_fidelity_within_documented_tolerances(results, name):
 
 
 def test_normal_flight_profiles_agree(results):
+    """Along the route tlm keeps within ~0.7 s of SITL (the AUTO takeoff completing before the
+    route starts, the S-curve time scaler and TLM_WP_LEG_K): altitude and speed on the common
+    time base agree (measured 0.26 m, 0.15 m/s; 0.52 m, 0.47 m/s before)."""
     r = results["normal_s11"]
-    assert r["altitude_rms_m"] < 1.0 and r["speed_rms_ms"] < 1.0
+    assert r["altitude_rms_m"] < 0.4 and r["speed_rms_ms"] < 0.3
     assert r["max_alt_m"]["tlm"] == pytest.approx(r["max_alt_m"]["sitl"], abs=1.0)
     assert r["imu_acc_std"]["tlm"] == pytest.approx(r["imu_acc_std"]["sitl"], rel=0.3)
 
@@ -89,6 +94,24 @@ def test_engine_fall_agrees(results, name):
     assert tlm["impact_speed_ms"] == pytest.approx(sitl["impact_speed_ms"], abs=1.0)
     assert tlm["roll_max_3s_deg"] == pytest.approx(sitl["roll_max_3s_deg"], abs=20.0)
     assert tlm["above_10m_after_end_s"] == pytest.approx(sitl["above_10m_after_end_s"], abs=1.5)
+
+
+@pytest.mark.parametrize("name", ["gps_s12", "combined_s21"])
+def test_gps_loss_flyaway_and_return_agree(results, name):
+    """GPS loss with FS_EKF_THRESH 0: dead reckoning for 15 s, then the EKF stops aiding, the
+    position controller's estimate is the EKF origin and the copter leans at ANGLE_MAX away
+    from its path until GPS returns, then flies back (docs/crosscheck.md). Measured gps_s12: top
+    speed 11.4 / 12.0 m/s (tlm / SITL), pitch 33 / 35 deg, path after the end 92 / 98 m,
+    trajectory RMS after the recovery 0.26 m (3.8 m before issue 8)."""
+    r = results[name]
+    f = [x for x in r["faults"] if x["type"] == "gps"][0]
+    tlm, sitl = f["tlm"], f["sitl"]
+    assert tlm["speed_max_ms"] == pytest.approx(sitl["speed_max_ms"], abs=1.0)
+    assert tlm["pitch_max_deg"] == pytest.approx(sitl["pitch_max_deg"], abs=3.0)
+    assert tlm["path_after_end_m"] == pytest.approx(sitl["path_after_end_m"], rel=0.15)
+    assert tlm["ekf_recovered_after_end_s"] < 1.0 and sitl["ekf_recovered_after_end_s"] < 1.0
+    assert r["trajectory_rms_settled_m"] < 0.5
+    assert r["altitude_rms_m"] < (0.6 if name == "gps_s12" else 1.5)
 
 
 def test_rc_fault_signature_matches(results):

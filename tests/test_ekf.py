@@ -328,6 +328,12 @@ def test_gps_loss_timeouts_constant_position_and_reset():
     assert np.all(cpos[during & (dt_lost <= 14.99)] == 0.0)
     assert np.all(cpos[during & (dt_lost >= 15.01)] == 1.0)
     assert np.all(out[during & (dt_lost >= 4.01), L.O_F_USING_GPS] == 0.0)
+    # stopping aiding resets the horizontal velocity to zero (EKF3's ResetVelocity outside
+    # absolute aiding; gps_s12.bin: XKF1 VN -3.12 -> 0.0006 m/s at "stopped aiding")
+    first = np.nonzero(cpos == 1.0)[0]
+    first = first[first > last][0]
+    assert np.abs(out[first - 1, L.O_VN : L.O_VN + 2]).max() > 0.5
+    assert np.abs(out[first, L.O_VN : L.O_VN + 2]).max() < 0.05
     # pinned near the last position while the vehicle flies on: large error before GPS returns
     err = np.linalg.norm(out[:, L.O_PN : L.O_PN + 2] - flight.pos[:, :2], axis=1)
     assert err[back - 1] > 10.0
@@ -339,8 +345,11 @@ def test_gps_loss_timeouts_constant_position_and_reset():
     vel_err = np.linalg.norm(out[back, L.O_VN : L.O_VN + 3] - flight.vel[back])
     assert vel_err < 0.2
     assert hpos[back] == 1.0 and cpos[back] == 0.0 and out[back, L.O_F_USING_GPS] == 1.0
-    assert ekf[0, L.POS_RESET_COUNT] == 2.0  # first fix + return from constant-position mode
-    assert np.sqrt(np.mean(err[back:] ** 2)) < 0.2
+    # first fix, entering constant-position mode, return from it
+    assert ekf[0, L.POS_RESET_COUNT] == 3.0
+    # (the constant-position phase leaves tilt and bias errors that take some seconds to go:
+    # 0.25 m RMS after the return since that phase starts from EKF3's reset variances)
+    assert np.sqrt(np.mean(err[back:] ** 2)) < 0.3
 
 
 def test_accel_failure_switches_primary_lane():

@@ -242,3 +242,32 @@ def test_crash_check_needs_two_seconds_of_all_conditions():
     assert not any(crash_check(c, g, 0.0025, cos_tilt, lean, 0.0, 0.0) for _ in range(900))
     c[C.LANDED] = 0.0
     assert not any(crash_check(c, g, 0.0025, cos_tilt, lean, 0.0, 12.0) for _ in range(900))
+
+
+def test_gps_loss_constant_position_mode_flies_away_and_back():
+    """ArduCopter with FS_EKF_THRESH 0 after 15 s without GPS (gps_s12.bin, combined_s21.bin):
+    EKF3 stops aiding, the AHRS has no position and AC_PosControl's estimate is the origin
+    (PSCN.PN = PSCE.PE = 0), the target is held at error_max (8.45 m) from it towards the
+    frozen path point, the velocity target never reached by the EKF's velocity keeps the lean
+    at ANGLE_MAX (30 deg); when GPS returns the estimate jumps to the GPS position and the
+    vehicle flies back to its path at WPNAV_SPEED plus the held feed-forward."""
+    log = _flight(("gps:100-140",))
+    rec = log.faults[0]
+    t0, t1 = rec["start_time_us"], rec["end_time_us"]
+    pn, pe, att = log.tables["PSCN"], log.tables["PSCE"], log.tables["ATT"]
+    lost = _window(pn, t0 + 15.5e6, t1 - 0.5e6)
+    assert len(lost) > 200 and (lost.PN == 0.0).all()
+    assert (_window(pe, t0 + 15.5e6, t1 - 0.5e6).PE == 0.0).all()
+    assert (_window(pn, t0, t0 + 14.5e6).PN != 0.0).all()  # dead reckoning before that
+    tgt = np.hypot(lost.TPN.to_numpy(), _window(pe, t0 + 15.5e6, t1 - 0.5e6).TPE.to_numpy())
+    np.testing.assert_allclose(tgt, 8.45, atol=0.01)
+    a = _window(att, t0 + 18e6, t1)
+    lean = np.degrees(np.arccos(np.cos(np.radians(a.DesPitch)) * np.cos(np.radians(a.DesRoll))))
+    assert np.mean(np.abs(lean - 30.0) < 1.0) > 0.75
+    # GPS back: the estimate is the vehicle's position again, the target 8.45 m from it
+    back = _window(pn, t1 + 1e6, t1 + 3e6)
+    assert (np.abs(back.PN) > 10.0).all()
+    # ... and the vehicle returns to its path: a minute later it flies the mission at cruise speed
+    gps = log.tables["GPS"]
+    cruise = _window(gps, t0 - 20e6, t0 - 10e6).Spd.mean()
+    assert _window(gps, t1 + 60e6, t1 + 70e6).Spd.mean() == pytest.approx(cruise, abs=0.5)

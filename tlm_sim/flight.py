@@ -217,6 +217,12 @@ def run_flight(
         for k in range(3):
             pos[k] = e[EK.PN + k]
             vel[k] = e[EK.VN + k]
+        if e[EK.F_CONST_POS] != 0.0:
+            # no horizontal position from the EKF (constant-position mode): AC_PosControl's
+            # estimate is then the EKF origin, as the AHRS call fails and leaves it at zero
+            # (gps_s12.bin: PSCN.PN / PSCE.PE are 0.000 from "stopped aiding" to "is using GPS")
+            pos[0] = 0.0
+            pos[1] = 0.0
         for k in range(4):
             q[k] = e[EK.QW + k]
         ib = S.IMU_BASE + int(e[EK.IMU_INDEX]) * S.IMU_STRIDE
@@ -249,7 +255,7 @@ def run_flight(
             _log_imu(bufs, counts, t_us, s, scfg)
         if tick % 40 == 0:  # 10 Hz messages
             _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt,
-                      throttle)
+                      throttle, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
@@ -321,7 +327,8 @@ def _log_imu(bufs, counts, t_us, s, scfg):
 
 
 @tick_jit
-def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt, throttle):
+def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt, throttle,
+              pos):
     """The 10 Hz messages: RATE, VIBE, ATT, BARO, MAG, RCIN, RCOU, XKF1, XKF4, CTUN, BAT, POS,
     SIM, PSCN/E/D."""
     d = L.RAD2DEG
@@ -483,9 +490,9 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
             if ax < 2:
                 b[r, 1] = c[C.PXY_POS_T + ax]
                 b[r, 2] = c[C.PXY_POS_T + ax]
-                b[r, 4] = c[C.PXY_VEL_T + ax]
+                b[r, 4] = c[C.PXY_VEL_FF + ax]
                 b[r, 5] = c[C.PXY_VEL_T + ax]
-                b[r, 7] = c[C.PXY_ACC_T + ax]
+                b[r, 7] = c[C.PXY_ACC_FF + ax]
                 b[r, 8] = c[C.PXY_ACC_T + ax]
             else:
                 b[r, 1] = c[C.PZ_POS_T]
@@ -494,7 +501,7 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
                 b[r, 5] = c[C.PZ_VEL_T]
                 b[r, 7] = -c[C.PZ_ACC_T]
                 b[r, 8] = -c[C.PZ_ACC_T]
-            b[r, 3] = e[EK.PN + ax]
+            b[r, 3] = pos[ax]
             b[r, 6] = e[EK.VN + ax]
             b[r, 9] = x[X.AN + ax]
 

@@ -29,6 +29,49 @@ PARM), flown in tlm with the sidecar's seed, and aligned at arming. Definitions 
 `tlm_process/crosscheck/metrics.py`. Targets of the cross-check issue: flight time within 10 %
 and trajectory RMS <= 3 m on the normal and combined flights.
 
+## GPS loss: what ArduCopter does, and tlm with it
+
+From gps_s12.bin (GPS off 88.35-122.54 s, FS_EKF_THRESH 0) and combined_s21.bin (71.66-100.91 s),
+read with `tlm_sim.flightlog.read_log` (XKF1/XKV1/XKF4, PSCN/PSCE/PSCD, ATT, SIM, MSG):
+
+1. **Dead reckoning, 15 s.** EKF3 keeps absolute aiding (its position keeps integrating the
+   IMU, the error grows to 3-6 m) and the copter follows the mission on it.
+2. **"EKF3 IMUx stopped aiding"** (103.42 s, 15.07 s after the loss: EKF3's tilt-drift time).
+   EKF3 resets the horizontal velocity to zero (XKF1 VN -3.12 -> 0.0006 m/s) and the
+   position/velocity variances to EK3_POSNE_M_NSE^2 / EK3_VELNE_M_NSE^2 (XKV1 0.25 / 0.09),
+   then fuses a constant position (EK3_NOAID_M_NSE). Its XKF1 position also jumps (to 0.27 of
+   its value in gps_s12, 0.42-0.45 in combined_s21, per core), which we could not explain from
+   EKF3's code; tlm keeps the position there.
+3. **No position for the controller.** The EKF reports no position in constant-position mode,
+   and AC_PosControl's estimate stays at zero, the EKF origin: PSCN.PN = PSCE.PE = 0.000 for the
+   whole phase. The path target (then -136.9 m north) is cut to AC_P_2D's error_max, 8.45 m
+   from the estimate (the error that asks for WPNAV_SPEED 6 m/s at PSC_POSXY_P 1, WPNAV_ACCEL
+   2.5 m/s^2): TPN -8.45 m, TVN = DVN - 6 = -9.21 m/s. AC_WPNav's S-curve time scaler
+   (0.05 + (track speed - P x track error) / desired speed, low-passed over WPNAV_ACCEL /
+   WPNAV_JERK = 2.5 s) falls to 0: the path point freezes while the desired velocity keeps
+   its -3.21 m/s. The EKF velocity never reaches -9.21 m/s, so the copter holds ANGLE_MAX
+   (30 deg, TAN -5.66 m/s^2) towards the origin-to-path-point direction for 19 s, up to the
+   drag-limited 12 m/s: 200+ m away from its path.
+4. **"EKF3 IMUx is using GPS"** (0.28 s after GPS returns): position and velocity reset to
+   GPS. The estimate jumps to the true position; the target is again cut to 8.45 m towards
+   the path point, which starts moving again (scaler back to 1); the copter flies back at 6 m/s
+   plus the feed-forward (2.64 m/s net in gps_s12, 7.7 m/s in combined_s21) and meets the
+   path ~35 s later.
+
+tlm does each step (`tlm_sim/ekf/fusion.py` `stop_aiding`, `tlm_sim/flight.py` position
+estimate, `tlm_sim/control/position.py` error limits (also the vertical ones: combined_s21's
+PSCD target is dragged up by the accelerometer fault's climb and follows the copter down
+1.625 m below), `tlm_sim/control/wpnav.py` `track_scaler`). With the S-curve time scaler the
+normal flight also keeps SITL's pace (TLM_WP_LEG_K refitted to 0.946); the AUTO takeoff now
+runs to its altitude and dwells 0.8 s at the first waypoint before the route starts, as the
+six logs show ("Mission: 2 WP" 1.8-2.2 s after AUTO, "Reached command #2" 0.76-0.86 s later).
+Before this, the combined flight's trajectory RMS was 10.5 m (gps_s12 4.35 m, the copter
+dead-reckoning at a constant EKF position and flying back at 26 m/s target speed).
+Left: tlm's top speed at 30 deg is 11.4 m/s against SITL's 12.0 (the flyaway ends ~20 m
+shorter), and the accelerometer fault lets tlm's path target advance faster than SITL's (it
+gains 2.5 s in accel_s13, ~5 s in combined_s21), so that the later faults of the combined
+flight catch the copter at other points of its route.
+
 """
 
 

@@ -56,6 +56,14 @@ in tlm. Note column: *close* = within {rel:.0%} of SITL's value or an absolute f
 3 m, 5 deg, 1 m/s; 0.02 for fractions); flags, NSats and the mode reason must be the *same*; ERR
 counts compare presence (both > 0 or both 0).
 
+**GPS loss** (issue 8): after EKF3's 15 s of dead reckoning it stops aiding (velocity reset to
+zero), ArduCopter's position controller then has no position (its estimate stays at the EKF
+origin, PSCN.PN = 0), holds its target 8.45 m from it and leans at ANGLE_MAX away from the
+path until GPS returns, when it flies back. tlm models each step; the log evidence and the
+ArduPilot facts are in `docs/crosscheck.md` ("GPS loss"). The EKF errors below stay lower than
+SITL's because EKF3's XKF1 position also jumps towards the origin when it stops aiding, which
+tlm does not reproduce (no mechanism found).
+
 """
 
 

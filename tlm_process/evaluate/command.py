@@ -22,7 +22,7 @@ from tlm_process.argtypes import number, whole_number
 __all__ = ["add_parser", "run"]
 
 MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
-               "RandomForest", "RandomTree", "CNN", "WindowHGB")
+               "RandomForest", "RandomTree", "CNN", "WindowHGB", "WindowHGB60", "CentredHGB")
 TABLE_NAMES = ("GPS", "IMU", "RATE", "VIBE")
 
 DESCRIPTION = """\

@@ -64,7 +64,7 @@ __all__ = [
 PAPER_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR",
                                  "ZeroR", "J48", "RandomForest", "RandomTree")
 #: Models that look at a window of consecutive rows (beyond the paper; :mod:`.temporal`).
-TIME_MODELS: tuple[str, ...] = ("WindowHGB",)
+TIME_MODELS: tuple[str, ...] = ("WindowHGB", "WindowHGB60", "CentredHGB")
 #: Every model ``tlm evaluate --models all`` runs.
 ALL_MODELS: tuple[str, ...] = PAPER_MODELS + ("CNN",) + TIME_MODELS
 
@@ -455,7 +455,7 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
         if cnn_epochs is not None:
             kw["epochs"] = cnn_epochs
         return RowImageCNN(**kw)
-    if name == "WindowHGB":
+    if name in TIME_MODELS:
         from tlm_process.evaluate.temporal import window_hgb
 
         return window_hgb(seed=s)

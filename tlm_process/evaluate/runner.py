@@ -30,7 +30,12 @@ from tlm_process.evaluate.metrics import (
 )
 from tlm_process.evaluate.models import ALL_MODELS, TIME_MODELS, make_model
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
-from tlm_process.evaluate.temporal import CIRCULAR_DEG, WindowFeatures, window_features
+from tlm_process.evaluate.temporal import (
+    CIRCULAR_DEG,
+    WindowFeatures,
+    window_features,
+    window_spec_for,
+)
 
 __all__ = ["evaluate", "resolve_models", "window_spec"]
 
@@ -56,8 +61,9 @@ def resolve_models(text: str | Sequence[str]) -> list[str]:
     return out
 
 
-def window_spec(ds: EvalDataset, table: str) -> WindowFeatures:
-    """Window features for ``table``: circular periods in the table's (scaled) units."""
+def window_spec(ds: EvalDataset, table: str, model: str = "WindowHGB") -> WindowFeatures:
+    """Window features of window model ``model`` for ``table``: circular periods in the
+    table's (scaled) units."""
     circ = {}
     scaled = bool((ds.report.get("scaling") or {}).get("applied", True))
     for f, period in CIRCULAR_DEG.get(table, {}).items():
@@ -68,7 +74,7 @@ def window_spec(ds: EvalDataset, table: str) -> WindowFeatures:
             circ[f] = period / (hi - lo) if hi > lo else period
         else:
             circ[f] = period
-    return WindowFeatures(circular=circ)
+    return window_spec_for(model, circ)
 
 
 def _folds(df: pd.DataFrame, split: str, seed: int, folds: int | None,
@@ -138,20 +144,19 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             fold_list = _folds(df, split, seed, folds, test_frac)
         except ValueError as exc:
             raise EvaluateError(f"{t}: {exc}") from None
-        spec = window_spec(ds, t)
-        needs_window = any(m in TIME_MODELS for m in models)
-        X_win = window_features(df, feats, spec)[0] if needs_window else None
+        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
+        X_win = {m: window_features(df, feats, sp)[0] for m, sp in specs.items()}
         xt = transfer.get(t) if transfer is not None else None
         if xt is not None:
             yt = xt["label"].to_numpy(np.int64)
             Xt_rows = xt[feats].to_numpy(np.float64)
-            Xt_win = window_features(xt, feats, spec)[0] if needs_window else None
+            Xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
         say(f"[{t}] {len(df):,} rows, {len(pd.unique(groups))} flights, {len(feats)} features; "
             f"{fold_list[0].name if len(fold_list) == 1 else f'{len(fold_list)} folds'}"
             + (f"; transfer {len(xt):,} rows" if xt is not None else ""))
         results[t] = {}
         for name in models:
-            X = X_win if name in TIME_MODELS else X_rows
+            X = X_win[name] if name in TIME_MODELS else X_rows
             cm = np.zeros((len(CLASS_NAMES),) * 2, dtype=np.int64)
             fit_s = pred_s = 0.0
             n_train = n_test = 0
@@ -191,7 +196,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                                       progress=lambda s, t=t: say(f"[{t}]   {s}"),
                                       cnn_epochs=cnn_epochs)
                     _fit(last, X, y, groups)
-                Xt = Xt_win if name in TIME_MODELS else Xt_rows
+                Xt = Xt_win[name] if name in TIME_MODELS else Xt_rows
                 r["transfer"] = classification_metrics(confusion_matrix(yt, last.predict(Xt)))
             results[t][name] = r
             msg = (f"[{t}] {name}: accuracy {100 * r['accuracy']:.2f}%, macro-F1 "

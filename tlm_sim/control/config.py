@@ -99,7 +99,7 @@ def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -
     g[C.G_FS_THR_VALUE] = p.get("FS_THR_VALUE", 975.0)
     g[C.G_ARM_TIME] = p.get("TLM_ARM_TIME", 10.0)
     g[C.G_HOVER_LEARN] = p.get("MOT_HOVER_LEARN", 2.0)
-    g[C.G_WP_LEG_K] = p.get("TLM_WP_LEG_K", 0.94)
+    g[C.G_WP_LEG_K] = p.get("TLM_WP_LEG_K", 0.946)
     g[C.G_THR_MIX_MIN] = p.get("ATC_THR_MIX_MIN", 0.1)
     g[C.G_THR_MIX_MAX] = p.get("ATC_THR_MIX_MAX", 0.5)
     g[C.G_FS_CRASH_CHECK] = p.get("FS_CRASH_CHECK", 1.0)
@@ -119,7 +119,27 @@ def build_control_config(p: Mapping[str, float], loop_hz: float | None = None) -
     tc = p.get("ATC_ANG_LIM_TC", 1.0)
     g[C.G_ANG_LIM_ALPHA] = 1.0 if tc <= 0.0 else dt / (dt + tc)
     g[C.G_YAW_ERR_MAX] = yaw_error_max(g[C.G_RAT_P + 2], g[C.G_ANG_P + 2], g[C.G_ACCEL_MAX + 2])
+    g[C.G_POSXY_ERR_MAX] = inv_sqrt_ctrl(g[C.G_WP_SPEED], g[C.G_POSXY_P], g[C.G_WP_ACCEL])
+    g[C.G_POSZ_ERR_UP] = inv_sqrt_ctrl(g[C.G_WP_SPEED_UP], g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z])
+    g[C.G_POSZ_ERR_DN] = inv_sqrt_ctrl(g[C.G_WP_SPEED_DN], g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z])
     return g
+
+
+def inv_sqrt_ctrl(output: float, p: float, accel: float) -> float:
+    """Error at which the square-root controller (gain p, acceleration accel) outputs
+    ``output``: AC_P_2D's error_max, beyond which AC_PosControl moves its target towards the
+    vehicle. For the position controller with WPNAV_SPEED 6 m/s, PSC_POSXY_P 1 and WPNAV_ACCEL
+    2.5 m/s^2 it is 8.45 m, the distance at which gps_s12.bin's PSCN/PSCE target sits from the
+    position estimate while the EKF has no position (inf: no limit)."""
+    if output <= 0.0:
+        return math.inf
+    if accel <= 0.0:
+        return output / p if p > 0.0 else math.inf
+    if p <= 0.0:
+        return output * output / (2.0 * accel)
+    if output <= accel / p:
+        return output / p
+    return output * output / (2.0 * accel) + accel / (2.0 * p * p)
 
 
 def yaw_error_max(rate_p: float, angle_p: float, accel_max: float) -> float:

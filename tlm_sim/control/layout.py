@@ -103,7 +103,9 @@ AIR_RHO_RATIO = 123  # air density / 1.225 at the vehicle (motor density compens
 PATH_STOP_A = 124  # acceleration limit of that stop [m/s^2]
 ALTHOLD_LEAN = 125  # lean-angle limit from the throttle headroom, filtered [rad] (see position)
 PXY_LIMIT = 126  # last horizontal acceleration target before it was limited, NE (2; 0: none)
-N_CONTROL_STATE = 128
+TRACK_K = 128  # AC_WPNav's S-curve time scaler (track_scalar_dt), 0..1
+TAKEOFF_DONE_T = 129  # time since the AUTO takeoff reached its altitude [s] (-1: not yet)
+N_CONTROL_STATE = 130
 
 # sub-modes of AUTO / RTL / LAND
 SUB_NONE = 0
@@ -208,4 +210,7 @@ G_RHO_RATIO_GRAD = 90  # its change per metre of height above home [1/m]
 G_BATT_SAG_HOVER = 91  # battery monitor's resting-voltage estimate minus voltage at hover [V]
 G_ANG_LIM_ALPHA = 92  # ATC_ANG_LIM_TC low-pass coefficient at the loop rate
 G_YAW_ERR_MAX = 93  # largest heading error the attitude controller acts on [rad]
-N_CONTROL_CFG = 94
+G_POSXY_ERR_MAX = 94  # largest horizontal position error the position controller acts on [m]
+G_POSZ_ERR_UP = 95  # largest vertical position error (target above) it acts on [m]
+G_POSZ_ERR_DN = 96  # largest vertical position error (target below) it acts on [m]
+N_CONTROL_CFG = 97

@@ -56,6 +56,13 @@ ARMING_DELAY_S = 2.0
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 LAND_MAYBE_S = 0.2
 LAND_WITH_DELAY_S = 4.0  # failsafe LAND pauses this long before descending
+# AUTO after the GUIDED takeoff: the reference driver switches at ~91.5 % of the takeoff
+# altitude (CTUN.Alt at the MODE change: 0.908-0.920 of the first waypoint's altitude in the
+# six reference logs); the mission's NAV_TAKEOFF then completes when the takeoff's altitude
+# target is reached ("Mission: 2 WP" 1.8-2.2 s after AUTO, as DVD reaches 0) and the first
+# waypoint, at home and that altitude, is "reached" 0.76-0.86 s later, when the route starts
+TAKEOFF_AUTO_FRAC = 0.915
+TAKEOFF_WP_DWELL_S = 0.8
 HOVER_LEARN_SIN_LEAN = math.sin(math.radians(5.0))  # hover learning: |pitch| < 5 deg
 HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
 
@@ -234,16 +241,24 @@ def vehicle_step(
     yaw_rate_ff = 0.0
     land_vertical = False
     if sub == C.SUB_TAKEOFF:
-        heading, done = path_update(c, g, seg, 2, pos, 0.0)
-        if -pos[2] >= 0.95 * c[C.TAKEOFF_ALT]:
-            # the driver's "altitude reached" -> AUTO, first leg from here to waypoint 1
+        # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
+        # runs it outside AC_WPNav)
+        heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
+        if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
+            # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
             set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
-            c[C.SUBMODE] = C.SUB_WP
-            c[C.SUB_TIMER] = 0.0
-            path_start(c)
-            c[C.PATH_V] = 0.0
+            c[C.TAKEOFF_DONE_T] = -1.0
+        if c[C.MODE] == C.MODE_AUTO and done > 0.0:
+            if c[C.TAKEOFF_DONE_T] < 0.0:
+                c[C.TAKEOFF_DONE_T] = 0.0
+            c[C.TAKEOFF_DONE_T] += dt
+            if c[C.TAKEOFF_DONE_T] >= TAKEOFF_WP_DWELL_S:
+                # first waypoint reached: the route starts from rest
+                c[C.SUBMODE] = C.SUB_WP
+                c[C.SUB_TIMER] = 0.0
+                path_start(c)
     elif sub == C.SUB_WP:
-        heading, done = path_update(c, g, path, n_path, pos, 0.0)
+        heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
         if not math.isnan(heading):
             yaw_cmd = heading
             yaw_rate_ff = c[C.YAW_RATE_CMD]
@@ -254,7 +269,7 @@ def vehicle_step(
                 c[C.WP_REACHED] += 1.0
                 _start_rtl(c, g, pos, vel, seg)
     elif sub == C.SUB_RTL_CLIMB:
-        heading, done = path_update(c, g, seg, 2, pos, 0.0)
+        heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, True)
         if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
             c[C.SUBMODE] = C.SUB_RTL_RETURN
             c[C.SUB_TIMER] = 0.0
@@ -262,7 +277,7 @@ def vehicle_step(
             path_start(c)
     elif sub == C.SUB_RTL_RETURN:
         speed_cap = g[C.G_RTL_SPEED]
-        heading, done = path_update(c, g, seg, 2, pos, speed_cap)
+        heading, done = path_update(c, g, seg, 2, pos, vel, speed_cap, True)
         if done > 0.0 and pos[0] * pos[0] + pos[1] * pos[1] <= g[C.G_WP_RADIUS] ** 2:
             c[C.SUBMODE] = C.SUB_RTL_LOITER
             c[C.SUB_TIMER] = 0.0

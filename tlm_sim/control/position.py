@@ -100,11 +100,22 @@ def xy_update(c, g, pos, vel, cy, sy):
     accel_max = g[C.G_ACCEL_XY_MAX]
     if lean < g[C.G_ANGLE_MAX]:
         accel_max = GRAVITY * math.tan(lean)
-    # position -> velocity (square-root shaped along the error vector)
+    # position -> velocity (square-root shaped along the error vector, PSC_POSXY_P and
+    # WPNAV_ACCEL). As AC_P_2D, an error beyond the one that asks for WPNAV_SPEED is cut to that
+    # length and the target moved to match: after a jump of the position estimate (the EKF
+    # stopping or resuming aiding) the vehicle flies towards its target at the feed-forward
+    # plus at most WPNAV_SPEED.
     en = c[C.PXY_POS_T] - pos[0]
     ee = c[C.PXY_POS_T + 1] - pos[1]
     dist = math.sqrt(en * en + ee * ee)
-    vcorr = sqrt_ctrl(dist, g[C.G_POSXY_P], 0.5 * g[C.G_WP_ACCEL] + 1.0, dt)
+    emax = g[C.G_POSXY_ERR_MAX]
+    if dist > emax:
+        en *= emax / dist
+        ee *= emax / dist
+        dist = emax
+        c[C.PXY_POS_T] = pos[0] + en
+        c[C.PXY_POS_T + 1] = pos[1] + ee
+    vcorr = sqrt_ctrl(dist, g[C.G_POSXY_P], g[C.G_WP_ACCEL], dt)
     if dist > 1e-9:
         vcn = vcorr * en / dist
         vce = vcorr * ee / dist
@@ -218,6 +229,15 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
     vibe = c[C.VIBE_COMP] != 0.0
     v_up_est = -c[C.VCF_VEL] if vibe else -vd
     err_up = -(c[C.PZ_POS_T] - pd)  # positive when the target is above
+    # as AC_P_1D: the target stays within the errors that ask for WPNAV_SPEED_UP / _DN
+    # (combined_s21.bin: during the accelerometer fault's climb PSCD's target is dragged up
+    # with the vehicle and then follows it down 1.625 m below, the error asking for 1.5 m/s)
+    if err_up > g[C.G_POSZ_ERR_UP]:
+        err_up = g[C.G_POSZ_ERR_UP]
+        c[C.PZ_POS_T] = pd - err_up
+    elif err_up < -g[C.G_POSZ_ERR_DN]:
+        err_up = -g[C.G_POSZ_ERR_DN]
+        c[C.PZ_POS_T] = pd - err_up
     v_up = sqrt_ctrl(err_up, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt) - c[C.PZ_VEL_FF]
     v_up = min(max(v_up, -dn_max), up_max)
     c[C.PZ_VEL_T] = -v_up

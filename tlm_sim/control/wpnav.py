@@ -8,7 +8,8 @@ end; on the short (~13 m) legs of Algorithm 1 missions that caps the cruise spee
 WPNAV_SPEED (the reference SITL logs cruise at ~3.4 m/s with WPNAV_SPEED 6 m/s). We model
 that cap as v_leg = K * (L * sqrt(J) / 2)^(2/3), the peak speed of a jerk-limited rest-to-rest
 move over the leg length L, with K (TLM_WP_LEG_K) fitted to the reference logs.
-The target waits for the vehicle when it falls behind (position error beyond 2 m).
+When the vehicle falls behind, the target's progress slows as AC_WPNav's S-curve time does
+(its track scaler, see :func:`path_update`); the feed-forwards keep their values.
 
 Corners. ArduCopter does not stop at an intermediate waypoint: it starts the next leg's S-curve
 while the current one decelerates, so that the current leg's speed ramps down (jerk-limited)
@@ -258,6 +259,35 @@ def path_start(c):
     c[C.PATH_V] = 0.0
     c[C.PATH_A] = 0.0
     c[C.PATH_STOP_T] = -1.0
+    c[C.TRACK_K] = 1.0
+
+
+@tick_jit
+def track_scaler(c, g, pos, vel):
+    """AC_WPNav's S-curve time scaler: the fraction of real time [0..1] by which the target's
+    progress advances this tick.
+
+    Along the desired (feed-forward) velocity u: 0.05 + (vehicle speed along u - PSC_POSXY_P x
+    position error along u) / |u|, kept within 0..1 and low-passed with the time constant
+    WPNAV_ACCEL / WPNAV_JERK (2.5 s). A vehicle that keeps up gives 1; one that lags gives
+    less, and when the position error is large (after a jump of the position estimate) the
+    target stops while the feed-forward velocity keeps its value: gps_s12.bin's PSCN shows the
+    desired position frozen and DVN held at -3.21 m/s for the 19 s the EKF had no position.
+    Written without a square root: the ratio is (v.u - P e.u) / |u|^2.
+    """
+    un = c[C.PXY_VEL_FF]
+    ue = c[C.PXY_VEL_FF + 1]
+    ud = c[C.PZ_VEL_FF]
+    u2 = un * un + ue * ue + ud * ud
+    k = 1.0
+    if u2 > 1e-12:
+        e_u = ((c[C.PXY_POS_T] - pos[0]) * un + (c[C.PXY_POS_T + 1] - pos[1]) * ue
+               + (c[C.PZ_POS_T] - pos[2]) * ud)
+        v_u = vel[0] * un + vel[1] * ue + vel[2] * ud
+        k = min(max(0.05 + (v_u - g[C.G_POSXY_P] * e_u) / u2, 0.0), 1.0)
+    tc = g[C.G_WP_ACCEL] / g[C.G_WP_JERK] if g[C.G_WP_JERK] > 0.0 else 1.0
+    c[C.TRACK_K] += (k - c[C.TRACK_K]) * min(g[C.G_DT] / tc, 1.0)
+    return c[C.TRACK_K]
 
 
 @tick_jit
@@ -289,15 +319,20 @@ def stop_profile(g, v0, tau, amax):
 
 
 @tick_jit
-def path_update(c, g, path, n, pos, speed_cap):
+def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     """Advance the target along path[0:n] (prepared by prepare_path) and set the position
-    controller targets and feed-forwards. pos: EKF position NED [m]; speed_cap [m/s] (<= 0:
-    none). Sets c[YAW_RATE_CMD] to the heading's rate [rad/s] (0 without a heading).
+    controller targets and feed-forwards. pos, vel: the position controller's position and
+    velocity estimates NED [m, m/s]; speed_cap [m/s] (<= 0: none). Sets c[YAW_RATE_CMD] to the
+    heading's rate [rad/s] (0 without a heading).
+
+    With scale_time (AC_WPNav legs) the target's speed profile runs on the S-curve time of
+    :func:`track_scaler`; the feed-forwards are the profile's speed and acceleration at that
+    time.
 
     Returns (heading of the horizontal velocity [rad], nan for a vertical leg; 1.0 when the end
     is reached).
     """
-    dt = g[C.G_DT]
+    dt = g[C.G_DT] * track_scaler(c, g, pos, vel) if scale_time else g[C.G_DT]
     i = int(c[C.WP_INDEX])
     if i >= n:
         i = n - 1
@@ -323,13 +358,6 @@ def path_update(c, g, path, n, pos, speed_cap):
         q = v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])
         if q < v_allow * v_allow:
             v_allow = math.sqrt(q)
-    # the target waits for a vehicle that falls behind (distance to the last target)
-    en = c[C.PXY_POS_T] - pos[0]
-    ee = c[C.PXY_POS_T + 1] - pos[1]
-    ed = c[C.PZ_POS_T] - pos[2]
-    err2 = en * en + ee * ee + ed * ed
-    if err2 > 4.0:
-        v_allow *= max(0.0, 1.0 - (math.sqrt(err2) - 2.0) / 3.0)
     # speed: a jerk-limited (WPNAV_JERK) tracker of the allowed speed, and at the path's end the
     # S-curve's own jerk-limited stop, started when the end is its stopping distance away
     v = c[C.PATH_V]
@@ -367,7 +395,7 @@ def path_update(c, g, path, n, pos, speed_cap):
             a = 0.0
     else:
         v_new = min(v_allow, v + a_max * dt) if v_allow > v else max(v_allow, v - a_max * dt)
-        a = (v_new - v) / dt
+        a = (v_new - v) / dt if dt > 0.0 else 0.0
     v = v_new
     c[C.PATH_A] = a
     c[C.PATH_V] = v

@@ -90,6 +90,7 @@ from tlm_sim.ekf.layout import (
     MAG_TR,
     NS,
     OUT_EPD,
+    OUT_EPN,
     OUT_EVD,
     P0,
     PD,
@@ -163,6 +164,41 @@ def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     e[T_POS_PASS] = t
     e[T_VEL_PASS] = t
     e[T_GPS_FUSED] = t
+
+
+@tick_jit
+def stop_aiding(e, cfg, t):
+    """EKF3 entering constant-position mode (aiding NONE after the tilt-drift time without GPS).
+
+    As EKF3's setAidingMode with its ResetVelocity/ResetPosition for a non-absolute mode: the
+    horizontal velocity is set to zero with variance EK3_VELNE_M_NSE^2, the horizontal position
+    is kept as the last known position (EK3_POSNE_M_NSE^2 variance) that the constant-position
+    pseudo-measurement then holds, and the output (what controllers and logs read) is set to
+    the filter state on both. The reference logs show it: at "EKF3 IMUx stopped aiding" XKF1
+    VN/VE drop to 0.000 and XKV1's velocity/position variances to 0.09 / 0.25 (gps_s12 at
+    103.35 s, combined_s21 at 86.82 s).
+    """
+    e[VEL_RESET_DN] = -filter_now(e, 3)
+    e[VEL_RESET_DE] = -filter_now(e, 4)
+    for col in range(2):
+        # velocity: filter and output to zero
+        shift_output(e, 3 + col, -e[VN + col])
+        e[OUT_EPN + 3 + col] = 0.0
+        # position: output to the filter's
+        dp = e[OUT_EPN + col]
+        shift_output(e, col, dp)
+        e[OUT_EPN + col] = 0.0
+    e[POS_RESET_COUNT] += 1.0
+    e[POS_RESET_DN] = 0.0
+    e[POS_RESET_DE] = 0.0
+    e[VEL_RESET_COUNT] += 1.0
+    e[VEL_RESET_DD] = 0.0
+    reset_block(e, ES_VEL, 2, cfg[C_VELNE_NSE] ** 2)
+    reset_block(e, ES_POS, 2, cfg[C_POSNE_NSE] ** 2)
+    e[AID_MODE] = AID_NONE
+    e[CONSTPOS_N] = e[PN]
+    e[CONSTPOS_E] = e[PE]
+    e[T_CONSTPOS] = t - cfg[C_CONSTPOS_DT]
 
 
 @tick_jit

@@ -20,7 +20,6 @@ import math
 from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.core import (
     buffer_push,
-    filter_now,
     output_track,
     predict_covariance,
     propagate,
@@ -33,6 +32,7 @@ from tlm_sim.ekf.fusion import (
     lane_fuse_constpos,
     lane_fuse_gps,
     lane_fuse_mag,
+    stop_aiding,
     update_flags,
 )
 from tlm_sim.ekf.layout import (
@@ -343,10 +343,7 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     if e[AID_MODE] == AID_ABSOLUTE:
         drift = cfg[C_TILT_DRIFT]
         if t - e[T_POS_PASS] > drift and t - e[T_VEL_PASS] > drift:
-            e[AID_MODE] = AID_NONE
-            e[CONSTPOS_N] = filter_now(e, 0)
-            e[CONSTPOS_E] = filter_now(e, 1)
-            e[T_CONSTPOS] = t - cfg[C_TARGET_DT]
+            stop_aiding(e, cfg, t)
     if e[AID_MODE] == AID_NONE:
         lane_fuse_constpos(e, cfg, t, armed)
     update_flags(e, cfg, t)
