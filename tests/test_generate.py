@@ -7,7 +7,9 @@ failsafe sends the copter home at once (~100 s simulated, well under a second ea
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import json
+import math
 import os
 import re
 import shutil
@@ -23,8 +25,10 @@ from tlm_process.generate import (
     generate,
     read_header,
     read_journal,
+    runner,
     scenario_from_manifest,
 )
+from tlm_process.generate.executors import ExecutorHandle
 from tlm_process.generate.parts import fault_table, table_part, to_parquet_bytes
 from tlm_process.generate.writer import DatasetWriter
 
@@ -187,7 +191,7 @@ def test_target_fault_ratio_sets_lambda_from_pilot_flights(dataset, tmp_path):
     fault = sum(entries[i]["summary"]["gps_fault_rows"] for i in (0, 1))
     rows = sum(entries[i]["summary"]["gps_rows"] for i in (0, 1))
     ds = tmp_path / "g"
-    rep = _gen(ds, n=2, target_fault_ratio=0.4, pilot_flights=2)
+    rep = _gen(ds, n=2, target_fault_ratio=0.4, pilot_flights=2, pilot_rounds=1)
     assert rep.alpha_pilot == pytest.approx(fault / rows)
     assert rep.lam == pytest.approx(0.4 / (fault / rows)) and rep.lam > 1
     header = read_header(ds)
@@ -201,6 +205,40 @@ def test_target_fault_ratio_sets_lambda_from_pilot_flights(dataset, tmp_path):
         assert abs(new_hold - old_hold * rep.lam) <= 0.15 + 0.05 * rep.lam  # 0.1 s rounding
     again = _gen(ds, n=3, target_fault_ratio=0.4, pilot_flights=2)  # no new pilot
     assert again.ok == 1 and again.lam == rep.lam and again.alpha_pilot == rep.alpha_pilot
+
+
+def test_next_lambda_secant_hits_a_power_law():
+    """share = c lambda^b: one secant step from two measured points gives the exact lambda."""
+    def share(lam):
+        return 0.1 * lam**0.7
+
+    pts = [(1.0, share(1.0)), (4.0, share(4.0))]
+    lam = runner._next_lambda(pts, 0.3)
+    assert share(lam) == pytest.approx(0.3, rel=1e-12)
+    # flat or falling share: Eq. 5 from the last point, within a factor 4 of it
+    assert runner._next_lambda([(1.0, 0.2), (2.0, 0.2)], 0.4) == pytest.approx(4.0)
+    assert runner._next_lambda([(1.0, 0.01), (2.0, 0.001)], 0.5) == pytest.approx(8.0)
+
+
+def test_pilot_rounds_correct_eq5_for_a_saturating_share(monkeypatch):
+    """The fault share saturates with lambda (faults end missions early): Eq. 5's one step
+    undershoots, further pilot rounds land within the tolerance and are all recorded."""
+    calls = []
+
+    def fake_share(opts, handle, lam, progress):
+        calls.append(lam)
+        return 1.0 - math.exp(-0.1 * lam)
+
+    monkeypatch.setattr(runner, "_pilot_share", fake_share)
+    opts = GenerateOptions(out=Path("unused"), flights=1, config=SHORT, pilot_rounds=4)
+    lam, alpha, points = runner._pilot_lambda(opts, None, 0.4, False)
+    assert alpha == pytest.approx(1.0 - math.exp(-0.1))
+    assert points[1][0] == pytest.approx(0.4 / alpha)  # round 2 flies Eq. 5's lambda
+    assert points[1][1] < 0.4 * (1 - runner.PILOT_TOLERANCE)  # ... which undershoots
+    assert 1.0 - math.exp(-0.1 * lam) == pytest.approx(0.4, rel=runner.PILOT_TOLERANCE)
+    assert [p[0] for p in points] == calls and len(points) <= 4
+    one = GenerateOptions(out=Path("unused"), flights=1, config=SHORT, pilot_rounds=1)
+    assert runner._pilot_lambda(one, None, 0.4, False)[0] == pytest.approx(0.4 / alpha)
 
 
 def crashing_job(job):
@@ -320,3 +358,22 @@ def test_tlm_fly_from_manifest_reflies_one_flight(dataset, tmp_path, capsys):
     assert main(["fly", "--from-manifest", str(dataset), "--flight", "1", "--out", str(out),
                  "--fault", "gps:60-80"]) == 2
     assert "drop --fault" in capsys.readouterr().err
+
+
+def test_pilot_share_is_stratified_by_flight_kind(monkeypatch):
+    """Pilots drawn 3 no-fault : 1 paper-style under a configured 1 : 1 mix: the share
+    weights each kind's mean rows by its configured share (0.4), not the pilots' mix (0.2)."""
+    def fake_fly_job(job):
+        kind = "paper" if job["flight"] == 3 else "none"
+        return {"flight": job["flight"], "status": "ok", "scenario": {"kind": kind},
+                "summary": {"gps_fault_rows": 80 if kind == "paper" else 0, "gps_rows": 100}}
+
+    monkeypatch.setattr(runner, "fly_job", fake_fly_job)
+    config = ScenarioConfig(kinds={"none": 1.0, "paper": 1.0})
+    opts = GenerateOptions(out=Path("unused"), flights=1, config=config, pilot_flights=4)
+    with cf.ThreadPoolExecutor(1) as pool:
+        handle = ExecutorHandle(kind="thread", pool=pool, slots=1, description="test")
+        assert runner._pilot_share(opts, handle, 1.0, False) == pytest.approx(0.4)
+        only_none = GenerateOptions(out=Path("unused"), flights=1, config=config,
+                                    pilot_flights=3)  # no paper-style pilot: plain ratio
+        assert runner._pilot_share(only_none, handle, 1.0, False) == 0.0

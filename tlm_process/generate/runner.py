@@ -12,8 +12,10 @@ finish (a second Ctrl-C drops them), and closes the data set consistently.
 
 ``target_fault_ratio`` (γ): λ = γ / α (:func:`tlm_process.pipeline.stretching.lambda_for_target`,
 the paper's Eq. 5), with α the fault share of GPS rows measured on pilot flights (the first
-``pilot_flights`` scenarios flown with λ = 1, nothing written). λ is stored in the manifest and
-reused when the data set is continued.
+``pilot_flights`` scenarios flown with λ = 1, nothing written), then corrected in up to
+``pilot_rounds - 1`` more pilot rounds flown at the current λ (the share is not linear in λ:
+an engine fault or the RC failsafe ends a mission early). λ and the rounds are stored in the
+manifest and reused when the data set is continued.
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ class GenerateOptions:
     dask_local: int | None = None
     progress: bool | None = None
     pilot_flights: int = 16
+    pilot_rounds: int = 3
     connect_timeout_s: float = 10.0
 
 
@@ -305,36 +308,79 @@ def _with_scenario(res: dict[str, Any], job: Mapping[str, Any]) -> dict[str, Any
     return res
 
 
-def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
-                  progress: bool | None) -> tuple[float, float]:
-    """λ = γ / α from pilot flights (see the module docstring); returns (λ, α)."""
-    from tlm_process.pipeline.stretching import lambda_for_target
+def _pilot_share(opts: GenerateOptions, handle: ExecutorHandle, lam: float,
+                 progress: bool | None) -> float:
+    """Fault share of GPS rows of the pilot flights (the first ``pilot_flights`` scenarios,
+    nothing written) flown with window factor ``lam``.
 
+    Stratified by flight kind: the mean fault rows and rows per flight of each kind are
+    weighted by the kind's configured share (``ScenarioConfig.kinds``), so a pilot set whose
+    mix of no-fault, single-fault and paper-style flights happens to differ from the
+    configured one (16 flights draw it coarsely) does not bias the estimate. Falls back to
+    the plain ratio when a kind with a share has no finished pilot flight."""
     k = opts.pilot_flights
-    config = opts.config.with_lambda(1.0)
-    rows = [0, 0]
+    config = opts.config.with_lambda(lam)
+    per_kind: dict[str, list[int]] = {}  # kind -> [fault rows, rows, flights]
     errors: list[str] = []
 
     def take(res: Mapping[str, Any]) -> None:
         if res.get("status") == "ok":
-            rows[0] += int(res["summary"]["gps_fault_rows"])
-            rows[1] += int(res["summary"]["gps_rows"])
+            acc = per_kind.setdefault(str((res.get("scenario") or {}).get("kind")), [0, 0, 0])
+            acc[0] += int(res["summary"]["gps_fault_rows"])
+            acc[1] += int(res["summary"]["gps_rows"])
+            acc[2] += 1
         else:
             errors.append(f"flight {res['flight']}: {res.get('error')}")
 
     jobs = (make_job(i, opts.seed, config, tables=None, bin_log=False, pilot=True)
             for i in range(k))
     run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take)
-    bar = _bar(k, "pilot flights", progress)
+    bar = _bar(k, f"pilot flights (lambda {lam:.3g})", progress)
     try:
         while run.busy:
             bar.update(run.step())
     finally:
         bar.close()
-    if rows[1] == 0:
+    fault_rows = sum(v[0] for v in per_kind.values())
+    rows = sum(v[1] for v in per_kind.values())
+    if rows == 0:
         why = f" ({errors[0]})" if errors else ""
         raise GenerateError(f"--target-fault-ratio: no pilot flight finished{why}")
-    alpha = rows[0] / rows[1]
+    shares = {kind: p for kind, p in opts.config.kinds.items() if p > 0}
+    if all(kind in per_kind for kind in shares):
+        fault_rows = sum(p * per_kind[kd][0] / per_kind[kd][2] for kd, p in shares.items())
+        rows = sum(p * per_kind[kd][1] / per_kind[kd][2] for kd, p in shares.items())
+    return fault_rows / rows
+
+
+#: a pilot round within this relative distance of the target share ends the search
+PILOT_TOLERANCE = 0.02
+
+
+def _next_lambda(points: Sequence[tuple[float, float]], gamma: float) -> float:
+    """The window factor expected to give share ``gamma``, from the last two measured
+    (lambda, share) points: the secant of log share over log lambda (share = c lambda^b; b = 1
+    is Eq. 5), falling back to Eq. 5 from the last point when the slope is not usable."""
+    (l1, s1), (l2, s2) = points[-2], points[-1]
+    lam = l2 * gamma / s2 if s2 > 0 else l2 * 2.0
+    if s1 > 0 and s2 > 0 and l1 != l2:
+        b = math.log(s2 / s1) / math.log(l2 / l1)
+        if math.isfinite(b) and b > 0.05:
+            lam = l2 * (gamma / s2) ** (1.0 / b)
+    return min(max(lam, l2 / 4.0), l2 * 4.0)
+
+
+def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
+                  progress: bool | None) -> tuple[float, float, list[tuple[float, float]]]:
+    """λ for the target fault share γ from pilot flights (see the module docstring).
+
+    Round 1 flies the pilots at λ = 1 and takes Eq. 5, λ = γ / α. Each further round (up to
+    ``pilot_rounds``) flies them at the current λ and corrects it by the secant
+    (:func:`_next_lambda`), because Eq. 5 assumes flights keep their length, which engine
+    faults and the RC failsafe do not quite do. Returns (λ, α, [(λ, share) measured])."""
+    from tlm_process.pipeline.stretching import lambda_for_target
+
+    alpha = _pilot_share(opts, handle, 1.0, progress)
     if alpha <= 0:
         raise GenerateError("--target-fault-ratio: the pilot flights have no fault rows (do "
                             "the kinds give any faults?)")
@@ -342,7 +388,14 @@ def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
         lam = lambda_for_target(alpha, gamma)
     except ValueError as exc:
         raise GenerateError(f"--target-fault-ratio: {exc}") from None
-    return float(lam), float(alpha)
+    points = [(1.0, alpha)]
+    for _ in range(max(opts.pilot_rounds, 1) - 1):
+        share = _pilot_share(opts, handle, lam, progress)
+        points.append((lam, share))
+        if abs(share - gamma) <= PILOT_TOLERANCE * gamma:
+            break
+        lam = _next_lambda(points, gamma)
+    return float(lam), float(alpha), points
 
 
 def _bar(total: int, desc: str, progress: bool | None) -> Any:
@@ -389,9 +442,10 @@ def generate(opts: GenerateOptions) -> GenerateReport:
         if gamma is not None:
             if need_pilot:
                 assert handle is not None
-                lam, alpha = _pilot_lambda(opts, handle, gamma, opts.progress)
+                lam, alpha, rounds = _pilot_lambda(opts, handle, gamma, opts.progress)
                 writer.header["lambda"] = lam
-                writer.header["pilot"] = {"flights": opts.pilot_flights, "alpha": alpha}
+                writer.header["pilot"] = {"flights": opts.pilot_flights, "alpha": alpha,
+                                          "rounds": [list(p) for p in rounds]}
                 report.alpha_pilot = alpha
             else:
                 report.alpha_pilot = (writer.header.get("pilot") or {}).get("alpha")

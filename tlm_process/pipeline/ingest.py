@@ -329,15 +329,19 @@ def _read_dataset(path: Path) -> list[Flight]:
             frames[name] = df
     if "GPS" not in frames:
         raise IngestError("no GPS.parquet in the dataset", source=str(path))
+    # one pass over each table (a filter per flight would read every table once per flight)
+    by_flight = {name: dict(iter(df.groupby("flight", sort=False)))
+                 for name, df in frames.items()}
+    fault_groups = dict(iter(faults.groupby("flight", sort=False))) if len(faults) else {}
     flights = []
-    for fid, gps in frames["GPS"].groupby("flight", sort=True):
-        tables = {"GPS": gps.drop(columns="flight").reset_index(drop=True)}
-        for name, df in frames.items():
-            if name != "GPS":
-                sub = df[df["flight"] == fid]
-                if len(sub):
-                    tables[name] = sub.drop(columns="flight").reset_index(drop=True)
-        recs = faults[faults["flight"] == fid].drop(columns="flight") if len(faults) else faults
+    for fid in sorted(by_flight["GPS"]):
+        tables = {}
+        for name in frames:
+            sub = by_flight[name].get(fid)
+            if sub is not None and len(sub):
+                tables[name] = sub.drop(columns="flight").reset_index(drop=True)
+        recs = fault_groups.get(fid, faults.iloc[:0]).drop(columns="flight") if len(faults) \
+            else faults
         dicts = [{k: (None if _is_missing(v) else v) for k, v in r.items()}
                  for r in recs.to_dict(orient="records")]
         flights.append(Flight(f"{path.name}:{fid}", f"{path}:{fid}", "dataset", tables,
