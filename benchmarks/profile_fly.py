@@ -1,0 +1,97 @@
+"""Profile: where the numba flight loop spends its time, per jitted function (Linux ``perf``).
+
+Runs itself under ``perf record`` with an empty numba cache (so the loop is compiled in the
+process and the address of every jitted function is known), flies ``--flights`` flights of
+mission 1 after a warm-up, writes the ``/tmp/perf-PID.map`` that perf reads for JIT code, and
+prints each jitted function's share of the samples that fell in jitted code (self time: small
+functions LLVM inlined count in their caller). Needs ``perf`` on PATH; ~1 minute (compile).
+
+    PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections import Counter
+
+
+def _short(symbol: str) -> str:
+    """``tlm_sim.dynamics.body.physics_step`` from numba's mangled name
+    ``_ZN7tlm_sim8dynamics4body12physics_stepB3v37B52...``."""
+    if not symbol.startswith("_ZN"):
+        return symbol
+    parts, pos = [], 3
+    while (n := re.match(r"\d+", symbol[pos:])) is not None:
+        k, start = int(n.group()), pos + n.end()
+        parts.append(symbol[start:start + k])
+        pos = start + k
+    return ".".join(parts) or symbol
+
+
+def child(flights: int) -> None:
+    """Fly (under perf), then write the perf map of the loop's jitted functions."""
+    from tlm_sim import fly
+    from tlm_sim.flight import run_flight
+
+    fly(1, seed=0)
+    for k in range(flights):
+        fly(1, seed=k + 1)
+    addrs = []
+    for cres in run_flight.overloads.values():
+        lib = cres.library
+        for f in lib._final_module.functions:  # numba internals: the linked loop module
+            if not f.is_declaration:
+                a = lib.get_pointer_to_function(f.name)
+                if a:
+                    addrs.append((a, f.name))
+    addrs.sort()
+    with open(f"/tmp/perf-{os.getpid()}.map", "w", encoding="ascii") as fh:
+        for i, (a, name) in enumerate(addrs):
+            size = addrs[i + 1][0] - a if i + 1 < len(addrs) else 0x10000
+            fh.write(f"{a:x} {size:x} {name}\n")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--flights", type=int, default=20)
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        child(args.flights)
+        return
+    if shutil.which("perf") is None:
+        sys.exit("profile_fly: needs Linux perf on PATH")
+    with tempfile.TemporaryDirectory() as tmp:
+        data = os.path.join(tmp, "perf.data")
+        env = {**os.environ, "NUMBA_CACHE_DIR": os.path.join(tmp, "numba")}
+        subprocess.run(["perf", "record", "-q", "-F", "2000", "-o", data, sys.executable,
+                        __file__, "--child", "--flights", str(args.flights)],
+                       check=True, env=env)
+        rep = subprocess.run(["perf", "report", "-i", data, "-n", "--no-children",
+                              "--sort", "sym", "--stdio"], capture_output=True, text=True,
+                             check=True).stdout
+    samples: Counter[str] = Counter()
+    for line in rep.splitlines():
+        f = line.split()
+        if len(f) >= 4 and f[0].endswith("%") and f[3].startswith("_ZN"):
+            name = _short(f[3])
+            if name.startswith("tlm_sim."):
+                samples[name] += int(f[1])
+    total = sum(samples.values())
+    if not total:
+        sys.exit("profile_fly: no samples in jitted code (perf map not read?)")
+    print(f"{total} samples in the jitted flight loop ({args.flights} flights of mission 1)")
+    print("| function | share |\n|---|---|")
+    for name, n in samples.most_common():
+        if n / total >= 0.005:
+            print(f"| `{name}` | {100 * n / total:.1f} % |")
+
+
+if __name__ == "__main__":
+    main()
