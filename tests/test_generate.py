@@ -377,3 +377,49 @@ def test_pilot_share_is_stratified_by_flight_kind(monkeypatch):
         only_none = GenerateOptions(out=Path("unused"), flights=1, config=config,
                                     pilot_flights=3)  # no paper-style pilot: plain ratio
         assert runner._pilot_share(only_none, handle, 1.0, False) == 0.0
+
+
+def _read_sorted(ds: Path, table: str) -> pd.DataFrame:
+    df = pd.read_parquet(ds / f"{table}.parquet")
+    return df.sort_values(["flight", "TimeUS"] if "TimeUS" in df else ["flight", "fault"],
+                          kind="stable").reset_index(drop=True)
+
+
+def test_compact_merges_parts_into_blocks_and_survives_a_killed_compaction(dataset, tmp_path,
+                                                                           monkeypatch):
+    """Blocks of 2 flights: flights 0-1 and 2 in two files per table; pandas reads the same
+    rows; a part left beside its block (killed between rename and deletion) is dropped when
+    the data set is opened again; a continued run adds flights that a second compaction
+    merges into the existing block, in flight order."""
+    from tlm_process.generate import compact
+    from tlm_process.generate.compact import block_flights, compact_dataset
+
+    monkeypatch.setattr(compact, "BLOCK_FLIGHTS", 2)
+    ds = tmp_path / "c"
+    shutil.copytree(dataset, ds)
+    before = {t: _read_sorted(ds, t) for t in ("GPS", "IMU", "MODE", "faults")}
+    saved = (ds / "GPS.parquet" / "flight-00000002.parquet").read_bytes()
+    n_parts = len(list(ds.glob("*.parquet/flight-*.parquet")))
+    assert compact_dataset(ds, {0, 1, 2}) == n_parts
+    gps_files = sorted(p.name for p in (ds / "GPS.parquet").iterdir())
+    assert gps_files == ["flights-00000000-00000001.parquet", "flights-00000002-00000003.parquet"]
+    assert [f for f, _ in block_flights(ds / "GPS.parquet" / gps_files[0])] == [0, 1]
+    for t, df in before.items():
+        pd.testing.assert_frame_equal(_read_sorted(ds, t), df)
+    assert compact_dataset(ds, {0, 1, 2}) == 0  # nothing left to merge
+    (ds / "GPS.parquet" / "flight-00000002.parquet").write_bytes(saved)  # killed compaction
+    writer = DatasetWriter(ds)
+    writer.open({**read_header(ds), "flights": 3})
+    writer.close()
+    assert not (ds / "GPS.parquet" / "flight-00000002.parquet").exists()
+    pd.testing.assert_frame_equal(_read_sorted(ds, "GPS"), before["GPS"])
+    # continue to 4 flights (flight 3 lands in block 2-3) and compact through the command
+    more = _gen(ds, n=4, compact=True, bin_log=True)
+    assert more.ok == 1 and more.compacted_parts > 0
+    blk = ds / "GPS.parquet" / "flights-00000002-00000003.parquet"
+    assert [f for f, _ in block_flights(blk)] == [2, 3]
+    assert not list((ds / "GPS.parquet").glob("flight-*.parquet"))
+    gps = pd.read_parquet(blk)
+    assert gps["flight"].is_monotonic_increasing and set(gps["flight"]) == {2, 3}
+    pd.testing.assert_frame_equal(
+        _read_sorted(ds, "GPS")[lambda d: d.flight < 3].reset_index(drop=True), before["GPS"])

@@ -40,6 +40,7 @@ writes:
   DS/manifest.json                   settings, tlm version, state, runs
   DS/flights.jsonl, DS/manifest.parquet   per flight: scenario, seed, status, timings, error
   DS/bin/flight-00000042.bin         with --bin: ArduPilot DataFlash logs
+  DS/GPS.parquet/flights-00000000-00000099.parquet   with --compact: 100 flights per file
 
 defaults: kinds none=0.2,single=0.4,paper=0.4; missions builtin=0.5,random=0.5; wind
 SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/2_RND
@@ -187,6 +188,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     out.add_argument("--tables", metavar="GPS,IMU,...",
                      help="tables to write (default: all the simulator logs)")
     out.add_argument("--bin", action="store_true", help="also write DS/bin/flight-N.bin")
+    out.add_argument("--compact", action="store_true",
+                     help="at the end, merge each table's per-flight parts into one file per "
+                          "100 flights (fewer files, faster reads; also on a finished data set)")
     out.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
@@ -222,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
             target_fault_ratio=args.target_fault_ratio, tables=tables, bin_log=args.bin,
             executor=args.executor, workers=args.workers, scheduler=args.scheduler,
             dask_local=args.dask_local, progress=False if args.no_progress else None,
-            connect_timeout_s=args.connect_timeout)
+            connect_timeout_s=args.connect_timeout, compact=args.compact)
         with _sigterm_as_interrupt(_term):
             report = generate(opts)
     except (_UsageError, GenerateError) as exc:

@@ -118,11 +118,16 @@ def fault_table(records: Sequence[Mapping[str, Any]], flight: int) -> pa.Table:
     return pa.Table.from_pydict(cols, schema=FAULT_SCHEMA)
 
 
+def parquet_options(schema: pa.Schema) -> dict[str, Any]:
+    """Parquet writer options of every data set file (see the module docstring)."""
+    floats = [f.name for f in schema if pa.types.is_floating(f.type)]
+    stats = [n for n in ("flight", "TimeUS") if n in schema.names]
+    return {"compression": "zstd", "use_dictionary": False,
+            "use_byte_stream_split": floats or False, "write_statistics": stats or False}
+
+
 def to_parquet_bytes(table: pa.Table) -> bytes:
     """Parquet file bytes of ``table`` (zstd, see the module docstring for the encoding)."""
-    floats = [f.name for f in table.schema if pa.types.is_floating(f.type)]
-    stats = [n for n in ("flight", "TimeUS") if n in table.column_names]
     buf = io.BytesIO()
-    pq.write_table(table, buf, compression="zstd", use_dictionary=False,
-                   use_byte_stream_split=floats or False, write_statistics=stats or False)
+    pq.write_table(table, buf, **parquet_options(table.schema))
     return buf.getvalue()

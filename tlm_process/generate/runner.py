@@ -66,6 +66,7 @@ class GenerateOptions:
     progress: bool | None = None
     pilot_flights: int = 16
     pilot_rounds: int = 3
+    compact: bool = False
     connect_timeout_s: float = 10.0
 
 
@@ -96,6 +97,8 @@ class GenerateReport:
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
     parent_peak_rss_mb: float = 0.0
     restarts: int = 0
+    compacted_parts: int = 0
+    compact_s: float = 0.0
     errors: list[str] = field(default_factory=list)
 
     @property
@@ -132,6 +135,9 @@ class GenerateReport:
             if self.peak_rss_mb:
                 out.append(f"peak memory        {max(self.peak_rss_mb.values()):.0f} MB per "
                            f"worker process (largest of {len(self.peak_rss_mb)})")
+        if self.compacted_parts:
+            out.append(f"compacted          {self.compacted_parts} per-flight parts into block "
+                       f"files in {self.compact_s:.1f} s")
         lam = f"lambda             {self.lam:g}"
         if self.alpha_pilot is not None:
             lam += f" (pilot fault share alpha {100 * self.alpha_pilot:.1f} %)"
@@ -468,6 +474,13 @@ def generate(opts: GenerateOptions) -> GenerateReport:
                         interrupted=report.interrupted)
         header = writer.close(run_info)
         report.state = header.get("state", "")
+    if opts.compact and not report.interrupted:
+        from tlm_process.generate.compact import compact_dataset
+
+        t0 = time.perf_counter()
+        report.compacted_parts = compact_dataset(
+            opts.out, {f for f, st in writer.status.items() if st == "ok"})
+        report.compact_s = time.perf_counter() - t0
     return report
 
 

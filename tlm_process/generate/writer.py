@@ -129,7 +129,11 @@ class DatasetWriter:
         os.replace(tmp, path)
 
     def _clean(self, ok: set[int]) -> None:
-        """Remove temporary files and the parts of flights the journal does not list as ok."""
+        """Remove temporary files, the parts of flights the journal does not list as ok, and
+        parts a block file already holds (see :mod:`tlm_process.generate.compact`)."""
+        from tlm_process.generate.compact import drop_compacted_parts
+
+        drop_compacted_parts(self.root)
         for d in self.root.iterdir():
             if d.name.startswith(".") and d.is_file():
                 d.unlink()
