@@ -17,6 +17,10 @@ from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step, set_airborne
 from tlm_sim.dynamics.frame import build_frame, hover_command, pwm_to_command
 from tlm_sim.params import Params
+from tlm_sim.rng import new_rng
+
+#: wind generator state for the physics calls
+RNG = new_rng(0, 2)
 
 
 @pytest.fixture(scope="module")
@@ -126,7 +130,7 @@ def _rate_step(frame, g, axis, target_deg, n_ticks=400):
         mix(c, g, o[0], o[1], o[2], 0.39, 12.6)
         pwm[:] = c[C.MIX_PWM : C.MIX_PWM + 4]
         for _ in range(3):
-            physics_step(x, pwm, frame, 833e-6, t_us * 1e-6)
+            physics_step(x, pwm, frame, 833e-6, t_us * 1e-6, RNG)
             t_us += 833
         out.append(math.degrees(meas[axis]))
     return np.array(out[20:])

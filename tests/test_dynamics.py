@@ -24,16 +24,18 @@ from tlm_sim.dynamics import (
     pwm_to_command,
     resting_voltage,
     run_ticks,
-    seed_rng,
     set_airborne,
     update_wind,
     yaw_of,
 )
 from tlm_sim.dynamics import frame as F
 from tlm_sim.dynamics import layout as X
+from tlm_sim.rng import new_rng
 
 G = GRAVITY_MSS
 DT = PHYSICS_DT_S
+#: wind generator state for the physics calls (turbulence tests use their own)
+RNG = new_rng(0, 2)
 
 
 def new_state(frame: np.ndarray, yaw: float = 0.0) -> np.ndarray:
@@ -173,11 +175,11 @@ def test_slew_limit(frame: np.ndarray) -> None:
     pwm = pwm_all(2000.0)
     step = frame[F.F_SLEW_MAX] * DT  # 0.125 per tick: full range in 8 ticks (6.7 ms)
     for k in range(1, 9):
-        physics_step(x, pwm, frame, DT, 0.0)
+        physics_step(x, pwm, frame, DT, 0.0, RNG)
         assert x[X.M1] == pytest.approx(min(1.0, k * step), abs=1e-12)
-    physics_step(x, pwm, frame, DT, 0.0)
+    physics_step(x, pwm, frame, DT, 0.0, RNG)
     assert x[X.M1] == 1.0
-    physics_step(x, pwm_all(1000.0), frame, DT, 0.0)
+    physics_step(x, pwm_all(1000.0), frame, DT, 0.0, RNG)
     assert x[X.M1] == pytest.approx(1.0 - step)
 
 
@@ -188,7 +190,7 @@ def test_hover_equilibrium(frame: np.ndarray) -> None:
     pwm = hover_pwm(frame)
     t = 0.0
     for _ in range(1200):
-        t = run_ticks(x, pwm, frame, DT, t, 1)
+        t = run_ticks(x, pwm, frame, DT, t, 1, RNG)
         assert math.sqrt(x[X.AN] ** 2 + x[X.AE] ** 2 + x[X.AD] ** 2) < 0.05
     assert np.linalg.norm(x[X.PN : X.PD + 1] - p0) < 0.01
     # the accelerometer reads -g on z, nothing else; no rotation
@@ -204,7 +206,7 @@ def test_hover_equilibrium(frame: np.ndarray) -> None:
 def test_hover_at_reference_density_is_exact(frame: np.ndarray) -> None:
     height = frame[F.F_REF_ALT] - frame[F.F_HOME_ALT] - frame[F.F_FRAME_HEIGHT]
     x = airborne(frame, height, hover_command(frame))
-    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 10)
+    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 10, RNG)
     assert abs(x[X.AD]) < 1e-9
 
 
@@ -214,7 +216,7 @@ def test_free_fall_without_drag_matches_half_g_t2(frame: np.ndarray) -> None:
     x = airborne(f, 100.0, 0.0)
     z0 = x[X.PD]
     n = 1800  # 1.5 s
-    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n, RNG)
     t = n * DT
     drop = x[X.PD] - z0
     assert drop == pytest.approx(0.5 * G * t * t, rel=0.01)
@@ -228,7 +230,7 @@ def test_free_fall_with_drag_matches_quadratic_drag_solution(frame: np.ndarray) 
     x = airborne(frame, 100.0, 0.0)
     z0 = x[X.PD]
     n = 3000  # 2.5 s, about 28 m: drag is a third of the weight at the end
-    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, n)
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, n, RNG)
     t = n * DT
     rho = air_density(frame[F.F_HOME_ALT] - 0.5 * (z0 + x[X.PD]))
     k = frame[F.F_AREA_CD] * 0.5 * rho / frame[F.F_MASS]
@@ -258,7 +260,7 @@ def test_torque_free_spin_conserves_angular_momentum(rates: tuple[float, float, 
         return quat_to_dcm(x) @ (inertia * x[X.WX : X.WZ + 1])
 
     l0 = momentum_earth()
-    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 100_000)
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 100_000, RNG)
     assert x[X.ON_GROUND] == 0.0
     q = x[X.QW : X.QZ + 1]
     assert abs(np.dot(q, q) - 1.0) < 1e-12
@@ -271,7 +273,7 @@ def test_spin_without_gyroscopic_term_keeps_body_rates(frame: np.ndarray) -> Non
     f = frame_copy(frame, F_ROT_DAMP=0.0, F_AREA_EFF=0.0, F_GYRO=0.0)
     x = airborne(f, 5000.0, 0.0)
     x[X.WX], x[X.WY], x[X.WZ] = 1.0, -2.0, 3.0
-    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 5000)
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 5000, RNG)
     assert list(x[X.WX : X.WZ + 1]) == [1.0, -2.0, 3.0]
 
 
@@ -280,7 +282,7 @@ def test_rotational_damping(frame: np.ndarray) -> None:
     x = airborne(f, 5000.0, 0.0)
     x[X.WZ] = 2.0
     n = 12000  # 10 s
-    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n, RNG)
     assert x[X.WZ] == pytest.approx(2.0 * math.exp(-f[F.F_ROT_DAMP] * n * DT), rel=1e-3)
 
 
@@ -289,7 +291,7 @@ def test_constant_rate_rotates_attitude(frame: np.ndarray) -> None:
     x = airborne(f, 5000.0, 0.0)
     x[X.WZ] = 1.0
     n = 1200
-    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n)
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, n, RNG)
     assert yaw_of(x) == pytest.approx(n * DT, abs=1e-9)
 
 
@@ -300,7 +302,7 @@ def test_differential_thrust_rolls_and_pitches_the_right_way(frame: np.ndarray) 
     x = airborne(frame, 20.0, a_h)
     pwm = pwm_all(base)
     pwm[0] += 40.0
-    run_ticks(x, pwm, frame, DT, 0.0, 120)
+    run_ticks(x, pwm, frame, DT, 0.0, 120, RNG)
     assert x[X.WX] < -0.5
     assert euler(x)[0] < 0.0
     assert abs(x[X.WY]) < 0.01 * abs(x[X.WX])  # only gyroscopic coupling with the yaw rate
@@ -308,7 +310,7 @@ def test_differential_thrust_rolls_and_pitches_the_right_way(frame: np.ndarray) 
     x = airborne(frame, 20.0, a_h)
     pwm = pwm_all(base)
     pwm[2] += 40.0
-    run_ticks(x, pwm, frame, DT, 0.0, 120)
+    run_ticks(x, pwm, frame, DT, 0.0, 120, RNG)
     assert x[X.WY] > 0.5
     assert euler(x)[1] > 0.0
     assert abs(x[X.WX]) < 0.01 * abs(x[X.WY])
@@ -323,7 +325,7 @@ def test_yaw_torque_sign(frame: np.ndarray, profile: float) -> None:
     pwm = pwm_all(command_to_pwm(a_h, f))
     pwm[:2] += 30.0
     pwm[2:] -= 30.0
-    run_ticks(x, pwm, f, DT, 0.0, 240)
+    run_ticks(x, pwm, f, DT, 0.0, 240, RNG)
     assert x[X.WZ] > 0.05
     assert euler(x)[2] > 0.0
     assert abs(x[X.WX]) < 1e-9 and abs(x[X.WY]) < 1e-9
@@ -343,7 +345,7 @@ def test_paper_era_yaw_torque_is_stronger(frame: np.ndarray) -> None:
         pwm = pwm_all(command_to_pwm(a_h, f))
         pwm[:2] += 8.0
         pwm[2:] -= 8.0
-        run_ticks(x, pwm, f, DT, 0.0, 12)
+        run_ticks(x, pwm, f, DT, 0.0, 12, RNG)
         rates.append(x[X.WZ])
     a_h = hover_command(frame)
     e = frame[F.F_EXPO]
@@ -359,15 +361,15 @@ def test_climb_inflow_and_momentum_drag_reduce_thrust(frame: np.ndarray) -> None
     a_h = hover_command(frame)
     x = airborne(frame, 20.0, a_h)
     x[X.VD] = -5.0  # climbing at 5 m/s: air flows into the discs
-    physics_step(x, hover_pwm(frame), frame, DT, 0.0)
+    physics_step(x, hover_pwm(frame), frame, DT, 0.0, RNG)
     x0 = airborne(frame, 20.0, a_h)
-    physics_step(x0, hover_pwm(frame), frame, DT, 0.0)
+    physics_step(x0, hover_pwm(frame), frame, DT, 0.0, RNG)
     assert x[X.T1] < x0[X.T1]
     assert x[X.AD] > 0.5  # decelerating the climb
     # forward flight: body drag plus momentum drag oppose the airspeed
     x = airborne(frame, 20.0, a_h)
     x[X.VN] = 10.0
-    physics_step(x, hover_pwm(frame), frame, DT, 0.0)
+    physics_step(x, hover_pwm(frame), frame, DT, 0.0, RNG)
     body_drag = frame[F.F_AREA_CD] * 0.5 * x[X.RHO] * 100.0
     assert body_drag == pytest.approx(10.0, rel=0.05)  # "~10 N at 10 m/s"
     assert -x[X.FX] * frame[F.F_MASS] > body_drag
@@ -377,7 +379,7 @@ def test_climb_inflow_and_momentum_drag_reduce_thrust(frame: np.ndarray) -> None
 def test_rest_on_pad(frame: np.ndarray) -> None:
     x = new_state(frame, math.radians(353.0))
     assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
-    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 2400)
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 2400, RNG)
     assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
     assert x[X.ON_GROUND] == 1.0
     assert x[X.IMPACT_COUNT] == 0.0
@@ -391,7 +393,7 @@ def test_ground_impact_is_recorded_and_vehicle_does_not_sink(frame: np.ndarray) 
     x = airborne(frame, h, 0.0)
     t = 0.0
     while x[X.ON_GROUND] == 0.0:
-        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1)
+        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1, RNG)
         assert t < 10.0
     rho = air_density(frame[F.F_HOME_ALT] + 0.5 * h)
     v_term = math.sqrt(frame[F.F_MASS] * G / (0.5 * rho * frame[F.F_AREA_CD]))
@@ -400,7 +402,7 @@ def test_ground_impact_is_recorded_and_vehicle_does_not_sink(frame: np.ndarray) 
     assert x[X.IMPACT_COUNT] == 1.0
     assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
     assert x[X.VD] == 0.0
-    run_ticks(x, pwm_all(1000.0), frame, DT, t, 1200)
+    run_ticks(x, pwm_all(1000.0), frame, DT, t, 1200, RNG)
     assert x[X.PD] == -frame[F.F_FRAME_HEIGHT]
     assert x[X.IMPACT_COUNT] == 1.0
     assert x[X.FZ] == pytest.approx(-G)
@@ -411,7 +413,7 @@ def test_touchdown_levels_attitude_keeping_yaw(frame: np.ndarray) -> None:
     set_euler(x, math.radians(20.0), math.radians(-10.0), math.radians(30.0))
     x[X.VD] = 1.0
     x[X.WX] = 1.0
-    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 120)
+    run_ticks(x, pwm_all(1000.0), frame, DT, 0.0, 120, RNG)
     assert x[X.ON_GROUND] == 1.0
     roll, pitch, yaw = euler(x)
     assert abs(roll) < 1e-12 and abs(pitch) < 1e-12
@@ -422,9 +424,9 @@ def test_touchdown_levels_attitude_keeping_yaw(frame: np.ndarray) -> None:
 
 def test_lift_off_when_thrust_exceeds_weight(frame: np.ndarray) -> None:
     x = new_state(frame)
-    t = run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 1200)
+    t = run_ticks(x, hover_pwm(frame), frame, DT, 0.0, 1200, RNG)
     assert x[X.ON_GROUND] == 1.0  # hover thrust only balances the weight
-    run_ticks(x, pwm_all(1800.0), frame, DT, t, 2400)
+    run_ticks(x, pwm_all(1800.0), frame, DT, t, 2400, RNG)
     assert x[X.ON_GROUND] == 0.0
     assert -x[X.PD] - frame[F.F_FRAME_HEIGHT] > 1.0
     assert x[X.VD] < -1.0
@@ -435,7 +437,7 @@ def test_infinite_battery_holds_voltage_and_counts_charge(frame: np.ndarray) -> 
     height = frame[F.F_REF_ALT] - frame[F.F_HOME_ALT] - frame[F.F_FRAME_HEIGHT]
     x = airborne(frame, height, hover_command(frame))
     n = 2400
-    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, n)
+    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, n, RNG)
     assert x[X.BATT_V] == 12.6
     assert x[X.BATT_I] == pytest.approx(28.1, abs=0.05)  # §1.3: 28.1 A at hover
     assert x[X.BATT_AH] == pytest.approx(x[X.BATT_I] * n * DT / 3600.0, rel=1e-3)
@@ -447,14 +449,14 @@ def test_finite_battery_sags_under_load(frame: np.ndarray) -> None:
     assert x[X.BATT_V] == 12.6
     assert x[X.BATT_REM_AH] == pytest.approx(1.0)
     pwm = hover_pwm(f)
-    run_ticks(x, pwm, f, DT, 0.0, 240)  # 0.2 s: filter settled on the I R drop
+    run_ticks(x, pwm, f, DT, 0.0, 240, RNG)  # 0.2 s: filter settled on the I R drop
     v_early = x[X.BATT_V]
     assert v_early == pytest.approx(12.6 - x[X.BATT_I] * 0.01, abs=0.02)
     used = x[X.BATT_AH]
     t = 0.2
     for _ in range(100):  # 10 s more of open-loop hover command
         i0 = x[X.BATT_I]
-        t = run_ticks(x, pwm, f, DT, t, 120)
+        t = run_ticks(x, pwm, f, DT, t, 120, RNG)
         used += 0.5 * (i0 + x[X.BATT_I]) * 120 * DT / 3600.0
     assert x[X.BATT_AH] == pytest.approx(used, rel=1e-3)
     assert x[X.BATT_REM_AH] == pytest.approx(1.0 - x[X.BATT_AH], rel=1e-9)
@@ -473,12 +475,12 @@ def test_battery_voltage_parameter_change_and_dead_battery(frame: np.ndarray) ->
     f = frame.copy()
     x = airborne(f, 50.0, hover_command(f))
     f[F.F_BATT_VOLT] = 11.0  # SIM_BATT_VOLTAGE changed in flight: re-initialised
-    physics_step(x, hover_pwm(f), f, DT, 0.0)
+    physics_step(x, hover_pwm(f), f, DT, 0.0, RNG)
     assert x[X.BATT_V] == 11.0
-    run_ticks(x, hover_pwm(f), f, DT, 0.0, 10)
+    run_ticks(x, hover_pwm(f), f, DT, 0.0, 10, RNG)
     assert x[X.AD] > 0.2 * G  # thrust scales with (11/12.6)^2
     f[F.F_BATT_VOLT] = 1.0  # below 10 % of max voltage: motors stop
-    run_ticks(x, hover_pwm(f), f, DT, 0.0, 2)
+    run_ticks(x, hover_pwm(f), f, DT, 0.0, 2, RNG)
     assert np.all(x[X.T1 : X.T4 + 1] == 0.0)
     assert x[X.BATT_I] == 0.0
 
@@ -505,7 +507,7 @@ def wind_state(f: np.ndarray, height: float, settled_speed: float) -> np.ndarray
 def test_wind_height_profile(kind: float, height: float, expected: float) -> None:
     f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_T": kind})
     x = wind_state(f, height, 10.0)
-    update_wind(x, f, DT, 10.0)
+    update_wind(x, f, DT, 10.0, RNG)
     # from the south (180 deg): the air moves north
     assert x[X.WIND_N] == pytest.approx(expected, abs=1e-9)
     assert abs(x[X.WIND_E]) < 1e-9 and x[X.WIND_D] == 0.0
@@ -514,9 +516,9 @@ def test_wind_height_profile(kind: float, height: float, expected: float) -> Non
 def test_wind_direction_delay_and_filter() -> None:
     f = build_frame({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0})
     x = wind_state(f, 100.0, 8.0)
-    update_wind(x, f, DT, 4.9)  # no wind during the first 5 s
+    update_wind(x, f, DT, 4.9, RNG)  # no wind during the first 5 s
     assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
-    update_wind(x, f, DT, 5.1)  # from the east: the air moves west
+    update_wind(x, f, DT, 5.1, RNG)  # from the east: the air moves west
     assert x[X.WIND_E] == pytest.approx(-8.0)
     assert abs(x[X.WIND_N]) < 1e-9
     # first-order ramp from zero with SIM_WIND_TC = 5 s
@@ -524,12 +526,12 @@ def test_wind_direction_delay_and_filter() -> None:
     t = 5.0
     for _ in range(6000):
         t += DT
-        update_wind(x, f, DT, t)
+        update_wind(x, f, DT, t, RNG)
     assert -x[X.WIND_E] == pytest.approx(8.0 * (1.0 - math.exp(-1.0)), rel=0.01)
     # vertical direction 90 deg: a pure updraft (NED down negative)
     g = build_frame({"SIM_WIND_SPD": 3.0, "SIM_WIND_DIR_Z": 90.0, "SIM_WIND_T": 1.0})
     x = wind_state(g, 100.0, 3.0)
-    update_wind(x, g, DT, 10.0)
+    update_wind(x, g, DT, 10.0, RNG)
     assert x[X.WIND_D] == pytest.approx(-3.0)
 
 
@@ -537,7 +539,7 @@ def test_wind_pushes_hovering_vehicle_downwind() -> None:
     f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0})
     x = airborne(f, 100.0, hover_command(f))
     x[X.WIND_SPD_F] = 10.0
-    run_ticks(x, hover_pwm(f), f, DT, 10.0, 2400)
+    run_ticks(x, hover_pwm(f), f, DT, 10.0, 2400, RNG)
     assert x[X.VN] > 1.0 and x[X.PN] > 1.0  # drifting north, with the air
     assert x[X.VAIR_X] < 0.0  # the air comes from ahead (body x = north at yaw 0)
 
@@ -545,12 +547,12 @@ def test_wind_pushes_hovering_vehicle_downwind() -> None:
 def run_turbulent(seed: int, n: int = 3000) -> np.ndarray:
     f = build_frame({"SIM_WIND_SPD": 5.0, "SIM_WIND_TURB": 2.0})
     x = airborne(f, 50.0, hover_command(f))
-    seed_rng(seed)
+    rng = new_rng(seed, 2)
     out = np.empty((n, X.N_STATE))
     pwm = hover_pwm(f)
     t = 5.0
     for k in range(n):
-        t = run_ticks(x, pwm, f, DT, t, 1)
+        t = run_ticks(x, pwm, f, DT, t, 1, rng)
         out[k] = x
     return out
 
@@ -569,8 +571,7 @@ def test_turbulence_is_deterministic_with_a_seed() -> None:
 def test_no_turbulence_on_the_ground() -> None:
     f = build_frame({"SIM_WIND_TURB": 3.0})
     x = new_state(f)
-    seed_rng(1)
-    run_ticks(x, pwm_all(1000.0), f, DT, 6.0, 100)
+    run_ticks(x, pwm_all(1000.0), f, DT, 6.0, 100, new_rng(1, 2))
     assert x[X.GUST_H] == 0.0 and x[X.GUST_V] == 0.0
 
 
@@ -579,7 +580,7 @@ def test_air_density_cache_tracks_altitude(frame: np.ndarray) -> None:
     pwm = pwm_all(1950.0)
     t = 0.0
     for _ in range(40):
-        t = run_ticks(x, pwm, frame, DT, t, 120)
+        t = run_ticks(x, pwm, frame, DT, t, 120, RNG)
         # RHO was set at the start of the last tick, before it moved by VD * DT
         exact = air_density(frame[F.F_HOME_ALT] - (x[X.PD] - x[X.VD] * DT))
         assert x[X.RHO] == pytest.approx(exact, rel=1e-7)
@@ -593,7 +594,7 @@ def test_sensors_see_the_truth_in_flight(frame: np.ndarray) -> None:
     x = airborne(frame, 30.0, hover_command(frame))
     pwm = hover_pwm(frame)
     pwm[0] += 40.0  # roll and climb a little
-    run_ticks(x, pwm, frame, DT, 0.0, 1200)
+    run_ticks(x, pwm, frame, DT, 0.0, 1200, RNG)
     assert x[X.SMOOTH_ACTIVE] == 0.0
     for a, b in ((X.SPN, X.PN), (X.SVN, X.VN), (X.SFX, X.FX), (X.SWX, X.WX)):
         assert np.array_equal(x[a : a + 3], x[b : b + 3])
@@ -610,12 +611,12 @@ def test_impact_shows_in_the_sensors_as_sitl_smooths_it(frame: np.ndarray) -> No
     set_euler(x, math.radians(20.0), math.radians(-15.0), 0.0)
     t = 0.0
     while x[X.ON_GROUND] == 0.0:
-        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1)
+        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1, RNG)
     v_hit = x[X.IMPACT_SPEED]
     assert v_hit > 11.0
     fz, wx, sd = [], [], []
     for _ in range(2400):
-        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1)
+        t = run_ticks(x, pwm_all(1000.0), frame, DT, t, 1, RNG)
         fz.append(x[X.SFZ])
         wx.append(x[X.SWX])
         sd.append(-x[X.SPD] - frame[F.F_FRAME_HEIGHT])
@@ -641,7 +642,7 @@ def test_rotor_momentum_drag_damps_the_body_rates(frame: np.ndarray) -> None:
     x = airborne(frame, height, hover_command(frame))
     x[X.WZ] = 1.0
     n = 600
-    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, n)
+    run_ticks(x, hover_pwm(frame), frame, DT, 0.0, n, RNG)
     thrust = frame[F.F_MASS] * G / 4.0
     k_m = frame[F.F_MDRAG_COEF] * math.sqrt(x[X.RHO] * frame[F.F_AREA_TRUE])
     damp = 4.0 * k_m * math.sqrt(thrust) * frame[F.F_DIAG] ** 2 / frame[F.F_IZZ]

@@ -26,7 +26,6 @@ from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
-from tlm_sim.dynamics.wind import seed_rng
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.lanes import ekf_init, ekf_update
@@ -119,8 +118,8 @@ def _motor_pwm(c, scfg, pwm):
 
 @tick_jit
 def run_flight(
-    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, seed, t_end_us, home,
-    gps_time, bufs, counts, s, work, rng,
+    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, t_end_us, home,
+    gps_time, bufs, counts, s, work, rng, wind_rng,
 ):
     """Fly one whole flight in place; returns the final simulated time [us].
 
@@ -130,9 +129,8 @@ def run_flight(
     the time [us] it took effect (filled in, -1 if never); home: (lat,
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
-    generator (tlm_sim.rng). Allocation-free.
+    generator, wind_rng: wind turbulence generator (tlm_sim.rng). Allocation-free.
     """
-    np.random.seed(seed)  # noqa: NPY002 - numba's generator (wind turbulence) is the legacy API
     n_path = path.shape[0]
     dang, dvel = work[0], work[1]
     imu_ok = work[2][0]
@@ -169,7 +167,7 @@ def run_flight(
         k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
                                   applied)
         _motor_pwm(c, scfg, pwm)
-        physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6)
+        physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
         t_us += PHYSICS_DT_US
         thr_sum = 0.0
         n_on = 0
@@ -641,11 +639,10 @@ def fly(
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
     week, ms = gps_week_ms(BOOT_UTC)
-    seed_rng(int(seed))
     t_final = run_flight(
-        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, int(seed),
+        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied,
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
-        np.zeros(S.N_SENSOR_STATE), new_work(), new_rng(int(seed), 1),
+        np.zeros(S.N_SENSOR_STATE), new_work(), new_rng(int(seed), 1), new_rng(int(seed), 2),
     )
     meta: dict[str, Any] = {
         "seed": int(seed),

@@ -31,7 +31,7 @@ from tlm_sim.dynamics.frame import (
     pwm_to_command,
 )
 from tlm_sim.dynamics.motors import motor_forces
-from tlm_sim.dynamics.wind import init_wind, seed_rng, update_wind
+from tlm_sim.dynamics.wind import init_wind, update_wind
 
 #: SITL physics tick [s] (floor(1e6 / 1200) us)
 PHYSICS_DT_S: float = 833e-6
@@ -59,7 +59,6 @@ __all__ = [
     "pwm_to_command",
     "resting_voltage",
     "run_ticks",
-    "seed_rng",
     "set_airborne",
     "update_battery",
     "update_wind",

@@ -141,16 +141,18 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
 
 
 @tick_jit
-def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None:
+def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float,
+                 rng: np.ndarray) -> None:
     """Advance the truth state ``x`` by one physics tick of ``dt`` [s] (in place).
 
     ``pwm[0..3]``: motor 1..4 PWM [us] as the motors see it (after any SIM_ENGINE_* fault
     transform). ``t_s``: simulated time at the start of the tick [s] (wind start delay, ground
-    impact hold-off). Allocation-free.
+    impact hold-off). ``rng``: the wind turbulence's generator state (:mod:`tlm_sim.rng`).
+    Allocation-free.
     """
     g = GRAVITY_MSS
     # --- environment -------------------------------------------------------------------
-    update_wind(x, frame, dt, t_s)
+    update_wind(x, frame, dt, t_s, rng)
     update_air_density(x, frame)
 
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
@@ -251,14 +253,16 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
 @tick_jit
 def run_ticks(
-    x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float, n: int
+    x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float, n: int,
+    rng: np.ndarray,
 ) -> float:
-    """Run ``n`` physics ticks of ``dt`` [s] with constant ``pwm`` from time ``t_s`` [s].
+    """Run ``n`` physics ticks of ``dt`` [s] with constant ``pwm`` from time ``t_s`` [s]
+    (``rng``: the wind's generator state, see :func:`physics_step`).
 
     Returns the simulated time after the last tick [s]. For tests, benchmarks and open-loop
     experiments; the flight loop calls :func:`physics_step` itself.
     """
     for _ in range(n):
-        physics_step(x, pwm, frame, dt, t_s)
+        physics_step(x, pwm, frame, dt, t_s, rng)
         t_s += dt
     return t_s

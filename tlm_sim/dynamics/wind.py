@@ -7,8 +7,9 @@ airborne with ``SIM_WIND_TURB > 0`` filtered Gaussian gusts are added along an a
 afresh every step. No wind at all during the first 5 s of simulated time. The result is the
 velocity of the air mass, NED [m/s], written to ``WIND_N/E/D``.
 
-Randomness uses numba's global generator (``np.random`` inside njit); the flight loop seeds
-it once per flight with :func:`seed_rng`.
+Randomness comes from the flight's wind generator ``rng`` (:mod:`tlm_sim.rng`, seeded from the
+flight seed): two Gaussians (:func:`~tlm_sim.rng.normal_pair`) and a uniform direction
+(:func:`~tlm_sim.rng.unit_pair`) per step.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from tlm_sim.dynamics.frame import (
     F_WIND_TC,
     F_WIND_TURB,
 )
+from tlm_sim.rng import normal_pair, unit_pair
 
 #: simulated time before any wind is applied [s] (SITL lets the airspeed sensor calibrate)
 WIND_START_DELAY_S: float = 5.0
@@ -37,12 +39,6 @@ WIND_START_DELAY_S: float = 5.0
 GUST_IIR: float = 0.98
 #: gust input scale: filtered N(0,1) * 10 * TURB has a standard deviation of about TURB
 GUST_SCALE: float = 10.0
-
-
-@tick_jit
-def seed_rng(seed: int) -> None:
-    """Seed numba's global random generator (the one used inside njit code)."""
-    np.random.seed(seed)  # noqa: NPY002 - numba's global generator is the one njit code uses
 
 
 @tick_jit
@@ -104,8 +100,10 @@ def init_wind(x: np.ndarray, frame: np.ndarray) -> None:
 
 
 @tick_jit
-def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None:
+def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float,
+                rng: np.ndarray) -> None:
     """Advance the wind model by ``dt`` [s] at simulated time ``t_s`` [s]; writes WIND_N/E/D.
+    ``rng``: the wind's random generator state (:mod:`tlm_sim.rng`).
 
     The height used by the profile is the height of the ground-contact point above home
     ground, ``-PD - frame_height`` [m] (what the barometer reads relative to the pad).
@@ -134,13 +132,14 @@ def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float) -> None
         turb = frame[F_WIND_TURB]
         if turb > 0.0 and x[X.ON_GROUND] < 0.5:
             amp = GUST_SCALE * turb * (1.0 - GUST_IIR)
-            gh = GUST_IIR * x[X.GUST_H] + amp * np.random.standard_normal()  # noqa: NPY002
-            gv = GUST_IIR * x[X.GUST_V] + amp * np.random.standard_normal()  # noqa: NPY002
-            az = 2.0 * math.pi * np.random.random()  # noqa: NPY002
+            nh, nv = normal_pair(rng)
+            gh = GUST_IIR * x[X.GUST_H] + amp * nh
+            gv = GUST_IIR * x[X.GUST_V] + amp * nv
+            cos_az, sin_az = unit_pair(rng)  # the azimuth of the horizontal gust
             x[X.GUST_H] = gh
             x[X.GUST_V] = gv
-            wn += math.cos(az) * gh
-            we += math.sin(az) * gh
+            wn += cos_az * gh
+            we += sin_az * gh
             wd += gv
     x[X.WIND_N] = -wn
     x[X.WIND_E] = -we
