@@ -31,3 +31,10 @@ def flown(mission: int, seed: int = 0):
 def normal_flight():
     """Built-in mission 1, seed 0, default parameters."""
     return flown(1, 0)
+
+
+def close_dfreader(r) -> None:  # noqa: ANN001 - pymavlink's DFReader_binary
+    """Close what pymavlink's DFReader_binary keeps open (it has no close of its own), so no
+    ResourceWarning surfaces later inside another test's warning capture."""
+    r.data_map.close()
+    r.filehandle.close()

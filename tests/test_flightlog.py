@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from pymavlink import DFReader
 
-from tests.conftest import REFERENCE, reference_path
+from tests.conftest import REFERENCE, close_dfreader, reference_path
 from tlm_sim.flightlog import (
     FORMAT_CHARS,
     LOGGED_MESSAGES,
@@ -60,6 +60,7 @@ def ref_self_description() -> dict:
             units[chr(m.Id)] = m.Label
         elif t == "MULT":
             mults[chr(m.Id)] = m.Mult
+    close_dfreader(r)
     return {"fmt": fmts, "fmtu": fmtu, "units": units, "mults": mults}
 
 
@@ -411,6 +412,7 @@ def test_read_bin_values_equal_pymavlink(ref_tables):
             lst.append(m.to_dict())
         if all(len(v) >= 200 for v in got.values()):
             break
+    close_dfreader(r)
     for name, rows in got.items():
         df = ref_tables[name].iloc[: len(rows)]
         for col in SCHEMAS[name].columns:

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.conftest import reference_path
+from tests.conftest import close_dfreader, reference_path
 from tlm_sim.geo import (
     HOME_CMAC,
     HOME_HEADING_DEG,
@@ -97,6 +97,7 @@ def test_matches_sitl_truth_sim_vs_sim2():
             sim.append((m.TimeUS, m.Lat, m.Lng))
         else:
             sim2.append((m.TimeUS, m.PN, m.PE))
+    close_dfreader(r)
     sim_a, sim2_a = np.array(sim), np.array(sim2)
     assert len(sim_a) > 1000
     pn = np.interp(sim_a[:, 0], sim2_a[:, 0], sim2_a[:, 1])
