@@ -481,3 +481,29 @@ def test_array_format_round_trip(tmp_path):
 def test_read_bin_missing_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         read_bin(tmp_path / "nope.bin")
+
+
+def test_lazy_tables_build_frames_on_first_access_only():
+    """from_buffers keeps canonical columns; a table becomes a DataFrame when read, its
+    columns() equal the DataFrame's, and the others stay unbuilt."""
+    from tlm_sim.flightlog.flightlog import LazyTables
+
+    schema = SCHEMAS["VIBE"]
+    buf = np.zeros((4, len(schema.columns)))
+    buf[:, 0] = [30.0, 10.0, 20.0, 0.0]  # unsorted TimeUS
+    buf[:, 2] = [3.0, 1.0, 2.0, 0.5]
+    log = FlightLog.from_buffers({"VIBE": buf, "GPS": np.zeros((2, len(SCHEMAS["GPS"].columns)))},
+                                 {"VIBE": 3, "GPS": 0})
+    assert isinstance(log.tables, LazyTables) and list(log.tables) == ["VIBE"]
+    cols = log.columns("VIBE")
+    assert log.tables.columns("VIBE") is not None  # not built yet
+    assert list(cols["TimeUS"]) == [10, 20, 30] and log.n_rows("VIBE") == 3
+    df = log.tables["VIBE"]
+    assert log.tables.columns("VIBE") is None  # built now
+    for c in schema.columns:
+        np.testing.assert_array_equal(df[c].to_numpy(), cols[c])
+    assert list(log.columns("VIBE")) == list(schema.columns) and log.n_rows("GPS") == 0
+    log.tables["VIBE"] = df.iloc[:1]
+    assert log.n_rows("VIBE") == 1 and "VIBE" in log.tables and len(log.tables) == 1
+    del log.tables["VIBE"]
+    assert len(log.tables) == 0 and log.n_rows("VIBE") == 0
