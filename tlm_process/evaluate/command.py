@@ -126,11 +126,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     return p
 
 
-def _err(msg: str) -> int:
-    print(f"tlm: error: {msg}", file=sys.stderr)
-    return 2
-
-
 def _tables(text: str) -> list[str]:
     from tlm_process.evaluate.data import EvaluateError
 
@@ -148,14 +143,9 @@ def _tables(text: str) -> list[str]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``tlm evaluate``; 0 on success, 2 on a user error (one line on stderr)."""
-    from tlm_process.pipeline.errors import PipelineError
+    from tlm_process.pipeline.command import report_user_errors
 
-    try:
-        return _run(args)
-    except PipelineError as e:
-        return _err(str(e))
-    except OSError as e:
-        return _err(f"{e.filename or ''}: {e.strerror or e}".lstrip(": "))
+    return report_user_errors(_run, args)
 
 
 def _best(results: dict, key: str = "macro_f1", transfer: bool = False) -> str | None:

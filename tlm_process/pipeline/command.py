@@ -14,11 +14,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from tlm_process.argtypes import number, whole_number
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "report_user_errors", "run"]
 
 DESCRIPTION = """\
 Turn flights into labelled, feature-processed, scaled data tables (the paper's Time Line
@@ -122,21 +123,25 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     return p
 
 
-def _err(msg: str) -> int:
+def report_user_errors(body: Callable[[argparse.Namespace], int],
+                       args: argparse.Namespace) -> int:
+    """``body(args)``, turning a PipelineError (and its subclasses) or an OSError into one
+    line on stderr and exit code 2 (shared by ``tlm process`` and ``tlm evaluate``)."""
+    from tlm_process.pipeline.errors import PipelineError
+
+    try:
+        return body(args)
+    except PipelineError as e:
+        msg = str(e)
+    except OSError as e:
+        msg = f"{e.filename or ''}: {e.strerror or e}".lstrip(": ")
     print(f"tlm: error: {msg}", file=sys.stderr)
     return 2
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``tlm process``; 0 on success, 2 on a user error (one line on stderr)."""
-    from tlm_process.pipeline.errors import PipelineError
-
-    try:
-        return _run(args)
-    except PipelineError as e:
-        return _err(str(e))
-    except OSError as e:
-        return _err(f"{e.filename or ''}: {e.strerror or e}".lstrip(": "))
+    return report_user_errors(_run, args)
 
 
 def _make_plots(p, plots_dir: Path) -> list[str]:
