@@ -37,6 +37,7 @@ from tlm_sim.dynamics.frame import (
     F_ROT_DAMP,
     N_MOTORS,
 )
+from tlm_sim.dynamics.kinematics import step_translation
 from tlm_sim.dynamics.motors import motor_forces
 from tlm_sim.dynamics.smoothing import smooth_sensors, smoothing_reset
 from tlm_sim.dynamics.wind import init_wind, update_wind
@@ -216,13 +217,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     x[X.FY] = r01 * aen + r11 * aee + r21 * sd
     x[X.FZ] = r02 * aen + r12 * aee + r22 * sd
 
-    vn = x[X.VN] + aen * dt
-    ve = x[X.VE] + aee * dt
-    vd = x[X.VD] + aed * dt
-    x[X.VN], x[X.VE], x[X.VD] = vn, ve, vd
-    x[X.PN] += vn * dt
-    x[X.PE] += ve * dt
-    x[X.PD] += vd * dt
+    _, _, vd = step_translation(x, X.PN, aen, aee, aed, dt)
 
     # --- ground contact (NO_MOVEMENT behaviour) ------------------------------------------
     if -x[X.PD] - fh <= GROUND_EPS_M:

@@ -41,7 +41,8 @@ import numpy as np
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS
-from tlm_sim.rotation import quat_mul_normalised, rotation_half_angle
+from tlm_sim.dynamics.kinematics import step_translation
+from tlm_sim.rotation import quat_mul_normalised, quat_to_dcm, rotation_half_angle
 
 #: time constant of the shadow [s] (SITL's smoothing time constant, 0.1 s)
 SMOOTH_TC_S: float = 0.1
@@ -101,15 +102,7 @@ def smooth_sensors(x: np.ndarray, dt: float) -> None:
 
     sw, sx, sy, sz = x[X.SQW], x[X.SQX], x[X.SQY], x[X.SQZ]
     # accelerometer: R_s^T (a - g), R_s = DCM body -> NED of the shadow's attitude
-    r00 = 1.0 - 2.0 * (sy * sy + sz * sz)
-    r01 = 2.0 * (sx * sy - sw * sz)
-    r02 = 2.0 * (sx * sz + sw * sy)
-    r10 = 2.0 * (sx * sy + sw * sz)
-    r11 = 1.0 - 2.0 * (sx * sx + sz * sz)
-    r12 = 2.0 * (sy * sz - sw * sx)
-    r20 = 2.0 * (sx * sz - sw * sy)
-    r21 = 2.0 * (sy * sz + sw * sx)
-    r22 = 1.0 - 2.0 * (sx * sx + sy * sy)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(sw, sx, sy, sz)
     fd = ad - GRAVITY_MSS
     x[X.SFX] = r00 * an + r10 * ae + r20 * fd
     x[X.SFY] = r01 * an + r11 * ae + r21 * fd
@@ -143,13 +136,7 @@ def smooth_sensors(x: np.ndarray, dt: float) -> None:
         sw, sx, sy, sz, c, kk * wx, kk * wy, kk * wz)
 
     # translation
-    vn = x[X.SVN] + an * dt
-    ve = x[X.SVE] + ae * dt
-    vd = x[X.SVD] + ad * dt
-    x[X.SVN], x[X.SVE], x[X.SVD] = vn, ve, vd
-    x[X.SPN] += vn * dt
-    x[X.SPE] += ve * dt
-    x[X.SPD] += vd * dt
+    vn, ve, vd = step_translation(x, X.SPN, an, ae, ad, dt)
     # converged and airborne: hand back to the truth
     if x[X.ON_GROUND] == 0.0 and ex * ex + ey * ey + ez * ez < SMOOTH_DONE_Q2:
         pv = dpn * dpn + dpe * dpe + dpd * dpd
