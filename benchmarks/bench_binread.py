@@ -20,16 +20,9 @@ import os
 import time
 from pathlib import Path
 
+from _timing import best_of  # benchmarks/_timing.py (scripts run from this folder)
+
 REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "sitl"
-
-
-def _best(fn, repeat: int) -> float:  # noqa: ANN001
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def _pymavlink_index(path: Path, fast: bool) -> float:
@@ -83,9 +76,9 @@ def main() -> None:
         ix = scan_bin(path)
         n_msgs = sum(o.size for o in ix.offsets.values())
         names = binreader._present(ix)
-        t_scan = _best(lambda p=path: scan_bin(p), args.repeat)
-        t_dec = _best(lambda i=ix, n=names: binreader._decode_types(i, n), args.repeat)
-        t_read = _best(lambda p=path: binreader.read_bin(p), args.repeat)
+        t_scan = best_of(lambda p=path: scan_bin(p), args.repeat)
+        t_dec = best_of(lambda i=ix, n=names: binreader._decode_types(i, n), args.repeat)
+        t_read = best_of(lambda p=path: binreader.read_bin(p), args.repeat)
         t_c = min(_pymavlink_index(path, fast=True) for _ in range(args.repeat))
         line = (f"{path.name:<18}{mb:>6.1f}{n_msgs:>9}{t_scan * 1e3:>7.1f}ms"
                 f"{t_dec * 1e3:>7.0f}ms{t_read * 1e3:>8.0f}ms{mb / t_read:>8.0f}"

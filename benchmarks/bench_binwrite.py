@@ -12,17 +12,9 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
 from pathlib import Path
 
-
-def _best(fn, repeat: int) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from _timing import best_of  # benchmarks/_timing.py (scripts run from this folder)
 
 
 def main() -> None:
@@ -40,11 +32,11 @@ def main() -> None:
     n_msgs = sum(len(df) for df in log.tables.values())
     tmp = Path(tempfile.mkdtemp())
     bin_path, log_path = tmp / "f.bin", tmp / "f.log"
-    t_enc = _best(lambda: encode_bin(log), args.repeat)
-    t_wbin = _best(lambda: log.write_bin(bin_path), args.repeat)
-    t_rbin = _best(lambda: read_bin(bin_path), args.repeat)
-    t_wtxt = _best(lambda: write_mp_log(log, log_path), max(1, args.repeat // 2))
-    t_rtxt = _best(lambda: read_mp_log(log_path), max(1, args.repeat // 2))
+    t_enc = best_of(lambda: encode_bin(log), args.repeat)
+    t_wbin = best_of(lambda: log.write_bin(bin_path), args.repeat)
+    t_rbin = best_of(lambda: read_bin(bin_path), args.repeat)
+    t_wtxt = best_of(lambda: write_mp_log(log, log_path), max(1, args.repeat // 2))
+    t_rtxt = best_of(lambda: read_mp_log(log_path), max(1, args.repeat // 2))
     mb_bin = bin_path.stat().st_size / 1e6
     mb_txt = log_path.stat().st_size / 1e6
     print(f"flight: {log.meta['duration_s']:.0f} s simulated, {n_msgs} data messages, "
