@@ -29,6 +29,8 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from tlm_process.generate.parts import parquet_options
+
 __all__ = ["BLOCK_FLIGHTS", "block_flights", "block_name", "compact_dataset",
            "drop_compacted_parts"]
 
@@ -86,8 +88,6 @@ def _write_block(target: Path, sources: dict[int, Source], rows: dict[int, int],
                  schema: pa.Schema) -> None:
     """Stream the flights of ``sources`` into ``target`` atomically, in flight order, one
     flight in memory at a time."""
-    from tlm_process.generate.parts import parquet_options
-
     order = sorted(sources)
     meta = dict(schema.metadata or {})
     meta[FLIGHTS_KEY] = json.dumps([[f, rows[f]] for f in order]).encode()

@@ -26,6 +26,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from tlm_process.generate.compact import drop_compacted_parts
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.manifest import (
     FORMAT,
@@ -131,8 +132,6 @@ class DatasetWriter:
     def _clean(self, ok: set[int]) -> None:
         """Remove temporary files, the parts of flights the journal does not list as ok, and
         parts a block file already holds (see :mod:`tlm_process.generate.compact`)."""
-        from tlm_process.generate.compact import drop_compacted_parts
-
         drop_compacted_parts(self.root)
         for d in self.root.iterdir():
             if d.name.startswith(".") and d.is_file():
