@@ -340,10 +340,9 @@ def _read_dataset(path: Path) -> list[Flight]:
             sub = by_flight[name].get(fid)
             if sub is not None and len(sub):
                 tables[name] = sub.drop(columns="flight").reset_index(drop=True)
-        recs = fault_groups.get(fid, faults.iloc[:0]).drop(columns="flight") if len(faults) \
-            else faults
-        dicts = [{k: (None if _is_missing(v) else v) for k, v in r.items()}
-                 for r in recs.to_dict(orient="records")]
+        recs = fault_groups.get(fid)
+        rows = [] if recs is None else recs.drop(columns="flight").to_dict(orient="records")
+        dicts = [{k: (None if _is_missing(v) else v) for k, v in r.items()} for r in rows]
         flights.append(Flight(f"{path.name}:{fid}", f"{path}:{fid}", "dataset", tables,
                               parse_records(dicts, f"{path}:{fid}")))
     return flights
