@@ -71,6 +71,8 @@ def test_evaluate_end_to_end_table_json_and_pngs(tiny_ds, tmp_path, capsys):
                 "weighted_tp_rate", "weighted_fp_rate", "per_class", "confusion"):
         assert key in r
     assert sum(map(sum, r["confusion"])) == r["n_test"] > 0
+    assert r["n_fit"] == r["n_train"]  # row models fit on every training row
+    assert 0 < res["GPS"]["WindowHGB"]["n_fit"] <= r["n_train"]  # GPS 5 Hz: thinned to 5 Hz
     assert res["GPS"]["ZeroR"]["weighted_precision"] is None
     assert res["GPS"]["WindowHGB"]["macro_f1"] > res["GPS"]["ZeroR"]["macro_f1"]
     pngs = {p.name for p in (tmp_path / "png").iterdir()}

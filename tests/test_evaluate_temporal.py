@@ -10,6 +10,7 @@ import pytest
 from tlm_process.evaluate.temporal import (
     WINDOW_MODELS,
     WindowFeatures,
+    train_rows,
     window_features,
     window_hgb,
     window_spec_for,
@@ -117,3 +118,16 @@ def test_window_model_specs():
     assert window_spec_for("CentredHGB", {}).centred
     with pytest.raises(ValueError, match="unknown"):
         window_spec_for("nope", {})
+
+
+def test_window_models_fit_on_rows_thinned_per_flight_in_time_order():
+    t = np.arange(12) * 40_000  # 25 Hz: every 5th row is kept (TRAIN_HZ 5)
+    df = pd.DataFrame({"flight": ["b"] * 12 + ["a"] * 7,
+                       "TimeUS": np.concatenate([t, t[:7]]), "Spd": 0.0})
+    shuffled = df.sample(frac=1.0, random_state=3)
+    keep = train_rows(shuffled)
+    kept = shuffled[keep].sort_values(["flight", "TimeUS"])
+    assert list(zip(kept["flight"], kept["TimeUS"] // 40_000, strict=True)) == [
+        ("a", 0), ("a", 5), ("b", 0), ("b", 5), ("b", 10)]
+    assert train_rows(df, rate_hz=5.0).all()  # GPS rate: every row
+    assert train_rows(df, rate_hz=10.0).sum() == 6 + 4  # every 2nd row of each flight

@@ -33,6 +33,7 @@ from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
     WindowFeatures,
+    train_rows,
     window_features,
     window_spec_for,
 )
@@ -102,7 +103,9 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              progress: Callable[[str], None] | None = None, n_jobs: int = 1,
              cnn_epochs: int | None = None) -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
-    ``split``, ``folds``, ``n_train``, ``n_test``, ``fit_seconds``, ``predict_seconds``,
+    ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
+    than ``n_train`` for the window models, :data:`.temporal.TRAIN_HZ`), ``n_test``,
+    ``fit_seconds``, ``predict_seconds``,
     with cross-validation ``per_fold`` (accuracy and macro-F1 of each fold), for the CNN
     ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows).
     ``out_dir``: confusion matrix PNGs (and the CNN's training curves) are written there.
@@ -146,6 +149,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             raise EvaluateError(f"{t}: {exc}") from None
         specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
         X_win = {m: window_features(df, feats, sp)[0] for m, sp in specs.items()}
+        thin = train_rows(df) if specs else None
         xt = transfer.get(t) if transfer is not None else None
         if xt is not None:
             yt = xt["label"].to_numpy(np.int64)
@@ -159,21 +163,25 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             X = X_win[name] if name in TIME_MODELS else X_rows
             cm = np.zeros((len(CLASS_NAMES),) * 2, dtype=np.int64)
             fit_s = pred_s = 0.0
-            n_train = n_test = 0
+            n_train = n_test = n_fit = 0
             last = None
             per_fold: list[dict[str, Any]] = []
             for fold in fold_list:
                 est = make_model(name, n_features=X.shape[1], seed=seed, n_jobs=n_jobs,
                                  progress=lambda s, t=t: say(f"[{t}]   {s}"),
                                  cnn_epochs=cnn_epochs)
+                fit_rows = fold.train
+                if name in TIME_MODELS:
+                    fit_rows = fit_rows[thin[fit_rows]]
                 t0 = time.perf_counter()
-                _fit(est, X[fold.train], y[fold.train], groups[fold.train])
+                _fit(est, X[fit_rows], y[fit_rows], groups[fit_rows])
                 t1 = time.perf_counter()
                 pred = est.predict(X[fold.test])
                 t2 = time.perf_counter()
                 fit_s += t1 - t0
                 pred_s += t2 - t1
                 n_train += len(fold.train)
+                n_fit += len(fit_rows)
                 n_test += len(fold.test)
                 fold_cm = confusion_matrix(y[fold.test], pred)
                 cm += fold_cm
@@ -186,7 +194,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                         f"macro-F1 {fm['macro_f1']:.3f} (fit {t1 - t0:.1f} s)")
             r = classification_metrics(cm)
             r.update({"split": split, "folds": len(fold_list), "n_train": n_train,
-                      "n_test": n_test, "fit_seconds": round(fit_s, 3),
+                      "n_fit": n_fit, "n_test": n_test, "fit_seconds": round(fit_s, 3),
                       "predict_seconds": round(pred_s, 3)})
             if per_fold:
                 r["per_fold"] = per_fold
@@ -195,7 +203,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                     last = make_model(name, n_features=X.shape[1], seed=seed, n_jobs=n_jobs,
                                       progress=lambda s, t=t: say(f"[{t}]   {s}"),
                                       cnn_epochs=cnn_epochs)
-                    _fit(last, X, y, groups)
+                    every = thin if name in TIME_MODELS else slice(None)
+                    _fit(last, X[every], y[every], groups[every])
                 Xt = Xt_win[name] if name in TIME_MODELS else Xt_rows
                 r["transfer"] = classification_metrics(confusion_matrix(yt, last.predict(Xt)))
             results[t][name] = r
