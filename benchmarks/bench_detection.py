@@ -2,7 +2,8 @@
 
 Runs, through the ``tlm`` command line, in one temporary folder:
 
-1. ``tlm generate --flights N --kinds paper=1`` (paper-style flights: GPS, accel, engine, RC);
+1. ``tlm generate --flights N --kinds paper=1`` (paper-style flights: GPS, accel, engine, RC;
+   with ``--no-env`` as the paper flew them: no wind, no extra sensor noise);
 2. ``tlm process DS --test-frac 0.25`` (anchoring, labels, Algorithm 2, min-max scaling);
 3. ``tlm evaluate DS-tlm --table all --models M --split flight`` (and ``--test-on`` the
    reference SITL logs when they are beside the checkout);
@@ -11,7 +12,7 @@ and prints the wall time of each step and, per table, accuracy and macro-F1 of e
 (transfer macro-F1 when SITL logs were used), with the paper's figures for comparison (§5.4:
 RandomForest 84.08 % on GPS; CNN 85.63 % GPS, 75.32 % RATE, 73.03 % IMU, 63.15 % VIBE).
 
-    PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 200
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 200 --jobs 2
     PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 60 \\
         --models RandomForest,J48,CNN,WindowHGB
 """
@@ -45,21 +46,27 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--models", default="all")
     ap.add_argument("--out", help="working folder (default: a temporary one)")
+    ap.add_argument("--jobs", type=int, default=1, help="threads for the models (default 1)")
+    ap.add_argument("--no-env", action="store_true",
+                    help="fly as the paper and the reference SITL logs did: no wind, no extra "
+                         "sensor noise (tlm generate --no-env)")
     args = ap.parse_args()
     work = Path(args.out or tempfile.mkdtemp(prefix="tlm-bench-"))
     ds, dsp, rj = work / "ds", work / "ds-tlm", work / "results.json"
     times = {
         "generate": _tlm("generate", "--flights", str(args.flights), "--out", str(ds),
-                         "--seed", str(args.seed), "--kinds", "paper=1"),
+                         "--seed", str(args.seed), "--kinds", "paper=1",
+                         *(["--no-env"] if args.no_env else [])),
         "process": _tlm("process", str(ds), "--out", str(dsp), "--test-frac", "0.25",
                         "--seed", str(args.seed), "--quiet"),
     }
     test_on = sorted(str(p) for p in SITL.glob("*.bin")) if SITL.is_dir() else []
     ev = ["evaluate", str(dsp), "--table", "all", "--models", args.models, "--split", "flight",
-          "--seed", "0", "--json", str(rj), "--quiet"]
+          "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs)]  # progress on stderr
     times["evaluate"] = _tlm(*ev, *(["--test-on", *test_on] if test_on else []))
     res = json.loads(rj.read_text())
-    print(f"{args.flights} paper-style flights, seed {args.seed}; work folder {work}")
+    env = "no wind or extra noise (--no-env)" if args.no_env else "drawn wind and noise"
+    print(f"{args.flights} paper-style flights, {env}, seed {args.seed}; work folder {work}")
     print(" ".join(f"{k} {v:.1f} s;" for k, v in times.items()))
     print("| table | model | accuracy % | macro-F1 | transfer macro-F1 (SITL logs) | paper "
           "accuracy % |")

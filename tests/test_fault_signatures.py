@@ -138,6 +138,33 @@ def test_tlm_gps_ekf_drifts_while_auto_continues():
     assert s["auto_kept"] == 1.0
 
 
+def _vibe_x_p95(tables: dict, fault: dict, after_start_s: float, before_s: float) -> tuple:
+    """95th percentile of IMU 0's VibeX [m/s^2] in the ``before_s`` seconds before the fault
+    and from ``after_start_s`` after its start to its end."""
+    v = tables["VIBE"]
+    v = v[v["IMU"] == 0]
+    t0, t1 = fault["start_time_us"], fault["end_time_us"]
+    before = v[(v.TimeUS >= t0 - before_s * 1e6) & (v.TimeUS < t0)]["VibeX"]
+    inside = v[(v.TimeUS >= t0 + after_start_s * 1e6) & (v.TimeUS <= t1)]["VibeX"]
+    return float(before.quantile(0.95)), float(inside.quantile(0.95))
+
+
+@pytest.mark.slow
+def test_tlm_gps_loss_shakes_vibe_like_sitl_once_aiding_stops():
+    """In calm air a GPS loss shows in VIBE only after EKF3 stops aiding (15 s): the position
+    controller loses its position and the vehicle hunts (SITL gps_s12: VibeX 95th percentile
+    0.015 -> 0.043 m/s^2). This small signal is what the VIBE models find without wind
+    (docs/evaluation.md)."""
+    from tlm_sim.flightlog import read_bin
+
+    _, flight = _tlm("gps")
+    ref = read_bin(str(reference_path("gps_s12.bin")), types=["VIBE"])
+    ref_before, ref_in = _vibe_x_p95(ref, flight["ref_faults"][0], 15.0, 25.0)
+    tlm_before, tlm_in = _vibe_x_p95(flight["tlm"], flight["tlm_faults"][0], 15.0, 25.0)
+    assert ref_in > 2.0 * ref_before and tlm_in > 2.0 * tlm_before
+    assert 0.5 < tlm_in / ref_in < 2.0
+
+
 @pytest.mark.slow
 def test_tlm_accel_reads_the_fail_value_only_inside():
     s, _ = _tlm("accel")
