@@ -50,7 +50,9 @@ def gyro_drift(t_s, cfg):
     period = 2.0 * cfg[S.C_DRIFT_TIME]
     if speed == 0.0 or period <= 0.0:
         return 0.0
-    tm = (t_s / 60.0) % period
+    tm = t_s / 60.0
+    if tm >= period:  # fmod (a libm call, every physics tick) only past the first period
+        tm %= period
     if tm < 0.5 * period:
         return speed * tm
     return speed * (period - tm)
