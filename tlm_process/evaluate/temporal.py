@@ -65,6 +65,16 @@ WINDOW_MODELS: Mapping[str, Mapping[str, Any]] = {
 TRAIN_HZ: float = 5.0
 
 
+def _flight_runs(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Row order of ``df`` by flight, then TimeUS, and the positions in that order where each
+    flight's rows end (the last one is ``len(df)``)."""
+    flights = df["flight"].astype(str).to_numpy()
+    order = np.lexsort((df["TimeUS"].to_numpy(), flights))
+    ordered = flights[order]
+    ends = np.concatenate([np.flatnonzero(ordered[1:] != ordered[:-1]) + 1, [len(df)]])
+    return order, ends
+
+
 def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
                train_hz: float = TRAIN_HZ) -> np.ndarray:
     """Boolean mask of the rows of ``df`` a window model is fitted on: in each flight, in
@@ -75,11 +85,10 @@ def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
     keep = np.ones(len(df), dtype=bool)
     if k == 1 or not len(df):
         return keep
-    order = np.lexsort((df["TimeUS"].to_numpy(), df["flight"].astype(str).to_numpy()))
-    flights = df["flight"].astype(str).to_numpy()[order]
-    starts = np.concatenate([[True], flights[1:] != flights[:-1]])
-    first = np.maximum.accumulate(np.where(starts, np.arange(len(df)), 0))
-    keep[order] = (np.arange(len(df)) - first) % k == 0
+    order, ends = _flight_runs(df)
+    starts = np.concatenate([[0], ends[:-1]])
+    rank = np.arange(len(df)) - np.repeat(starts, ends - starts)  # position within the flight
+    keep[order] = rank % k == 0
     return keep
 
 
@@ -204,13 +213,9 @@ def window_features(df: pd.DataFrame, features: Sequence[str],
     rows = [max(2, int(round(s * rate))) for s in spec.seconds]
     names = spec.names(features)
     out = np.empty((len(df), len(names)), dtype=np.float32)
-    order = np.lexsort((df["TimeUS"].to_numpy(), df["flight"].astype(str).to_numpy()))
-    flights = df["flight"].astype(str).to_numpy()[order]
+    order, ends = _flight_runs(df)
     x = df[list(features)].to_numpy(np.float64)[order]
-    bounds = np.flatnonzero(flights[1:] != flights[:-1]) + 1
-    starts = np.concatenate([[0], bounds])
-    ends = np.concatenate([bounds, [len(df)]])
-    for a, b in zip(starts, ends, strict=True):
+    for a, b in zip(np.concatenate([[0], ends[:-1]]), ends, strict=True):
         if b > a:
             out[order[a:b]] = _flight_block(x[a:b], features, spec, rows)
     return out, names
