@@ -33,6 +33,7 @@ from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
     WindowFeatures,
+    row_rate_hz,
     train_rows,
     window_features,
     window_spec_for,
@@ -148,8 +149,9 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
         except ValueError as exc:
             raise EvaluateError(f"{t}: {exc}") from None
         specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
-        X_win = {m: window_features(df, feats, sp)[0] for m, sp in specs.items()}
-        thin = train_rows(df) if specs else None
+        rate = row_rate_hz(df) if specs else None  # measured once for every window model
+        X_win = {m: window_features(df, feats, sp, rate)[0] for m, sp in specs.items()}
+        thin = train_rows(df, rate) if specs else None
         xt = transfer.get(t) if transfer is not None else None
         if xt is not None:
             yt = xt["label"].to_numpy(np.int64)
