@@ -39,25 +39,29 @@ def uniform_pm1(state):
 
 
 @tick_jit
-def normal_pair(state):
-    """Two independent standard normal draws (Marsaglia's polar method); advances state[0]."""
+def _disc_point(state, s_min):
+    """A point (u, v) drawn uniformly in the unit disc by rejection, with s = u^2 + v^2 in
+    (s_min, 1); advances state[0]."""
     while True:
         u = uniform_pm1(state)
         v = uniform_pm1(state)
         s = u * u + v * v
-        if 0.0 < s < 1.0:
-            f = math.sqrt(-2.0 * math.log(s) / s)
-            return u * f, v * f
+        if s_min < s < 1.0:
+            return u, v, s
+
+
+@tick_jit
+def normal_pair(state):
+    """Two independent standard normal draws (Marsaglia's polar method); advances state[0]."""
+    u, v, s = _disc_point(state, 0.0)
+    f = math.sqrt(-2.0 * math.log(s) / s)
+    return u * f, v * f
 
 
 @tick_jit
 def unit_pair(state):
     """A direction drawn uniformly on the unit circle, as (cos, sin) of a uniform angle,
     without trigonometry (a point drawn in the unit disc, normalised); advances state[0]."""
-    while True:
-        u = uniform_pm1(state)
-        v = uniform_pm1(state)
-        s = u * u + v * v
-        if 1e-12 < s < 1.0:
-            r = 1.0 / math.sqrt(s)
-            return u * r, v * r
+    u, v, s = _disc_point(state, 1e-12)
+    r = 1.0 / math.sqrt(s)
+    return u * r, v * r
