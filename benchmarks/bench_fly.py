@@ -1,10 +1,11 @@
 """Benchmark: real-time factor of one paper-length flight (full stack) on one core.
 
 Prints the first-flight time (a cold compile when the numba cache is empty: set
-NUMBA_CACHE_DIR to an empty folder for a truly cold number), the warm real-time factor
-(simulated seconds per wall second) over several flights, and the peak memory.
+NUMBA_CACHE_DIR to an empty folder for a truly cold number) with the CPU time it took in this
+process and in the compile workers (tlm_sim.precompile), the warm real-time factor (simulated
+seconds per wall second) over several flights, and the peak memory.
 
-    python benchmarks/bench_fly.py [--flights 5] [--mission 1]
+    python benchmarks/bench_fly.py [--flights 5] [--mission 1] [--compile-procs N]
 """
 
 from __future__ import annotations
@@ -21,7 +22,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--flights", type=int, default=5)
     ap.add_argument("--mission", type=int, default=1)
+    ap.add_argument("--compile-procs", type=int, default=None,
+                    help="processes for a cold compile (TLM_COMPILE_PROCS; default: CPU count)")
     args = ap.parse_args()
+    if args.compile_procs is not None:
+        os.environ["TLM_COMPILE_PROCS"] = str(args.compile_procs)
 
     t0 = time.perf_counter()
     from tlm_sim import fly
@@ -32,8 +37,13 @@ def main() -> None:
     log = fly(args.mission, seed=0)
     t_first = time.perf_counter() - t0
     sim_first = log.meta["duration_s"]
+    cpu = [resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)]
+    procs = os.environ.get("TLM_COMPILE_PROCS") or "CPU count"
     print(f"import {t_import:.2f} s; first flight (compile or cache load + fly) {t_first:.2f} s "
           f"for {sim_first:.0f} s simulated; compiled signatures: {len(run_flight.signatures)}")
+    print(f"  CPU so far: {cpu[0].ru_utime + cpu[0].ru_stime:.1f} s here, "
+          f"{cpu[1].ru_utime + cpu[1].ru_stime:.1f} s in compile workers "
+          f"(TLM_COMPILE_PROCS: {procs}; os.cpu_count() {os.cpu_count()})")
 
     from tlm_sim import flight as F
 

@@ -614,6 +614,9 @@ def fly(
         mission = builtin_mission(int(mission))
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
+
+    ensure_compiled()  # a cold numba cache is compiled by several processes at once
     p = profile_params(profile, params)
     duration = max_duration_s(mission, p)
     schedule = faults if isinstance(faults, FaultSchedule) else None

@@ -1,0 +1,93 @@
+"""The parallel cold compile (tlm_sim.precompile): its plan matches the flight, and it works."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tlm_sim import precompile as P
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_every_job_signature_is_the_one_the_flight_compiled(normal_flight):
+    """A stale job signature would compile an unused variant in a worker and leave the real one
+    to the serial compile: each job's signature must be in its function's cache as flown."""
+    assert normal_flight.meta["duration_s"] > 0
+    for job in (*P.JOBS, P.RUN_FLIGHT):
+        disp = P.job_dispatcher(job)
+        if tuple(job.args) in disp.overloads:
+            continue
+        assert disp._cache.load_overload(job.args, disp.targetctx) is not None, job.target
+
+
+def test_jobs_are_the_run_flight_callees_and_distinct():
+    targets = [j.target for j in P.JOBS]
+    assert len(set(targets)) == len(targets)
+    assert P.RUN_FLIGHT.target not in targets
+    for job in P.JOBS:
+        assert job.cost_s > 0
+        assert callable(P.job_dispatcher(job).py_func)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 8])
+def test_share_out_gives_each_job_to_one_process_and_balances(n):
+    shares = P.share_out(P.JOBS, n)
+    assert len(shares) == n
+    flat = [j.target for s in shares for j in s]
+    assert sorted(flat) == sorted(j.target for j in P.JOBS)
+    loads = [sum(j.cost_s for j in s) + (P.WORKER_START_S if k else 0.0)
+             for k, s in enumerate(shares)]
+    biggest = max(j.cost_s for j in P.JOBS)
+    # longest-processing-time rule: no process ends more than the biggest job after another
+    assert max(loads) - min(loads) <= biggest + P.WORKER_START_S
+    if n == 1:
+        assert len(shares[0]) == len(P.JOBS)
+
+
+def test_n_procs_from_environment(monkeypatch):
+    monkeypatch.setenv("TLM_COMPILE_PROCS", "3")
+    assert P._n_procs() == 3
+    monkeypatch.setenv("TLM_COMPILE_PROCS", "0")
+    assert P._n_procs() == 1
+    monkeypatch.setenv("TLM_COMPILE_PROCS", "many")
+    assert P._n_procs() == 1
+    monkeypatch.delenv("TLM_COMPILE_PROCS")
+    assert 1 <= P._n_procs() <= P.MAX_PROCS
+
+
+_COLD = """
+import json, sys
+from tlm_sim import precompile as P
+rep = P.precompile(2)
+again = P.precompile(2)
+from tlm_sim import fly
+log = fly(1, seed=0)
+print(json.dumps({"processes": rep.processes, "misses": rep.misses,
+                  "failures": rep.worker_failures, "shares": rep.shares,
+                  "again": again.skipped, "rows": len(log.tables["GPS"])}))
+"""
+
+
+@pytest.mark.slow
+def test_cold_compile_in_two_processes_loads_the_workers_share(tmp_path):
+    """On an empty cache, a worker compiles its share and this process loads it from the cache
+    (no cache miss for any of the worker's jobs), then flies."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "PYTHONPATH": os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH"))
+                                         if p)}
+    out = subprocess.run([sys.executable, "-c", _COLD], env=env, capture_output=True, text=True,
+                         timeout=600, check=False)
+    assert out.returncode == 0, out.stderr[-3000:]
+    rep = json.loads(out.stdout.strip().splitlines()[-1])
+    assert rep["processes"] == 2
+    assert rep["failures"] == 0
+    assert rep["misses"] == []
+    assert rep["shares"][1], "the worker got no jobs"
+    assert rep["again"] == "cached"
+    assert rep["rows"] > 1000
