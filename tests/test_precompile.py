@@ -61,6 +61,65 @@ def test_n_procs_from_environment(monkeypatch):
     assert 1 <= P._n_procs() <= P.MAX_PROCS
 
 
+class _FakeWorker:
+    """Stands in for a worker process: records its jobs, exits with ``rc``."""
+
+    def __init__(self, jobs, rc):
+        self.jobs = [j.target for j in jobs]
+        self.returncode = rc
+
+    def communicate(self, timeout=None):
+        return b"", b"boom" if self.returncode else b""
+
+    def poll(self):
+        return self.returncode
+
+
+@pytest.mark.parametrize("rc", [0, 1])
+def test_precompile_shares_jobs_and_compiles_run_flight_last(monkeypatch, caplog, rc):
+    compiled: list[str] = []
+    started: list[_FakeWorker] = []
+    monkeypatch.setattr(P, "_is_cached", lambda job: False)
+    monkeypatch.setattr(P, "_compile", lambda job: compiled.append(job.target))
+
+    def start(jobs):
+        started.append(_FakeWorker(jobs, rc))
+        return started[-1]
+
+    monkeypatch.setattr(P, "_start_worker", start)
+    with caplog.at_level("INFO", logger="tlm_sim.precompile"):
+        rep = P.precompile(3)
+    assert rep.processes == 3 and len(started) == 2
+    assert compiled[-1] == P.RUN_FLIGHT.target
+    assert sorted(compiled[:-1] + [t for w in started for t in w.jobs]) == sorted(
+        j.target for j in P.JOBS)
+    assert rep.worker_failures == (2 if rc else 0)
+    assert "compiling the flight loop" in caplog.text
+    assert ("precompile worker failed" in caplog.text) == bool(rc)
+
+
+def test_precompile_without_subprocesses_compiles_everything_here(monkeypatch):
+    compiled: list[str] = []
+    monkeypatch.setattr(P, "_is_cached", lambda job: False)
+    monkeypatch.setattr(P, "_compile", lambda job: compiled.append(job.target))
+
+    def start(jobs):
+        raise OSError("no fork here")
+
+    monkeypatch.setattr(P, "_start_worker", start)
+    rep = P.precompile(2)
+    assert rep.processes == 1
+    assert sorted(compiled) == sorted([j.target for j in P.JOBS] + [P.RUN_FLIGHT.target])
+
+
+def test_precompile_loads_a_cached_flight(monkeypatch):
+    compiled: list[str] = []
+    monkeypatch.setattr(P, "_is_cached", lambda job: True)
+    monkeypatch.setattr(P, "_compile", lambda job: compiled.append(job.target))
+    rep = P.precompile(4)
+    assert rep.skipped == "cached" and compiled == [P.RUN_FLIGHT.target]
+
+
 _COLD = """
 import json, sys
 from tlm_sim import precompile as P

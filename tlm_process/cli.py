@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
 import time
@@ -373,6 +374,17 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _show_compile_notices() -> None:
+    """Print tlm_sim.precompile's notices ("compiling the flight loop ...", "compiled in 20 s")
+    on stderr: a cold numba cache makes the first flight after an install take ~20 s."""
+    lg = logging.getLogger("tlm_sim.precompile")
+    if not lg.handlers:
+        h = logging.StreamHandler(sys.stderr)
+        h.setFormatter(logging.Formatter("tlm: %(message)s"))
+        lg.addHandler(h)
+        lg.setLevel(logging.INFO)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
     ap = build_parser()
@@ -383,6 +395,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from tlm_sim.mission import MissionError
     from tlm_sim.params import ParamError
 
+    _show_compile_notices()
     if getattr(args, "seed", 0) is not None and getattr(args, "seed", 0) < 0:
         print("tlm: error: --seed must be >= 0", file=sys.stderr)
         return 2

@@ -55,6 +55,8 @@ log = logging.getLogger(__name__)
 MAX_PROCS = 4
 #: CPU seconds a worker process spends starting (interpreter, numba, tlm_sim imports)
 WORKER_START_S = 1.5
+#: a worker still compiling after this long [s] is stopped (its share is compiled here)
+WORKER_TIMEOUT_S = 900.0
 
 _F1 = nt.float64[::1]
 _F2 = nt.float64[:, ::1]
@@ -213,27 +215,40 @@ def precompile(n_procs: int | None = None) -> CompileReport:
             _compile(RUN_FLIGHT)
             return CompileReport(processes=0, wall_s=time.perf_counter() - t0,
                                  skipped="cached")
+        log.info("compiling the flight loop into the numba cache with %d process(es) (first "
+                 "run after an install or an edit of tlm_sim) ...", n)
         shares = share_out(JOBS, n)
         workers = []
-        for share in shares[1:]:
-            if not share:
-                continue
-            try:
-                workers.append(_start_worker(share))
-            except OSError as exc:  # no subprocesses here: this process compiles everything
-                log.debug("precompile worker did not start (%s)", exc)
-                shares[0].extend(share)
-                share.clear()
-        for job in shares[0]:
-            _compile(job)
         failures = 0
-        for w in workers:
-            _, err = w.communicate()
-            if w.returncode != 0:
-                failures += 1
-                log.warning("a precompile worker failed (exit %s); compiling its share here:\n%s",
-                            w.returncode, err.decode(errors="replace")[-2000:])
+        try:
+            for share in shares[1:]:
+                if not share:
+                    continue
+                try:
+                    workers.append(_start_worker(share))
+                except OSError as exc:  # no subprocesses here: this process compiles it all
+                    log.debug("precompile worker did not start (%s)", exc)
+                    shares[0].extend(share)
+                    share.clear()
+            for job in shares[0]:
+                _compile(job)
+            for w in workers:
+                try:
+                    _, err = w.communicate(timeout=WORKER_TIMEOUT_S)
+                except subprocess.TimeoutExpired:
+                    w.kill()
+                    _, err = w.communicate()
+                if w.returncode != 0:
+                    failures += 1
+                    log.warning("a precompile worker failed (exit %s); its share is compiled "
+                                "here:\n%s", w.returncode, err.decode(errors="replace")[-2000:])
+        finally:  # an error or Ctrl-C here stops the workers too
+            for w in workers:
+                if w.poll() is None:
+                    w.kill()
+                    w.wait()
         _compile(RUN_FLIGHT)
+        log.info("compiled in %.1f s", time.perf_counter() - t0)
     misses = [j.target for s in shares[1:] for j in s
               if sum(job_dispatcher(j).stats.cache_misses.values())]
     return CompileReport(processes=1 + len(workers), shares=[[j.target for j in s] for s in shares],
