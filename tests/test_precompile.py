@@ -117,7 +117,7 @@ def test_precompile_loads_a_cached_flight(monkeypatch):
     monkeypatch.setattr(P, "_is_cached", lambda job: True)
     monkeypatch.setattr(P, "_compile", lambda job: compiled.append(job.target))
     rep = P.precompile(4)
-    assert rep.skipped == "cached" and compiled == [P.RUN_FLIGHT.target]
+    assert rep.skipped == "cached" and compiled == []
 
 
 _COLD = """

@@ -157,8 +157,9 @@ def _n_procs() -> int:
 def _start_worker(jobs: Sequence[Job]) -> subprocess.Popen[bytes]:
     """A ``python -m tlm_sim.precompile --worker`` process compiling ``jobs`` into the cache."""
     env = dict(os.environ)
-    root = str(Path(__file__).resolve().parents[1])  # import this very tlm_sim in the worker
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    root = Path(__file__).resolve().parents[1]
+    if root.name not in ("site-packages", "dist-packages"):  # a checkout: import this very one
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(root), env.get("PYTHONPATH")) if p)
     env["TLM_COMPILE_PROCS"] = "1"
     names = [j.target for j in jobs]
     return subprocess.Popen([sys.executable, "-m", "tlm_sim.precompile", "--worker", *names],
@@ -205,16 +206,17 @@ def precompile(n_procs: int | None = None) -> CompileReport:
     """Compile the flight loop into the numba cache, sharing the work over ``n_procs``
     processes (default ``TLM_COMPILE_PROCS`` or the CPU count, at most :data:`MAX_PROCS`).
 
-    Loads instead when the cache already holds the flight. A worker that fails only costs
-    time: whatever it did not compile, run_flight's compile here does.
+    Does nothing when the cache already holds the flight (its first call loads it). A worker
+    that fails only costs time: whatever it did not compile, run_flight's compile here does.
     """
     t0 = time.perf_counter()
     n = _n_procs() if n_procs is None else max(1, int(n_procs))
+    if _is_cached(RUN_FLIGHT):  # no lock: many warm processes start at once in a pool
+        return CompileReport(processes=0, skipped="cached")
     with _cache_lock():
-        if _is_cached(RUN_FLIGHT):
-            _compile(RUN_FLIGHT)
+        if _is_cached(RUN_FLIGHT):  # another process compiled it while this one waited
             return CompileReport(processes=0, wall_s=time.perf_counter() - t0,
-                                 skipped="cached")
+                                 skipped="compiled by another process")
         log.info("compiling the flight loop into the numba cache with %d process(es) (first "
                  "run after an install or an edit of tlm_sim) ...", n)
         shares = share_out(JOBS, n)
@@ -289,7 +291,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     rep = precompile(a.procs)
     if rep.skipped:
-        print(f"already compiled ({config.CACHE_DIR}); loaded in {rep.wall_s:.1f} s")
+        print(f"already compiled ({rep.skipped}) in {config.CACHE_DIR}")
     else:
         print(f"compiled in {rep.wall_s:.1f} s with {rep.processes} process(es) "
               f"into {config.CACHE_DIR}")
