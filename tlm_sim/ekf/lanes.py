@@ -265,23 +265,27 @@ def _static_tilt_check(e, dang, dvel, imu, dt):
     """
     if dt <= 0.0:
         return
-    # the rest tests on the deltas (|dang| > STATIC_GYRO dt, ...): no divisions on the
-    # every-tick path, which nearly always ends here
+    # the tests on the deltas, squared (|dang| > STATIC_GYRO dt, ...): no square root or
+    # division on the every-tick path, which in hover and steady cruise passes the first two
+    # tests and ends at the third
     ax, ay, az = dang[imu, 0], dang[imu, 1], dang[imu, 2]
     if ax * ax + ay * ay + az * az > (STATIC_GYRO * dt) ** 2:
         e[TILT_BAD_T] = 0.0
         return
     vx, vy, vz = dvel[imu, 0], dvel[imu, 1], dvel[imu, 2]
-    dv = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if abs(dv - GRAVITY * dt) > STATIC_ACC * dt:
+    dv2 = vx * vx + vy * vy + vz * vz
+    lo = (GRAVITY - STATIC_ACC) * dt
+    hi = (GRAVITY + STATIC_ACC) * dt
+    if dv2 < lo * lo or dv2 > hi * hi:
         e[TILT_BAD_T] = 0.0
         return
-    fx, fy, fz, fn = vx / dt, vy / dt, vz / dt, dv / dt
-    # estimated "down" in body axes (third row of the body->NED matrix) vs the sensed one
-    cos_err = -(e[R20] * fx + e[R21] * fy + e[R22] * fz) / fn
-    if cos_err > STATIC_TILT_COS:
+    # estimated "down" in body axes (third row of the body->NED matrix) vs the sensed one:
+    # the cosine of the angle between them, -(R2 . dvel) / |dvel|, above STATIC_TILT_COS
+    c = -(e[R20] * vx + e[R21] * vy + e[R22] * vz)
+    if c > 0.0 and c * c > STATIC_TILT_COS * STATIC_TILT_COS * dv2:
         e[TILT_BAD_T] = 0.0
         return
+    fx, fy, fz = vx / dt, vy / dt, vz / dt
     e[TILT_BAD_T] += dt
     if e[TILT_BAD_T] < STATIC_TIME:
         return
