@@ -397,6 +397,18 @@ def test_damaged_fmt_drops_its_type_only(ref_slice):
             pd.testing.assert_frame_equal(log.tables[name], df, obj=name)
 
 
+def test_messages_method_reports_unusable_fmt_as_binlogerror(ref_slice):
+    """A FMT whose column list no longer matches its format (two names run together) is a
+    BinLogError naming the file on pymavlink's path, not a ValueError from the schema."""
+    data = bytearray(ref_slice.data)
+    at = _fmt_offset(ref_slice, "GPS")
+    cols = bytes(data[at + 25 : at + 89]).rstrip(b"\0")
+    data[at + 25 + cols.rindex(b",")] = ord("_")
+    path = ref_slice.write(bytes(data))
+    with pytest.raises(BinLogError, match=path.name):
+        read_bin(path, ["GPS"], method="messages")
+
+
 def test_conflicting_fmt_keeps_first(ref_slice):
     at = _fmt_offset(ref_slice, "RATE")
     fake = bytearray(ref_slice.data[at : at + FMT_LENGTH])

@@ -248,7 +248,10 @@ def _decode_messages(path: str | os.PathLike, names: list[str] | None) -> dict[s
             continue
         pf = fmts[name]
         fmt = LogFormat(pf.type, pf.name, pf.len, pf.format, tuple(pf.columns))
-        schema = _log_schema(fmt)
+        try:
+            schema = _log_schema(fmt)
+        except ValueError as e:  # a damaged FMT that pymavlink took as it was
+            raise BinLogError(f"{Path(path)}: unusable FMT message for {name} ({e})") from e
         r = rows[name]
         if not r:
             out[name] = empty_table(schema)
