@@ -4,7 +4,10 @@ Runs itself under ``perf record`` with an empty numba cache (so the loop is comp
 process and the address of every jitted function is known), flies ``--flights`` flights of
 mission 1 after a warm-up, writes the ``/tmp/perf-PID.map`` that perf reads for JIT code, and
 prints each jitted function's share of the samples that fell in jitted code (self time: small
-functions LLVM inlined count in their caller). Needs ``perf`` on PATH; ~1 minute (compile).
+functions LLVM inlined count in their caller). It profiles the loop as numba links it by
+default (``LoopLibrary.privatize = False``, see :mod:`tlm_sim._jit`): the default build makes
+the callees private to the loop, where LLVM inlines most of them and perf can no longer tell
+them apart. Needs ``perf`` on PATH; ~1 minute (compile).
 
     PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20]
 """
@@ -36,6 +39,11 @@ def _short(symbol: str) -> str:
 
 def child(flights: int) -> None:
     """Fly (under perf), then write the perf map of the loop's jitted functions."""
+    from tlm_sim._jit import LoopLibrary
+
+    # keep the callees' exported names (the perf map needs their addresses); the loop is then
+    # ~20 % slower than the default build, whose callees are private (tlm_sim._jit)
+    LoopLibrary.privatize = False
     from tlm_sim import fly
     from tlm_sim.flight import run_flight
 

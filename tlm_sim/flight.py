@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from tlm_sim import logger as L
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import loop_jit, tick_jit
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
 from tlm_sim.control.config import build_control_config
@@ -116,7 +116,7 @@ def _motor_pwm(c, scfg, pwm):
         pwm[i] = p
 
 
-@tick_jit
+@loop_jit
 def run_flight(
     x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, t_end_us, home,
     gps_time, bufs, counts, s, work, rng, wind_rng,

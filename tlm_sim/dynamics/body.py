@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import loop_jit, tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
@@ -246,7 +246,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     smooth_sensors(x, dt)
 
 
-@tick_jit
+@loop_jit
 def run_ticks(
     x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float, n: int,
     rng: np.ndarray,
