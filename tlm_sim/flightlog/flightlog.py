@@ -27,6 +27,7 @@ row count of every table and the layout of any table whose schema is not in ``SC
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -38,7 +39,7 @@ import numpy as np
 import pandas as pd
 
 from .quantise import frame_from_columns, quantise_column, quantise_frame
-from .schema import LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
+from .schema import FORMAT_CHARS, LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
 from .tableio import read_csv, read_parquet, write_csv, write_parquet
 
 __all__ = ["BIN_NAME", "FlightLog", "LazyTables", "allocate_buffers", "to_jsonable"]
@@ -94,6 +95,15 @@ def to_jsonable(obj: Any) -> Any:
 
 
 _PLAIN = (float, int, str, bool)
+
+
+@functools.cache
+def _format_groups(schema: MessageSchema) -> tuple[tuple[str, list[int]], ...]:
+    """Columns 1.. of ``schema`` (all but TimeUS) grouped by format character."""
+    groups: dict[str, list[int]] = {}
+    for k in range(1, len(schema.columns)):
+        groups.setdefault(schema.fmt[k], []).append(k)
+    return tuple(groups.items())
 
 
 def _params_dict(params: Any) -> dict[str, Any] | None:
@@ -301,11 +311,22 @@ class FlightLog:
                 continue
             rows = buf[:n]
             t = quantise_column(rows[:, 0], schema.fmt[0])
-            order = np.argsort(t, kind="stable")
-            cols = {schema.columns[0]: t[order]}
-            for k in range(1, len(schema.columns)):
-                cols[schema.columns[k]] = quantise_column(rows[order, k], schema.fmt[k])
-            tables.add_columns(name, cols)
+            if n < 2 or bool(np.all(t[1:] >= t[:-1])):  # logged in time order (the usual)
+                by_col = rows.T  # by_col[k] = column k in TimeUS order
+            else:
+                order = np.argsort(t, kind="stable")
+                t = t[order]
+                by_col = rows[order].T  # one gather
+            out = {schema.columns[0]: t}
+            for char, idx in _format_groups(schema):
+                if FORMAT_CHARS[char].kind in ("str", "array"):
+                    for k in idx:
+                        out[schema.columns[k]] = quantise_column(by_col[k], char)
+                else:  # elementwise: the columns of one format character in one call
+                    block = quantise_column(np.ascontiguousarray(by_col[idx]), char)
+                    for j, k in enumerate(idx):
+                        out[schema.columns[k]] = block[j]
+            tables.add_columns(name, {c: out[c] for c in schema.columns})
         return cls(tables, params=params, mission=mission, faults=faults, meta=meta)
 
     @classmethod
