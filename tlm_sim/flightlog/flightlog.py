@@ -98,12 +98,12 @@ _PLAIN = (float, int, str, bool)
 
 
 @functools.cache
-def _format_groups(schema: MessageSchema) -> tuple[tuple[str, list[int]], ...]:
+def _format_groups(schema: MessageSchema) -> tuple[tuple[str, tuple[int, ...]], ...]:
     """Columns 1.. of ``schema`` (all but TimeUS) grouped by format character."""
     groups: dict[str, list[int]] = {}
     for k in range(1, len(schema.columns)):
         groups.setdefault(schema.fmt[k], []).append(k)
-    return tuple(groups.items())
+    return tuple((char, tuple(idx)) for char, idx in groups.items())
 
 
 def _params_dict(params: Any) -> dict[str, Any] | None:
@@ -323,7 +323,7 @@ class FlightLog:
                     for k in idx:
                         out[schema.columns[k]] = quantise_column(by_col[k], char)
                 else:  # elementwise: the columns of one format character in one call
-                    block = quantise_column(np.ascontiguousarray(by_col[idx]), char)
+                    block = quantise_column(by_col[list(idx)], char)  # a C-ordered copy
                     for j, k in enumerate(idx):
                         out[schema.columns[k]] = block[j]
             tables.add_columns(name, {c: out[c] for c in schema.columns})
