@@ -38,6 +38,20 @@ from tlm_sim.params import ALIASES, PARAM_INFO, ParamError, Params, UnknownParam
 SIDECARS = sorted(REFERENCE.glob("*.json"))
 
 
+def _sidecar_param(path):
+    """A sidecar as a test parameter; one whose fault types tlm does not model yet (the second
+    reference set, labels 5-11: issue 19) is a strict xfail, so modelling them flips it."""
+    try:
+        types = {rec["type"] for rec in json.loads(path.read_text())["faults"]}
+    except (OSError, ValueError, KeyError, TypeError):
+        types = set()
+    missing = sorted(types - set(FAULT_TYPES))
+    marks = [pytest.mark.xfail(strict=True, raises=KeyError,
+                               reason=f"fault type(s) {', '.join(missing)} not modelled yet "
+                                      "(issue 19)")] if missing else []
+    return pytest.param(path, id=path.stem, marks=marks)
+
+
 def one_line_error(fn, *args, match: str | None = None, **kw) -> FaultScheduleError:
     """Call ``fn``; assert it raises a FaultScheduleError with a one-line message."""
     with pytest.raises(FaultScheduleError, match=match) as info:
@@ -78,7 +92,7 @@ def test_fault_type_params_are_valid_and_end_restores_defaults():
             assert defaults[name] != ftype.params_start[name]
 
 
-@pytest.mark.parametrize("sidecar", SIDECARS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("sidecar", [_sidecar_param(p) for p in SIDECARS])
 def test_fault_types_match_the_reference_sidecars(sidecar):
     faults = json.loads(reference_path(sidecar.name).read_text())["faults"]
     for rec in faults:
