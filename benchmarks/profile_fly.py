@@ -39,10 +39,10 @@ def _short(symbol: str) -> str:
 
 def child(flights: int) -> None:
     """Fly (under perf), then write the perf map of the loop's jitted functions."""
-    from tlm_sim._jit import LoopLibrary
+    from tlm_sim._jit_fast import LoopLibrary
 
     # keep the callees' exported names (the perf map needs their addresses); the loop is then
-    # ~20 % slower than the default build, whose callees are private (tlm_sim._jit)
+    # ~20 % slower than the default build, whose callees are private (tlm_sim._jit_fast)
     LoopLibrary.privatize = False
     from tlm_sim import fly
     from tlm_sim.flight import run_flight

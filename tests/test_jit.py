@@ -1,4 +1,5 @@
-"""tlm_sim._jit: loop entries keep their callees' code private to their own module."""
+"""tlm_sim._jit: the fast build (loop entries keep their callees' code private to their own
+module), the plain build (public numba options only) and the choice between them."""
 
 from __future__ import annotations
 
@@ -11,10 +12,11 @@ import pytest
 from llvmlite import binding as ll
 from numba import config
 
-from tlm_sim import fly
-from tlm_sim._jit import LoopLibrary, loop_jit, tick_jit
+from tlm_sim import _jit, fly
+from tlm_sim._jit import loop_jit, tick_jit
 
 pytestmark = pytest.mark.skipif(config.DISABLE_JIT, reason="needs numba's compiler")
+fast_only = pytest.mark.skipif(_jit.MODE != "fast", reason="tests the fast build")
 
 
 @tick_jit
@@ -22,7 +24,10 @@ def _bump(a, i, by):
     a[i] += by
 
 
+@fast_only
 def test_loop_library_makes_linked_callees_private_and_keeps_its_own_exported():
+    from tlm_sim._jit_fast import LoopLibrary
+
     def loop(a, n):
         for _ in range(n):
             _bump(a, 0, 1.0)
@@ -82,3 +87,71 @@ def test_callees_of_the_flight_loop_run_when_called_directly_after_a_flight():
                              timeout=300)
         assert out.returncode == 0, out.stderr[-2000:]
         assert float(out.stdout.split()[-1]) == pytest.approx(30.0, abs=0.02)
+
+
+def _run(script: str, **env: str) -> subprocess.CompletedProcess:
+    import os
+
+    full = {k: v for k, v in os.environ.items() if k not in ("TLM_JIT", "NUMBA_CACHE_DIR")}
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
+                          text=True, timeout=600, env={**full, **env})
+
+
+def test_plain_build_flies_the_same_flight_as_the_fast_build():
+    """TLM_JIT=plain: every function is a public numba.njit, its cache is its own, and it flies
+    the model the fast build flies (not bit for bit: LLVM inlines, and so fuses multiply-adds,
+    differently)."""
+    out = _run("""
+        import json, numba, tlm_sim
+        from tlm_sim import _jit
+        from tlm_sim.flight import run_flight
+        from tlm_sim.dynamics.body import physics_step
+        log = tlm_sim.fly(1, seed=3)
+        pos = log.tables["POS"]
+        print(json.dumps({"mode": _jit.MODE, "cache": __import__("os").environ["NUMBA_CACHE_DIR"],
+                          "plain": all(type(f) is numba.core.registry.CPUDispatcher
+                                       for f in (run_flight, physics_step)),
+                          "meta": {k: log.meta[k] for k in ("duration_s", "waypoints_reached",
+                                                            "landed")},
+                          "end": [float(pos["Lat"].iloc[-1]), float(pos["Lng"].iloc[-1])]}))
+    """, TLM_JIT="plain")
+    assert out.returncode == 0, out.stderr[-3000:]
+    import json
+
+    got = json.loads(out.stdout.splitlines()[-1])
+    assert got["mode"] == "plain" and got["plain"]
+    assert got["cache"].endswith("-plain")
+    ref = fly(1, seed=3)
+    assert got["meta"]["waypoints_reached"] == ref.meta["waypoints_reached"]
+    assert got["meta"]["landed"] == ref.meta["landed"]
+    assert got["meta"]["duration_s"] == pytest.approx(ref.meta["duration_s"], abs=0.5)
+    pos = ref.tables["POS"]
+    assert got["end"][0] == pytest.approx(float(pos["Lat"].iloc[-1]), abs=2e-6)  # ~0.2 m
+    assert got["end"][1] == pytest.approx(float(pos["Lng"].iloc[-1]), abs=2e-6)
+
+
+def test_a_numba_without_a_private_internal_falls_back_to_plain_with_one_warning():
+    out = _run("""
+        import warnings
+        from numba.core.options import DefaultOptions
+        del DefaultOptions._nrt  # a numba release without the option
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            from tlm_sim import _jit
+        ours = [str(w.message) for w in caught if "tlm" in str(w.message)]
+        print(_jit.MODE, len(ours), ours[0] if ours else "")
+    """)
+    assert out.returncode == 0, out.stderr[-3000:]
+    mode, n, message = out.stdout.split(" ", 2)
+    assert (mode, n) == ("plain", "1")
+    assert "DefaultOptions._nrt" in message and "plain build" in message
+
+
+def test_tlm_jit_values(monkeypatch):
+    monkeypatch.delenv("TLM_JIT", raising=False)
+    assert _jit.requested_mode() == "fast"
+    monkeypatch.setenv("TLM_JIT", " Plain ")
+    assert _jit.requested_mode() == "plain"
+    monkeypatch.setenv("TLM_JIT", "turbo")
+    with pytest.warns(RuntimeWarning, match="TLM_JIT='turbo'"):
+        assert _jit.requested_mode() == "fast"

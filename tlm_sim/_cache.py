@@ -3,7 +3,9 @@
 numba invalidates a cached function when its own file changes, but not when a function it
 calls (in another file) changes: ``run_flight`` would silently keep stale copies of the
 physics, EKF or controllers. Keying the cache folder by the whole package's source makes every
-edit start a fresh cache. Set NUMBA_CACHE_DIR yourself to override.
+edit start a fresh cache. The plain build (``TLM_JIT=plain``, :mod:`tlm_sim._jit`) gets a
+folder of its own (``<hash>-plain``): numba's cache index does not record compile options, so
+the two builds must not share one. Set NUMBA_CACHE_DIR yourself to override.
 """
 
 from __future__ import annotations
@@ -38,7 +40,8 @@ def configure_numba_cache() -> None:
     except OSError:
         base = Path(tempfile.gettempdir()) / "tlm-numba"
         base.mkdir(parents=True, exist_ok=True)
-    target = base / source_hash(root)
+    plain = os.environ.get("TLM_JIT", "").strip().lower() == "plain"
+    target = base / (source_hash(root) + ("-plain" if plain else ""))
     if not target.exists():
         target.mkdir(exist_ok=True)
         others = sorted((d for d in base.iterdir() if d.is_dir() and d != target),
