@@ -26,7 +26,7 @@ test: $(VENV)/.installed-test
 	$(PY) -m pytest -n 2 -q
 
 lint: $(VENV)/.installed-test
-	$(VENV)/bin/ruff check tlm_sim tlm_process tests benchmarks
+	$(VENV)/bin/ruff check tlm_sim tlm_process tests benchmarks tools
 
 bench: $(VENV)/.installed
 	$(PY) benchmarks/bench_fly.py

@@ -154,7 +154,7 @@ def _start_land(c, pos, failsafe):
 
 
 @tick_jit
-def vehicle_step(
+def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its sections
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
     mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
 ):
