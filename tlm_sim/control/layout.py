@@ -1,111 +1,127 @@
-"""Index constants of the controller state ``c`` and controller configuration ``g`` arrays.
+"""Slots of the controller state ``c`` and controller configuration ``g`` arrays, declared once
+(:class:`tlm_sim.slots.Layout`; ``STATE.describe(c)``, ``CONFIG.describe(g)``).
 
 Controller internals use SI units (m, m/s, m/s^2, rad, rad/s), earth frame NED, body FRD;
 configuration values are converted from ArduPilot's parameter units when the array is built.
 """
 
+from tlm_sim.slots import Layout
+
 # ---------------------------------------------------------------- controller state c ----------
-# rate PIDs, one block per axis (roll, pitch, yaw)
-RATE_BASE = 0
-R_TF = 0  # filtered target [rad/s]
-R_EF = 1  # filtered error [rad/s]
-R_DF = 2  # filtered derivative [rad/s^2]
-R_EPREV = 3  # previous filtered error
-R_I = 4  # integrator (motor units)
-R_OUT = 5  # last output (motor units, +-1)
-R_TARGET = 6  # unfiltered rate target [rad/s]
-R_MEAS = 7  # rate used [rad/s]
-RATE_STRIDE = 8
-# attitude: target euler angles [rad] and their shaped rates [rad/s]
-ATT_ROLL_T = 24
-ATT_PITCH_T = 25
-ATT_YAW_T = 26
-ATT_ROLL_RATE_T = 27
-ATT_PITCH_RATE_T = 28
-ATT_YAW_RATE_T = 29
-ATT_ROLL_CMD = 30  # commanded lean angles and heading [rad] (before shaping)
-ATT_PITCH_CMD = 31
-ATT_YAW_CMD = 32
+# rate PIDs: one record per axis (roll, pitch, yaw) at RATE_BASE + axis * RATE_STRIDE
+RATE = Layout("rate", "rate PID of one axis")
+R_TF = RATE.add("R_TF", 1, "rad/s", "filtered target")
+R_EF = RATE.add("R_EF", 1, "rad/s", "filtered error")
+R_DF = RATE.add("R_DF", 1, "rad/s^2", "filtered derivative")
+R_EPREV = RATE.add("R_EPREV", 1, "", "previous filtered error")
+R_I = RATE.add("R_I", 1, "", "integrator (motor units)")
+R_OUT = RATE.add("R_OUT", 1, "", "last output (motor units, +-1)")
+R_TARGET = RATE.add("R_TARGET", 1, "rad/s", "unfiltered rate target")
+R_MEAS = RATE.add("R_MEAS", 1, "rad/s", "rate used")
+RATE_STRIDE = RATE.close()
+
+STATE = Layout("c", "controller state")
+_c = STATE
+RATE_BASE = _c.block("RATE", RATE, 3)
+ATT_ROLL_T = _c.add("ATT_ROLL_T", 1, "rad", "attitude target: roll")
+ATT_PITCH_T = _c.add("ATT_PITCH_T", 1, "rad", "attitude target: pitch")
+ATT_YAW_T = _c.add("ATT_YAW_T", 1, "rad", "attitude target: heading")
+ATT_ROLL_RATE_T = _c.add("ATT_ROLL_RATE_T", 1, "rad/s", "shaped rate of the roll target")
+ATT_PITCH_RATE_T = _c.add("ATT_PITCH_RATE_T", 1, "rad/s", "shaped rate of the pitch target")
+ATT_YAW_RATE_T = _c.add("ATT_YAW_RATE_T", 1, "rad/s", "shaped rate of the heading target")
+ATT_ROLL_CMD = _c.add("ATT_ROLL_CMD", 1, "rad", "commanded roll (before shaping)")
+ATT_PITCH_CMD = _c.add("ATT_PITCH_CMD", 1, "rad", "commanded pitch (before shaping)")
+ATT_YAW_CMD = _c.add("ATT_YAW_CMD", 1, "rad", "commanded heading (before shaping)")
 # horizontal position controller (N, E)
-PXY_POS_T = 33  # target position NE [m] (2)
-PXY_VEL_T = 35  # target velocity NE [m/s] (2)
-PXY_ACC_T = 37  # target acceleration NE [m/s^2] (2)
-PXY_VEL_FF = 39  # feed-forward velocity NE (2)
-PXY_ACC_FF = 41  # feed-forward acceleration NE (2)
-PXY_I = 43  # velocity PID integrator NE [m/s^2] (2)
-PXY_EF = 45  # filtered velocity error (2)
-PXY_DF = 47  # filtered derivative (2)
-PXY_EPREV = 49  # previous filtered velocity error (2)
+PXY_POS_T = _c.add("PXY_POS_T", 2, "m", "target position NE")
+PXY_VEL_T = _c.add("PXY_VEL_T", 2, "m/s", "target velocity NE")
+PXY_ACC_T = _c.add("PXY_ACC_T", 2, "m/s^2", "target acceleration NE")
+PXY_VEL_FF = _c.add("PXY_VEL_FF", 2, "", "feed-forward velocity NE")
+PXY_ACC_FF = _c.add("PXY_ACC_FF", 2, "", "feed-forward acceleration NE")
+PXY_I = _c.add("PXY_I", 2, "m/s^2", "velocity PID integrator NE")
+PXY_EF = _c.add("PXY_EF", 2, "", "filtered velocity error")
+PXY_DF = _c.add("PXY_DF", 2, "", "filtered derivative")
+PXY_EPREV = _c.add("PXY_EPREV", 2, "", "previous filtered velocity error")
 # vertical position controller (down positive internally)
-PZ_POS_T = 51  # target down position [m]
-PZ_VEL_T = 52  # target down velocity [m/s]
-PZ_ACC_T = 53  # target "up" acceleration [m/s^2] (ArduPilot's ADes sign)
-PZ_VEL_FF = 54  # feed-forward down velocity
-PZ_ACC_EF = 55  # filtered acceleration error [m/s^2]
-PZ_I = 56  # accel PID integrator (throttle units)
-PZ_ACC_MEAS = 57  # measured up acceleration [m/s^2]
-THR_OUT = 58  # throttle demand 0..1 to the mixer
-THR_HOVER = 59  # learned hover throttle (MOT_THST_HOVER)
-THR_OUT_BOOSTED = 60  # throttle after angle boost
+PZ_POS_T = _c.add("PZ_POS_T", 1, "m", "target down position")
+PZ_VEL_T = _c.add("PZ_VEL_T", 1, "m/s", "target down velocity")
+PZ_ACC_T = _c.add("PZ_ACC_T", 1, "m/s^2", "target 'up' acceleration (ArduPilot's ADes sign)")
+PZ_VEL_FF = _c.add("PZ_VEL_FF", 1, "", "feed-forward down velocity")
+PZ_ACC_EF = _c.add("PZ_ACC_EF", 1, "m/s^2", "filtered acceleration error")
+PZ_I = _c.add("PZ_I", 1, "", "accel PID integrator (throttle units)")
+PZ_ACC_MEAS = _c.add("PZ_ACC_MEAS", 1, "m/s^2", "measured up acceleration")
+THR_OUT = _c.add("THR_OUT", 1, "", "throttle demand 0..1 to the mixer")
+THR_HOVER = _c.add("THR_HOVER", 1, "", "learned hover throttle (MOT_THST_HOVER)")
+THR_OUT_BOOSTED = _c.add("THR_OUT_BOOSTED", 1, "", "throttle after angle boost")
 # mixer outputs and limit flags
-MIX_THRUST = 61  # per-motor thrust fraction 0..1 (4)
-MIX_ACT = 65  # per-motor actuator 0..1 (4)
-MIX_PWM = 69  # per-motor commanded PWM [us] (4)
-LIM_RP = 73  # roll/pitch saturated (1/0)
-LIM_YAW = 74
-LIM_THR_LO = 75
-LIM_THR_HI = 76
+MIX_THRUST = _c.add("MIX_THRUST", 4, "", "per-motor thrust fraction 0..1")
+MIX_ACT = _c.add("MIX_ACT", 4, "", "per-motor actuator 0..1")
+MIX_PWM = _c.add("MIX_PWM", 4, "us", "per-motor commanded PWM")
+LIM_RP = _c.add("LIM_RP", 1, "", "roll/pitch saturated (1/0)")
+LIM_YAW = _c.add("LIM_YAW", 1, "", "yaw saturated (1/0)")
+LIM_THR_LO = _c.add("LIM_THR_LO", 1, "", "throttle at its lower limit (1/0)")
+LIM_THR_HI = _c.add("LIM_THR_HI", 1, "", "throttle at its upper limit (1/0)")
 # vehicle / mode
-MODE = 77  # ArduCopter mode number
-SUBMODE = 78  # see the SUB_* constants
-ARMED = 79
-LANDED = 80  # land-complete flag
-LAND_TIMER = 81  # seconds the landing conditions have held
-ALP = 82  # 1 Hz low-passed earth accel minus gravity [m/s^2] (3)
-WP_INDEX = 85  # index of the next mission waypoint (the end of the current leg)
-PATH_S = 86  # target progress along the active path [m]
-PATH_V = 87  # target speed along the path [m/s]
-PATH_A = 88  # target acceleration along the path [m/s^2]
-SUB_TIMER = 89  # time in the current sub-mode [s]
-HOME_YAW = 90  # heading at arming [rad]
-RC_FAILSAFE = 91  # radio failsafe active
-SPOOL = 92  # 0 shut down, 1 ground idle, 2 throttle unlimited
-MAYBE_LANDED = 93
-WP_REACHED = 94  # waypoints reached so far
-TAKEOFF_ALT = 95  # takeoff target altitude above home [m]
-LAND_DESCENT_STARTED = 96
-CRASH_TIMER = 97
-DISARM_TIME = 98  # simulated time of disarm [s] (-1 while armed)
-YAW_RATE_CMD = 99  # heading-rate feed-forward of the path's heading [rad/s]
-BODY_RATE_T = 100  # attitude controller output: body-rate targets [rad/s] (3)
+MODE = _c.add("MODE", 1, "", "ArduCopter mode number")
+SUBMODE = _c.add("SUBMODE", 1, "", "see the SUB_* constants")
+ARMED = _c.add("ARMED", 1, "", "1 while armed")
+LANDED = _c.add("LANDED", 1, "", "land-complete flag")
+LAND_TIMER = _c.add("LAND_TIMER", 1, "", "seconds the landing conditions have held")
+ALP = _c.add("ALP", 3, "m/s^2", "1 Hz low-passed earth accel minus gravity")
+WP_INDEX = _c.add("WP_INDEX", 1, "",
+                  "index of the next mission waypoint (the end of the current leg)")
+PATH_S = _c.add("PATH_S", 1, "m", "target progress along the active path")
+PATH_V = _c.add("PATH_V", 1, "m/s", "target speed along the path")
+PATH_A = _c.add("PATH_A", 1, "m/s^2", "target acceleration along the path")
+SUB_TIMER = _c.add("SUB_TIMER", 1, "s", "time in the current sub-mode")
+HOME_YAW = _c.add("HOME_YAW", 1, "rad", "heading at arming")
+RC_FAILSAFE = _c.add("RC_FAILSAFE", 1, "", "radio failsafe active")
+SPOOL = _c.add("SPOOL", 1, "", "0 shut down, 1 ground idle, 2 throttle unlimited")
+MAYBE_LANDED = _c.add("MAYBE_LANDED", 1, "", "land detector's maybe-landed flag")
+WP_REACHED = _c.add("WP_REACHED", 1, "", "waypoints reached so far")
+TAKEOFF_ALT = _c.add("TAKEOFF_ALT", 1, "m", "takeoff target altitude above home")
+LAND_DESCENT_STARTED = _c.add("LAND_DESCENT_STARTED", 1, "", "1 once the LAND descent has begun")
+CRASH_TIMER = _c.add("CRASH_TIMER", 1, "s", "time the crash-check conditions have held")
+DISARM_TIME = _c.add("DISARM_TIME", 1, "s", "simulated time of disarm (-1 while armed)")
+YAW_RATE_CMD = _c.add("YAW_RATE_CMD", 1, "rad/s", "heading-rate feed-forward of the path's heading")
+BODY_RATE_T = _c.add("BODY_RATE_T", 3, "rad/s", "attitude controller output: body-rate targets")
 # vertical complementary filter of the EKF height (EKF3's height-rate output), down positive
-VCF_ACC = 103  # learned acceleration offset [m/s^2]
-VCF_VEL = 104  # height rate, down [m/s]
-VCF_POS = 105  # height, down [m]
-VIBE_COMP = 106  # 1 while the vibration failsafe (vibration compensation) is on
-VIBE_FAIL_T = 107  # start of the current run of failing vibration checks [s] (-1: passing)
-VIBE_LAST_FAIL_T = 108  # last failing vibration check [s]
-EKF_FAIL_COUNT = 109  # ekf_check failure counter (0..10)
-EKF_FAILSAFE = 110  # 1 while the EKF failsafe is active
-EKF_CHECK_OK_ONCE = 111  # 1 once the EKF checks have passed
-EKF_VEL_TR_F = 112  # low-passed sqrt velocity test ratio
-EKF_POS_TR_F = 113  # low-passed sqrt position test ratio
-EKF_POS_OK = 114  # 1 while the EKF reports an absolute horizontal position
-LAND_NOGPS = 115  # 1: LAND without position control (level attitude, horizontal drift)
-LAND_PAUSE = 116  # seconds left before a failsafe LAND starts descending
-CHECK_TIMER = 117  # time of the next 10 Hz failsafe check [s]
-THRUST_LOSS_T = 118  # time the thrust-loss symptoms have lasted [s]
-THRUST_BOOST = 119  # 1 while the motors' thrust boost is on (after a thrust-loss detection)
-PZ_ACC_FF = 120  # feed-forward down acceleration of the path [m/s^2]
-PATH_STOP_T = 121  # time into the jerk-limited stop at the path's end [s] (-1: not stopping)
-PATH_STOP_V0 = 122  # target speed when that stop began [m/s]
-AIR_RHO_RATIO = 123  # air density / 1.225 at the vehicle (motor density compensation; 0: off)
-PATH_STOP_A = 124  # acceleration limit of that stop [m/s^2]
-ALTHOLD_LEAN = 125  # lean-angle limit from the throttle headroom, filtered [rad] (see position)
-PXY_LIMIT = 126  # last horizontal acceleration target before it was limited, NE (2; 0: none)
-TRACK_K = 128  # AC_WPNav's S-curve time scaler (track_scalar_dt), 0..1
-TAKEOFF_DONE_T = 129  # time since the AUTO takeoff reached its altitude [s] (-1: not yet)
-N_CONTROL_STATE = 130
+VCF_ACC = _c.add("VCF_ACC", 1, "m/s^2", "learned acceleration offset")
+VCF_VEL = _c.add("VCF_VEL", 1, "m/s", "height rate, down")
+VCF_POS = _c.add("VCF_POS", 1, "m", "height, down")
+VIBE_COMP = _c.add("VIBE_COMP", 1, "",
+                   "1 while the vibration failsafe (vibration compensation) is on")
+VIBE_FAIL_T = _c.add("VIBE_FAIL_T", 1, "s",
+                     "start of the current run of failing vibration checks (-1: passing)")
+VIBE_LAST_FAIL_T = _c.add("VIBE_LAST_FAIL_T", 1, "s", "last failing vibration check")
+EKF_FAIL_COUNT = _c.add("EKF_FAIL_COUNT", 1, "", "ekf_check failure counter (0..10)")
+EKF_FAILSAFE = _c.add("EKF_FAILSAFE", 1, "", "1 while the EKF failsafe is active")
+EKF_CHECK_OK_ONCE = _c.add("EKF_CHECK_OK_ONCE", 1, "", "1 once the EKF checks have passed")
+EKF_VEL_TR_F = _c.add("EKF_VEL_TR_F", 1, "", "low-passed sqrt velocity test ratio")
+EKF_POS_TR_F = _c.add("EKF_POS_TR_F", 1, "", "low-passed sqrt position test ratio")
+EKF_POS_OK = _c.add("EKF_POS_OK", 1, "", "1 while the EKF reports an absolute horizontal position")
+LAND_NOGPS = _c.add("LAND_NOGPS", 1, "",
+                    "1: LAND without position control (level attitude, horizontal drift)")
+LAND_PAUSE = _c.add("LAND_PAUSE", 1, "", "seconds left before a failsafe LAND starts descending")
+CHECK_TIMER = _c.add("CHECK_TIMER", 1, "s", "time of the next 10 Hz failsafe check")
+THRUST_LOSS_T = _c.add("THRUST_LOSS_T", 1, "s", "time the thrust-loss symptoms have lasted")
+THRUST_BOOST = _c.add("THRUST_BOOST", 1, "",
+                      "1 while the motors' thrust boost is on (after a thrust-loss detection)")
+PZ_ACC_FF = _c.add("PZ_ACC_FF", 1, "m/s^2", "feed-forward down acceleration of the path")
+PATH_STOP_T = _c.add("PATH_STOP_T", 1, "s",
+                     "time into the jerk-limited stop at the path's end (-1: not stopping)")
+PATH_STOP_V0 = _c.add("PATH_STOP_V0", 1, "m/s", "target speed when that stop began")
+AIR_RHO_RATIO = _c.add("AIR_RHO_RATIO", 1, "",
+                       "air density / 1.225 at the vehicle (motor density compensation; 0: off)")
+PATH_STOP_A = _c.add("PATH_STOP_A", 1, "m/s^2", "acceleration limit of that stop")
+ALTHOLD_LEAN = _c.add("ALTHOLD_LEAN", 1, "rad",
+                      "lean-angle limit from the throttle headroom, filtered (see position)")
+PXY_LIMIT = _c.add("PXY_LIMIT", 2, "",
+                   "last horizontal acceleration target before it was limited, NE (0: none)")
+TRACK_K = _c.add("TRACK_K", 1, "", "AC_WPNav's S-curve time scaler (track_scalar_dt), 0..1")
+TAKEOFF_DONE_T = _c.add("TAKEOFF_DONE_T", 1, "s",
+                        "time since the AUTO takeoff reached its altitude (-1: not yet)")
+N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
 SUB_NONE = 0
@@ -136,81 +152,94 @@ RSN_MISSION_END = 8
 RSN_CRASH_FAILSAFE = 19
 
 # ------------------------------------------------------------ controller configuration g ------
-G_DT = 0  # main-loop period [s]
-G_RAT_P = 1  # rate PID P per axis (3)
-G_RAT_I = 4
-G_RAT_D = 7
-G_RAT_FF = 10
-G_RAT_IMAX = 13
-G_RAT_FLTT = 16  # filter alphas at the loop rate (3 each)
-G_RAT_FLTE = 19
-G_RAT_FLTD = 22
-G_ANG_P = 25  # angle P per axis (3) [1/s]
-G_ACCEL_MAX = 28  # attitude accel limits per axis [rad/s^2] (3)
-G_INPUT_TC = 31  # ATC_INPUT_TC [s]
-G_SLEW_YAW = 32  # ATC_SLEW_YAW [rad/s]
-G_ANGLE_MAX = 33  # ANGLE_MAX [rad]
-G_POSXY_P = 34
-G_VELXY_P = 35
-G_VELXY_I = 36
-G_VELXY_D = 37
-G_VELXY_IMAX = 38  # [m/s^2]
-G_VELXY_FLTE = 39  # alpha
-G_VELXY_FLTD = 40  # alpha
-G_POSZ_P = 41
-G_VELZ_P = 42
-G_ACCZ_P = 43  # throttle per cm/s^2 (ArduPilot units kept: x0.001 applied in code)
-G_ACCZ_I = 44
-G_ACCZ_D = 45
-G_ACCZ_IMAX = 46  # [throttle units * 1000]
-G_ACCZ_FLTE = 47  # alpha
-G_WP_SPEED = 48  # WPNAV_SPEED [m/s]
-G_WP_ACCEL = 49  # WPNAV_ACCEL [m/s^2]
-G_WP_SPEED_UP = 50  # [m/s]
-G_WP_SPEED_DN = 51  # [m/s]
-G_WP_ACCEL_Z = 52  # [m/s^2]
-G_WP_RADIUS = 53  # [m]
-G_WP_JERK = 54  # [m/s^3]
-G_RTL_ALT = 55  # [m]
-G_RTL_SPEED = 56  # [m/s] (0 -> WP speed)
-G_RTL_LOIT_TIME = 57  # [s]
-G_RTL_CONE_SLOPE = 58
-G_RTL_CLIMB_MIN = 59  # [m]
-G_LAND_SPEED = 60  # [m/s]
-G_LAND_SPEED_HIGH = 61  # [m/s] (0 -> WP_SPEED_DN)
-G_LAND_ALT_LOW = 62  # [m]
-G_MOT_EXPO = 63
-G_MOT_HOVER = 64
-G_MOT_SPIN_ARM = 65
-G_MOT_SPIN_MIN = 66
-G_MOT_SPIN_MAX = 67
-G_MOT_PWM_MIN = 68
-G_MOT_PWM_MAX = 69
-G_MOT_BAT_MAX = 70
-G_MOT_BAT_MIN = 71
-G_MOT_YAW_HEADROOM = 72  # fraction
-G_FS_THR_ENABLE = 73
-G_RC_FS_TIMEOUT = 74  # [s]
-G_FS_THR_VALUE = 75  # [us]
-G_ARM_TIME = 76  # [s] simulated time at which the vehicle arms
-G_HOVER_LEARN = 77  # MOT_HOVER_LEARN
-G_WP_LEG_K = 78  # S-curve leg-speed calibration factor
-G_THR_MIX_MIN = 79
-G_THR_MIX_MAX = 80
-G_FS_CRASH_CHECK = 81
-G_DISARM_DELAY = 82  # [s]
-G_ACCEL_XY_MAX = 83  # g * tan(ANGLE_MAX): horizontal acceleration limit [m/s^2]
-G_HRT_OMEGA = 84  # 2 pi EK3_HRT_FILT: height-rate complementary filter crossover [rad/s]
-G_FS_VIBE_ENABLE = 85
-G_FS_EKF_THRESH = 86
-G_FS_EKF_ACTION = 87
-G_FS_EKF_ALPHA = 88  # FS_EKF_FILT low-pass coefficient at the 10 Hz check rate
-G_RHO_RATIO_HOME = 89  # air density / 1.225 at home (1976 atmosphere, SIM_OPOS_ALT)
-G_RHO_RATIO_GRAD = 90  # its change per metre of height above home [1/m]
-G_BATT_SAG_HOVER = 91  # battery monitor's resting-voltage estimate minus voltage at hover [V]
-G_ANG_LIM_ALPHA = 92  # ATC_ANG_LIM_TC low-pass coefficient at the loop rate
-G_YAW_ERR_MAX = 93  # largest heading error the attitude controller acts on [rad]
-G_POSXY_ERR_MAX = 94  # largest horizontal position error the position controller acts on [m]
-G_POSZ_ERR_UP = 95  # largest vertical position error (target above) it acts on [m]
-G_POSZ_ERR_DN = 96  # largest vertical position error (target below) it acts on [m]
-N_CONTROL_CFG = 97
+CONFIG = Layout("g", "controller configuration")
+_g = CONFIG
+G_DT = _g.add("G_DT", 1, "s", "main-loop period")
+G_RAT_P = _g.add("G_RAT_P", 3, "", "rate PID P per axis")
+G_RAT_I = _g.add("G_RAT_I", 3, "", "rate PID I per axis")
+G_RAT_D = _g.add("G_RAT_D", 3, "", "rate PID D per axis")
+G_RAT_FF = _g.add("G_RAT_FF", 3, "", "rate PID feed-forward per axis")
+G_RAT_IMAX = _g.add("G_RAT_IMAX", 3, "", "rate PID IMAX per axis")
+G_RAT_FLTT = _g.add("G_RAT_FLTT", 3, "", "target filter alphas at the loop rate")
+G_RAT_FLTE = _g.add("G_RAT_FLTE", 3, "", "error filter alphas at the loop rate")
+G_RAT_FLTD = _g.add("G_RAT_FLTD", 3, "", "derivative filter alphas at the loop rate")
+G_ANG_P = _g.add("G_ANG_P", 3, "1/s", "angle P per axis")
+G_ACCEL_MAX = _g.add("G_ACCEL_MAX", 3, "rad/s^2", "attitude accel limits per axis")
+G_INPUT_TC = _g.add("G_INPUT_TC", 1, "s", "ATC_INPUT_TC")
+G_SLEW_YAW = _g.add("G_SLEW_YAW", 1, "rad/s", "ATC_SLEW_YAW")
+G_ANGLE_MAX = _g.add("G_ANGLE_MAX", 1, "rad", "ANGLE_MAX")
+G_POSXY_P = _g.add("G_POSXY_P", 1, "1/s", "PSC_POSXY_P")
+G_VELXY_P = _g.add("G_VELXY_P", 1, "1/s", "PSC_VELXY_P")
+G_VELXY_I = _g.add("G_VELXY_I", 1, "", "PSC_VELXY_I")
+G_VELXY_D = _g.add("G_VELXY_D", 1, "", "PSC_VELXY_D")
+G_VELXY_IMAX = _g.add("G_VELXY_IMAX", 1, "m/s^2", "PSC_VELXY_IMAX")
+G_VELXY_FLTE = _g.add("G_VELXY_FLTE", 1, "", "alpha")
+G_VELXY_FLTD = _g.add("G_VELXY_FLTD", 1, "", "alpha")
+G_POSZ_P = _g.add("G_POSZ_P", 1, "1/s", "PSC_POSZ_P")
+G_VELZ_P = _g.add("G_VELZ_P", 1, "1/s", "PSC_VELZ_P")
+G_ACCZ_P = _g.add("G_ACCZ_P", 1, "",
+                  "throttle per cm/s^2 (ArduPilot units kept: x0.001 applied in code)")
+G_ACCZ_I = _g.add("G_ACCZ_I", 1, "", "PSC_ACCZ_I")
+G_ACCZ_D = _g.add("G_ACCZ_D", 1, "", "PSC_ACCZ_D")
+G_ACCZ_IMAX = _g.add("G_ACCZ_IMAX", 1, "throttle units * 1000", "PSC_ACCZ_IMAX")
+G_ACCZ_FLTE = _g.add("G_ACCZ_FLTE", 1, "", "alpha")
+G_WP_SPEED = _g.add("G_WP_SPEED", 1, "m/s", "WPNAV_SPEED")
+G_WP_ACCEL = _g.add("G_WP_ACCEL", 1, "m/s^2", "WPNAV_ACCEL")
+G_WP_SPEED_UP = _g.add("G_WP_SPEED_UP", 1, "m/s", "WPNAV_SPEED_UP")
+G_WP_SPEED_DN = _g.add("G_WP_SPEED_DN", 1, "m/s", "WPNAV_SPEED_DN")
+G_WP_ACCEL_Z = _g.add("G_WP_ACCEL_Z", 1, "m/s^2", "WPNAV_ACCEL_Z")
+G_WP_RADIUS = _g.add("G_WP_RADIUS", 1, "m", "WPNAV_RADIUS")
+G_WP_JERK = _g.add("G_WP_JERK", 1, "m/s^3", "WPNAV_JERK")
+G_RTL_ALT = _g.add("G_RTL_ALT", 1, "m", "RTL_ALT")
+G_RTL_SPEED = _g.add("G_RTL_SPEED", 1, "m/s", "(0 -> WP speed)")
+G_RTL_LOIT_TIME = _g.add("G_RTL_LOIT_TIME", 1, "s", "RTL_LOIT_TIME")
+G_RTL_CONE_SLOPE = _g.add("G_RTL_CONE_SLOPE", 1, "", "RTL_CONE_SLOPE")
+G_RTL_CLIMB_MIN = _g.add("G_RTL_CLIMB_MIN", 1, "m", "RTL_CLIMB_MIN")
+G_LAND_SPEED = _g.add("G_LAND_SPEED", 1, "m/s", "LAND_SPEED")
+G_LAND_SPEED_HIGH = _g.add("G_LAND_SPEED_HIGH", 1, "m/s", "(0 -> WP_SPEED_DN)")
+G_LAND_ALT_LOW = _g.add("G_LAND_ALT_LOW", 1, "m", "LAND_ALT_LOW")
+G_MOT_EXPO = _g.add("G_MOT_EXPO", 1, "", "MOT_THST_EXPO")
+G_MOT_HOVER = _g.add("G_MOT_HOVER", 1, "", "MOT_THST_HOVER")
+G_MOT_SPIN_ARM = _g.add("G_MOT_SPIN_ARM", 1, "", "MOT_SPIN_ARM")
+G_MOT_SPIN_MIN = _g.add("G_MOT_SPIN_MIN", 1, "", "MOT_SPIN_MIN")
+G_MOT_SPIN_MAX = _g.add("G_MOT_SPIN_MAX", 1, "", "MOT_SPIN_MAX")
+G_MOT_PWM_MIN = _g.add("G_MOT_PWM_MIN", 1, "us", "MOT_PWM_MIN")
+G_MOT_PWM_MAX = _g.add("G_MOT_PWM_MAX", 1, "us", "MOT_PWM_MAX")
+G_MOT_BAT_MAX = _g.add("G_MOT_BAT_MAX", 1, "V", "MOT_BAT_VOLT_MAX")
+G_MOT_BAT_MIN = _g.add("G_MOT_BAT_MIN", 1, "V", "MOT_BAT_VOLT_MIN")
+G_MOT_YAW_HEADROOM = _g.add("G_MOT_YAW_HEADROOM", 1, "", "fraction")
+G_FS_THR_ENABLE = _g.add("G_FS_THR_ENABLE", 1, "", "FS_THR_ENABLE")
+G_RC_FS_TIMEOUT = _g.add("G_RC_FS_TIMEOUT", 1, "s", "RC_FS_TIMEOUT")
+G_FS_THR_VALUE = _g.add("G_FS_THR_VALUE", 1, "us", "FS_THR_VALUE")
+G_ARM_TIME = _g.add("G_ARM_TIME", 1, "s", "simulated time at which the vehicle arms")
+G_HOVER_LEARN = _g.add("G_HOVER_LEARN", 1, "", "MOT_HOVER_LEARN")
+G_WP_LEG_K = _g.add("G_WP_LEG_K", 1, "", "S-curve leg-speed calibration factor")
+G_THR_MIX_MIN = _g.add("G_THR_MIX_MIN", 1, "", "ATC_THR_MIX_MIN")
+G_THR_MIX_MAX = _g.add("G_THR_MIX_MAX", 1, "", "ATC_THR_MIX_MAX")
+G_FS_CRASH_CHECK = _g.add("G_FS_CRASH_CHECK", 1, "", "FS_CRASH_CHECK")
+G_DISARM_DELAY = _g.add("G_DISARM_DELAY", 1, "s", "DISARM_DELAY")
+G_ACCEL_XY_MAX = _g.add("G_ACCEL_XY_MAX", 1, "m/s^2",
+                        "g * tan(ANGLE_MAX): horizontal acceleration limit")
+G_HRT_OMEGA = _g.add("G_HRT_OMEGA", 1, "rad/s",
+                     "2 pi EK3_HRT_FILT: height-rate complementary filter crossover")
+G_FS_VIBE_ENABLE = _g.add("G_FS_VIBE_ENABLE", 1, "", "FS_VIBE_ENABLE")
+G_FS_EKF_THRESH = _g.add("G_FS_EKF_THRESH", 1, "", "FS_EKF_THRESH")
+G_FS_EKF_ACTION = _g.add("G_FS_EKF_ACTION", 1, "", "FS_EKF_ACTION")
+G_FS_EKF_ALPHA = _g.add("G_FS_EKF_ALPHA", 1, "",
+                        "FS_EKF_FILT low-pass coefficient at the 10 Hz check rate")
+G_RHO_RATIO_HOME = _g.add("G_RHO_RATIO_HOME", 1, "",
+                          "air density / 1.225 at home (1976 atmosphere, SIM_OPOS_ALT)")
+G_RHO_RATIO_GRAD = _g.add("G_RHO_RATIO_GRAD", 1, "1/m", "its change per metre of height above home")
+G_BATT_SAG_HOVER = _g.add("G_BATT_SAG_HOVER", 1, "V",
+                          "battery monitor's resting-voltage estimate minus voltage at hover")
+G_ANG_LIM_ALPHA = _g.add("G_ANG_LIM_ALPHA", 1, "",
+                         "ATC_ANG_LIM_TC low-pass coefficient at the loop rate")
+G_YAW_ERR_MAX = _g.add("G_YAW_ERR_MAX", 1, "rad",
+                       "largest heading error the attitude controller acts on")
+G_POSXY_ERR_MAX = _g.add("G_POSXY_ERR_MAX", 1, "m",
+                         "largest horizontal position error the position controller acts on")
+G_POSZ_ERR_UP = _g.add("G_POSZ_ERR_UP", 1, "m",
+                       "largest vertical position error (target above) it acts on")
+G_POSZ_ERR_DN = _g.add("G_POSZ_ERR_DN", 1, "m",
+                       "largest vertical position error (target below) it acts on")
+N_CONTROL_CFG = CONFIG.close()

@@ -1,63 +1,75 @@
-"""Index constants of the truth state vector ``x`` (one float64 array per flight).
+"""Slots of the truth state vector ``x`` (one float64 array per flight), declared once
+(:class:`tlm_sim.slots.Layout`; ``STATE.describe(x)`` names every value).
 
 Frames: earth NED (x north, y east, z down) relative to home at ground level; body FRD
 (x forward, y right, z down). The quaternion rotates body vectors into NED (Hamilton
 convention, scalar first): ``v_ned = q * v_body * q^-1``.
 """
 
-# position of the centre of mass, NED from home [m]; PD = -height above home ground
-PN, PE, PD = 0, 1, 2
-# velocity NED [m/s]
-VN, VE, VD = 3, 4, 5
-# attitude quaternion body -> NED, scalar first
-QW, QX, QY, QZ = 6, 7, 8, 9
-# body angular rate [rad/s], FRD
-WX, WY, WZ = 10, 11, 12
-# specific force in the body frame [m/s^2] (what an ideal accelerometer reads; ~(0,0,-g) at hover)
-FX, FY, FZ = 13, 14, 15
-# earth-frame kinematic acceleration NED [m/s^2] (gravity included; 0 at hover)
-AN, AE, AD = 16, 17, 18
-# motor commands after the slew limit, 0..1 (motor 1..4 in ArduPilot's numbering)
-M1, M2, M3, M4 = 19, 20, 21, 22
-# per-motor thrust [N]
-T1, T2, T3, T4 = 23, 24, 25, 26
-# battery: terminal voltage [V], current [A], consumed charge [Ah], resting voltage [V]
-BATT_V, BATT_I, BATT_AH, BATT_VREST = 27, 28, 29, 30
-# 1.0 while resting on the ground (ground contact active), else 0.0
-ON_GROUND = 31
-# wind (velocity of the air mass) NED [m/s], as applied at the vehicle's height
-WIND_N, WIND_E, WIND_D = 32, 33, 34
-# wind model internal state: filtered speed [m/s], direction [deg, from], vertical dir [deg],
-# horizontal and vertical gust speeds [m/s]
-WIND_SPD_F, WIND_DIR_F, WIND_DIRZ_F, GUST_H, GUST_V = 35, 36, 37, 38, 39
-# vertical speed at the last ground impact [m/s, down positive]; impact counter
-IMPACT_SPEED, IMPACT_COUNT = 40, 41
-# simulated time of the last ground contact start [s]
-TIME_LAST_AIRBORNE = 42
-# body-frame airspeed vector [m/s]
-VAIR_X, VAIR_Y, VAIR_Z = 43, 44, 45
-# battery: remaining charge [Ah] (finite capacity only); SIM_BATT_VOLTAGE value the battery was
-# last (re)initialised to [V] (a change of the parameter re-initialises the battery, as SITL does)
-BATT_REM_AH, BATT_VSET = 46, 47
-# air density at the vehicle [kg/m^3] (1976 standard atmosphere at home_alt - PD)
-RHO = 48
-# wind model cache: unit vector (NED) of the filtered direction the wind comes FROM
-WIND_UN, WIND_UE, WIND_UD = 49, 50, 51
-# air density cache: altitude [m AMSL] where RHO_ANCHOR [kg/m^3] and its gradient RHO_GRAD
-# [kg/m^4] were evaluated (RHO is interpolated linearly within a few metres of it)
-RHO_ALT, RHO_ANCHOR, RHO_GRAD = 52, 53, 54
-# what the sensors see (SITL's "sensor smoothing", tlm_sim.dynamics.smoothing): a kinematic
-# shadow of the truth that follows it with a 0.1 s time constant, so that a ground impact (the
-# truth stops instantly) shows up in the IMU as a deceleration. Position NED [m], velocity NED
-# [m/s], attitude quaternion body -> NED, specific force in its body frame [m/s^2] and body rate
-# [rad/s]; the IMU, GPS and baro read these, the SIM log the truth above.
-SPN, SPE, SPD = 55, 56, 57
-SVN, SVE, SVD = 58, 59, 60
-SQW, SQX, SQY, SQZ = 61, 62, 63, 64
-SFX, SFY, SFZ = 65, 66, 67
-SWX, SWY, SWZ = 68, 69, 70
-# 1.0 while the shadow differs from the truth (after a ground contact), else 0.0: the shadow
-# is then the truth itself
-SMOOTH_ACTIVE = 71
+from tlm_sim.slots import Layout
 
-N_STATE = 72
+STATE = Layout("x", "truth state of the vehicle and its environment")
+_x = STATE
+
+PN, PE, PD = _x.vector(("PN", "PE", "PD"), "m",
+                       "centre of mass, NED from home; PD = -height above home ground")
+VN, VE, VD = _x.vector(("VN", "VE", "VD"), "m/s", "velocity NED")
+QW, QX, QY, QZ = _x.vector(("QW", "QX", "QY", "QZ"), "",
+                           "attitude quaternion body -> NED, scalar first")
+WX, WY, WZ = _x.vector(("WX", "WY", "WZ"), "rad/s", "body angular rate, FRD")
+FX, FY, FZ = _x.vector(("FX", "FY", "FZ"), "m/s/s",
+                       "specific force, body (what an ideal accelerometer reads; ~(0,0,-g) "
+                       "at hover)")
+AN, AE, AD = _x.vector(("AN", "AE", "AD"), "m/s/s",
+                       "kinematic acceleration NED (gravity included; 0 at hover)")
+M1, M2, M3, M4 = _x.vector(("M1", "M2", "M3", "M4"), "",
+                           "motor commands after the slew limit, 0..1 (ArduPilot's numbering)")
+T1, T2, T3, T4 = _x.vector(("T1", "T2", "T3", "T4"), "N", "per-motor thrust")
+BATT_V = _x.add("BATT_V", 1, "V", "battery terminal voltage")
+BATT_I = _x.add("BATT_I", 1, "A", "battery current")
+BATT_AH = _x.add("BATT_AH", 1, "Ah", "charge consumed")
+BATT_VREST = _x.add("BATT_VREST", 1, "V", "battery resting voltage")
+ON_GROUND = _x.add("ON_GROUND", 1, "", "1.0 while resting on the ground (ground contact active)")
+WIND_N, WIND_E, WIND_D = _x.vector(("WIND_N", "WIND_E", "WIND_D"), "m/s",
+                                   "wind (velocity of the air mass) NED at the vehicle's height")
+WIND_SPD_F = _x.add("WIND_SPD_F", 1, "m/s", "wind model: filtered speed")
+WIND_DIR_F = _x.add("WIND_DIR_F", 1, "deg", "wind model: filtered direction (from)")
+WIND_DIRZ_F = _x.add("WIND_DIRZ_F", 1, "deg", "wind model: filtered vertical direction")
+GUST_H = _x.add("GUST_H", 1, "m/s", "wind model: horizontal gust speed")
+GUST_V = _x.add("GUST_V", 1, "m/s", "wind model: vertical gust speed")
+IMPACT_SPEED = _x.add("IMPACT_SPEED", 1, "m/s",
+                      "vertical speed at the last ground impact, down positive")
+IMPACT_COUNT = _x.add("IMPACT_COUNT", 1, "", "ground impacts so far")
+TIME_LAST_AIRBORNE = _x.add("TIME_LAST_AIRBORNE", 1, "s",
+                            "simulated time of the last ground contact start")
+VAIR_X, VAIR_Y, VAIR_Z = _x.vector(("VAIR_X", "VAIR_Y", "VAIR_Z"), "m/s", "airspeed, body")
+BATT_REM_AH = _x.add("BATT_REM_AH", 1, "Ah", "remaining charge (finite capacity only)")
+BATT_VSET = _x.add("BATT_VSET", 1, "V",
+                   "SIM_BATT_VOLTAGE the battery was last (re)initialised to (a change of the "
+                   "parameter re-initialises the battery, as SITL does)")
+RHO = _x.add("RHO", 1, "kg/m^3",
+             "air density at the vehicle (1976 standard atmosphere at home_alt - PD)")
+WIND_UN, WIND_UE, WIND_UD = _x.vector(("WIND_UN", "WIND_UE", "WIND_UD"), "",
+                                      "wind model cache: unit vector NED of the filtered "
+                                      "direction the wind comes from")
+RHO_ALT = _x.add("RHO_ALT", 1, "m",
+                 "air density cache: altitude AMSL of RHO_ANCHOR and RHO_GRAD (RHO is "
+                 "interpolated linearly within a few metres of it)")
+RHO_ANCHOR = _x.add("RHO_ANCHOR", 1, "kg/m^3", "air density at RHO_ALT")
+RHO_GRAD = _x.add("RHO_GRAD", 1, "kg/m^4", "air density gradient at RHO_ALT")
+# What the sensors see (SITL's "sensor smoothing", tlm_sim.dynamics.smoothing): a kinematic
+# shadow of the truth that follows it with a 0.1 s time constant, so that a ground impact (the
+# truth stops instantly) shows up in the IMU as a deceleration. The IMU, GPS and baro read
+# these, the SIM log the truth above.
+SPN, SPE, SPD = _x.vector(("SPN", "SPE", "SPD"), "m", "sensor shadow: position NED")
+SVN, SVE, SVD = _x.vector(("SVN", "SVE", "SVD"), "m/s", "sensor shadow: velocity NED")
+SQW, SQX, SQY, SQZ = _x.vector(("SQW", "SQX", "SQY", "SQZ"), "",
+                               "sensor shadow: attitude quaternion body -> NED")
+SFX, SFY, SFZ = _x.vector(("SFX", "SFY", "SFZ"), "m/s/s",
+                          "sensor shadow: specific force in its body frame")
+SWX, SWY, SWZ = _x.vector(("SWX", "SWY", "SWZ"), "rad/s", "sensor shadow: body rate")
+SMOOTH_ACTIVE = _x.add("SMOOTH_ACTIVE", 1, "",
+                       "1.0 while the shadow differs from the truth (after a ground contact); "
+                       "else the shadow is the truth itself")
+
+N_STATE = STATE.close()

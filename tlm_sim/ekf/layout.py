@@ -1,4 +1,5 @@
-"""Index constants of the navigation EKF arrays.
+"""Slots of the navigation EKF arrays, declared once (:class:`tlm_sim.slots.Layout`;
+``LANE.describe(ekf[lane])``, ``SELECTOR``, ``CONFIG``, ``OUTPUT``).
 
 Three float64 arrays hold everything the filter needs; all are allocated once per flight by
 :func:`tlm_sim.ekf.config.new_ekf` and mutated in place by the ``@njit`` kernels:
@@ -31,6 +32,8 @@ innovation test ratios (innovation^2 / (gate^2 * innovation variance), fusion sk
 ekf_check reads their square roots (see :func:`tlm_sim.ekf.lanes.ekf_output`).
 """
 
+from tlm_sim.slots import Layout
+
 # ------------------------------------------------------------------ sizes ----------------------
 NS = 15  # error states (covariance dimension)
 NBUF = 128  # ring-buffer length in main-loop ticks (0.32 s at 400 Hz): longest usable delay
@@ -38,170 +41,217 @@ BUF_ROW = 6  # pn, pe, pd, vn, ve, vd per ring-buffer row
 MAX_LANES = 3
 
 # error-state offsets (covariance rows/columns)
-ES_ATT = 0  # earth-frame attitude error (3) [rad]
-ES_VEL = 3  # velocity NED (3) [m/s]
-ES_POS = 6  # position NED (3) [m]
-ES_BG = 9  # gyro bias, body (3) [rad/s]
-ES_BA = 12  # accel bias, body (3) [m/s^2]
+ERROR_STATE = Layout("error state", "covariance ordering")
+ES_ATT = ERROR_STATE.add("ES_ATT", 3, "rad", "earth-frame attitude error")
+ES_VEL = ERROR_STATE.add("ES_VEL", 3, "m/s", "velocity NED")
+ES_POS = ERROR_STATE.add("ES_POS", 3, "m", "position NED")
+ES_BG = ERROR_STATE.add("ES_BG", 3, "rad/s", "gyro bias, body")
+ES_BA = ERROR_STATE.add("ES_BA", 3, "m/s^2", "accel bias, body")
+assert ERROR_STATE.close() == NS
 
 # ------------------------------------------------------------------ lane row -------------------
+LANE = Layout("ekf lane", "one EKF lane (row of the ekf array)")
+_l = LANE
 # nominal state
-QW, QX, QY, QZ = 0, 1, 2, 3  # attitude quaternion body -> NED
-VN, VE, VD = 4, 5, 6  # velocity NED [m/s]
-PN, PE, PD = 7, 8, 9  # position NED from the origin [m]
-BGX, BGY, BGZ = 10, 11, 12  # gyro bias, body FRD [rad/s] (subtracted from the gyro)
-BAX, BAY, BAZ = 13, 14, 15  # accel bias, body FRD [m/s^2] (subtracted from the accel)
-N_NOMINAL = 16
+QW, QX, QY, QZ = _l.vector(("QW", "QX", "QY", "QZ"), "", "attitude quaternion body -> NED")
+VN, VE, VD = _l.vector(("VN", "VE", "VD"), "m/s", "velocity NED (the output, see above)")
+PN, PE, PD = _l.vector(("PN", "PE", "PD"), "m",
+                       "position NED from the origin (the output, see above)")
+BGX, BGY, BGZ = _l.vector(("BGX", "BGY", "BGZ"), "rad/s",
+                          "gyro bias, body FRD (subtracted from the gyro)")
+BAX, BAY, BAZ = _l.vector(("BAX", "BAY", "BAZ"), "m/s^2",
+                          "accel bias, body FRD (subtracted from the accel)")
+N_NOMINAL = _l.size
 # rotation matrix body -> NED (row-major), kept in step with the quaternion
-R00, R01, R02, R10, R11, R12, R20, R21, R22 = 16, 17, 18, 19, 20, 21, 22, 23, 24
-# covariance P[i, j] = ekf[lane, P0 + i * NS + j]
-P0 = 25
+R00, R01, R02, R10, R11, R12, R20, R21, R22 = _l.vector(
+    ("R00", "R01", "R02", "R10", "R11", "R12", "R20", "R21", "R22"), "",
+    "rotation matrix body -> NED, row-major")
+P0 = _l.add("P0", NS * NS, "", "covariance, P[i, j] = ekf[lane, P0 + i * NS + j]")
 # IMU accumulators since the last covariance prediction
-ACC_DVN, ACC_DVE, ACC_DVD = 250, 251, 252  # sum of rotated delta velocities, NED [m/s]
-ACC_DT = 253  # accumulated time [s]
+ACC_DVN, ACC_DVE, ACC_DVD = _l.vector(("ACC_DVN", "ACC_DVE", "ACC_DVD"), "m/s",
+                                      "sum of rotated delta velocities, NED")
+ACC_DT = _l.add("ACC_DT", 1, "s", "accumulated time")
 # scratch (no allocation inside the kernels)
-SCR_A = 254  # F P rows for attitude/velocity/position (9 x NS)
-SCR_C = 389  # P H^T column (NS)
-SCR_DX = 404  # error-state correction accumulated during one measurement batch (NS)
+SCR_A = _l.add("SCR_A", 9 * NS, "", "F P rows for attitude/velocity/position (9 x NS)")
+SCR_C = _l.add("SCR_C", NS, "", "P H^T column")
+SCR_DX = _l.add("SCR_DX", NS, "",
+                "error-state correction accumulated during one measurement batch")
 # alignment
-ALIGNED = 419  # 1 after tilt/yaw alignment
-ALIGN_T0 = 420  # time alignment data started [s]
-ALIGN_FX, ALIGN_FY, ALIGN_FZ = 421, 422, 423  # summed delta velocity while aligning [m/s]
-ALIGN_DT = 424  # summed time while aligning [s]
-MAG_HAVE = 425  # 1 once a magnetometer sample was seen
-MAG_LX, MAG_LY, MAG_LZ = 426, 427, 428  # last body-frame field [gauss]
+ALIGNED = _l.add("ALIGNED", 1, "", "1 after tilt/yaw alignment")
+ALIGN_T0 = _l.add("ALIGN_T0", 1, "s", "time alignment data started")
+ALIGN_FX, ALIGN_FY, ALIGN_FZ = _l.vector(("ALIGN_FX", "ALIGN_FY", "ALIGN_FZ"), "m/s",
+                                         "summed delta velocity while aligning")
+ALIGN_DT = _l.add("ALIGN_DT", 1, "s", "summed time while aligning")
+MAG_HAVE = _l.add("MAG_HAVE", 1, "", "1 once a magnetometer sample was seen")
+MAG_LX, MAG_LY, MAG_LZ = _l.vector(("MAG_LX", "MAG_LY", "MAG_LZ"), "gauss",
+                                   "last body-frame field")
 # timing / aiding
-T_LAST = 429  # time of the last prediction tick [s] (-1 before the first)
-T_ALIGNED = 430  # time alignment completed [s]
-AID_MODE = 431  # AID_NONE or AID_ABSOLUTE
-T_VEL_PASS = 432  # last GPS velocity fusion or reset [s]
-T_POS_PASS = 433  # last GPS position fusion or reset [s]
-T_HGT_PASS = 434  # last height fusion or reset [s]
-T_GPS_FUSED = 435  # last time GPS position was fused [s] (using_gps: within 4 s)
-T_CONSTPOS = 436  # last constant-position pseudo-measurement [s]
-CONSTPOS_N, CONSTPOS_E = 437, 438  # last known position for constant-position mode [m]
-# test ratios (raw; ekf_check uses their square roots)
-VEL_TR, POS_TR, HGT_TR, MAG_TR = 439, 440, 441, 442  # MAG_TR = max over the three axes
+T_LAST = _l.add("T_LAST", 1, "s", "time of the last prediction tick (-1 before the first)")
+T_ALIGNED = _l.add("T_ALIGNED", 1, "s", "time alignment completed")
+AID_MODE = _l.add("AID_MODE", 1, "", "AID_NONE or AID_ABSOLUTE")
+T_VEL_PASS = _l.add("T_VEL_PASS", 1, "s", "last GPS velocity fusion or reset")
+T_POS_PASS = _l.add("T_POS_PASS", 1, "s", "last GPS position fusion or reset")
+T_HGT_PASS = _l.add("T_HGT_PASS", 1, "s", "last height fusion or reset")
+T_GPS_FUSED = _l.add("T_GPS_FUSED", 1, "s",
+                     "last time GPS position was fused (using_gps: within 4 s)")
+T_CONSTPOS = _l.add("T_CONSTPOS", 1, "s", "last constant-position pseudo-measurement")
+CONSTPOS_N, CONSTPOS_E = _l.vector(("CONSTPOS_N", "CONSTPOS_E"), "m",
+                                   "last known position for constant-position mode")
+VEL_TR, POS_TR, HGT_TR, MAG_TR = _l.vector(
+    ("VEL_TR", "POS_TR", "HGT_TR", "MAG_TR"), "",
+    "raw test ratios (ekf_check uses their square roots); MAG_TR = max over the three axes")
 # innovations (measurement - prediction) of the last fusion attempt
-INNOV_VN, INNOV_VE, INNOV_VD = 443, 444, 445  # [m/s]
-INNOV_PN, INNOV_PE = 446, 447  # [m]
-INNOV_HGT = 448  # [m, down]
-INNOV_MX, INNOV_MY, INNOV_MZ = 449, 450, 451  # [gauss, body]
+INNOV_VN, INNOV_VE, INNOV_VD = _l.vector(("INNOV_VN", "INNOV_VE", "INNOV_VD"), "m/s",
+                                         "velocity innovations NED")
+INNOV_PN, INNOV_PE = _l.vector(("INNOV_PN", "INNOV_PE"), "m", "position innovations NE")
+INNOV_HGT = _l.add("INNOV_HGT", 1, "m", "height innovation, down")
+INNOV_MX, INNOV_MY, INNOV_MZ = _l.vector(("INNOV_MX", "INNOV_MY", "INNOV_MZ"), "gauss",
+                                         "magnetometer innovations, body")
 # status flags (1.0 / 0.0)
-F_ATTITUDE = 452  # attitude valid
-F_HORIZ_VEL = 453  # horizontal velocity valid
-F_VERT_VEL = 454
-F_HORIZ_POS = 455  # absolute horizontal position valid (horiz_pos_abs)
-F_VERT_POS = 456
-F_CONST_POS = 457  # constant-position mode (aiding stopped)
-F_USING_GPS = 458  # GPS position fused within the last 4 s
-FAULT = 459  # 1 after a numerical fault (NaN); lane then unhealthy
-HEALTHY = 460  # lane health as the selector sees it
-SCORE = 461  # error score max(0.5 (vel + pos), hgt)
-IMU_OK = 462  # 1 while this lane's IMU delivers samples
+F_ATTITUDE = _l.add("F_ATTITUDE", 1, "", "attitude valid")
+F_HORIZ_VEL = _l.add("F_HORIZ_VEL", 1, "", "horizontal velocity valid")
+F_VERT_VEL = _l.add("F_VERT_VEL", 1, "", "vertical velocity valid")
+F_HORIZ_POS = _l.add("F_HORIZ_POS", 1, "",
+                     "absolute horizontal position valid (horiz_pos_abs)")
+F_VERT_POS = _l.add("F_VERT_POS", 1, "", "vertical position valid")
+F_CONST_POS = _l.add("F_CONST_POS", 1, "", "constant-position mode (aiding stopped)")
+F_USING_GPS = _l.add("F_USING_GPS", 1, "", "GPS position fused within the last 4 s")
+FAULT = _l.add("FAULT", 1, "", "1 after a numerical fault (NaN); lane then unhealthy")
+HEALTHY = _l.add("HEALTHY", 1, "", "lane health as the selector sees it")
+SCORE = _l.add("SCORE", 1, "", "error score max(0.5 (vel + pos), hgt)")
+IMU_OK = _l.add("IMU_OK", 1, "", "1 while this lane's IMU delivers samples")
 # resets (for controllers that must absorb jumps), counters and last deltas
-POS_RESET_COUNT = 463
-POS_RESET_DN, POS_RESET_DE = 464, 465  # [m]
-VEL_RESET_COUNT = 466
-VEL_RESET_DN, VEL_RESET_DE, VEL_RESET_DD = 467, 468, 469  # [m/s]
-HGT_RESET_COUNT = 470
+POS_RESET_COUNT = _l.add("POS_RESET_COUNT", 1, "", "position resets so far")
+POS_RESET_DN, POS_RESET_DE = _l.vector(("POS_RESET_DN", "POS_RESET_DE"), "m",
+                                       "last position reset NE")
+VEL_RESET_COUNT = _l.add("VEL_RESET_COUNT", 1, "", "velocity resets so far")
+VEL_RESET_DN, VEL_RESET_DE, VEL_RESET_DD = _l.vector(
+    ("VEL_RESET_DN", "VEL_RESET_DE", "VEL_RESET_DD"), "m/s", "last velocity reset NED")
+HGT_RESET_COUNT = _l.add("HGT_RESET_COUNT", 1, "", "height resets so far")
 # configuration of the lane
-IMU_INDEX = 471  # which IMU instance this lane integrates
-N_PREDICT = 472  # covariance predictions so far
+IMU_INDEX = _l.add("IMU_INDEX", 1, "", "which IMU instance this lane integrates")
+N_PREDICT = _l.add("N_PREDICT", 1, "", "covariance predictions so far")
 # ring buffer of past output states (stored minus the cumulative shift BUF_OFS, so shifts
 # applied later move all stored entries at O(1) cost)
-BUF_HEAD = 473  # index of the newest row
-BUF_COUNT = 474  # rows filled (<= NBUF)
+BUF_HEAD = _l.add("BUF_HEAD", 1, "", "index of the newest ring-buffer row")
+BUF_COUNT = _l.add("BUF_COUNT", 1, "", "ring-buffer rows filled (<= NBUF)")
 # bad-IMU handling (EKF3: vertical GPS velocity and height innovations both large, same sign)
-BAD_IMU = 475  # 1 while the bad-IMU response is active (held 10 s after the last detection)
-T_BAD_IMU = 476  # last detection [s]
-BARO_LAST = 477  # latest baro altitude [m, up]
-T_BARO_LAST = 478  # time of the latest baro sample [s]
-T_GOOD_IMU = 479  # last GPS sample without bad-IMU detection (or last bad-IMU height reset) [s]
-TILT_BAD_T = 480  # time the lane has been static with a large tilt error [s]
-TILT_RESET_COUNT = 481  # stationary tilt re-alignments so far
+BAD_IMU = _l.add("BAD_IMU", 1, "",
+                 "1 while the bad-IMU response is active (held 10 s after the last detection)")
+T_BAD_IMU = _l.add("T_BAD_IMU", 1, "s", "last bad-IMU detection")
+BARO_LAST = _l.add("BARO_LAST", 1, "m", "latest baro altitude, up")
+T_BARO_LAST = _l.add("T_BARO_LAST", 1, "s", "time of the latest baro sample")
+T_GOOD_IMU = _l.add("T_GOOD_IMU", 1, "s",
+                    "last GPS sample without bad-IMU detection (or last bad-IMU height reset)")
+TILT_BAD_T = _l.add("TILT_BAD_T", 1, "s",
+                    "time the lane has been static with a large tilt error")
+TILT_RESET_COUNT = _l.add("TILT_RESET_COUNT", 1, "", "stationary tilt re-alignments so far")
 # output tracking error: filter state minus output state (pn, pe, pd, vn, ve, vd), EKF3's
 # output-observer error. The lane's VN..PD hold the *output* (what controllers and logs read);
 # measurement corrections change the filter state only, and the output follows with the time
 # constant EK3_TAU_OUTPUT (see tlm_sim.ekf.core.output_track). Ordered like a ring-buffer row.
-OUT_EPN, OUT_EPE, OUT_EPD = 482, 483, 484  # [m]
-OUT_EVN, OUT_EVE, OUT_EVD = 485, 486, 487  # [m/s]
+OUT_EPN, OUT_EPE, OUT_EPD = _l.vector(("OUT_EPN", "OUT_EPE", "OUT_EPD"), "m",
+                                      "output tracking error, position NED")
+OUT_EVN, OUT_EVE, OUT_EVD = _l.vector(("OUT_EVN", "OUT_EVE", "OUT_EVD"), "m/s",
+                                      "output tracking error, velocity NED")
 # time integrals of the tracking errors (the observer's integral term), same order
-OUT_IPN, OUT_IPE, OUT_IPD = 488, 489, 490  # [m s]
-OUT_IVN, OUT_IVE, OUT_IVD = 491, 492, 493  # [m]
-BUF_OFS = 494  # cumulative output shifts pn, pe, pd, vn, ve, vd (6)
-BUF0 = 500  # NBUF rows of BUF_ROW
-N_EKF = BUF0 + NBUF * BUF_ROW
+OUT_IPN, OUT_IPE, OUT_IPD = _l.vector(("OUT_IPN", "OUT_IPE", "OUT_IPD"), "m s",
+                                      "integral of the position tracking error")
+OUT_IVN, OUT_IVE, OUT_IVD = _l.vector(("OUT_IVN", "OUT_IVE", "OUT_IVD"), "m",
+                                      "integral of the velocity tracking error")
+BUF_OFS = _l.add("BUF_OFS", BUF_ROW, "m, m/s",
+                 "cumulative output shifts pn, pe, pd, vn, ve, vd")
+BUF0 = _l.add("BUF0", NBUF * BUF_ROW, "m, m/s",
+              "ring buffer: NBUF rows of (pn, pe, pd, vn, ve, vd)")
+N_EKF = LANE.close()
 
 # aiding modes (EKF3 names)
 AID_ABSOLUTE = 0.0
 AID_NONE = 2.0
 
 # ------------------------------------------------------------------ selector -------------------
-SEL_PRIMARY = 0  # index of the primary lane
-SEL_N_LANES = 1
-SEL_CHANGES = 2  # number of primary changes (ERR 24 events)
-SEL_T_SWITCH = 3  # time of the last switch [s] (-1 if none)
-SEL_RUN = 4  # 1 once the primary has been healthy for 10 s (latched)
-SEL_HEALTHY_SINCE = 5  # time the primary became continuously healthy [s] (-1 if not)
-SEL_REL_ERR = 6  # relative error per lane (MAX_LANES)
-SEL_T_PRIMARY = SEL_REL_ERR + MAX_LANES  # time each lane last stopped being primary (MAX_LANES)
-N_SEL = SEL_T_PRIMARY + MAX_LANES
+SELECTOR = Layout("sel", "lane selector")
+_s = SELECTOR
+SEL_PRIMARY = _s.add("SEL_PRIMARY", 1, "", "index of the primary lane")
+SEL_N_LANES = _s.add("SEL_N_LANES", 1, "", "lanes running")
+SEL_CHANGES = _s.add("SEL_CHANGES", 1, "", "number of primary changes (ERR 24 events)")
+SEL_T_SWITCH = _s.add("SEL_T_SWITCH", 1, "s", "time of the last switch (-1 if none)")
+SEL_RUN = _s.add("SEL_RUN", 1, "", "1 once the primary has been healthy for 10 s (latched)")
+SEL_HEALTHY_SINCE = _s.add("SEL_HEALTHY_SINCE", 1, "s",
+                           "time the primary became continuously healthy (-1 if not)")
+SEL_REL_ERR = _s.add("SEL_REL_ERR", MAX_LANES, "", "relative error per lane")
+SEL_T_PRIMARY = _s.add("SEL_T_PRIMARY", MAX_LANES, "s",
+                       "time each lane last stopped being primary")
+N_SEL = SELECTOR.close()
 
 # ------------------------------------------------------------------ configuration --------------
-C_DT = 0  # nominal main-loop period [s]
-C_TARGET_DT = 1  # covariance prediction target interval [s] (EKF3: 12 ms)
-C_VELNE_NSE = 2  # EK3_VELNE_M_NSE [m/s]
-C_VELD_NSE = 3  # EK3_VELD_M_NSE [m/s]
-C_POSNE_NSE = 4  # EK3_POSNE_M_NSE [m]
-C_ALT_NSE = 5  # EK3_ALT_M_NSE [m]
-C_MAG_NSE = 6  # EK3_MAG_M_NSE [gauss]
-C_GYRO_PNSE = 7  # EK3_GYRO_P_NSE [rad/s]
-C_ACC_PNSE = 8  # EK3_ACC_P_NSE [m/s^2]
-C_GBIAS_PNSE = 9  # EK3_GBIAS_P_NSE [rad/s^2]
-C_ABIAS_PNSE = 10  # EK3_ABIAS_P_NSE [m/s^3]
-C_VEL_GATE = 11  # EK3_VEL_I_GATE as sigmas: max(gate / 100, 1)
-C_POS_GATE = 12  # EK3_POS_I_GATE as sigmas
-C_HGT_GATE = 13  # EK3_HGT_I_GATE as sigmas
-C_MAG_GATE = 14  # EK3_MAG_I_GATE as sigmas
-C_GLITCH_RAD = 15  # EK3_GLITCH_RAD [m]
-C_NOAID_NSE = 16  # EK3_NOAID_M_NSE [m]
-C_ERR_THRESH = 17  # EK3_ERR_THRESH
-C_GPS_DELAY = 18  # assumed GPS measurement delay [s]
-C_HGT_DELAY = 19  # EK3_HGT_DELAY [s]
-C_MAG_N, C_MAG_E, C_MAG_D = 20, 21, 22  # earth magnetic field NED [gauss]
-C_POS_RETRY = 23  # GPS position/velocity timeout (EKF3 posRetryTimeNoVel) [s]
-C_TILT_DRIFT = 24  # time without aiding before constant-position mode [s]
-C_HGT_RETRY = 25  # height innovation timeout before a reset to baro [s]
-C_USING_GPS_T = 26  # using_gps flag window [s]
-C_CONSTPOS_DT = 27  # interval of constant-position pseudo-measurements [s]
-C_GBIAS_LIM = 28  # gyro bias limit [rad/s]
-C_ABIAS_LIM = 29  # EK3_ACC_BIAS_LIM [m/s^2]
-C_ALIGN_TIME = 30  # accel averaging time for tilt alignment [s]
-C_LANE_INIT_T = 31  # lane unhealthy for this long after alignment [s]
-C_SELECT_T = 32  # primary healthy this long before selection runs; min time between uses [s]
-C_ONGROUND_NSE = 33  # constant-position noise while disarmed [m]
-C_N_LANES = 34  # number of lanes (from EK3_IMU_MASK)
-C_LANE_IMU = 35  # IMU instance of each lane (MAX_LANES)
-C_BAD_IMU_ACC_NSE = C_LANE_IMU + MAX_LANES  # accel process noise while the IMU is bad [m/s^2]
-C_BAD_IMU_HOLD = C_BAD_IMU_ACC_NSE + 1  # bad-IMU response hold time [s]
-C_BAD_IMU_TIMEOUT = C_BAD_IMU_HOLD + 1  # continuous bad-IMU time before a height reset [s]
-C_TAU_OUTPUT = C_BAD_IMU_TIMEOUT + 1  # EK3_TAU_OUTPUT: output observer time constant [s]
-N_CFG = C_TAU_OUTPUT + 1
+CONFIG = Layout("cfg", "EKF configuration (built once per flight from EK3_* parameters)")
+_c = CONFIG
+C_DT = _c.add("C_DT", 1, "s", "nominal main-loop period")
+C_TARGET_DT = _c.add("C_TARGET_DT", 1, "s", "covariance prediction target interval (EKF3: 12 ms)")
+C_VELNE_NSE = _c.add("C_VELNE_NSE", 1, "m/s", "EK3_VELNE_M_NSE")
+C_VELD_NSE = _c.add("C_VELD_NSE", 1, "m/s", "EK3_VELD_M_NSE")
+C_POSNE_NSE = _c.add("C_POSNE_NSE", 1, "m", "EK3_POSNE_M_NSE")
+C_ALT_NSE = _c.add("C_ALT_NSE", 1, "m", "EK3_ALT_M_NSE")
+C_MAG_NSE = _c.add("C_MAG_NSE", 1, "gauss", "EK3_MAG_M_NSE")
+C_GYRO_PNSE = _c.add("C_GYRO_PNSE", 1, "rad/s", "EK3_GYRO_P_NSE")
+C_ACC_PNSE = _c.add("C_ACC_PNSE", 1, "m/s^2", "EK3_ACC_P_NSE")
+C_GBIAS_PNSE = _c.add("C_GBIAS_PNSE", 1, "rad/s^2", "EK3_GBIAS_P_NSE")
+C_ABIAS_PNSE = _c.add("C_ABIAS_PNSE", 1, "m/s^3", "EK3_ABIAS_P_NSE")
+C_VEL_GATE = _c.add("C_VEL_GATE", 1, "", "EK3_VEL_I_GATE as sigmas: max(gate / 100, 1)")
+C_POS_GATE = _c.add("C_POS_GATE", 1, "", "EK3_POS_I_GATE as sigmas")
+C_HGT_GATE = _c.add("C_HGT_GATE", 1, "", "EK3_HGT_I_GATE as sigmas")
+C_MAG_GATE = _c.add("C_MAG_GATE", 1, "", "EK3_MAG_I_GATE as sigmas")
+C_GLITCH_RAD = _c.add("C_GLITCH_RAD", 1, "m", "EK3_GLITCH_RAD")
+C_NOAID_NSE = _c.add("C_NOAID_NSE", 1, "m", "EK3_NOAID_M_NSE")
+C_ERR_THRESH = _c.add("C_ERR_THRESH", 1, "", "EK3_ERR_THRESH")
+C_GPS_DELAY = _c.add("C_GPS_DELAY", 1, "s", "assumed GPS measurement delay")
+C_HGT_DELAY = _c.add("C_HGT_DELAY", 1, "s", "EK3_HGT_DELAY")
+C_MAG_N, C_MAG_E, C_MAG_D = _c.vector(("C_MAG_N", "C_MAG_E", "C_MAG_D"), "gauss",
+                                      "earth magnetic field NED")
+C_POS_RETRY = _c.add("C_POS_RETRY", 1, "s",
+                     "GPS position/velocity timeout (EKF3 posRetryTimeNoVel)")
+C_TILT_DRIFT = _c.add("C_TILT_DRIFT", 1, "s", "time without aiding before constant-position mode")
+C_HGT_RETRY = _c.add("C_HGT_RETRY", 1, "s", "height innovation timeout before a reset to baro")
+C_USING_GPS_T = _c.add("C_USING_GPS_T", 1, "s", "using_gps flag window")
+C_CONSTPOS_DT = _c.add("C_CONSTPOS_DT", 1, "s", "interval of constant-position pseudo-measurements")
+C_GBIAS_LIM = _c.add("C_GBIAS_LIM", 1, "rad/s", "gyro bias limit")
+C_ABIAS_LIM = _c.add("C_ABIAS_LIM", 1, "m/s^2", "EK3_ACC_BIAS_LIM")
+C_ALIGN_TIME = _c.add("C_ALIGN_TIME", 1, "s", "accel averaging time for tilt alignment")
+C_LANE_INIT_T = _c.add("C_LANE_INIT_T", 1, "s", "lane unhealthy for this long after alignment")
+C_SELECT_T = _c.add("C_SELECT_T", 1, "s",
+                    "primary healthy this long before selection runs; min time between uses")
+C_ONGROUND_NSE = _c.add("C_ONGROUND_NSE", 1, "m", "constant-position noise while disarmed")
+C_N_LANES = _c.add("C_N_LANES", 1, "", "number of lanes (from EK3_IMU_MASK)")
+C_LANE_IMU = _c.add("C_LANE_IMU", MAX_LANES, "", "IMU instance of each lane")
+C_BAD_IMU_ACC_NSE = _c.add("C_BAD_IMU_ACC_NSE", 1, "m/s^2",
+                           "accel process noise while the IMU is bad")
+C_BAD_IMU_HOLD = _c.add("C_BAD_IMU_HOLD", 1, "s", "bad-IMU response hold time")
+C_BAD_IMU_TIMEOUT = _c.add("C_BAD_IMU_TIMEOUT", 1, "s",
+                           "continuous bad-IMU time before a height reset")
+C_TAU_OUTPUT = _c.add("C_TAU_OUTPUT", 1, "s", "EK3_TAU_OUTPUT: output observer time constant")
+N_CFG = CONFIG.close()
 
 # ------------------------------------------------------------------ output vector --------------
 # filled by tlm_sim.ekf.lanes.ekf_output from the primary lane
-O_QW, O_QX, O_QY, O_QZ = 0, 1, 2, 3  # quaternion body -> NED
-O_VN, O_VE, O_VD = 4, 5, 6  # [m/s]
-O_PN, O_PE, O_PD = 7, 8, 9  # [m]
-O_BGX, O_BGY, O_BGZ = 10, 11, 12  # gyro bias [rad/s]
-O_BAX, O_BAY, O_BAZ = 13, 14, 15  # accel bias [m/s^2]
-O_ROLL, O_PITCH, O_YAW = 16, 17, 18  # Euler angles [rad] (ZYX), yaw in (-pi, pi]
-O_F_ATTITUDE, O_F_HORIZ_VEL, O_F_HORIZ_POS, O_F_VERT_POS = 19, 20, 21, 22
-O_F_CONST_POS, O_F_USING_GPS = 23, 24
-O_SQRT_VEL, O_SQRT_POS, O_SQRT_HGT, O_SQRT_MAG = 25, 26, 27, 28  # sqrt of the test ratios
-O_PRIMARY = 29
-O_PRIMARY_CHANGES = 30
-O_POS_RESET_COUNT = 31
-O_VEL_RESET_COUNT = 32
-N_OUT = 33
+OUTPUT = Layout("out", "EKF output: what the rest of the vehicle reads")
+_o = OUTPUT
+O_QW, O_QX, O_QY, O_QZ = _o.vector(("O_QW", "O_QX", "O_QY", "O_QZ"), "",
+                                   "quaternion body -> NED")
+O_VN, O_VE, O_VD = _o.vector(("O_VN", "O_VE", "O_VD"), "m/s", "velocity NED")
+O_PN, O_PE, O_PD = _o.vector(("O_PN", "O_PE", "O_PD"), "m", "position NED")
+O_BGX, O_BGY, O_BGZ = _o.vector(("O_BGX", "O_BGY", "O_BGZ"), "rad/s", "gyro bias")
+O_BAX, O_BAY, O_BAZ = _o.vector(("O_BAX", "O_BAY", "O_BAZ"), "m/s^2", "accel bias")
+O_ROLL, O_PITCH, O_YAW = _o.vector(("O_ROLL", "O_PITCH", "O_YAW"), "rad",
+                                   "Euler angles (ZYX), yaw in (-pi, pi]")
+O_F_ATTITUDE, O_F_HORIZ_VEL, O_F_HORIZ_POS, O_F_VERT_POS = _o.vector(
+    ("O_F_ATTITUDE", "O_F_HORIZ_VEL", "O_F_HORIZ_POS", "O_F_VERT_POS"), "", "status flags")
+O_F_CONST_POS, O_F_USING_GPS = _o.vector(("O_F_CONST_POS", "O_F_USING_GPS"), "",
+                                         "status flags")
+O_SQRT_VEL, O_SQRT_POS, O_SQRT_HGT, O_SQRT_MAG = _o.vector(
+    ("O_SQRT_VEL", "O_SQRT_POS", "O_SQRT_HGT", "O_SQRT_MAG"), "", "sqrt of the test ratios")
+O_PRIMARY = _o.add("O_PRIMARY", 1, "", "primary lane")
+O_PRIMARY_CHANGES = _o.add("O_PRIMARY_CHANGES", 1, "", "primary lane changes so far")
+O_POS_RESET_COUNT = _o.add("O_POS_RESET_COUNT", 1, "", "position resets of the primary")
+O_VEL_RESET_COUNT = _o.add("O_VEL_RESET_COUNT", 1, "", "velocity resets of the primary")
+N_OUT = OUTPUT.close()

@@ -1,4 +1,5 @@
-"""Index constants of the sensor state ``s`` and sensor configuration ``scfg`` arrays.
+"""Slots of the sensor state ``s`` and sensor configuration ``scfg`` arrays, declared once
+(:class:`tlm_sim.slots.Layout`; ``STATE.describe(s)``, ``CONFIG.describe(scfg)``).
 
 The sensor state holds, per IMU instance, the accumulators handed to the EKF each main-loop tick,
 the autopilot's 20 Hz low-pass filter states, the VIBE metric filters and the clip counters; plus
@@ -6,89 +7,104 @@ the GPS delay line, baro, compass and RC receiver state. Units: SI (m, m/s, m/s^
 body frame FRD, earth frame NED.
 """
 
+from tlm_sim.slots import Layout
+
 N_IMU = 2
 
-# ---- per-IMU block (offset IMU_BASE + i * IMU_STRIDE) ----------------------------------------
-IMU_BASE = 0
-I_DANG = 0  # accumulated delta angle since the last main-loop tick [rad] (3)
-I_DVEL = 3  # accumulated delta velocity since the last main-loop tick [m/s] (3)
-I_GYR_F = 6  # low-pass filtered gyro [rad/s] (3): what controllers and the IMU log see
-I_ACC_F = 9  # low-pass filtered accel [m/s^2] (3)
-I_GYR_LPF = 12  # biquad delay elements, gyro (3 axes x 2)
-I_ACC_LPF = 18  # biquad delay elements, accel (3 axes x 2)
-I_VIB_FLOOR = 24  # VIBE 5 Hz floor filter (3)
-I_VIB_SQ = 27  # VIBE 2 Hz filter of the squared deviation (3)
-I_CLIP = 30  # accel clip count
-I_NEXT_GYR_US = 31  # time of the next gyro sample [us]
-I_NEXT_ACC_US = 32  # time of the next accel sample [us]
-I_LAST_GYR = 33  # last raw gyro sample [rad/s] (3)
-I_LAST_ACC = 36  # last raw accel sample [m/s^2] (3)
-I_GYR_COUNT = 39  # gyro samples accumulated this tick
-I_ACC_COUNT = 40  # accel samples accumulated this tick
-I_EG = 41  # gyro error count
-I_EA = 42  # accel error count
-I_ACC_OK = 43  # 1 while the accel delivers samples this tick
-I_T_SAMPLE_US = 44  # physics time of the latest sampling call [us]
-I_T_TAKE_US = 45  # physics time at which the EKF last took the deltas [us] (-1: never)
-IMU_STRIDE = 46
+# ---- per-IMU record (at IMU_BASE + i * IMU_STRIDE) -------------------------------------------
+IMU = Layout("imu", "one IMU instance")
+_i = IMU
+I_DANG = _i.add("I_DANG", 3, "rad", "accumulated delta angle since the last main-loop tick")
+I_DVEL = _i.add("I_DVEL", 3, "m/s", "accumulated delta velocity since the last main-loop tick")
+I_GYR_F = _i.add("I_GYR_F", 3, "rad/s",
+                 "low-pass filtered gyro: what controllers and the IMU log see")
+I_ACC_F = _i.add("I_ACC_F", 3, "m/s/s", "low-pass filtered accel")
+I_GYR_LPF = _i.add("I_GYR_LPF", 6, "", "biquad delay elements, gyro (3 axes x 2)")
+I_ACC_LPF = _i.add("I_ACC_LPF", 6, "", "biquad delay elements, accel (3 axes x 2)")
+I_VIB_FLOOR = _i.add("I_VIB_FLOOR", 3, "m/s/s", "VIBE 5 Hz floor filter")
+I_VIB_SQ = _i.add("I_VIB_SQ", 3, "m^2/s^4", "VIBE 2 Hz filter of the squared deviation")
+I_CLIP = _i.add("I_CLIP", 1, "", "accel clip count")
+I_NEXT_GYR_US = _i.add("I_NEXT_GYR_US", 1, "us", "time of the next gyro sample")
+I_NEXT_ACC_US = _i.add("I_NEXT_ACC_US", 1, "us", "time of the next accel sample")
+I_LAST_GYR = _i.add("I_LAST_GYR", 3, "rad/s", "last raw gyro sample")
+I_LAST_ACC = _i.add("I_LAST_ACC", 3, "m/s/s", "last raw accel sample")
+I_GYR_COUNT = _i.add("I_GYR_COUNT", 1, "", "gyro samples accumulated this tick")
+I_ACC_COUNT = _i.add("I_ACC_COUNT", 1, "", "accel samples accumulated this tick")
+I_EG = _i.add("I_EG", 1, "", "gyro error count")
+I_EA = _i.add("I_EA", 1, "", "accel error count")
+I_ACC_OK = _i.add("I_ACC_OK", 1, "", "1 while the accel delivers samples this tick")
+I_T_SAMPLE_US = _i.add("I_T_SAMPLE_US", 1, "us", "physics time of the latest sampling call")
+I_T_TAKE_US = _i.add("I_T_TAKE_US", 1, "us",
+                     "physics time at which the EKF last took the deltas (-1: never)")
+IMU_STRIDE = IMU.close()
 
-# ---- GPS ---------------------------------------------------------------------------------------
-GPS_BASE = IMU_BASE + N_IMU * IMU_STRIDE
+# ---- GPS record: a delay line of main-loop ticks ---------------------------------------------
 GPS_HIST_N = 64  # delay line length (main-loop ticks, 400 Hz -> 160 ms)
-G_HEAD = 0  # index of the newest history row
-G_COUNT = 1  # rows filled
-G_NEXT_US = 2  # time of the next GPS epoch [us]
-G_HIST = 3  # history rows: (t_s, pn, pe, pd, vn, ve, vd) x GPS_HIST_N
-G_ROW = 7
-GPS_SIZE = G_HIST + GPS_HIST_N * G_ROW
+G_ROW = 7  # one history row: t_s, pn, pe, pd, vn, ve, vd
+GPS = Layout("gps", "GPS delay line")
+G_HEAD = GPS.add("G_HEAD", 1, "", "index of the newest history row")
+G_COUNT = GPS.add("G_COUNT", 1, "", "rows filled")
+G_NEXT_US = GPS.add("G_NEXT_US", 1, "us", "time of the next GPS epoch")
+G_HIST = GPS.add("G_HIST", GPS_HIST_N * G_ROW, "s, m, m/s",
+                 "history rows (t_s, pn, pe, pd, vn, ve, vd) x GPS_HIST_N")
+GPS_SIZE = GPS.close()
 
-# ---- baro / compass / RC ---------------------------------------------------------------------
-MISC_BASE = GPS_BASE + GPS_SIZE
-B_NEXT_US = MISC_BASE + 0  # next baro sample (10 Hz as the autopilot reads it) [us]
-B_ALT = MISC_BASE + 1  # last baro altitude above the ground calibration [m]
-B_ALT_PREV = MISC_BASE + 2  # previous baro altitude [m] (climb rate)
-B_PRESS = MISC_BASE + 3  # last pressure [Pa]
-B_TEMP = MISC_BASE + 4  # last temperature [degC]
-M_NEXT_US = MISC_BASE + 5  # next compass sample [us]
-M_FIELD = MISC_BASE + 6  # last body field [gauss] (3)
-RC_NEXT_US = MISC_BASE + 9  # next RC frame [us]
-RC_LAST_FRAME_US = MISC_BASE + 10  # time of the last RC frame received [us]
-RC_CH = MISC_BASE + 11  # RC input channels 1..8 as the receiver delivers them [us PWM] (8)
-N_SENSOR_STATE = MISC_BASE + 19
+# ---- the sensor state s ----------------------------------------------------------------------
+STATE = Layout("s", "sensor state")
+_s = STATE
+IMU_BASE = _s.block("IMU", IMU, N_IMU)
+GPS_BASE = _s.block("GPS", GPS)
+MISC_BASE = _s.size
+B_NEXT_US = _s.add("B_NEXT_US", 1, "us", "next baro sample (10 Hz as the autopilot reads it)")
+B_ALT = _s.add("B_ALT", 1, "m", "last baro altitude above the ground calibration")
+B_ALT_PREV = _s.add("B_ALT_PREV", 1, "m", "previous baro altitude (climb rate)")
+B_PRESS = _s.add("B_PRESS", 1, "Pa", "last pressure")
+B_TEMP = _s.add("B_TEMP", 1, "degC", "last temperature")
+M_NEXT_US = _s.add("M_NEXT_US", 1, "us", "next compass sample")
+M_FIELD = _s.add("M_FIELD", 3, "gauss", "last body field")
+RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
+RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
+RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
+N_SENSOR_STATE = STATE.close()
 
-# ---- sensor configuration (built once per flight from parameters) -----------------------------
-C_ACC_NOISE = 0  # base accel noise amplitude [m/s^2] (uniform)
-C_GYR_NOISE = 1  # base gyro noise amplitude [rad/s] (uniform)
-C_GYR_RND = 2  # SIM_GYR1_RND, SIM_GYR2_RND [rad/s] (2)
-C_ACC_BIAS = 4  # SIM_ACC1_BIAS, SIM_ACC2_BIAS [m/s^2] (2 x 3)
-C_GYR_BIAS = 10  # SIM_GYR1_BIAS, SIM_GYR2_BIAS [rad/s] (2 x 3)
-C_ACC_FAIL = 16  # SIM_ACCEL1_FAIL, SIM_ACCEL2_FAIL [m/s^2] (2)
-C_DRIFT_SPEED = 18  # SIM_DRIFT_SPEED [rad/s per minute]
-C_DRIFT_TIME = 19  # SIM_DRIFT_TIME [min]
-C_INS_THR_MIN = 20  # SIM_INS_THR_MIN
-C_GYR_PERIOD_US = 21  # gyro sample period per IMU [us] (2)
-C_ACC_PERIOD_US = 23  # accel sample period per IMU [us] (2)
-C_GYR_LPF = 25  # gyro biquad coefficients per IMU (b0, b1, b2, a1, a2) x 2
-C_ACC_LPF = 35  # accel biquad coefficients per IMU x 2
-C_VIB_FLOOR_A = 45  # VIBE floor 5 Hz alpha per IMU (2)
-C_VIB_SQ_A = 47  # VIBE 2 Hz alpha per IMU (2)
-C_GPS_ENABLE = 49  # SIM_GPS1_ENABLE
-C_GPS_PERIOD_US = 50  # 1e6 / SIM_GPS1_HZ
-C_GPS_LAG_S = 51  # SIM_GPS1_LAG_MS / 1000
-C_GPS_NUMSATS = 52  # SIM_GPS1_NUMSATS
-C_GPS_HDOP = 53  # reported HDop
-C_GPS_VERR = 54  # SIM_GPS1_VERR (3) [m/s]
-C_GPS_NOISE = 57  # SIM_GPS1_NOISE [m]
-C_BARO_RND = 58  # SIM_BARO_RND [m]
-C_BARO_GLITCH = 59  # SIM_BARO_GLITCH [m]
-C_MAG_RND = 60  # SIM_MAG_RND [gauss]
-C_MAG_EARTH = 61  # earth field NED [gauss] (3)
-C_RC_FAIL = 64  # SIM_RC_FAIL
-C_HOME_ALT = 65  # SIM_OPOS_ALT [m AMSL]
-C_VIB_MOT_MAX = 66  # SIM_VIB_MOT_MAX [Hz]
-C_ACC_RND = 67  # SIM_ACC1_RND, SIM_ACC2_RND [m/s^2] (2)
-C_FRAME_HEIGHT = 69  # ground-to-CG height [m]
-C_ENGINE_MUL = 70  # SIM_ENGINE_MUL: PWM multiplier above 1000 us on the failed outputs
-C_ENGINE_MASK = 71  # SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)
-C_NOISE_SCALE = 72  # per-IMU scale of the base noise amplitudes (2)
-N_SENSOR_CFG = 74
+# ---- sensor configuration scfg (built once per flight from parameters) ------------------------
+CONFIG = Layout("scfg", "sensor configuration")
+_c = CONFIG
+C_ACC_NOISE = _c.add("C_ACC_NOISE", 1, "m/s/s", "base accel noise amplitude (uniform)")
+C_GYR_NOISE = _c.add("C_GYR_NOISE", 1, "rad/s", "base gyro noise amplitude (uniform)")
+C_GYR_RND = _c.add("C_GYR_RND", 2, "rad/s", "SIM_GYR1_RND, SIM_GYR2_RND")
+C_ACC_BIAS = _c.add("C_ACC_BIAS", 6, "m/s/s", "SIM_ACC1_BIAS, SIM_ACC2_BIAS (2 x 3)")
+C_GYR_BIAS = _c.add("C_GYR_BIAS", 6, "rad/s", "SIM_GYR1_BIAS, SIM_GYR2_BIAS (2 x 3)")
+C_ACC_FAIL = _c.add("C_ACC_FAIL", 2, "m/s/s", "SIM_ACCEL1_FAIL, SIM_ACCEL2_FAIL")
+C_DRIFT_SPEED = _c.add("C_DRIFT_SPEED", 1, "rad/s/min", "SIM_DRIFT_SPEED")
+C_DRIFT_TIME = _c.add("C_DRIFT_TIME", 1, "min", "SIM_DRIFT_TIME")
+C_INS_THR_MIN = _c.add("C_INS_THR_MIN", 1, "", "SIM_INS_THR_MIN")
+C_GYR_PERIOD_US = _c.add("C_GYR_PERIOD_US", 2, "us", "gyro sample period per IMU")
+C_ACC_PERIOD_US = _c.add("C_ACC_PERIOD_US", 2, "us", "accel sample period per IMU")
+C_GYR_LPF = _c.add("C_GYR_LPF", 10, "",
+                   "gyro biquad coefficients per IMU (b0, b1, b2, a1, a2) x 2")
+C_ACC_LPF = _c.add("C_ACC_LPF", 10, "", "accel biquad coefficients per IMU x 2")
+C_VIB_FLOOR_A = _c.add("C_VIB_FLOOR_A", 2, "", "VIBE floor 5 Hz alpha per IMU")
+C_VIB_SQ_A = _c.add("C_VIB_SQ_A", 2, "", "VIBE 2 Hz alpha per IMU")
+C_GPS_ENABLE = _c.add("C_GPS_ENABLE", 1, "", "SIM_GPS1_ENABLE")
+C_GPS_PERIOD_US = _c.add("C_GPS_PERIOD_US", 1, "us", "1e6 / SIM_GPS1_HZ")
+C_GPS_LAG_S = _c.add("C_GPS_LAG_S", 1, "s", "SIM_GPS1_LAG_MS / 1000")
+C_GPS_NUMSATS = _c.add("C_GPS_NUMSATS", 1, "", "SIM_GPS1_NUMSATS")
+C_GPS_HDOP = _c.add("C_GPS_HDOP", 1, "", "reported HDop")
+C_GPS_VERR = _c.add("C_GPS_VERR", 3, "m/s", "SIM_GPS1_VERR")
+C_GPS_NOISE = _c.add("C_GPS_NOISE", 1, "m", "SIM_GPS1_NOISE")
+C_BARO_RND = _c.add("C_BARO_RND", 1, "m", "SIM_BARO_RND")
+C_BARO_GLITCH = _c.add("C_BARO_GLITCH", 1, "m", "SIM_BARO_GLITCH")
+C_MAG_RND = _c.add("C_MAG_RND", 1, "gauss", "SIM_MAG_RND")
+C_MAG_EARTH = _c.add("C_MAG_EARTH", 3, "gauss", "earth field NED")
+C_RC_FAIL = _c.add("C_RC_FAIL", 1, "", "SIM_RC_FAIL")
+C_HOME_ALT = _c.add("C_HOME_ALT", 1, "m", "SIM_OPOS_ALT (AMSL)")
+C_VIB_MOT_MAX = _c.add("C_VIB_MOT_MAX", 1, "Hz", "SIM_VIB_MOT_MAX")
+C_ACC_RND = _c.add("C_ACC_RND", 2, "m/s/s", "SIM_ACC1_RND, SIM_ACC2_RND")
+C_FRAME_HEIGHT = _c.add("C_FRAME_HEIGHT", 1, "m", "ground-to-CG height")
+C_ENGINE_MUL = _c.add("C_ENGINE_MUL", 1, "",
+                      "SIM_ENGINE_MUL: PWM multiplier above 1000 us on the failed outputs")
+C_ENGINE_MASK = _c.add("C_ENGINE_MASK", 1, "",
+                       "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
+C_NOISE_SCALE = _c.add("C_NOISE_SCALE", 2, "", "per-IMU scale of the base noise amplitudes")
+N_SENSOR_CFG = CONFIG.close()
