@@ -134,8 +134,9 @@ def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
 
 
 def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
-    """One row per flight: status, kind, seeds, mission, faults, λ, timings, error, scenario
-    (JSON)."""
+    """One row per flight: status, kind, seeds, mission, faults, λ, duration, landing, why the
+    flight ended (``end_reason``: ``landed``, ``crash`` or ``time_cap``, see
+    :data:`tlm_sim.flight.END_REASONS`), timings, error, scenario (JSON)."""
     rows = []
     for flight in sorted(entries):
         e = entries[flight]
@@ -157,6 +158,7 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "duration_s": sm.get("duration_s", math.nan),
             "waypoints_reached": sm.get("waypoints_reached"),
             "landed": sm.get("landed"),
+            "end_reason": sm.get("end_reason"),
             "gps_rows": sm.get("gps_rows"),
             "gps_fault_rows": sm.get("gps_fault_rows"),
             "wall_s": tm.get("total_s", math.nan),
@@ -166,8 +168,8 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "scenario": json.dumps(sc, sort_keys=True),
         })
     cols = ["flight", "status", "kind", "seed", "mission", "faults", "faults_recorded", "lam",
-            "duration_s", "waypoints_reached", "landed", "gps_rows", "gps_fault_rows", "wall_s",
-            "fly_s", "worker", "error", "scenario"]
+            "duration_s", "waypoints_reached", "landed", "end_reason", "gps_rows",
+            "gps_fault_rows", "wall_s", "fly_s", "worker", "error", "scenario"]
     df = pd.DataFrame(rows, columns=cols)
     for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows"):
         df[c] = df[c].astype("Int64")
