@@ -104,9 +104,12 @@ def _config_file(path: str) -> dict[str, Any]:
 
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise _UsageError(f"--config: cannot read {p}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise _UsageError(f"--config: cannot read {p}: not UTF-8 text ({exc.reason} at byte "
+                          f"{exc.start})") from None
     try:
         doc = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:

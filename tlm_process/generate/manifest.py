@@ -74,8 +74,8 @@ def read_header(ds: Path) -> dict[str, Any] | None:
     if not path.exists():
         return None
     try:
-        doc = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # ValueError: JSON or UTF-8 decoding
         raise GenerateError(f"{path}: cannot read the data set manifest: {exc}") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise GenerateError(f"{path} is not a tlm data set manifest")
@@ -120,7 +120,7 @@ def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
     bad = 0
     if not path.exists():
         return entries, 0
-    with path.open("r", encoding="utf-8") as fh:
+    with path.open("rb") as fh:  # bytes: a line that is not UTF-8 is one bad line
         for line in fh:
             line = line.strip()
             if not line:
@@ -128,7 +128,7 @@ def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
             try:
                 rec = json.loads(line)
                 entries[int(rec["flight"])] = rec
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            except (KeyError, TypeError, ValueError):  # ValueError: JSON, UTF-8, int
                 bad += 1
     return entries, bad
 
