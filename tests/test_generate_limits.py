@@ -113,3 +113,15 @@ def test_flights_cut_off_by_the_time_cap_are_reported(tmp_path):
     assert list(frame["end_reason"]) == ["time_cap", "landed", "landed"]
     assert list(frame["status"]) == ["ok"] * 3  # valid tables, just cut off
     assert read_header(tmp_path / "ds")["runs"][-1]["capped"] == 1
+
+
+def test_the_scheduler_docs_and_help_say_dask_is_unauthenticated(capsys):
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "generate.md").read_text()
+    section = doc.split("### Dask security", 1)[1].split("\n#", 1)[0]
+    for needle in ("**unauthenticated**", "can run code on every worker",
+                   "--host 127.0.0.1", "ssh -N -L 8786:127.0.0.1:8786", "tls://"):
+        assert needle in section, needle
+    assert "--scheduler tcp://10." not in doc  # no example pointing at a LAN address
+    with pytest.raises(SystemExit):
+        _cli(["generate", "--help"])
+    assert "unauthenticated" in " ".join(capsys.readouterr().out.split())
