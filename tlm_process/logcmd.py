@@ -108,8 +108,9 @@ def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> d
             for f in doc.get("faults") or ():
                 faults.append({**{k: f.get(k) for k in ("type", "label", "start_time_us",
                                                          "end_time_us")}, "source": "sidecar"})
-        except (OSError, ValueError, AttributeError):  # ValueError: JSON or UTF-8 decoding
-            info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON"
+        except (OSError, ValueError, AttributeError) as exc:  # ValueError: JSON or UTF-8
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON ({why})"
     info["faults"] = faults
     return info
 

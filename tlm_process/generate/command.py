@@ -150,7 +150,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "generate", help="fly many sampled flights into one labelled data set",
         description=DESCRIPTION, epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--flights", type=int, required=True, help="number of flights N (0..N-1)")
+    p.add_argument("--flights", type=int, required=True,
+                   help="number of flights N (0..N-1), at most 100000000")
     p.add_argument("--out", required=True, help="data set folder (new, empty, or one to continue)")
     p.add_argument("--seed", type=int, default=0, help="run seed: every draw comes from it "
                                                        "(default 0)")
