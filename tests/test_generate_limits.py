@@ -108,7 +108,7 @@ def test_flights_cut_off_by_the_time_cap_are_reported(tmp_path):
     rep = _gen(tmp_path / "ds", 3, config=slow, seed=0)
     assert (rep.ok, rep.failed, rep.capped) == (3, 0, [0])
     line = next(ln for ln in rep.lines() if ln.startswith("capped"))
-    assert "1 flight(s) hit the time cap" in line and "flights 0)" in line
+    assert "1 flight still armed at the time cap, cut off (flight 0)" in line
     frame = pd.read_parquet(tmp_path / "ds" / "manifest.parquet")
     assert list(frame["end_reason"]) == ["time_cap", "landed", "landed"]
     assert list(frame["status"]) == ["ok"] * 3  # valid tables, just cut off

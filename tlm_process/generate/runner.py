@@ -162,8 +162,10 @@ class GenerateReport:
         if self.capped:
             shown = ", ".join(str(f) for f in sorted(self.capped)[:10])
             more = ", ..." if len(self.capped) > 10 else ""
-            out.append(f"capped             {len(self.capped)} flight(s) hit the time cap, still "
-                       f"armed (flights {shown}{more}): see end_reason in manifest.parquet")
+            pl = "s" if len(self.capped) > 1 else ""
+            out.append(f"capped             {len(self.capped)} flight{pl} still armed at the "
+                       f"time cap, cut off (flight{pl} {shown}{more}): see end_reason in "
+                       "manifest.parquet")
         if self.restarts:
             out.append(f"worker pool        restarted {self.restarts} time(s): a worker process "
                        "died")
