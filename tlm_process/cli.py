@@ -408,6 +408,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FileNotFoundError as e:
         print(f"tlm: error: file not found: {e.filename}", file=sys.stderr)
         return 2
+    except UnicodeDecodeError as e:  # a reader that does not name its file yet
+        print(f"tlm: error: a file given is not UTF-8 text ({e.reason} at byte {e.start})",
+              file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("tlm: interrupted", file=sys.stderr)
         return 130

@@ -104,12 +104,13 @@ def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> d
     sidecar = Path(path).with_suffix(".json")
     if sidecar.is_file():
         try:
-            doc = json.loads(sidecar.read_text())
+            doc = json.loads(sidecar.read_text(encoding="utf-8"))
             for f in doc.get("faults") or ():
                 faults.append({**{k: f.get(k) for k in ("type", "label", "start_time_us",
                                                          "end_time_us")}, "source": "sidecar"})
-        except (json.JSONDecodeError, AttributeError):
-            info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON"
+        except (OSError, ValueError, AttributeError) as exc:  # ValueError: JSON or UTF-8
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON ({why})"
     info["faults"] = faults
     return info
 

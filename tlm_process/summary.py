@@ -12,6 +12,10 @@ from tlm_sim.geo import latlon_to_ne
 
 MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
               9: "LAND"}
+#: What each ``meta["end_reason"]`` (tlm_sim.flight.END_REASONS) means, for the summary.
+END_REASON_TEXT = {"landed": "landed and disarmed",
+                   "crash": "the crash check disarmed it",
+                   "time_cap": "still armed at the time cap: the flight was cut off"}
 
 
 def flight_summary(log: FlightLog) -> dict[str, Any]:
@@ -35,6 +39,7 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
         "waypoints_reached": f"{meta.get('waypoints_reached', '?')}/{meta.get('n_waypoints', '?')}",
         "final_mode": f"{MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
         "landed": meta.get("landed"),
+        "end_reason": meta.get("end_reason"),
         "rows": {k: len(v) for k, v in log.tables.items()},
     }
 
@@ -49,6 +54,8 @@ def format_summary(s: dict[str, Any]) -> str:
         f"distance flown     {s['distance_m']} m, max altitude {s['max_alt_m']} m",
         f"waypoints reached  {s['waypoints_reached']}",
         f"final mode         {s['final_mode']}, landed {s['landed']}",
+        f"end reason         {s.get('end_reason')} "
+        f"({END_REASON_TEXT.get(str(s.get('end_reason')), 'unknown')})",
         f"rows               {rows}",
     ])
 

@@ -21,6 +21,7 @@ from tlm_sim._jit import loop_jit, tick_jit
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
 from tlm_sim.control.config import build_control_config
+from tlm_sim.control.events import ERR_CRASH_CHECK
 from tlm_sim.control.modes import vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
@@ -62,6 +63,14 @@ SCH_AT, SCH_KIND, SCH_TGT, SCH_IDX, SCH_VAL, SCH_CHANGE = 0, 1, 2, 3, 4, 5
 N_SCH = 6
 TRIG_TIME = 0  # SCH_AT is a time [us since boot]
 TRIG_WP = 1  # SCH_AT is a waypoint number: due once that many mission waypoints are reached
+
+#: Why a flight ended (``FlightLog.meta["end_reason"]``): the land detector disarmed the copter
+#: on the ground (the normal end), the crash check disarmed it (ERR CRASH_CHECK), or it was
+#: still armed when the loop reached the time cap (:func:`max_duration_s`), e.g. sitting armed
+#: on the ground after an engine fault or unable to advance against a strong wind: its tables
+#: are valid but the flight was cut off.
+END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
+END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP)
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -588,6 +597,16 @@ def max_duration_s(mission: Mission, params: Mapping[str, float]) -> float:
                  + 600.0)
 
 
+def end_reason(disarm_time_s: float, err_rows: np.ndarray) -> str:
+    """Why a flight ended (one of :data:`END_REASONS`).
+
+    ``disarm_time_s``: the control state's disarm time [s] (< 0: never disarmed, so the loop ran
+    to the time cap); ``err_rows``: the flight's ERR rows (TimeUS, Subsys, ECode)."""
+    if disarm_time_s < 0.0:
+        return END_TIME_CAP
+    return END_CRASH if bool(np.any(err_rows[:, 1] == ERR_CRASH_CHECK)) else END_LANDED
+
+
 def fly(
     mission: Mission | int,
     faults: FaultSchedule | Sequence[Any] | None = None,
@@ -659,6 +678,9 @@ def fly(
         "waypoints_reached": int(c[C.WP_REACHED]),
         "n_waypoints": int(mission.n_waypoints),
         "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
+        "end_reason": end_reason(float(c[C.DISARM_TIME]),
+                                 bufs["ERR"][:int(counts[L.K_ERR])]),
+        "max_duration_s": duration,
         "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
     }
     log = FlightLog.from_buffers(

@@ -783,9 +783,12 @@ class Params(Mapping[str, float]):
         """Defaults with the parameters of an ArduPilot ``.parm`` file applied on top."""
         path = Path(path)
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise ParamError(f"cannot read parameter file {path}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise ParamError(f"cannot read parameter file {path}: not UTF-8 text ({exc.reason} "
+                             f"at byte {exc.start})") from None
         return cls.from_parm_text(text, source=str(path))
 
     @classmethod

@@ -50,7 +50,7 @@ SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/
 examples:
   tlm generate --flights 1000 --out ds --seed 1
   tlm generate --flights 200 --out ds-paper --kinds paper=1 --profile paper --lambda 1.5
-  tlm generate --flights 5000 --out ds --scheduler tcp://10.0.0.5:8786
+  tlm generate --flights 5000 --out ds --scheduler tcp://127.0.0.1:8786   # via an SSH tunnel
   tlm fly --from-manifest ds --flight 123 --out flight123    # one flight again, alone
 """
 
@@ -104,9 +104,12 @@ def _config_file(path: str) -> dict[str, Any]:
 
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise _UsageError(f"--config: cannot read {p}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise _UsageError(f"--config: cannot read {p}: not UTF-8 text ({exc.reason} at byte "
+                          f"{exc.start})") from None
     try:
         doc = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:
@@ -147,7 +150,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "generate", help="fly many sampled flights into one labelled data set",
         description=DESCRIPTION, epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--flights", type=int, required=True, help="number of flights N (0..N-1)")
+    p.add_argument("--flights", type=int, required=True,
+                   help="number of flights N (0..N-1), at most 100000000")
     p.add_argument("--out", required=True, help="data set folder (new, empty, or one to continue)")
     p.add_argument("--seed", type=int, default=0, help="run seed: every draw comes from it "
                                                        "(default 0)")
@@ -157,7 +161,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                     help="local threads or processes; auto (default): threads up to 4 "
                          "workers (faster on few cores), processes above")
     ex.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                    help="run on a Dask distributed cluster")
+                    help="run on a Dask distributed cluster (unauthenticated: use only a "
+                         "scheduler you started, on loopback / an SSH tunnel or with TLS; see "
+                         "docs/generate.md)")
     ex.add_argument("--dask-local", type=int, metavar="N",
                     help="start a Dask LocalCluster of N worker processes")
     ex.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",

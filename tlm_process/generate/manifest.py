@@ -74,8 +74,8 @@ def read_header(ds: Path) -> dict[str, Any] | None:
     if not path.exists():
         return None
     try:
-        doc = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # ValueError: JSON or UTF-8 decoding
         raise GenerateError(f"{path}: cannot read the data set manifest: {exc}") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise GenerateError(f"{path} is not a tlm data set manifest")
@@ -120,7 +120,7 @@ def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
     bad = 0
     if not path.exists():
         return entries, 0
-    with path.open("r", encoding="utf-8") as fh:
+    with path.open("rb") as fh:  # bytes: a line that is not UTF-8 is one bad line
         for line in fh:
             line = line.strip()
             if not line:
@@ -128,14 +128,15 @@ def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
             try:
                 rec = json.loads(line)
                 entries[int(rec["flight"])] = rec
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            except (KeyError, TypeError, ValueError):  # ValueError: JSON, UTF-8, int
                 bad += 1
     return entries, bad
 
 
 def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
-    """One row per flight: status, kind, seeds, mission, faults, λ, timings, error, scenario
-    (JSON)."""
+    """One row per flight: status, kind, seeds, mission, faults, λ, duration, landing, why the
+    flight ended (``end_reason``: ``landed``, ``crash`` or ``time_cap``, see
+    :data:`tlm_sim.flight.END_REASONS`), timings, error, scenario (JSON)."""
     rows = []
     for flight in sorted(entries):
         e = entries[flight]
@@ -157,6 +158,7 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "duration_s": sm.get("duration_s", math.nan),
             "waypoints_reached": sm.get("waypoints_reached"),
             "landed": sm.get("landed"),
+            "end_reason": sm.get("end_reason"),
             "gps_rows": sm.get("gps_rows"),
             "gps_fault_rows": sm.get("gps_fault_rows"),
             "wall_s": tm.get("total_s", math.nan),
@@ -166,8 +168,8 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "scenario": json.dumps(sc, sort_keys=True),
         })
     cols = ["flight", "status", "kind", "seed", "mission", "faults", "faults_recorded", "lam",
-            "duration_s", "waypoints_reached", "landed", "gps_rows", "gps_fault_rows", "wall_s",
-            "fly_s", "worker", "error", "scenario"]
+            "duration_s", "waypoints_reached", "landed", "end_reason", "gps_rows",
+            "gps_fault_rows", "wall_s", "fly_s", "worker", "error", "scenario"]
     df = pd.DataFrame(rows, columns=cols)
     for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows"):
         df[c] = df[c].astype("Int64")

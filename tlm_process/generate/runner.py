@@ -27,7 +27,7 @@ import math
 import sys
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +39,7 @@ from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprin
 from tlm_process.generate.scenario import ScenarioConfig, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
 from tlm_process.generate.writer import DatasetWriter
+from tlm_sim.flight import END_TIME_CAP
 
 __all__ = ["GenerateOptions", "GenerateReport", "generate"]
 
@@ -46,6 +47,9 @@ __all__ = ["GenerateOptions", "GenerateReport", "generate"]
 JOBS_PER_SLOT = 2
 #: How long running flights may take to finish after Ctrl-C [s].
 DRAIN_TIMEOUT_S = 60.0
+#: Most flights a data set can hold: part and block file names carry 8-digit flight numbers
+#: (``flight-00000000.parquet`` .. ``flight-99999999.parquet``), so names sort by flight.
+MAX_FLIGHTS = 10**8
 
 
 @dataclass
@@ -77,6 +81,8 @@ class GenerateReport:
     out: Path
     flights: int
     skipped: int = 0
+    #: flights the data set holds: the most any run on it asked for (>= ``flights``)
+    dataset_flights: int = 0
     ok: int = 0
     failed: int = 0
     interrupted: bool = False
@@ -100,6 +106,8 @@ class GenerateReport:
     compacted_parts: int = 0
     compact_s: float = 0.0
     errors: list[str] = field(default_factory=list)
+    #: flights of this run (status ok) still armed at the simulator's time cap: cut off
+    capped: list[int] = field(default_factory=list)
 
     @property
     def ran(self) -> int:
@@ -123,6 +131,11 @@ class GenerateReport:
                + (f", {self.skipped} already done" if self.skipped else "")
                + (" (interrupted: run the same command again to continue)"
                   if self.interrupted else "")]
+        if self.dataset_flights > self.flights and self.state != "complete":
+            out.append(f"note               an earlier run asked for {self.dataset_flights} "
+                       f"flights: the data set is complete once flights 0.."
+                       f"{self.dataset_flights - 1} are flown (--flights "
+                       f"{self.dataset_flights})")
         if self.ran:
             rt = self.sim_s / self.wall_s if self.wall_s > 0 else math.nan
             out.append(f"wall time          {self.wall_s:.1f} s on {self.executor}: "
@@ -146,6 +159,13 @@ class GenerateReport:
             target = ("" if self.target_fault_ratio is None
                       else f" (target {100 * self.target_fault_ratio:.1f} %)")
             out.append(f"fault share        {100 * self.fault_share:.1f} % of GPS rows{target}")
+        if self.capped:
+            shown = ", ".join(str(f) for f in sorted(self.capped)[:10])
+            more = ", ..." if len(self.capped) > 10 else ""
+            pl = "s" if len(self.capped) > 1 else ""
+            out.append(f"capped             {len(self.capped)} flight{pl} still armed at the "
+                       f"time cap, cut off (flight{pl} {shown}{more}): see end_reason in "
+                       "manifest.parquet")
         if self.restarts:
             out.append(f"worker pool        restarted {self.restarts} time(s): a worker process "
                        "died")
@@ -180,6 +200,9 @@ def _check(opts: GenerateOptions) -> list[str] | None:
                         ("pilot flights", opts.pilot_flights, 1)):
         if isinstance(v, bool) or not isinstance(v, int) or v < lo:
             raise GenerateError(f"{what} must be a whole number >= {lo}, got {v!r}")
+    if opts.flights > MAX_FLIGHTS:
+        raise GenerateError(f"--flights must be at most {MAX_FLIGHTS:_} (file names hold "
+                            f"8-digit flight numbers), got {opts.flights:_}")
     g = opts.target_fault_ratio
     if g is not None:
         if isinstance(g, bool) or not isinstance(g, int | float) or not 0 < g < 1:
@@ -431,15 +454,16 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     report = GenerateReport(Path(opts.out), opts.flights,
                             target_fault_ratio=opts.target_fault_ratio)
     done = {f for f, st in status.items() if st == "ok"}
-    todo = [i for i in range(opts.flights) if i not in done]
-    report.skipped = opts.flights - len(todo)
+    report.skipped = sum(1 for f in done if f < opts.flights)
+    n_todo = opts.flights - report.skipped
+    report.dataset_flights = int(writer.header.get("flights", opts.flights))
     handle = None
     run_info: dict[str, Any] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     try:
         config = opts.config
         gamma = opts.target_fault_ratio
         need_pilot = gamma is not None and writer.header.get("lambda") is None
-        if todo or need_pilot:
+        if n_todo or need_pilot:
             handle = open_executor(opts.executor, opts.workers, scheduler=opts.scheduler,
                                    dask_local=opts.dask_local,
                                    timeout_s=opts.connect_timeout_s)
@@ -459,9 +483,10 @@ def generate(opts: GenerateOptions) -> GenerateReport:
         else:
             writer.header["lambda"] = config.lam
         report.lam = config.lam
-        if todo:
+        if n_todo:
             assert handle is not None
-            _fly_all(opts, handle, writer, report, config, tables, todo, t_start)
+            todo = (i for i in range(opts.flights) if i not in done)  # lazily: N may be large
+            _fly_all(opts, handle, writer, report, config, tables, todo, n_todo, t_start)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -471,7 +496,7 @@ def generate(opts: GenerateOptions) -> GenerateReport:
         report.wall_s = time.perf_counter() - t_start
         report.parent_peak_rss_mb = peak_rss_mb()
         run_info.update(wall_s=round(report.wall_s, 3), ok=report.ok, failed=report.failed,
-                        interrupted=report.interrupted)
+                        capped=len(report.capped), interrupted=report.interrupted)
         header = writer.close(run_info)
         report.state = header.get("state", "")
     if opts.compact and not report.interrupted:
@@ -486,9 +511,9 @@ def generate(opts: GenerateOptions) -> GenerateReport:
 
 def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWriter,
              report: GenerateReport, config: ScenarioConfig, tables: list[str] | None,
-             todo: list[int], t_start: float) -> None:
-    """Fly the flights ``todo`` and write them (the body of :func:`generate`)."""
-    bar = _bar(len(todo), "flights", opts.progress)
+             todo: Iterable[int], n_todo: int, t_start: float) -> None:
+    """Fly the ``n_todo`` flights ``todo`` and write them (the body of :func:`generate`)."""
+    bar = _bar(n_todo, "flights", opts.progress)
 
     def take(res: Mapping[str, Any]) -> None:
         entry = writer.put(res)
@@ -502,6 +527,8 @@ def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWrite
             report.gps_fault_rows += int(sm.get("gps_fault_rows", 0))
             report.fly_s += float(tm.get("fly_s", 0.0))
             report.encode_s += float(tm.get("encode_s", 0.0))
+            if sm.get("end_reason") == END_TIME_CAP:
+                report.capped.append(int(res["flight"]))
         else:
             report.failed += 1
             report.errors.append(f"flight {res['flight']}: {res.get('error')}")

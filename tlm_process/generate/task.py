@@ -80,7 +80,8 @@ def fly_job(job: Mapping[str, Any]) -> dict[str, Any]:
 
     Returns a dict: ``flight``, ``status`` ("ok" or "failed"), ``scenario`` (dict, None if
     sampling failed), ``error`` / ``traceback`` (failed), ``summary`` (simulated duration,
-    waypoints, landing, fault types recorded, GPS rows and GPS rows in fault windows),
+    waypoints, landing, why it ended (``end_reason``), fault types recorded, GPS rows and GPS
+    rows in fault windows),
     ``timing`` (s: sample, fly, encode, total; ``first`` = the first job of this process, which
     pays numba's cache load or compile), ``parts`` (table name -> Parquet bytes, ``faults``
     included), ``bin`` (bytes or None), ``worker`` (host, pid, peak RSS, numba cache folder).
@@ -112,6 +113,7 @@ def fly_job(job: Mapping[str, Any]) -> dict[str, Any]:
             "n_waypoints": int(log.meta["n_waypoints"]),
             "landed": bool(log.meta["landed"]),
             "final_mode": int(log.meta["final_mode"]),
+            "end_reason": str(log.meta["end_reason"]),
             "faults": [r["type"] for r in log.faults],
             "gps_rows": len(gps_t),
             "gps_fault_rows": gps_fault_rows(gps_t, log.faults),

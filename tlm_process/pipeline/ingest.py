@@ -218,9 +218,12 @@ def parse_records(records: Any, source: str = "") -> list[FaultRecord]:
 
 def _read_json(path: Path) -> Any:
     try:
-        return json.loads(path.read_text())
+        return json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise IngestError(f"cannot read: {exc.strerror or exc}", source=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise IngestError(f"not UTF-8 text ({exc.reason} at byte {exc.start})",
+                          source=str(path)) from None
     except json.JSONDecodeError as exc:
         raise IngestError(f"invalid JSON: {exc}", source=str(path)) from None
 

@@ -342,10 +342,13 @@ class FaultSchedule:
         path = Path(path)
         suffix = _suffix(path)
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise FaultScheduleError(
                 f"cannot read fault schedule {path}: {exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise FaultScheduleError(f"cannot read fault schedule {path}: not UTF-8 text "
+                                     f"({exc.reason} at byte {exc.start})") from None
         try:
             data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
         except json.JSONDecodeError as exc:

@@ -225,8 +225,8 @@ class Mission:
         """
         path = Path(path)
         try:
-            doc: dict[str, Any] = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
+            doc: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:  # ValueError: JSON or UTF-8 decoding
             raise MissionError(f"{path}: cannot read sidecar JSON: {exc}") from None
         m = doc.get("mission")
         if not isinstance(m, dict) or "waypoints" not in m:

@@ -126,8 +126,11 @@ def read_wpl(
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MissionError(f"{path}: cannot read: {exc}") from None
+    except OSError as exc:
+        raise MissionError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise MissionError(f"{path}: cannot read: not UTF-8 text ({exc.reason} at byte "
+                           f"{exc.start})") from None
     lines = text.splitlines()
     items: list[tuple[int, int, int, int, float, float, float]] = []  # lineno + fields
     header_seen = False
