@@ -8,7 +8,9 @@ executor, the worker count or the order flights finish in.
 
 Re-running with the same settings continues a data set: flights the journal lists as ok are
 skipped, failed ones are flown again. Ctrl-C stops handing out flights, lets the running ones
-finish (a second Ctrl-C drops them), and closes the data set consistently.
+finish (a second Ctrl-C drops them), and closes the data set consistently. A Dask scheduler
+that is gone, or silent for ``scheduler_grace_s`` while no flight finishes, stops the run the
+same way and raises a one-line :class:`GenerateError`.
 
 ``target_fault_ratio`` (γ): λ = γ / α (:func:`tlm_process.pipeline.stretching.lambda_for_target`,
 the paper's Eq. 5), with α the fault share of GPS rows measured on pilot flights (the first
@@ -486,7 +488,8 @@ def generate(opts: GenerateOptions) -> GenerateReport:
 
     Raises:
         GenerateError: bad settings, an unwritable or foreign output folder, a data set made
-            with other settings or another tlm, an unreachable Dask scheduler.
+            with other settings or another tlm, an unreachable Dask scheduler, or one lost
+            during the run (raised after the data set was closed, state ``incomplete``).
     """
     t_start = time.perf_counter()
     tables = _check(opts)
