@@ -7,7 +7,8 @@ Wiring (in ``tlm_process/cli.py``)::
     # dispatch: args.func(args) -> generate_command.run(args)
 
 ``run`` reports user mistakes itself (one line on stderr, exit code 2); exit code 1 when some
-flights failed (they are in the manifest with their error), 130 after Ctrl-C.
+flights failed (they are in the manifest with their error), 130 after Ctrl-C or SIGTERM, 2
+when the Dask scheduler was lost (the data set is closed, incomplete).
 """
 
 from __future__ import annotations
@@ -167,7 +168,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     ex.add_argument("--dask-local", type=int, metavar="N",
                     help="start a Dask LocalCluster of N worker processes")
     ex.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
-                    help="give up reaching the Dask scheduler after S seconds (default 10)")
+                    help="give up reaching the Dask scheduler after S seconds, and stop a "
+                         "run whose scheduler is silent that long (default 10)")
     sc = p.add_argument_group("scenarios")
     lam = sc.add_mutually_exclusive_group()
     lam.add_argument("--lambda", dest="lam", type=float, metavar="L",

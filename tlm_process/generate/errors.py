@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["GenerateError"]
+__all__ = ["ExecutorLost", "GenerateError"]
 
 
 class GenerateError(ValueError):
@@ -13,3 +13,9 @@ class GenerateError(ValueError):
 
     def __init__(self, message: str) -> None:
         super().__init__(re.sub(r"\s*\n\s*", " ", str(message)).strip())
+
+
+class ExecutorLost(GenerateError):
+    """The executor can no longer run flights (the Dask scheduler is gone or does not answer).
+    ``generate`` closes the data set (state ``incomplete``) and re-raises it as a
+    :class:`GenerateError` that says how many flights were written."""

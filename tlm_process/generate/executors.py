@@ -9,29 +9,37 @@ generator submits, waits and cancels the same way whichever runs the flights:
   minute in interleaved 300-flight runs); about a fifth of a flight holds the GIL, so threads
   stop scaling at a few cores, where processes take over.
 * ``process``: ``ProcessPoolExecutor`` with the ``spawn`` start method, one flight per
-  task. Workers ignore SIGINT (the parent handles Ctrl-C and lets running flights finish) and
-  import tlm_sim on start (~2.6 s of CPU), which points them at the same on-disk numba cache as
-  the parent (``NUMBA_CACHE_DIR`` is inherited), so a worker loads the compiled flight instead
-  of compiling it. A worker that dies (a crash in native code) does not stop the run.
+  task. Workers ignore SIGINT and SIGTERM (the parent handles both and lets running flights
+  finish) and import tlm_sim on start (~2.6 s of CPU), which points them at the same on-disk
+  numba cache as the parent (``NUMBA_CACHE_DIR`` is inherited), so a worker loads the
+  compiled flight instead of compiling it. A worker that dies (a crash in native code) does
+  not stop the run. A worker whose parent dies (even by SIGKILL) exits within
+  :data:`PARENT_POLL_S`, and with the last one the multiprocessing resource tracker, so a
+  killed run leaves no process behind.
 * ``thread``: ``ThreadPoolExecutor``; the flight loop is compiled with ``nogil=True``, but
   building the pandas tables, the fault records and the Arrow tables need the GIL.
 * ``dask``: ``--scheduler tcp://HOST:PORT`` connects a ``distributed.Client`` to a running
   cluster; ``--dask-local N`` starts a ``LocalCluster`` of N single-threaded worker processes.
   Workers need tlm installed; results (the encoded Parquet parts) come back to this process,
-  which writes them, so workers need no shared file system.
+  which writes them, so workers need no shared file system. LocalCluster workers exit by
+  themselves when this process dies (Dask watches its parent). A scheduler that is gone is
+  noticed by the generator (``ExecutorHandle.unreachable``), which stops the run.
 """
 
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import logging
 import multiprocessing
 import os
 import signal
+import threading
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from tlm_process.generate.errors import GenerateError
+from tlm_process.generate.errors import ExecutorLost, GenerateError
 
 __all__ = ["AUTO_THREADS_MAX", "EXECUTORS", "ExecutorHandle", "open_executor"]
 
@@ -39,11 +47,37 @@ __all__ = ["AUTO_THREADS_MAX", "EXECUTORS", "ExecutorHandle", "open_executor"]
 EXECUTORS: tuple[str, ...] = ("auto", "process", "thread")
 #: ``auto`` runs up to this many workers as threads, more as processes.
 AUTO_THREADS_MAX = 4
+#: How long closing the client of a lost Dask scheduler may take [s].
+DASK_CLOSE_TIMEOUT_S = 2.0
+#: The logger quieted while a Dask client is open (it logs its lost connection as an error).
+QUIET_LOGGER = "distributed.client"
 
 
-def _init_process_worker() -> None:
-    """Process pool initializer: Ctrl-C is the parent's business; load tlm_sim once."""
+#: How often a worker process checks that the process that started it is alive [s].
+PARENT_POLL_S = 0.5
+
+
+def _watch_parent(parent_pid: int, poll_s: float = PARENT_POLL_S) -> None:
+    """Exit this process at once (``os._exit``) when ``parent_pid`` is no longer its parent.
+
+    A dead parent's children are re-parented (to init or a subreaper), so ``os.getppid()``
+    changes for good; this runs in a daemon thread and so also ends a worker whose main thread
+    is flying, blocked writing a result to a pipe nobody reads, or waiting on a queue lock.
+    """
+    while os.getppid() == parent_pid:
+        time.sleep(poll_s)
+    os._exit(1)
+
+
+def _init_process_worker(parent_pid: int) -> None:
+    """Process pool initializer: exit when the parent ``parent_pid`` dies (even by SIGKILL,
+    which leaves it no chance to stop us); Ctrl-C and SIGTERM are the parent's business (sent
+    to the whole process group, they let the running flight finish); load tlm_sim once.
+    """
+    threading.Thread(target=_watch_parent, args=(parent_pid,), name="tlm-parent-watch",
+                     daemon=True).start()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     import tlm_sim  # noqa: F401 - sets NUMBA_CACHE_DIR (inherited) and imports the jitted code
 
 
@@ -60,6 +94,12 @@ class ExecutorHandle:
     _cluster: Any = None
     _workers: int = 0
     restarts: int = field(default=0)
+    #: the Dask scheduler's address (``kind == "dask"``)
+    address: str = ""
+    #: why the executor is gone (set by :meth:`mark_lost`), else ``None``
+    lost: str | None = None
+    #: log levels to restore on close (loggers quieted while the executor is open)
+    _log_levels: dict[str, int] = field(default_factory=dict)
 
     def restart(self) -> None:
         """A fresh process pool after a worker process died (BrokenProcessPool)."""
@@ -70,23 +110,57 @@ class ExecutorHandle:
         self.restarts += 1
 
     def close(self, cancel: bool = False) -> None:
-        """Shut the executor down; ``cancel`` drops flights not started yet."""
+        """Shut the executor down; ``cancel`` drops flights not started yet. A Dask client
+        whose scheduler is gone is closed without waiting for it (nothing is raised)."""
         try:
-            if self.kind == "dask":
-                self.pool.shutdown(wait=not cancel)
-            else:
+            if self.kind != "dask":
                 self.pool.shutdown(wait=True, cancel_futures=cancel)
+            elif self.lost is None:
+                with contextlib.suppress(Exception):  # the scheduler may have just gone
+                    self.pool.shutdown(wait=not cancel)
         finally:
             if self._client is not None:
-                self._client.close()
+                with contextlib.suppress(Exception):
+                    if self.lost is None:
+                        self._client.close()
+                    else:
+                        self._client.close(timeout=DASK_CLOSE_TIMEOUT_S)
             if self._cluster is not None:
                 self._cluster.close()
+            for name, level in self._log_levels.items():
+                logging.getLogger(name).setLevel(level)
+            self._log_levels.clear()
+
+    def unreachable(self, timeout_s: float) -> str | None:
+        """Why the Dask scheduler cannot run flights now, in a few words; ``None`` when it
+        answers a (cheap) identity call within ``timeout_s`` seconds, or for local pools."""
+        if self.kind != "dask" or self._client is None:
+            return None
+        client = self._client
+        if client.status in ("closing", "closed"):
+            return "the client closed the connection"
+        try:
+            client.sync(client.scheduler.identity, n_workers=0, callback_timeout=timeout_s)
+        except TimeoutError:
+            return f"no answer for {timeout_s:g} s"
+        except Exception as exc:  # noqa: BLE001 - OSError, CommClosedError, ...
+            if client.status in ("closing", "closed"):
+                return "the client closed the connection"
+            return f"unreachable: {exc}".splitlines()[0][:200]
+        return None
+
+    def mark_lost(self, why: str) -> ExecutorLost:
+        """Remember the executor is gone (``close`` then waits for nothing) and return the
+        error to raise: one line naming the scheduler and ``why``."""
+        self.lost = why
+        return ExecutorLost(f"lost the Dask scheduler at {self.address or '?'} ({why})")
 
 
 def _process_pool(workers: int) -> cf.ProcessPoolExecutor:
     return cf.ProcessPoolExecutor(max_workers=workers,
                                   mp_context=multiprocessing.get_context("spawn"),
-                                  initializer=_init_process_worker)
+                                  initializer=_init_process_worker,
+                                  initargs=(os.getpid(),))
 
 
 def _check_workers(n: Any, what: str) -> int:
@@ -160,10 +234,15 @@ def _open_dask(scheduler: str | None, dask_local: int | None,
             cluster.close()
         where = f"the Dask scheduler at {scheduler}" if scheduler else "a Dask LocalCluster"
         raise GenerateError(f"cannot reach {where}: {exc}") from None
+    # a lost scheduler is reported by generate in one line; the client's own log of its
+    # failed reconnection would come first, on stderr
+    log_levels = {QUIET_LOGGER: logging.getLogger(QUIET_LOGGER).level}
+    logging.getLogger(QUIET_LOGGER).setLevel(logging.CRITICAL)
     info = client.scheduler_info()
     workers = info.get("workers", {})
     slots = sum(int(w.get("nthreads", 1)) for w in workers.values()) or 1
     what = f"Dask LocalCluster ({len(workers)} workers)" if cluster is not None else (
         f"Dask cluster {scheduler} ({len(workers)} workers, {slots} threads)")
     return ExecutorHandle("dask", client.get_executor(pure=False), slots, what,
-                          _client=client, _cluster=cluster, _workers=len(workers))
+                          _client=client, _cluster=cluster, _workers=len(workers),
+                          address=str(client.scheduler.address), _log_levels=log_levels)

@@ -8,7 +8,9 @@ executor, the worker count or the order flights finish in.
 
 Re-running with the same settings continues a data set: flights the journal lists as ok are
 skipped, failed ones are flown again. Ctrl-C stops handing out flights, lets the running ones
-finish (a second Ctrl-C drops them), and closes the data set consistently.
+finish (a second Ctrl-C drops them), and closes the data set consistently. A Dask scheduler
+that is gone, or silent for ``scheduler_grace_s`` while no flight finishes, stops the run the
+same way and raises a one-line :class:`GenerateError`.
 
 ``target_fault_ratio`` (γ): λ = γ / α (:func:`tlm_process.pipeline.stretching.lambda_for_target`,
 the paper's Eq. 5), with α the fault share of GPS rows measured on pilot flights (the first
@@ -33,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tlm_process.generate.errors import GenerateError
+from tlm_process.generate.errors import ExecutorLost, GenerateError
 from tlm_process.generate.executors import ExecutorHandle, open_executor
 from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprint
 from tlm_process.generate.scenario import ScenarioConfig, sample_scenario
@@ -50,6 +52,8 @@ DRAIN_TIMEOUT_S = 60.0
 #: Most flights a data set can hold: part and block file names carry 8-digit flight numbers
 #: (``flight-00000000.parquet`` .. ``flight-99999999.parquet``), so names sort by flight.
 MAX_FLIGHTS = 10**8
+#: On Dask, how often the wait for finished flights looks at the connection [s].
+DASK_POLL_S = 1.0
 
 
 @dataclass
@@ -72,6 +76,15 @@ class GenerateOptions:
     pilot_rounds: int = 3
     compact: bool = False
     connect_timeout_s: float = 10.0
+    #: Dask: the run stops when no flight finished and the scheduler did not answer for this
+    #: long [s] (``None``: ``connect_timeout_s``)
+    scheduler_grace_s: float | None = None
+
+    @property
+    def grace_s(self) -> float:
+        """How long a silent Dask scheduler counts as still there [s]."""
+        return float(self.connect_timeout_s if self.scheduler_grace_s is None
+                     else self.scheduler_grace_s)
 
 
 @dataclass
@@ -227,23 +240,31 @@ class _Run:
     A worker process that dies breaks its whole pool (every job in it is lost, and which one
     killed it is unknown): the pool is restarted and the lost jobs are flown again one at a
     time, so a job that breaks the pool while flying alone is the culprit and is recorded as
-    failed; the others come out as usual."""
+    failed; the others come out as usual.
+
+    On Dask, a job the client cancelled (it lost and regained the scheduler) is handed out
+    again, and a scheduler that is gone, or has not answered while no flight finished for
+    ``grace_s`` seconds, stops the run with :class:`ExecutorLost`."""
 
     def __init__(self, handle: ExecutorHandle, jobs: Iterator[dict[str, Any]], window: int,
-                 on_result: Callable[[Mapping[str, Any]], None]) -> None:
+                 on_result: Callable[[Mapping[str, Any]], None], grace_s: float = 10.0) -> None:
         self.handle = handle
         self.jobs = jobs
         self.window = max(1, window)
         self.on_result = on_result
+        self.grace_s = grace_s
         self.pending: dict[cf.Future, tuple[int, dict[str, Any]]] = {}
         self.retry: deque[tuple[int, dict[str, Any]]] = deque()
+        self.again: deque[tuple[int, dict[str, Any]]] = deque()
         self.exhausted = False
         self.draining = False
+        self.heard_at = time.monotonic()  # when the executor last showed it works
 
     @property
     def busy(self) -> bool:
         """Jobs are handed out, waiting to be retried, or still to come."""
-        return bool(self.pending or self.retry or not (self.exhausted or self.draining))
+        return bool(self.pending or self.retry or self.again
+                    or not (self.exhausted or self.draining))
 
     def _submit(self, job: dict[str, Any], tries: int) -> None:
         try:
@@ -252,11 +273,20 @@ class _Run:
             self._broken([])
             self.retry.appendleft((tries, job))
             return
+        except Exception as exc:  # a Dask client that gave up on its scheduler
+            if self.handle.kind != "dask":
+                raise
+            raise self.handle.mark_lost(f"{type(exc).__name__}: {exc}".splitlines()[0][:200]
+                                        ) from None
         self.pending[fut] = (tries, job)
 
     def fill(self) -> None:
         """Hand out jobs up to the window (a retried job only when nothing else runs)."""
         while not self.draining:
+            if self.again and len(self.pending) < self.window:
+                tries, job = self.again.popleft()
+                self._submit(job, tries)
+                continue
             if self.retry:
                 if not self.pending:
                     tries, job = self.retry.popleft()
@@ -276,8 +306,7 @@ class _Run:
         self.fill()
         if not self.pending:
             return 0
-        done, _ = cf.wait(list(self.pending), timeout=timeout,
-                          return_when=cf.FIRST_COMPLETED)
+        done = self._wait(timeout)
         n = 0
         for fut in sorted(done, key=lambda f: self.pending.get(f, (0, {"flight": -1}))[1][
                 "flight"]):
@@ -285,6 +314,8 @@ class _Run:
                 continue  # lost with a broken pool, already queued again
             tries, job = self.pending.pop(fut)
             if fut.cancelled():
+                if not self.draining:  # not by us: Dask lost the scheduler for a while
+                    self.again.append((tries, job))
                 continue
             try:
                 res = fut.result()
@@ -297,9 +328,46 @@ class _Run:
             n += 1
         return n
 
+    def _wait(self, timeout: float | None) -> set[cf.Future]:
+        """The jobs that finish within ``timeout`` seconds (``None``: until one does). On Dask
+        the wait is cut into :data:`DASK_POLL_S` slices and the scheduler checked after each
+        empty one (:meth:`_check_scheduler`)."""
+        if self.handle.kind != "dask":
+            return cf.wait(list(self.pending), timeout=timeout,
+                           return_when=cf.FIRST_COMPLETED)[0]
+        end = None if timeout is None else time.monotonic() + timeout
+        while True:
+            left = DASK_POLL_S if end is None else min(DASK_POLL_S, end - time.monotonic())
+            done = cf.wait(list(self.pending), timeout=max(0.0, left),
+                           return_when=cf.FIRST_COMPLETED)[0]
+            if done:
+                self.heard_at = time.monotonic()
+                return done
+            self._check_scheduler()
+            if end is not None and time.monotonic() >= end:
+                return done
+
+    def _check_scheduler(self) -> None:
+        """Raise :class:`ExecutorLost` when the Dask client has closed (it gave up
+        reconnecting), or when nothing was heard for ``grace_s`` and the scheduler does not
+        answer within ``grace_s`` either."""
+        if self.handle.kind != "dask":
+            return
+        status = getattr(self.handle._client, "status", "running")
+        if status in ("closing", "closed"):
+            raise self.handle.mark_lost("the client closed the connection")
+        if time.monotonic() - self.heard_at < self.grace_s:
+            return
+        why = self.handle.unreachable(self.grace_s)
+        if why is not None:
+            raise self.handle.mark_lost(why)
+        self.heard_at = time.monotonic()
+
     def _broken(self, first: list[tuple[int, dict[str, Any]]]) -> None:
         lost = first + list(self.pending.values())
         self.pending.clear()
+        if self.draining:  # stopping anyway: the lost jobs stay missing, flown next run
+            return
         self.handle.restart()
         for tries, job in sorted(lost, key=lambda x: x[1]["flight"]):
             if tries >= 1 and len(lost) == 1:  # it ran alone: it killed the worker
@@ -312,6 +380,7 @@ class _Run:
         """Hand out nothing more and cancel the jobs that have not started."""
         self.draining = True
         self.retry.clear()
+        self.again.clear()
         for fut in list(self.pending):
             if fut.cancel():
                 self.pending.pop(fut)
@@ -363,7 +432,7 @@ def _pilot_share(opts: GenerateOptions, handle: ExecutorHandle, lam: float,
 
     jobs = (make_job(i, opts.seed, config, tables=None, bin_log=False, pilot=True)
             for i in range(k))
-    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take)
+    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take, opts.grace_s)
     bar = _bar(k, f"pilot flights (lambda {lam:.3g})", progress)
     try:
         while run.busy:
@@ -442,7 +511,8 @@ def generate(opts: GenerateOptions) -> GenerateReport:
 
     Raises:
         GenerateError: bad settings, an unwritable or foreign output folder, a data set made
-            with other settings or another tlm, an unreachable Dask scheduler.
+            with other settings or another tlm, an unreachable Dask scheduler, or one lost
+            during the run (raised after the data set was closed, state ``incomplete``).
     """
     t_start = time.perf_counter()
     tables = _check(opts)
@@ -458,6 +528,7 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     n_todo = opts.flights - report.skipped
     report.dataset_flights = int(writer.header.get("flights", opts.flights))
     handle = None
+    lost: ExecutorLost | None = None
     run_info: dict[str, Any] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     try:
         config = opts.config
@@ -489,16 +560,27 @@ def generate(opts: GenerateOptions) -> GenerateReport:
             _fly_all(opts, handle, writer, report, config, tables, todo, n_todo, t_start)
     except KeyboardInterrupt:
         report.interrupted = True
+    except ExecutorLost as exc:
+        report.interrupted, lost = True, exc
+        run_info["lost"] = str(exc)
     finally:
-        if handle is not None:
-            report.restarts = handle.restarts
-            handle.close(cancel=True)
-        report.wall_s = time.perf_counter() - t_start
-        report.parent_peak_rss_mb = peak_rss_mb()
-        run_info.update(wall_s=round(report.wall_s, 3), ok=report.ok, failed=report.failed,
-                        capped=len(report.capped), interrupted=report.interrupted)
-        header = writer.close(run_info)
-        report.state = header.get("state", "")
+        try:
+            if handle is not None:
+                report.restarts = handle.restarts
+                handle.close(cancel=True)
+        finally:
+            report.wall_s = time.perf_counter() - t_start
+            report.parent_peak_rss_mb = peak_rss_mb()
+            run_info.update(wall_s=round(report.wall_s, 3), ok=report.ok,
+                            failed=report.failed, capped=len(report.capped),
+                            interrupted=report.interrupted)
+            header = writer.close(run_info)
+            report.state = header.get("state", "")
+    if lost is not None:
+        counts = header.get("counts", {})
+        raise GenerateError(f"{lost}; {counts.get('ok', report.ok)} of {opts.flights} flights "
+                            f"written (data set {report.state}), run the same command again "
+                            "to continue")
     if opts.compact and not report.interrupted:
         from tlm_process.generate.compact import compact_dataset
 
@@ -543,7 +625,7 @@ def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWrite
         bar.update(1)
 
     jobs = (make_job(i, opts.seed, config, tables=tables, bin_log=opts.bin_log) for i in todo)
-    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take)
+    run = _Run(handle, jobs, JOBS_PER_SLOT * handle.slots, take, opts.grace_s)
     try:
         while run.busy:
             run.step()
