@@ -5,6 +5,7 @@ from __future__ import annotations
 import faulthandler
 import json
 import struct
+import sys
 import warnings
 import zlib
 from dataclasses import dataclass
@@ -290,7 +291,7 @@ def _read_checked(path: Path):
     """read_log, failing on anything but BinLogError / BinLogWarning or on a hang."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        faulthandler.dump_traceback_later(HANG_S, exit=True)
+        faulthandler.dump_traceback_later(HANG_S, exit=True, file=sys.__stderr__)
         try:
             log = read_log(path)
         except BinLogError as e:
@@ -503,7 +504,7 @@ def test_fuzz_mutated_log_never_crashes_or_hangs(ref_slice, ops):
 def test_fuzz_messages_method_raises_only_binlogerror(ref_slice, ops):
     """The pymavlink cross-check path on damaged input: tables or BinLogError, nothing else."""
     path = ref_slice.write(_mutate(ref_slice, ops))
-    faulthandler.dump_traceback_later(HANG_S, exit=True)
+    faulthandler.dump_traceback_later(HANG_S, exit=True, file=sys.__stderr__)
     try:
         out = read_bin(path, ["GPS", "IMU", "PARM", "MSG"], method="messages")
         assert set(out) == {"GPS", "IMU", "PARM", "MSG"}
@@ -511,3 +512,195 @@ def test_fuzz_messages_method_raises_only_binlogerror(ref_slice, ops):
         assert path.name in str(e)
     finally:
         faulthandler.cancel_dump_traceback_later()
+
+
+# --- hostile logs through the readers, tlm info and tlm convert ----------------------------------
+def _patched_fmt(ref_slice: Slice, changes: dict[str, tuple[int, bytes]]) -> bytes:
+    """The slice with bytes of some FMT messages replaced: name → (offset in the FMT, bytes)."""
+    data = bytearray(ref_slice.data)
+    for name, (at, new) in changes.items():
+        o = _fmt_offset(ref_slice, name) + at
+        data[o : o + len(new)] = new
+    return bytes(data)
+
+
+def _tree(root: Path) -> set[Path]:
+    return {p for p in root.rglob("*")}
+
+
+def _cli(argv: list[str], capsys) -> tuple[int, str, str]:
+    """``tlm ARGV`` in this process: (exit code, stdout, stderr); any exception fails the test."""
+    from tlm_process.cli import main
+
+    faulthandler.dump_traceback_later(HANG_S, exit=True, file=sys.__stderr__)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", BinLogWarning)
+            rc = main(argv)
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+    out, err = capsys.readouterr()
+    assert rc in (0, 2), (rc, err)
+    if rc == 2:
+        assert len(err.strip().splitlines()) == 1 and err.startswith("tlm: error: "), err
+    return rc, out, err
+
+
+def test_unsafe_fmt_names_are_skipped_and_nothing_is_written_outside_out(ref_slice, tmp_path,
+                                                                         capsys):
+    """Item 5: FMT names '../x' and '/abs' (RATE's and VIBE's FMT) must not become paths."""
+    work = tmp_path / "work"
+    work.mkdir()
+    src = work / "hostile.bin"
+    src.write_bytes(_patched_fmt(ref_slice, {"RATE": (5, b"../x"), "VIBE": (5, b"/abs")}))
+    abs_before = Path("/abs.csv").exists()
+    before = _tree(tmp_path)
+    rc, out, _ = _cli(["convert", str(src), "--out", str(work / "out")], capsys)
+    assert rc == 0
+    assert {p for p in _tree(tmp_path) - before if work / "out" not in p.parents} == {work / "out"}
+    assert Path("/abs.csv").exists() == abs_before
+    assert "'../x'" in out and "'/abs'" in out and "not a message name" in out
+    n_rate, n_vibe = len(ref_slice.tables["RATE"]), len(ref_slice.tables["VIBE"])
+    with pytest.warns(BinLogWarning, match="not a message name"):
+        log = read_log(src)
+    lost = log.info["lost_messages"]
+    assert sorted(lost.values()) == sorted([n_rate, n_vibe])
+    assert any("'../x'" in k for k in lost) and any("'/abs'" in k for k in lost)
+    assert not any("/" in n or "." in n for n in log.tables)
+    rc, out, _ = _cli(["info", str(src)], capsys)
+    assert rc == 0 and "'../x'" in out and "messages lost: " in out
+
+
+def test_flightlog_write_refuses_unsafe_table_names(tmp_path):
+    from tlm_sim.flightlog import FlightLog
+    from tlm_sim.flightlog.flightlog import write_table
+
+    gps = SCHEMAS["GPS"]
+    df = pd.DataFrame({c: [] for c in gps.columns})
+    for bad in ("../x", "/abs", "a.b", "a\\b", "", "x\0"):
+        log = FlightLog({bad: df}, schemas={bad: gps})
+        with pytest.raises(ValueError, match="safe file name"):
+            log.write(tmp_path / "out", formats=["csv"])
+        with pytest.raises(ValueError, match="safe file name"):
+            write_table(tmp_path, bad, df, gps, ["csv"])
+    assert _tree(tmp_path) == set()
+
+
+# the columns tlm info needs from each context table: every one renamed by a one-bit flip
+_CONTEXT_COLUMNS = {"MODE": ("TimeUS", "ModeNum", "Rsn"), "EV": ("TimeUS", "Id"),
+                    "PARM": ("TimeUS", "Name", "Value"), "MSG": ("TimeUS", "Message")}
+
+
+def _column_flip(ref_slice: Slice, name: str, column: str, bit: int = 0) -> bytes:
+    """The slice with one bit flipped in the first letter of ``column`` in ``name``'s FMT."""
+    o = _fmt_offset(ref_slice, name)
+    cols = bytes(ref_slice.data[o + 25 : o + 89])
+    at = o + 25 + ([0] + [k + 1 for k, c in enumerate(cols) if c == ord(",")])[
+        ref_slice.by_name[name].columns.index(column)]
+    data = bytearray(ref_slice.data)
+    data[at] ^= 1 << bit
+    return bytes(data)
+
+
+@pytest.mark.parametrize(("name", "column"),
+                         [(n, c) for n, cols in _CONTEXT_COLUMNS.items() for c in cols])
+def test_info_names_a_context_table_whose_column_a_bit_flip_renamed(ref_slice, tmp_path, capsys,
+                                                                    name, column):
+    """Item 6: a renamed MODE/EV/PARM/MSG column (a crash before) is named; the rest reported."""
+    src = tmp_path / "flip.bin"
+    src.write_bytes(_column_flip(ref_slice, name, column))
+    rc, out, _ = _cli(["info", str(src), "--json", str(tmp_path / "i.json")], capsys)
+    assert rc == 0
+    assert f"{name} has no {column} column; ignored" in out
+    assert "faults found" in out and "messages " in out
+    info = json.loads((tmp_path / "i.json").read_text())
+    assert any(f"{name} has no {column}" in d for d in info["damage"])
+    assert info["messages"]["IMU"]["count"] == len(ref_slice.tables["IMU"])
+
+
+def test_info_survives_a_sample_of_column_name_bit_flips(ref_slice, tmp_path, capsys):
+    """Item 6: 48 of the 4 × 60 × 8 one-bit flips in the column names of MODE, EV, PARM and
+    MSG (fixed seed): each exits 0 or 2 (one line), never an uncaught exception."""
+    rng = np.random.default_rng(17)
+    src = tmp_path / "flip.bin"
+    for _ in range(48):
+        name = str(rng.choice(list(_CONTEXT_COLUMNS)))
+        o = _fmt_offset(ref_slice, name) + 25 + int(rng.integers(60))
+        data = bytearray(ref_slice.data)
+        data[o] ^= 1 << int(rng.integers(8))
+        src.write_bytes(bytes(data))
+        _cli(["info", str(src)], capsys)
+
+
+def test_renamed_fmt_is_reported(ref_slice, tmp_path):
+    """Item 7: a bit flip that renames RATE's FMT to RATA left read_bin(..., ["RATE"]) empty
+    without a word."""
+    src = tmp_path / "rata.bin"
+    src.write_bytes(_patched_fmt(ref_slice, {"RATE": (5 + 3, b"A")}))
+    with pytest.warns(BinLogWarning, match=r"named 'RATA' but has the layout of RATE"):
+        out = read_bin(src, ["RATE"])
+    assert len(out["RATE"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_bin(ref_slice.path, ["RATE"])  # the intact log: no warning
+
+
+def test_lost_messages_are_counted_per_type(ref_slice, tmp_path, capsys):
+    """Item 7: what the reader drops is counted per type and printed by tlm info/convert."""
+    n_vibe = len(ref_slice.tables["VIBE"])
+    src = tmp_path / "vibe.bin"
+    data = bytearray(ref_slice.data)
+    data[_fmt_offset(ref_slice, "VIBE") + 4] += 1  # VIBE's FMT length no longer matches
+    imu = int(ref_slice.offsets[ref_slice.by_name["IMU"].type][5])
+    data[imu + 2] = 7  # one IMU message of a type no FMT defines
+    src.write_bytes(bytes(data))
+    log, warned = _read_checked(src)
+    lost = log.info["lost_messages"]
+    vibe_type = ref_slice.by_name["VIBE"].type
+    assert lost == {f"type {vibe_type} ('VIBE', damaged FMT)": n_vibe, "type 7": 1}
+    assert any("lost messages: type 7 1" in w or "type 7 1" in w for w in warned)
+    rc, out, _ = _cli(["info", str(src)], capsys)
+    assert rc == 0 and f"'VIBE', damaged FMT) {n_vibe}" in out
+    rc, out, _ = _cli(["convert", str(src), "--out", str(tmp_path / "c")], capsys)
+    assert rc == 0 and "damage " in out and "'VIBE', damaged FMT" in out
+
+
+@pytest.mark.parametrize("what", ["device", "folder", "fifo"])
+def test_info_and_convert_refuse_a_file_that_is_not_regular(tmp_path, capsys, what):
+    """Item 11: /dev/zero said 'file not found' (it exists: it is not a regular file)."""
+    import os
+
+    if what == "device":
+        path = Path("/dev/zero")
+    elif what == "folder":
+        path = tmp_path
+    else:
+        path = tmp_path / "pipe.bin"
+        os.mkfifo(path)
+    for argv in (["info", str(path)], ["convert", str(path), "--out", str(tmp_path / "o")]):
+        rc, _, err = _cli(argv, capsys)
+        assert rc == 2 and "not a regular file" in err and "not found" not in err
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(BinLogError, match="not a regular file"):
+        read_bin(path)
+
+
+@settings(max_examples=30, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(ops=st.lists(_MUTATION, min_size=1, max_size=6))
+def test_fuzz_info_and_convert_on_mutated_logs(ref_slice, capsys, ops):
+    """tlm info and tlm convert on the reader's fuzz mutants: exit 0 or 2 (one line), never an
+    uncaught exception or a hang, nothing written outside --out."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        src = root / "m.bin"
+        src.write_bytes(_mutate(ref_slice, ops))
+        _cli(["info", str(src), "--json", str(root / "info.json")], capsys)
+        before = _tree(root)
+        rc, _, _ = _cli(["convert", str(src), "--out", str(root / "out")], capsys)
+        new = _tree(root) - before
+        assert all(p == root / "out" or root / "out" in p.parents for p in new)
+        if rc == 0:
+            assert (root / "out" / "meta.json").exists()

@@ -17,11 +17,15 @@ import argparse
 import contextlib
 import io
 import json
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from tlm_sim.flightlog import FlightLog
+    import pandas as pd
+
+    from tlm_sim.flightlog import BinLog, FlightLog
 
 CONVERT_FORMATS = ("csv", "parquet", "log")
 
@@ -36,41 +40,116 @@ class LogError(Exception):
     """A log that cannot be used (reported by the CLI as one line)."""
 
 
-def _load(path: str) -> FlightLog:
-    from tlm_sim.flightlog import FlightLog
+def _open(path: str | Path) -> tuple[BinLog, Iterator[tuple[str, pd.DataFrame]], list[str]]:
+    """Index a log: (context, its tables one at a time, what was damaged: one line each).
+
+    Raises:
+        FileNotFoundError: no such file.
+        LogError: not a regular file, not a DataFlash log, unreadable, or no messages.
+    """
+    from tlm_sim.flightlog.binreader import BinLogWarning, iter_log
 
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise FileNotFoundError(2, "no such log", str(p))
     try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pymavlink prints while indexing
-            log = FlightLog.from_bin(p)
-    except (ValueError, OSError) as e:
-        raise LogError(f"{p}: cannot read as an ArduPilot DataFlash log: {e}") from None
-    if not log.tables:
+        with warnings.catch_warnings(record=True) as caught, \
+                contextlib.redirect_stdout(io.StringIO()):
+            warnings.simplefilter("always", BinLogWarning)
+            log, tables = iter_log(p)
+    except ValueError as e:  # BinLogError names the file
+        raise LogError(str(e)) from None
+    except OSError as e:
+        raise LogError(f"{p}: cannot read: {e.strerror or e}") from None
+    damage = []
+    for w in caught:
+        if issubclass(w.category, BinLogWarning):
+            damage.append(str(w.message))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if not any(log.info["messages"].values()):
         raise LogError(f"{p}: not an ArduPilot DataFlash log (no messages found)")
-    return log
+    return log, tables, damage
+
+
+def _usable(tables: dict[str, pd.DataFrame], name: str, cols: tuple[str, ...],
+            path: Path, damage: list[str]) -> pd.DataFrame:
+    """Table ``name`` if it has ``cols`` (a damaged FMT can rename them), else an empty one
+    and a line in ``damage``; an empty one too when the log has no such table."""
+    from tlm_sim.flightlog import SCHEMAS
+    from tlm_sim.flightlog.binreader import empty_table
+
+    df = tables.get(name)
+    if df is None:
+        return empty_table(SCHEMAS[name])
+    missing = [c for c in cols if c not in df.columns]
+    if missing:
+        line = f"{path.name}: {name} has no {', '.join(missing)} column; ignored"
+        if line not in damage:
+            damage.append(line)
+        return empty_table(SCHEMAS[name])
+    return df
+
+
+#: tables ``tlm info`` keeps (besides the context ``read_log`` gives) and the columns it uses
+_INFO_TABLES: dict[str, tuple[str, ...]] = {
+    "VER": ("FWS",), "EV": ("TimeUS", "Id"), "PARM": ("TimeUS", "Name", "Value"),
+}
 
 
 # --------------------------------------------------------------------------- info ----------
-def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
-    """Everything ``tlm info`` reports, as plain JSON-able data (times in seconds)."""
+def _sidecar_faults(path: Path, info: dict[str, Any]) -> list[dict[str, Any]]:
+    """Faults of a sidecar ``LOG.json`` beside the log ([] if none or not a fault sidecar)."""
+    sidecar = path.with_suffix(".json")
+    if not sidecar.is_file():
+        return []
+    try:
+        doc = json.loads(sidecar.read_text(encoding="utf-8"))
+        return [{**{k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")},
+                 "source": "sidecar"} for f in doc.get("faults") or ()]
+    except (ValueError, AttributeError, TypeError, OSError) as exc:  # ValueError: JSON, UTF-8
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON ({why})"
+        return []
+
+
+def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
+    """Everything ``tlm info`` reports, as plain JSON-able data (times in seconds).
+
+    The tables are decoded one at a time (only VER, EV and PARM are kept), so memory stays
+    near the file's size. Tables whose columns a damaged FMT renamed are ignored and named in
+    ``damage``, with what the reader skipped; ``lost_messages`` counts the messages dropped.
+
+    Raises:
+        FileNotFoundError, LogError: as ``_open``.
+    """
     from tlm_sim.faults.detect import faults_from_param_changes
     from tlm_sim.flightlog.binreader import COPTER_MODES, MODE_REASONS, param_changes_from_parm
+    from tlm_sim.flightlog.flightlog import table_summary
 
-    s = log.summary()
-    t0, t1 = s["time_us"]
+    p = Path(path)
+    log, tables, damage = _open(p)
+    kept: dict[str, pd.DataFrame] = {}
+    summaries: dict[str, dict[str, Any]] = {}
+    t0 = t1 = None
+    for name, df in tables:
+        summaries[name], span = table_summary(df, log.schemas[name])
+        if span is not None:
+            t0 = span[0] if t0 is None else min(t0, span[0])
+            t1 = span[1] if t1 is None else max(t1, span[1])
+        if name in _INFO_TABLES:
+            kept[name] = df
     info: dict[str, Any] = {
         "file": str(path),
-        "size_bytes": Path(path).stat().st_size,
+        "size_bytes": log.info["size_bytes"],
         "time_span_s": [t0 * 1e-6, t1 * 1e-6] if t0 is not None else None,
-        "duration_s": s["duration_s"],
+        "duration_s": (t1 - t0) * 1e-6 if t0 is not None else 0.0,
     }
-    msg = log.table("MSG")
-    ver = log.table("VER")
+    msg = log.messages
+    ver = _usable(kept, "VER", _INFO_TABLES["VER"], p, damage)
     info["firmware"] = (str(ver["FWS"].iloc[0]) if len(ver) else
                         next((m for m in msg["Message"] if "Copter" in str(m)), None))
-    ev = log.table("EV")
+    ev = _usable(kept, "EV", _INFO_TABLES["EV"], p, damage)
     armed = ev[ev.Id == ARMED].TimeUS
     disarmed = ev[ev.Id == DISARMED].TimeUS
     if len(armed):
@@ -80,16 +159,17 @@ def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> d
         info["flight_time_s"] = None if d is None else (d - a) * 1e-6
     info["messages"] = {
         n: {"count": t["rows"], "instances": t.get("instances"), "rate_hz": t.get("rate_hz")}
-        for n, t in sorted(s["tables"].items())
+        for n, t in sorted(summaries.items())
     }
-    mode = log.table("MODE")
+    mode = log.modes
     info["modes"] = [
         {"time_s": int(t) * 1e-6, "mode": int(m),
          "name": COPTER_MODES.get(int(m), str(int(m))),
          "reason": MODE_REASONS.get(int(r), str(int(r)))}
         for t, m, r in zip(mode.TimeUS, mode.ModeNum, mode.Rsn, strict=True)
     ]
-    changes = param_changes_from_parm(log.table("PARM"), exclude=())
+    changes = param_changes_from_parm(_usable(kept, "PARM", _INFO_TABLES["PARM"], p, damage),
+                                      exclude=())
     shown = changes if all_params else changes[
         ~changes["Name"].astype(str).str.startswith(_HOUSEKEEPING)]
     info["params_changed"] = [
@@ -101,17 +181,11 @@ def log_info(log: FlightLog, path: str | Path, *, all_params: bool = False) -> d
     for m, t in zip(msg["Message"], msg["TimeUS"], strict=True):
         if str(m).startswith("tlm: fault "):
             faults.append({"message": str(m), "time_us": int(t), "source": "MSG"})
-    sidecar = Path(path).with_suffix(".json")
-    if sidecar.is_file():
-        try:
-            doc = json.loads(sidecar.read_text(encoding="utf-8"))
-            for f in doc.get("faults") or ():
-                faults.append({**{k: f.get(k) for k in ("type", "label", "start_time_us",
-                                                         "end_time_us")}, "source": "sidecar"})
-        except (OSError, ValueError, AttributeError) as exc:  # ValueError: JSON or UTF-8
-            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON ({why})"
+    faults += _sidecar_faults(p, info)
     info["faults"] = faults
+    info["damage"] = damage
+    info["lost_messages"] = log.info["lost_messages"]
+    info["skipped_bytes"] = log.info["skipped_bytes"]
     return info
 
 
@@ -146,6 +220,13 @@ def format_info(info: dict[str, Any]) -> str:
                  + (f" ({hidden} housekeeping changes hidden; --all-params)" if hidden else ""))
     for c in info["params_changed"]:
         lines.append(f"  {c['time_s']:9.2f} s  {c['name']} = {c['value']:g}")
+    if info.get("damage"):
+        lines.append("damage (read as far as possible; the rest of this report is what "
+                     "could be read)")
+        lines += [f"  {d}" for d in info["damage"]]
+        if info.get("lost_messages"):
+            lost = ", ".join(f"{k} {v}" for k, v in info["lost_messages"].items())
+            lines.append(f"  messages lost: {lost}")
     lines.append("faults found")
     if not info["faults"]:
         lines.append("  none")
@@ -165,8 +246,7 @@ def format_info(info: dict[str, Any]) -> str:
 
 def cmd_info(args: argparse.Namespace) -> int:
     """Print the summary of one .bin log (and optionally write it as JSON)."""
-    log = _load(args.log)
-    info = log_info(log, args.log, all_params=args.all_params)
+    info = log_info(args.log, all_params=args.all_params)
     print(format_info(info))
     if args.json:
         Path(args.json).write_text(json.dumps(info, indent=1) + "\n")
@@ -174,22 +254,71 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------- convert ---------
-def convert(log: FlightLog, out: Path, fmt: str, stem: str,
-            types: list[str] | None = None) -> list[Path]:
-    """Write ``log``'s tables to ``out`` as ``fmt`` (csv, parquet or log); returns the files."""
-    from tlm_sim.flightlog.mplog import write_mp_log
+def _flightlog(log: BinLog, tables: dict[str, pd.DataFrame]) -> FlightLog:
+    """FlightLog of ``tables`` with the log's parameters, mission and reader info."""
+    from tlm_sim.flightlog import FlightLog
 
+    return FlightLog(tables, params=log.params, mission=log.mission,
+                     schemas={n: log.schemas[n] for n in tables},
+                     meta={"source": log.path, **log.info})
+
+
+def _check_types(log: BinLog, types: list[str] | None) -> list[str]:
+    """The tables to convert: ``types`` (each must have messages in the log) or all."""
+    present = [n for n, c in log.info["messages"].items() if c]
     if types:
-        missing = [t for t in types if t not in log.tables]
+        missing = [t for t in types if t not in present]
         if missing:
             raise LogError(f"--types: not in this log: {', '.join(missing)} "
-                           f"(it has {', '.join(sorted(log.tables))})")
-        log = type(log)({n: log.tables[n] for n in types}, params=log.params,
-                        schemas={n: log.schemas[n] for n in types}, meta=log.meta)
+                           f"(it has {', '.join(sorted(present))})")
+    return list(types or present)
+
+
+def convert(path: str | Path, out: Path, fmt: str,
+            types: list[str] | None = None) -> tuple[list[Path], dict[str, int], list[str]]:
+    """Write a log's tables to ``out`` as ``fmt`` (csv, parquet or log).
+
+    csv/parquet tables are decoded, written and dropped one at a time (memory near the file's
+    size); a table whose name is not a safe file name is skipped (``damage`` says so), never
+    written outside ``out``.
+
+    Returns:
+        (files written, name → rows of each table written, damage: one line per problem).
+    Raises:
+        FileNotFoundError, LogError: as ``_open``; LogError for ``types`` not in the log.
+    """
+    log, tables, damage = _open(path)
+    names = _check_types(log, types)
+    files, rows = _write_converted(log, tables, names, out, fmt, Path(path).stem, damage)
+    return files, rows, damage
+
+
+def _write_converted(log: BinLog, tables: Iterator[tuple[str, pd.DataFrame]], names: list[str],
+                     out: Path, fmt: str, stem: str, damage: list[str]
+                     ) -> tuple[list[Path], dict[str, int]]:
+    """``convert``'s writing: tables ``names`` (in that order in meta.json) from ``tables``."""
+    from tlm_sim.flightlog.flightlog import is_safe_table_name, write_table
+    from tlm_sim.flightlog.mplog import write_mp_log
+
+    wanted = set(names)
     if fmt == "log":
-        return [write_mp_log(log, out / f"{stem}.log")]
-    log.write(out, formats=[fmt])
-    return [out / f"{n}.{fmt}" for n in log.tables] + [out / "meta.json"]
+        keep = {n: df for n, df in tables if n in wanted}
+        keep = {n: keep[n] for n in names if n in keep}
+        path = write_mp_log(_flightlog(log, keep), out / f"{stem}.log")
+        return [path], {n: len(df) for n, df in keep.items()}
+    files: list[Path] = []
+    rows: dict[str, int] = {}
+    for n, df in tables:
+        if n not in wanted:
+            continue
+        if not is_safe_table_name(n):
+            damage.append(f"skipped table {n!r}: not a safe file name")
+            continue
+        files += write_table(out, n, df, log.schemas[n], [fmt])
+        rows[n] = len(df)
+    rows = {n: rows[n] for n in names if n in rows}
+    files.append(_flightlog(log, {}).write_meta(out, rows, log.schemas))
+    return files, rows
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
@@ -200,13 +329,14 @@ def cmd_convert(args: argparse.Namespace) -> int:
     if fmt not in CONVERT_FORMATS:
         raise UsageError(f"--format: {args.format!r}; choose one of {', '.join(CONVERT_FORMATS)}")
     types = [t.strip().upper() for t in args.types.split(",") if t.strip()] if args.types else None
-    log = _load(args.log)
-    out = _prepare_out(args.out)
-    files = convert(log, out, fmt, Path(args.log).stem, types)
-    names = types or list(log.tables)
-    rows = sum(len(log.tables[n]) for n in names)
+    log, tables, damage = _open(args.log)
+    names = _check_types(log, types)
+    out = _prepare_out(args.out)  # only once the log is known to be readable
+    files, rows = _write_converted(log, tables, names, out, fmt, Path(args.log).stem, damage)
     print(f"converted          {args.log} -> {out}/ ({len(files)} files, {fmt}, "
-          f"{len(names)} message types, {rows} messages)")
+          f"{len(rows)} message types, {sum(rows.values())} messages)")
+    for d in damage:
+        print(f"damage             {d}")
     return 0
 
 

@@ -11,9 +11,12 @@ and I=1; ``split_instances`` separates them), values and dtypes as in
 ``tlm_sim.flightlog.schema`` (c/C/e/E as raw/100, L as raw/1e7, f as float32 values in float64
 columns, integers as integers, strings as str).
 
-Damaged files: an empty file or one without a valid FMT message raises ``BinLogError`` (a
-``ValueError`` naming the file). Skipped bytes, damaged or conflicting FMT messages give a
-partial result and one ``BinLogWarning`` per kind of damage. An incomplete final message is
+Damaged files: an empty file, one that is not a regular file, or one without a valid FMT
+message raises ``BinLogError`` (a ``ValueError`` naming the file). Skipped bytes, damaged,
+conflicting or unsafely named FMT messages (a name must be 1-4 of A-Z, 0-9), and a type whose
+FMT name looks damaged (its layout is that of a known message the log lacks) give a partial
+result and one ``BinLogWarning`` per kind of damage; ``read_log(...).info["lost_messages"]``
+counts the messages dropped per type. An incomplete final message is
 dropped silently, as pymavlink does: ArduPilot's logger leaves one at the end of most logs
 (every reference SITL log ends so), so warning about it would warn on every genuine log;
 ``read_log(...).info["tail_bytes"]`` reports it.
@@ -31,7 +34,7 @@ import io
 import math
 import os
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,7 +44,15 @@ import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
 from pymavlink import mavutil
 
-from .binscan import BinIndex, BinLogError, BinLogWarning, LogFormat, scan_bin
+from .binscan import (
+    BinIndex,
+    BinLogError,
+    BinLogWarning,
+    LogFormat,
+    check_log_file,
+    is_message_name,
+    scan_bin,
+)
 from .quantise import raw_to_column
 from .schema import (
     EVENT_MESSAGES,
@@ -62,6 +73,7 @@ __all__ = [
     "BOOKKEEPING_PARAMS",
     "read_bin",
     "read_log",
+    "iter_log",
     "read_params",
     "read_param_changes",
     "read_mission",
@@ -186,11 +198,7 @@ def _present(ix: BinIndex) -> list[str]:
 def _open_pymavlink(path: str | os.PathLike):  # noqa: ANN202 - pymavlink type
     from pymavlink import DFReader
 
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"no such log: {p}")
-    if p.stat().st_size == 0:
-        raise BinLogError(f"{p}: empty file, not an ArduPilot DataFlash log")
+    p = check_log_file(path)
     reader = DFReader.DFReader_binary.__new__(DFReader.DFReader_binary)
     try:
         sink = io.StringIO()
@@ -217,7 +225,7 @@ def _decode_messages(path: str | os.PathLike, names: list[str] | None) -> dict[s
     """Decode through pymavlink's ``recv_match``, one message object at a time (slow path)."""
     reader = _open_pymavlink(path)
     try:
-        fmts = {f.name: f for f in reader.formats.values()}
+        fmts = {f.name: f for f in reader.formats.values() if is_message_name(f.name)}
         if names is None:
             names = [n for n, f in fmts.items() if reader.counts[f.type] > 0]
         want = [n for n in names if n in fmts]
@@ -523,7 +531,8 @@ class BinLog:
         messages: MSG table (TimeUS, Message).
         modes: ``read_modes`` (MODE with ModeName, RsnName).
         info: size_bytes, messages (name → count of complete messages), skipped_bytes,
-            tail_bytes (incomplete final message, dropped), issues (what was damaged).
+            tail_bytes (incomplete final message, dropped), lost_messages (``BinIndex.lost``:
+            what → messages dropped), issues (one line per kind of damage, as warned).
     """
 
     path: str
@@ -557,18 +566,8 @@ def _context_table(ix: BinIndex, tables: dict[str, pd.DataFrame], name: str) -> 
     return df
 
 
-def read_log(path: str | os.PathLike, types: Iterable[str] | None = None) -> BinLog:
-    """Tables and context of a DataFlash log, indexing the file once.
-
-    Args:
-        path: the ``.bin`` file.
-        types: tables to decode (as ``read_bin``; None = all types with messages, ``()`` =
-            context only). PARM, CMD, MSG and MODE are decoded for the context either way.
-    Raises / warns: as ``read_bin``.
-    """
-    ix = _index(path)
-    names = _present(ix) if types is None else list(dict.fromkeys(types))
-    tables = _decode_types(ix, names)
+def _bin_log(ix: BinIndex, path: str | os.PathLike, tables: dict[str, pd.DataFrame]) -> BinLog:
+    """BinLog of an indexed log with ``tables`` (context tables decoded here if not given)."""
     ctx = {n: _context_table(ix, tables, n) for n in _CONTEXT}
     info = {
         "size_bytes": ix.size,
@@ -576,6 +575,7 @@ def read_log(path: str | os.PathLike, types: Iterable[str] | None = None) -> Bin
                      if f.type in ix.offsets},
         "skipped_bytes": ix.skipped_bytes,
         "tail_bytes": ix.tail_bytes,
+        "lost_messages": dict(ix.lost),
         "issues": list(ix.issues),
     }
     return BinLog(
@@ -590,3 +590,35 @@ def read_log(path: str | os.PathLike, types: Iterable[str] | None = None) -> Bin
         info=info,
     )
 
+
+def read_log(path: str | os.PathLike, types: Iterable[str] | None = None) -> BinLog:
+    """Tables and context of a DataFlash log, indexing the file once.
+
+    Args:
+        path: the ``.bin`` file.
+        types: tables to decode (as ``read_bin``; None = all types with messages, ``()`` =
+            context only). PARM, CMD, MSG and MODE are decoded for the context either way.
+    Raises / warns: as ``read_bin``.
+    """
+    ix = _index(path)
+    names = _present(ix) if types is None else list(dict.fromkeys(types))
+    return _bin_log(ix, path, _decode_types(ix, names))
+
+
+def iter_log(path: str | os.PathLike) -> tuple[BinLog, Iterator[tuple[str, pd.DataFrame]]]:
+    """A log's context now and its tables one at a time: at most one table is held.
+
+    Returns:
+        (BinLog with every field but ``tables`` (empty), an iterator of (name, table) over
+        the types with messages, in FMT order, each decoded when reached, as ``read_log``).
+        The iterator holds the file's bytes until it is exhausted or dropped.
+    Raises / warns: as ``read_bin`` (when called, not while iterating).
+    """
+    ix = _index(path)
+    log = _bin_log(ix, path, {})
+
+    def tables() -> Iterator[tuple[str, pd.DataFrame]]:
+        for n in _present(ix):
+            yield n, _decode_index(ix, ix.by_name[n])
+
+    return log, tables()

@@ -31,6 +31,7 @@ import functools
 import json
 import math
 import os
+import re
 from collections.abc import Iterable, Iterator, Mapping, MutableMapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -42,13 +43,66 @@ from .quantise import frame_from_columns, quantise_column, quantise_frame
 from .schema import FORMAT_CHARS, LOGGED_MESSAGES, SCHEMAS, MessageSchema, schema_from_fmt
 from .tableio import read_csv, read_parquet, write_csv, write_parquet
 
-__all__ = ["BIN_NAME", "FlightLog", "LazyTables", "allocate_buffers", "to_jsonable"]
+__all__ = [
+    "BIN_NAME", "FlightLog", "LazyTables", "allocate_buffers", "is_safe_table_name",
+    "to_jsonable", "write_table",
+]
 
 FORMAT_NAME = "tlm.flightlog"
 FORMAT_VERSION = 1
 _FORMATS = ("csv", "parquet", "bin")
 #: Name of the DataFlash log ``write(..., formats=["bin"])`` puts in the folder.
 BIN_NAME = "flight.bin"
+
+#: A table name that is safe as a file name (``write`` makes ``DIR/<name>.csv``): letters,
+#: digits, "_" and "-", 1-64 of them; never "/", "\\", ".", NUL or empty.
+_TABLE_FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_-]{0,63}")
+
+
+def is_safe_table_name(name: object) -> bool:
+    """Whether ``name`` can become ``<name>.csv`` inside a folder without leaving it."""
+    return isinstance(name, str) and _TABLE_FILE_NAME.fullmatch(name) is not None
+
+
+def table_summary(df: pd.DataFrame, schema: MessageSchema
+                  ) -> tuple[dict[str, Any], tuple[int, int] | None]:
+    """One table's part of ``FlightLog.summary``: ({rows, columns, and with TimeUS: instances,
+    rate_hz (mean per-instance message rate [Hz], None if unknown)}, (first, last TimeUS [µs])
+    or None when the table has no rows or no TimeUS)."""
+    info: dict[str, Any] = {"rows": len(df), "columns": len(df.columns)}
+    if not len(df) or "TimeUS" not in df.columns:
+        return info, None
+    t = df["TimeUS"].to_numpy()
+    inst = schema.instance_field
+    groups = [t] if inst is None else [
+        g["TimeUS"].to_numpy() for _, g in df.groupby(inst, sort=True)
+    ]
+    info["instances"] = len(groups)
+    rates = [
+        (len(g) - 1) / ((g[-1] - g[0]) * 1e-6) for g in groups
+        if len(g) > 1 and g[-1] > g[0]
+    ]
+    info["rate_hz"] = float(np.mean(rates)) if rates else None
+    return info, (int(t.min()), int(t.max()))
+
+
+def write_table(out: Path, name: str, df: pd.DataFrame, schema: MessageSchema,
+                formats: Iterable[str]) -> list[Path]:
+    """Write one table as ``out/<name>.csv`` and/or ``.parquet`` (as ``FlightLog.write``).
+
+    Raises:
+        ValueError: ``name`` is not a safe file name (``is_safe_table_name``).
+    """
+    if not is_safe_table_name(name):
+        raise ValueError(f"table name {name!r} is not a safe file name; not written")
+    files = []
+    if "csv" in formats:
+        files.append(out / f"{name}.csv")
+        write_csv(df, schema, files[-1])
+    if "parquet" in formats:
+        files.append(out / f"{name}.parquet")
+        write_parquet(df, schema, files[-1])
+    return files
 
 
 def allocate_buffers(
@@ -387,22 +441,10 @@ class FlightLog:
         tables: dict[str, dict[str, Any]] = {}
         t0, t1 = None, None
         for name, df in self.tables.items():
-            schema = self.schemas[name]
-            info: dict[str, Any] = {"rows": len(df), "columns": len(df.columns)}
-            if len(df) and "TimeUS" in df.columns:
-                t = df["TimeUS"].to_numpy()
-                t0 = int(t.min()) if t0 is None else min(t0, int(t.min()))
-                t1 = int(t.max()) if t1 is None else max(t1, int(t.max()))
-                inst = schema.instance_field
-                groups = [t] if inst is None else [
-                    g["TimeUS"].to_numpy() for _, g in df.groupby(inst, sort=True)
-                ]
-                info["instances"] = len(groups)
-                rates = [
-                    (len(g) - 1) / ((g[-1] - g[0]) * 1e-6) for g in groups
-                    if len(g) > 1 and g[-1] > g[0]
-                ]
-                info["rate_hz"] = float(np.mean(rates)) if rates else None
+            info, span = table_summary(df, self.schemas[name])
+            if span is not None:
+                t0 = span[0] if t0 is None else min(t0, span[0])
+                t1 = span[1] if t1 is None else max(t1, span[1])
             tables[name] = info
         return {
             "tables": tables,
@@ -447,28 +489,47 @@ class FlightLog:
             formats: any of "csv", "parquet", "bin" (``DIR/flight.bin``).
         Returns:
             the folder.
+        Raises:
+            ValueError: an unknown format, or a table name that is not a safe file name
+                (``is_safe_table_name``: it could write outside ``out_dir``); nothing is
+                written then.
         """
         formats = tuple(formats)
         bad = [f for f in formats if f not in _FORMATS]
         if bad or not formats:
             raise ValueError(f"unknown formats {bad or formats}; use any of {', '.join(_FORMATS)}")
+        unsafe = [n for n in self.tables if not is_safe_table_name(n)]
+        if unsafe:
+            raise ValueError(f"table name(s) {', '.join(map(repr, unsafe))} are not safe file "
+                             "names (letters, digits, '_', '-'); nothing written")
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         rows = {}
         for name, df in self.tables.items():
             if len(df) == 0:
                 continue
-            schema = self.schemas[name]
-            if "csv" in formats:
-                write_csv(df, schema, out / f"{name}.csv")
-            if "parquet" in formats:
-                write_parquet(df, schema, out / f"{name}.parquet")
+            write_table(out, name, df, self.schemas[name], formats)
             rows[name] = len(df)
         if "bin" in formats:
             self.write_bin(out / BIN_NAME)
+        self.write_meta(out, rows)
+        return out
+
+    def write_meta(self, out: Path, rows: Mapping[str, int],
+                   schemas: Mapping[str, MessageSchema] | None = None) -> Path:
+        """Write ``out/meta.json`` (what ``read`` needs besides the table files).
+
+        Args:
+            out: the folder (exists).
+            rows: name → rows of each table file written.
+            schemas: the tables' schemas (default ``self.schemas``); those not in the registry,
+                or differing from it, are stored.
+        Returns:
+            the meta.json path.
+        """
         extra = {
             n: {"fmt": s.fmt, "columns": list(s.columns), "units": s.units, "mults": s.mults}
-            for n, s in self.schemas.items()
+            for n, s in (self.schemas if schemas is None else schemas).items()
             if n in rows and SCHEMAS.get(n) != s
         }
         doc = {
@@ -479,11 +540,12 @@ class FlightLog:
             "params": self.params,
             "params_changed": self.params_changed,
             "mission": to_jsonable(self.mission),
-            "tables": rows,
+            "tables": dict(rows),
             "schemas": extra,
         }
-        (out / "meta.json").write_text(json.dumps(doc, indent=1) + "\n")
-        return out
+        path = out / "meta.json"
+        path.write_text(json.dumps(doc, indent=1) + "\n")
+        return path
 
     def write_bin(self, path: str | os.PathLike) -> Path:
         """Write the flight as an ArduPilot DataFlash ``.bin`` (see ``binwriter``)."""
