@@ -210,6 +210,13 @@ def _sigterm_as_interrupt(handler: Any) -> Iterator[None]:
         signal.signal(signal.SIGTERM, old)
 
 
+def _print_line(line: str) -> None:
+    """Print ``line`` to stdout, escaping what its encoding cannot hold (the undecodable
+    bytes of a non-UTF-8 --out, which Python keeps as lone surrogates)."""
+    enc = getattr(sys.stdout, "encoding", None) or "utf-8"
+    print(line.encode(enc, "backslashreplace").decode(enc))
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``tlm generate``; returns the exit code."""
     from tlm_process.generate.errors import GenerateError
@@ -233,7 +240,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"tlm: error: {exc}", file=sys.stderr)
         return 2
     for line in report.lines():
-        print(line)
+        _print_line(line)
     if report.interrupted:
         return 130
     return 1 if report.failed else 0
