@@ -282,9 +282,8 @@ def scenario_from_manifest(ds: str | os.PathLike, flight: int, *,
                             "its flights would not come out the same")
     try:
         return Scenario.from_dict(entry["scenario"]).realise()
-    except GenerateError as exc:
-        raise GenerateError(f"{root} flight {flight}: {exc}") from None
     except Exception as exc:  # noqa: BLE001 - a hand-edited scenario: any error, one line
-        why = f"{type(exc).__name__}: {exc}".splitlines()[0][:200]
+        why = (str(exc) if isinstance(exc, GenerateError)
+               else f"{type(exc).__name__}: {exc}".splitlines()[0][:200])
         raise GenerateError(f"{root} flight {flight}: its scenario in the journal cannot be "
                             f"flown ({why})") from None
