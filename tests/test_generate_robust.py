@@ -210,8 +210,19 @@ def test_loader_matches_pandas_on_a_whole_data_set_and_refuses_inconsistent_ones
     ds = tmp_path / "b"
     shutil.copytree(dataset, ds)
     (ds / "IMU.parquet" / "flight-00000002.parquet").unlink()
-    with pytest.raises(IngestError, match=r"damaged: flight 2's IMU part .* is gone"):
+    with pytest.raises(IngestError, match=r"damaged: flight 2's IMU part .* is gone.*run the "
+                                          r"same tlm generate command again"):
         read_dataset(ds, partial=True)
+    rep = _gen(ds)  # the repair: the flight is forgotten and flown again
+    assert (rep.skipped, rep.ok, rep.state) == (2, 1, "complete")
+    assert _parts(ds) == _parts(dataset)
+    # a part cut short (a power cut): one line naming it; deleted, the next run flies it again
+    cut = ds / "GPS.parquet" / "flight-00000001.parquet"
+    cut.write_bytes(b"")
+    with pytest.raises(GenerateError, match=r"cannot read .*flight-00000001.parquet"):
+        read_dataset_table(ds, "GPS")
+    cut.unlink()
+    assert _gen(ds).ok == 1 and _parts(ds) == _parts(dataset)
 
 
 def test_a_block_whose_flights_span_several_row_groups_is_read_and_rewritten_right(tmp_path):

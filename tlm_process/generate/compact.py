@@ -34,6 +34,7 @@ from typing import Any
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.layout import BLOCK_RE, PART_RE, owned_dirs, tmp_name
 from tlm_process.generate.parts import parquet_options
 
@@ -73,9 +74,16 @@ def _flights_meta(schema: pa.Schema) -> list[tuple[int, int]]:
 
 
 def block_flights(path: Path) -> list[tuple[int, int]]:
-    """(flight, rows) of every flight a block file holds, from its footer alone."""
-    with open_parquet(path) as pf:
-        return _flights_meta(pf.schema_arrow)
+    """(flight, rows) of every flight a block file holds, from its footer alone.
+
+    Raises GenerateError when the file is not a readable block file."""
+    try:
+        with open_parquet(path) as pf:
+            return _flights_meta(pf.schema_arrow)
+    except (ValueError, TypeError, pa.ArrowException) as exc:
+        raise GenerateError(f"cannot read block file {path}: {str(exc).splitlines()[0]}; "
+                            "delete it and run the same tlm generate command again (its "
+                            "flights are flown again)") from None
 
 
 def flight_row_groups(pf: pq.ParquetFile) -> dict[int, list[int]]:

@@ -166,23 +166,27 @@ def _check_committed(root: Path, entries: dict[int, dict[str, Any]], committed: 
                 raise GenerateError(
                     f"{root} is damaged: flight {f}'s {table} part ({table}.parquet/"
                     f"{part_name(f)}) is gone though the journal lists the flight as "
-                    "finished; restore it, or delete the flight's line from flights.jsonl "
-                    "and run the same tlm generate command again to fly it anew")
+                    f"finished; {_FIX} (it flies that flight again)")
 
 
 def _read_pieces(files: dict[Path, list[int]]) -> list[pa.Table]:
     """The rows of the given flights of each file (a part: all; a block: their row groups)."""
     pieces = []
     for path, flights in files.items():
-        with open_parquet(path) as pf:
-            if BLOCK_RE.match(path.name):
-                groups = flight_row_groups(pf)
-                rg = [g for f in sorted(flights) for g in groups.get(f, [])]
-                table = pf.read_row_groups(rg) if rg else None
-            else:
-                table = pf.read()
-            if table is not None:
-                pieces.append(table)
+        try:
+            with open_parquet(path) as pf:
+                if BLOCK_RE.match(path.name):
+                    groups = flight_row_groups(pf)
+                    rg = [g for f in sorted(flights) for g in groups.get(f, [])]
+                    table = pf.read_row_groups(rg) if rg else None
+                else:
+                    table = pf.read()
+        except (OSError, ValueError, pa.ArrowException) as exc:
+            raise GenerateError(f"cannot read {path}: {str(exc).splitlines()[0]} (a file cut "
+                                "short by a power cut? delete it and run the same tlm "
+                                "generate command again)") from None
+        if table is not None:
+            pieces.append(table)
     return pieces
 
 
@@ -209,13 +213,9 @@ def read_dataset_table(ds: str | os.PathLike | DatasetIndex, table: str, *,
     by_file: dict[Path, list[int]] = defaultdict(list)
     for f, path in sorted(idx.sources[table].items()):
         by_file[path].append(f)
-    try:
-        pieces = _read_pieces(dict(by_file))
-        if not pieces:
-            return _empty_table(idx.root / f"{table}.parquet").to_pandas()
-    except (OSError, ValueError, pa.ArrowException) as exc:
-        raise GenerateError(f"{idx.root}: cannot read table {table}: "
-                            f"{str(exc).splitlines()[0]}") from None
+    pieces = _read_pieces(dict(by_file))
+    if not pieces:
+        return _empty_table(idx.root / f"{table}.parquet").to_pandas()
     meta = {k: v for k, v in (pieces[0].schema.metadata or {}).items() if k != FLIGHTS_KEY}
     merged = pa.concat_tables([t.replace_schema_metadata(meta) for t in pieces])
     flight = merged.column("flight")

@@ -127,7 +127,8 @@ class DatasetWriter:
         self.header.setdefault("runs", [])
         try:
             self._clean({f for f, st in self.status.items() if st == "ok"})
-            if bad or not self._journal_clean(len(entries)):
+            lost = self._drop_damaged(entries)
+            if lost or bad or not self._journal_clean(len(entries)):
                 self._rewrite_journal(entries)
             write_json_atomic(root / HEADER, self.header)
             self._journal = os.open(root / JOURNAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT,
@@ -173,6 +174,30 @@ class DatasetWriter:
                          for f, _ in block_flights(d / n)}
             for name in sorted(names):
                 self._clean_one(d, name, ok, in_blocks, names)
+
+    def _drop_damaged(self, entries: dict[int, dict[str, Any]]) -> list[int]:
+        """Forget the ok flights that lack a part their journal line lists (deleted outside
+        tlm, or lost to a power cut): their lines are dropped from ``entries`` and their
+        parts deleted, so this run flies them again (where a block file still holds the
+        flight, the next open drops the new part again, see :func:`drop_compacted_parts`).
+        Returns them."""
+        have: dict[str, set[int]] = {}
+        for d in owned_dirs(self.root):
+            flights = have.setdefault(d.name.removesuffix(".parquet"), set())
+            for p in d.iterdir():
+                m = PART_RE.match(p.name)
+                if m is not None:
+                    flights.add(int(m.group(1)))
+                elif BLOCK_RE.match(p.name):
+                    flights.update(f for f, _ in block_flights(p))
+        lost = [f for f, e in entries.items() if e.get("status") == "ok"
+                and any(f not in have.get(t, set()) for t in e.get("parts") or [])]
+        for f in lost:
+            del entries[f]
+            del self.status[f]
+            for d in owned_dirs(self.root):
+                _unlink_quietly([d / part_name(f, "bin" if d.name == BIN_DIR else "parquet")])
+        return lost
 
     @staticmethod
     def _clean_one(d: Path, name: str, ok: set[int], in_blocks: set[int],
