@@ -35,7 +35,9 @@ interrupted data set.
 EPILOG = """\
 writes:
   DS/GPS.parquet DS/IMU.parquet ...  one folder per table, one part per flight, column
-                                     'flight'; pandas.read_parquet('DS/GPS.parquet') reads all
+                                     'flight'; read with tlm_process.generate.
+                                     read_dataset_table(DS, 'GPS') (or, once the manifest
+                                     says complete, pandas.read_parquet('DS/GPS.parquet'))
   DS/faults.parquet                  Eq. 4 fault records, column 'flight'
   DS/manifest.json                   settings, tlm version, state, runs
   DS/flights.jsonl, DS/manifest.parquet   per flight: scenario, seed, status, timings, error
