@@ -3,11 +3,12 @@
 
 Typical use::
 
-    from tlm_process.generate import GenerateOptions, generate, scenario_from_manifest
+    from tlm_process.generate import (GenerateOptions, generate, read_dataset_table,
+                                      scenario_from_manifest)
 
     report = generate(GenerateOptions(out=Path("ds"), flights=1000, seed=1))
     print("\\n".join(report.lines()))
-    pd.read_parquet("ds/GPS.parquet")             # every flight, column 'flight'
+    gps = read_dataset_table("ds", "GPS")         # every flight, column 'flight'
     mission, schedule, params, seed, profile = scenario_from_manifest("ds", 123)
     tlm_sim.fly(mission, schedule, params, seed, profile)   # flight 123 again, same tables
 
@@ -22,6 +23,7 @@ _EXPORTS: dict[str, str] = {
     "errors": "GenerateError",
     "executors": "open_executor",
     "manifest": "read_header read_journal scenario_from_manifest",
+    "reader": "DatasetIndex index_dataset read_dataset_table",
     "runner": "GenerateOptions GenerateReport generate",
     "scenario": "FlightSpec Scenario ScenarioConfig mission_from_recipe sample_scenario",
 }

@@ -36,7 +36,9 @@ interrupted data set.
 EPILOG = """\
 writes:
   DS/GPS.parquet DS/IMU.parquet ...  one folder per table, one part per flight, column
-                                     'flight'; pandas.read_parquet('DS/GPS.parquet') reads all
+                                     'flight'; read with tlm_process.generate.
+                                     read_dataset_table(DS, 'GPS') (or, once the manifest
+                                     says complete, pandas.read_parquet('DS/GPS.parquet'))
   DS/faults.parquet                  Eq. 4 fault records, column 'flight'
   DS/manifest.json                   settings, tlm version, state, runs
   DS/flights.jsonl, DS/manifest.parquet   per flight: scenario, seed, status, timings, error
@@ -218,6 +220,13 @@ def _sigterm_as_interrupt(handler: Any) -> Iterator[None]:
         signal.signal(signal.SIGTERM, old)
 
 
+def _print_line(line: str) -> None:
+    """Print ``line`` to stdout, escaping what its encoding cannot hold (the undecodable
+    bytes of a non-UTF-8 --out, which Python keeps as lone surrogates)."""
+    enc = getattr(sys.stdout, "encoding", None) or "utf-8"
+    print(line.encode(enc, "backslashreplace").decode(enc))
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``tlm generate``; returns the exit code."""
     from tlm_process.generate.errors import GenerateError
@@ -241,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"tlm: error: {exc}", file=sys.stderr)
         return 2
     for line in report.lines():
-        print(line)
+        _print_line(line)
     if report.interrupted:
         return 130
     return 1 if report.failed else 0

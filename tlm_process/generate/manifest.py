@@ -79,7 +79,48 @@ def read_header(ds: Path) -> dict[str, Any] | None:
         raise GenerateError(f"{path}: cannot read the data set manifest: {exc}") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise GenerateError(f"{path} is not a tlm data set manifest")
+    for key, (kinds, what) in _HEADER_FIELDS.items():
+        if key in doc and not _is(doc[key], kinds):
+            raise GenerateError(f"{path}: {key!r} must be {what}, got {json.dumps(doc[key])}; "
+                                "restore the file or use another --out")
     return doc
+
+
+def _is(value: Any, kinds: tuple[type, ...]) -> bool:
+    """isinstance, with bool not an int and whole numbers >= 0 where int is asked for."""
+    if isinstance(value, bool) and bool not in kinds:
+        return False
+    if int in kinds and isinstance(value, int) and not isinstance(value, bool):
+        return value >= 0
+    return isinstance(value, kinds)
+
+
+_NONE = type(None)
+#: header field -> (allowed types, in words) (int: a whole number >= 0)
+_HEADER_FIELDS: dict[str, tuple[tuple[type, ...], str]] = {
+    "format_version": ((int,), "a whole number"),
+    "flights": ((int,), "a whole number >= 0"),
+    "seed": ((int,), "a whole number >= 0"),
+    "state": ((str,), "a text"),
+    "runs": ((list,), "a list"),
+    "settings": ((dict,), "an object"),
+    "counts": ((dict,), "an object"),
+    "pilot": ((dict, _NONE), "an object"),
+    "lambda": ((int, float, _NONE), "a number"),
+    "tlm_version": ((str, _NONE), "a text"),
+    "sim_source": ((str, _NONE), "a text"),
+}
+#: journal field -> (allowed types, in words)
+_ENTRY_FIELDS: dict[str, tuple[tuple[type, ...], str]] = {
+    "scenario": ((dict, _NONE), "an object or null"),
+    "summary": ((dict,), "an object"),
+    "timing": ((dict,), "an object"),
+    "worker": ((str, _NONE), "a text or null"),
+    "parts": ((list,), "a list of table names"),
+    "bytes": ((int,), "a whole number >= 0"),
+    "error": ((str, _NONE), "a text or null"),
+    "traceback": ((str, _NONE), "a text or null"),
+}
 
 
 def check_compatible(header: Mapping[str, Any], wanted: Mapping[str, Any], ds: Path) -> None:
@@ -114,23 +155,50 @@ def _first_difference(a: Any, b: Any, where: str) -> str:
 
 def read_journal(ds: Path) -> tuple[dict[int, dict[str, Any]], int]:
     """The last journal entry of every flight, and how many lines could not be read (a line
-    cut short by a hard kill)."""
+    cut short by a hard kill: skipped).
+
+    Raises GenerateError for a line that is JSON but not a journal entry (a hand-edited line
+    with a value of the wrong type): it names the line."""
     path = ds / JOURNAL
     entries: dict[int, dict[str, Any]] = {}
     bad = 0
     if not path.exists():
         return entries, 0
     with path.open("rb") as fh:  # bytes: a line that is not UTF-8 is one bad line
-        for line in fh:
+        for number, line in enumerate(fh, 1):
             line = line.strip()
             if not line:
                 continue
             try:
                 rec = json.loads(line)
-                entries[int(rec["flight"])] = rec
-            except (KeyError, TypeError, ValueError):  # ValueError: JSON, UTF-8, int
-                bad += 1
+            except ValueError:  # JSONDecodeError or UnicodeDecodeError
+                bad += 1  # cut short by a hard kill
+                continue
+            _check_entry(rec, f"{path} line {number}")
+            entries[rec["flight"]] = rec
     return entries, bad
+
+
+def _check_entry(rec: Any, where: str) -> None:
+    """Raise GenerateError unless ``rec`` is a journal entry (a hand-edited line)."""
+    fix = ("fix or delete the line (tlm generate then flies that flight again)")
+    if not isinstance(rec, dict):
+        raise GenerateError(f"{where}: a journal entry must be an object, got "
+                            f"{type(rec).__name__}; {fix}")
+    if not _is(rec.get("flight"), (int,)):
+        raise GenerateError(f"{where}: 'flight' must be a whole number >= 0, got "
+                            f"{json.dumps(rec.get('flight'))}; {fix}")
+    if rec.get("status") not in ("ok", "failed"):
+        raise GenerateError(f"{where}: 'status' must be \"ok\" or \"failed\", got "
+                            f"{json.dumps(rec.get('status'))}; {fix}")
+    for key, (kinds, what) in _ENTRY_FIELDS.items():
+        if key in rec and not _is(rec[key], kinds):
+            raise GenerateError(f"{where}: {key!r} must be {what}, got "
+                                f"{json.dumps(rec[key])[:60]}; {fix}")
+    if not all(isinstance(p, str) for p in rec.get("parts") or []):
+        raise GenerateError(f"{where}: 'parts' must be a list of table names; {fix}")
+    if rec["status"] == "ok" and not isinstance(rec.get("scenario"), dict):
+        raise GenerateError(f"{where}: a finished flight needs its 'scenario' object; {fix}")
 
 
 def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
@@ -140,10 +208,8 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
     rows = []
     for flight in sorted(entries):
         e = entries[flight]
-        sc = e.get("scenario") or {}
-        sm = e.get("summary") or {}
-        tm = e.get("timing") or {}
-        m = sc.get("mission") or {}
+        sc, sm, tm = (_obj(e.get(k)) for k in ("scenario", "summary", "timing"))
+        m = _obj(sc.get("mission"))
         mission = (f"builtin-{m.get('id')}" if m.get("source") == "builtin"
                    else f"random-{m.get('seed')}" if m else None)
         rows.append({
@@ -152,8 +218,9 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "kind": sc.get("kind"),
             "seed": sc.get("seed"),
             "mission": mission,
-            "faults": ",".join(f["fault"] for f in (sc.get("faults") or {}).get("faults", [])),
-            "faults_recorded": ",".join(sm.get("faults", [])),
+            "faults": ",".join(str(_obj(f).get("fault"))
+                               for f in _list(_obj(sc.get("faults")).get("faults"))),
+            "faults_recorded": ",".join(str(f) for f in _list(sm.get("faults"))),
             "lam": sc.get("lam", math.nan),
             "duration_s": sm.get("duration_s", math.nan),
             "waypoints_reached": sm.get("waypoints_reached"),
@@ -172,9 +239,23 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "gps_fault_rows", "wall_s", "fly_s", "worker", "error", "scenario"]
     df = pd.DataFrame(rows, columns=cols)
     for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows"):
-        df[c] = df[c].astype("Int64")
-    df["landed"] = df["landed"].astype("boolean")
+        df[c] = pd.to_numeric(df[c], errors="coerce").round().astype("Int64")
+    for c in ("lam", "duration_s", "wall_s", "fly_s"):
+        df[c] = pd.to_numeric(df[c], errors="coerce").astype("float64")
+    for c in ("kind", "mission", "worker", "error"):
+        df[c] = df[c].map(lambda v: None if v is None else str(v))
+    df["landed"] = df["landed"].map(lambda v: v if isinstance(v, bool) else pd.NA
+                                    ).astype("boolean")
     return df
+
+
+def _obj(v: Any) -> dict[str, Any]:
+    """``v`` when it is a JSON object, else an empty one (a hand-edited journal value)."""
+    return v if isinstance(v, dict) else {}
+
+
+def _list(v: Any) -> list[Any]:
+    return v if isinstance(v, list) else []
 
 
 def scenario_from_manifest(ds: str | os.PathLike, flight: int, *,
@@ -201,4 +282,10 @@ def scenario_from_manifest(ds: str | os.PathLike, flight: int, *,
         raise GenerateError(f"{root} was made by another simulator source "
                             f"({header.get('sim_source')}; this tlm: {fp['sim_source']}): "
                             "its flights would not come out the same")
-    return Scenario.from_dict(entry["scenario"]).realise()
+    try:
+        return Scenario.from_dict(entry["scenario"]).realise()
+    except Exception as exc:  # noqa: BLE001 - a hand-edited scenario: any error, one line
+        why = (str(exc) if isinstance(exc, GenerateError)
+               else f"{type(exc).__name__}: {exc}".splitlines()[0][:200])
+        raise GenerateError(f"{root} flight {flight}: its scenario in the journal cannot be "
+                            f"flown ({why})") from None

@@ -529,6 +529,7 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     report.dataset_flights = int(writer.header.get("flights", opts.flights))
     handle = None
     lost: ExecutorLost | None = None
+    failure: BaseException | None = None
     run_info: dict[str, Any] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     try:
         config = opts.config
@@ -563,6 +564,9 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     except ExecutorLost as exc:
         report.interrupted, lost = True, exc
         run_info["lost"] = str(exc)
+    except BaseException as exc:
+        failure = exc
+        raise
     finally:
         try:
             if handle is not None:
@@ -574,21 +578,44 @@ def generate(opts: GenerateOptions) -> GenerateReport:
             run_info.update(wall_s=round(report.wall_s, 3), ok=report.ok,
                             failed=report.failed, capped=len(report.capped),
                             interrupted=report.interrupted)
-            header = writer.close(run_info)
-            report.state = header.get("state", "")
+            report.state = _close(writer, run_info, failure or lost)
     if lost is not None:
-        counts = header.get("counts", {})
-        raise GenerateError(f"{lost}; {counts.get('ok', report.ok)} of {opts.flights} flights "
-                            f"written (data set {report.state}), run the same command again "
-                            "to continue")
+        raise GenerateError(f"{lost}; {writer.header.get('counts', {}).get('ok', report.ok)} of "
+                            f"{opts.flights} flights written (data set {report.state}), run the "
+                            "same command again to continue")
     if opts.compact and not report.interrupted:
-        from tlm_process.generate.compact import compact_dataset
-
-        t0 = time.perf_counter()
-        report.compacted_parts = compact_dataset(
-            opts.out, {f for f, st in writer.status.items() if st == "ok"})
-        report.compact_s = time.perf_counter() - t0
+        _compact(opts.out, writer, report)
     return report
+
+
+def _close(writer: DatasetWriter, run_info: Mapping[str, Any],
+           failure: BaseException | None) -> str:
+    """Close the data set (its manifest gets the counts and state); returns the state.
+
+    Raises GenerateError when it cannot be closed: the message adds that to ``failure`` (a
+    GenerateError already on its way, e.g. a full disk while writing a flight)."""
+    try:
+        return str(writer.close(run_info).get("state", ""))
+    except GenerateError as exc:
+        if isinstance(failure, GenerateError):
+            raise GenerateError(f"{failure}; then: {exc}") from None
+        raise
+
+
+def _compact(out: Path, writer: DatasetWriter, report: GenerateReport) -> None:
+    """``--compact``: merge the parts of the finished flights into block files."""
+    from tlm_process.generate.compact import compact_dataset
+
+    t0 = time.perf_counter()
+    try:
+        report.compacted_parts = compact_dataset(
+            out, {f for f, st in writer.status.items() if st == "ok"})
+    except OSError as exc:
+        where = f" ({exc.filename})" if exc.filename else ""
+        raise GenerateError(f"compacting {out} stopped: {exc.strerror or exc}{where}; the data "
+                            "set is whole; free space and run the same command again to "
+                            "finish compacting") from None
+    report.compact_s = time.perf_counter() - t0
 
 
 def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWriter,

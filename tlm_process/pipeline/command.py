@@ -118,6 +118,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--plots", type=whole_number, default=5, metavar="N",
                    help="trajectory and per-fault plots for the first N flights (default 5; "
                         "0 for none)")
+    p.add_argument("--partial", action="store_true",
+                   help="read a tlm generate data set that is not complete (killed, "
+                        "interrupted, failed flights) anyway: its finished flights only "
+                        "(recorded in report.json)")
     p.add_argument("--quiet", action="store_true", help="no per-flight lines")
     p.set_defaults(func=run)
     return p
@@ -159,10 +163,23 @@ def _make_plots(p, plots_dir: Path) -> list[str]:
     return [str(x) for x in out]
 
 
+def _warn_partial(info: dict) -> None:
+    """One stderr line for a generated data set read partially or with lines skipped."""
+    notes = []
+    if info["state"] != "complete":
+        notes.append(f"state {info['state']}: reading its {info['committed']} finished of "
+                     f"{info['flights']} flights only (--partial)")
+    if info["skipped_journal_lines"]:
+        notes.append(f"{info['skipped_journal_lines']} journal line(s) cut short by a kill "
+                     "skipped")
+    if notes:
+        print(f"tlm: warning: {info['path']}: {'; '.join(notes)}", file=sys.stderr)
+
+
 def _run(args: argparse.Namespace) -> int:
     from tlm_process.pipeline.anchoring import DEFAULT_MAX_MATCH_M
     from tlm_process.pipeline.errors import PipelineError
-    from tlm_process.pipeline.ingest import expand_inputs, read_flight, unique_ids
+    from tlm_process.pipeline.ingest import expand_inputs, read_dataset, read_flight, unique_ids
     from tlm_process.pipeline.plots import plot_label_shares
     from tlm_process.pipeline.process import (
         ProcessOptions,
@@ -187,8 +204,16 @@ def _run(args: argparse.Namespace) -> int:
     processed = []
     plots: list[str] = []
     seen: dict[str, int] = {}
+    generated: list[dict] = []
     for k, (kind, path) in enumerate(sources, 1):
-        flights = unique_ids(read_flight(kind, path), seen)
+        if kind == "dataset":
+            found, info = read_dataset(path, partial=args.partial)
+            if info is not None:
+                generated.append(info)
+                _warn_partial(info)
+        else:
+            found = read_flight(kind, path)
+        flights = unique_ids(found, seen)
         for fl in flights:
             p = process_flight(fl, options)
             processed.append(p)
@@ -205,7 +230,7 @@ def _run(args: argparse.Namespace) -> int:
     ds = build_dataset(processed, test_frac=args.test_frac, seed=args.seed,
                        test_patterns=args.test_flight, scale=not args.no_scale,
                        options=options)
-    extra = {}
+    extra: dict = {"inputs": {"partial": bool(args.partial), "generated": generated}}
     if args.target_fault_ratio is not None:
         extra["stretching"] = stretching_report(fault_share(ds.counts).to_dict(),
                                                 args.target_fault_ratio)

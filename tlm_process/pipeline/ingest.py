@@ -11,10 +11,11 @@ Kinds of input (:func:`detect_kind` decides from the path):
   ``DIR/IMU.csv``, ...; a leading ``timestamp`` column as ``mavlogdump.py --format csv``
   writes is allowed) and ``DIR/faults.json`` (``{"faults": [...]}`` or a bare list; ``[]`` for
   a normal flight).
-* ``"dataset"`` — a multi-flight dataset (the layout ``tlm generate`` is to write):
-  ``DS/<NAME>.parquet`` with a ``flight`` column and ``DS/faults.parquet`` with one row per
-  fault record (``flight`` plus the record keys below). Each flight becomes one
-  :class:`Flight`.
+* ``"dataset"`` — a multi-flight dataset: ``DS/<NAME>.parquet`` with a ``flight`` column and
+  ``DS/faults.parquet`` with one row per fault record (``flight`` plus the record keys
+  below). Each flight becomes one :class:`Flight`. A ``tlm generate`` data set (it has
+  ``DS/manifest.json``) is read through :mod:`tlm_process.generate.reader`: only the flights
+  its journal lists as finished, and only when it is complete unless ``partial``.
 * a plain folder holding any of the above (``*.bin`` with sidecars, flight folders,
   datasets) is expanded one level.
 
@@ -51,6 +52,7 @@ __all__ = [
     "detect_kind",
     "expand_inputs",
     "parse_records",
+    "read_dataset",
     "read_flight",
     "read_flights",
     "unique_ids",
@@ -317,21 +319,69 @@ def _read_csv_folder(path: Path) -> list[Flight]:
     return [Flight(path.name, str(path), "csv", tables, records)]
 
 
-def _read_dataset(path: Path) -> list[Flight]:
+def _generated_tables(path: Path, partial: bool) -> tuple[pd.DataFrame,
+                                                         dict[str, pd.DataFrame], dict]:
+    """Fault records and tables of a ``tlm generate`` data set, through its loader (the
+    committed flights only; a data set that is not complete only with ``partial``), and the
+    loader's summary (state, flights read, files ignored)."""
+    from tlm_process.generate.errors import GenerateError
+    from tlm_process.generate.reader import index_dataset, read_dataset_table
+
+    try:
+        idx = index_dataset(path, partial=partial)
+        if "faults" not in idx.tables:
+            raise IngestError("no faults.parquet in the dataset", source=str(path))
+        faults = read_dataset_table(idx, "faults")
+        frames = {name: read_dataset_table(idx, name)
+                  for name in DATA_TABLES + AUX_TABLES if name in idx.tables}
+    except GenerateError as exc:
+        raise IngestError(str(exc), source=str(path)) from None
+    return faults, frames, idx.summary()
+
+
+def _plain_tables(path: Path) -> tuple[pd.DataFrame, dict[str, pd.DataFrame]]:
+    """Fault records and tables of a data set without a tlm manifest (single files or
+    folders with a ``flight`` column), read whole."""
     faults = _read_table_file(path / "faults.parquet")
-    if len(faults) and "flight" not in faults.columns:
-        raise IngestError("faults.parquet has no 'flight' column", source=str(path))
     frames = {}
     for name in DATA_TABLES + AUX_TABLES:
         p = path / f"{name}.parquet"
         if p.exists():
-            df = _read_table_file(p)
-            if "flight" not in df.columns:
-                raise IngestError("no 'flight' column (a dataset table holds many flights)",
-                                  source=str(p))
-            frames[name] = df
+            frames[name] = _read_table_file(p)
+    return faults, frames
+
+
+def read_dataset(path: str | Path, *, partial: bool = False) -> tuple[list[Flight],
+                                                                      dict | None]:
+    """The flights of a multi-flight data set, and for a ``tlm generate`` data set (one with
+    ``manifest.json``) the loader's summary (:meth:`~tlm_process.generate.reader.
+    DatasetIndex.summary`; None otherwise). A generated data set is read through
+    :mod:`tlm_process.generate.reader`: committed flights only, and one that is not complete
+    is refused unless ``partial``."""
+    path = Path(path)
+    info = None
+    if (path / "manifest.json").exists():
+        faults, frames, info = _generated_tables(path, partial)
+    else:
+        faults, frames = _plain_tables(path)
+    if len(faults) and "flight" not in faults.columns:
+        raise IngestError("faults.parquet has no 'flight' column", source=str(path))
+    for name, df in frames.items():
+        if "flight" not in df.columns:
+            raise IngestError("no 'flight' column (a dataset table holds many flights)",
+                              source=str(path / f"{name}.parquet"))
     if "GPS" not in frames:
         raise IngestError("no GPS.parquet in the dataset", source=str(path))
+    return _dataset_flights(path, faults, frames), info
+
+
+def _read_dataset(path: Path) -> list[Flight]:
+    return read_dataset(path)[0]
+
+
+def _dataset_flights(path: Path, faults: pd.DataFrame,
+                     frames: dict[str, pd.DataFrame]) -> list[Flight]:
+    """One Flight per flight of the GPS table (tables and fault records by ``flight``)."""
     # one pass over each table (a filter per flight would read every table once per flight)
     by_flight = {name: dict(iter(df.groupby("flight", sort=False)))
                  for name, df in frames.items()}
@@ -378,7 +428,8 @@ def detect_kind(path: str | Path) -> str | None:
                 return "tlm"
         except (OSError, ValueError, AttributeError):
             return None
-    if (p / "faults.parquet").exists() and (p / "GPS.parquet").exists():
+    if ((p / "faults.parquet").exists() and (p / "GPS.parquet").exists()) or (
+            (p / "manifest.json").exists() and (p / "flights.jsonl").exists()):
         return "dataset"
     if (p / "GPS.csv").exists() or (p / "GPS.parquet").exists():
         return "csv"
@@ -425,11 +476,13 @@ def expand_inputs(paths: Iterable[str | Path]) -> list[tuple[str, Path]]:
     return out
 
 
-def read_flights(paths: Iterable[str | Path]) -> list[Flight]:
-    """Every flight named by ``paths`` (see :func:`expand_inputs`), with unique ids."""
+def read_flights(paths: Iterable[str | Path], *, partial: bool = False) -> list[Flight]:
+    """Every flight named by ``paths`` (see :func:`expand_inputs`), with unique ids.
+    ``partial``: read the finished flights of a generated data set that is not complete
+    (see :func:`read_dataset`)."""
     flights: list[Flight] = []
     for kind, p in expand_inputs(paths):
-        flights.extend(_READERS[kind](p))
+        flights.extend(read_flight(kind, p, partial=partial))
     return unique_ids(flights)
 
 
@@ -446,8 +499,11 @@ def unique_ids(flights: list[Flight], seen: dict[str, int] | None = None) -> lis
     return flights
 
 
-def read_flight(kind: str, path: str | Path) -> list[Flight]:
-    """The flights of one source of a known kind (see :func:`detect_kind`)."""
+def read_flight(kind: str, path: str | Path, *, partial: bool = False) -> list[Flight]:
+    """The flights of one source of a known kind (see :func:`detect_kind`); ``partial``:
+    see :func:`read_dataset`."""
     if kind not in _READERS:
         raise IngestError(f"unknown input kind {kind!r}", source=str(path))
+    if kind == "dataset":
+        return read_dataset(path, partial=partial)[0]
     return _READERS[kind](Path(path))

@@ -198,15 +198,35 @@ def counts_dict(counts: pd.DataFrame) -> dict[str, dict[str, int]]:
 def write_dataset(ds: Dataset, out: str | os.PathLike,
                   extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """Write ``OUT/<TABLE>.parquet``, ``OUT/scaler.json`` and ``OUT/report.json``; returns
-    the report."""
+    the report.
+
+    ``report.json`` is the commit record: an old one is removed before anything else is
+    written, every file goes to a hidden temporary name and is renamed into place, and the
+    report comes last. A folder killed while being written has no report.json, which
+    ``tlm evaluate`` refuses, so old and new tables are never read as one data set."""
     from tlm_process.pipeline.report import build_report
 
     d = Path(out)
     d.mkdir(parents=True, exist_ok=True)
+    (d / "report.json").unlink(missing_ok=True)
     for name, df in ds.tables.items():
-        df.to_parquet(d / f"{name}.parquet", index=False, compression="zstd")
+        _replace_with(d / f"{name}.parquet",
+                      lambda fh, df=df: df.to_parquet(fh, index=False, compression="zstd"))
     if ds.scaler is not None:
         ds.scaler.save(d / "scaler.json")
     report = build_report(ds, extra or {})
-    (d / "report.json").write_text(json.dumps(report, indent=1) + "\n")
+    text = (json.dumps(report, indent=1) + "\n").encode("utf-8")
+    _replace_with(d / "report.json", lambda fh: fh.write(text))
     return report
+
+
+def _replace_with(path: Path, write: Any) -> None:
+    """Write ``path`` atomically: ``write(file)`` fills ``.<name>.tmp``, which is renamed."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with tmp.open("wb") as fh:
+            write(fh)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
