@@ -71,8 +71,9 @@ def test_a_file_that_is_not_utf8_is_a_one_line_error(tmp_path, capsys, make, nam
 
 
 def test_a_journal_line_that_is_not_utf8_counts_as_one_bad_line(tmp_path):
-    (tmp_path / "flights.jsonl").write_bytes(b'{"flight": 0, "status": "ok", "scenario": {}}\n{"flight": 1, "'
-                                             + BAD + b'{"flight": 2, "status": "failed"}\n')
+    (tmp_path / "flights.jsonl").write_bytes(b'{"flight": 0, "status": "ok", "scenario": {}}\n'
+                                             b'{"flight": 1, "' + BAD
+                                             + b'{"flight": 2, "status": "failed"}\n')
     entries, bad = read_journal(tmp_path)
     assert sorted(entries) == [0, 2] and bad == 1
 
