@@ -617,7 +617,6 @@ def fly(
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
 
-    ensure_compiled()  # a cold numba cache is compiled by several processes at once
     p = profile_params(profile, params)
     duration = max_duration_s(mission, p)
     schedule = faults if isinstance(faults, FaultSchedule) else None
@@ -626,6 +625,8 @@ def fly(
         changes: list[Any] = list(schedule.param_changes())
     else:
         changes = list(faults or ())
+        _check_changes(p, changes)  # a bad change fails before any compiling
+    ensure_compiled()  # a cold numba cache is compiled by several processes at once
     scfg, frame, g, ecfg = _configs(p)
     sched = build_schedule(p, changes, (scfg, frame, g, ecfg))
     applied = np.full(len(changes), -1.0)
@@ -679,6 +680,15 @@ def fly(
         log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
                                    t_last)
     return log
+
+
+def _check_changes(params: Params, changes: Sequence[Any]) -> None:
+    """Validate raw ``(time_s, NAME, value)`` changes as :func:`build_schedule` applies them
+    (names, values, parameters tlm models), without building configurations."""
+    current = params
+    for ch in changes:
+        _, _, name, value = _as_change(ch)
+        current = current.updated({name: value})
 
 
 def _change_record(ch: Any, applied_us: float) -> dict[str, Any]:

@@ -993,3 +993,56 @@ def earth_field(p: Params) -> np.ndarray:
     from tlm_sim.geo import earth_field_ned
 
     return earth_field_ned(p["TLM_MAG_DEC_DEG"], p["TLM_MAG_INC_DEG"], p["TLM_MAG_INT_GA"])
+
+
+# --------------------------------------------------------------------------------------------
+# The parameter list (``tlm params``)
+# --------------------------------------------------------------------------------------------
+
+def parameter_list(patterns: Sequence[str] = ()) -> list[dict[str, Any]]:
+    """Every parameter tlm knows, sorted by name, as ``{name, default, unit, min, max, integer,
+    modelled, description, aliases}`` (``unit``/``min``/``max`` None where tlm declares no range:
+    ArduPilot parameters carried from the default file only, none of them modelled).
+
+    ``patterns``: names (case-insensitive; paper-era aliases resolve to the current name) or
+    shell-style patterns (``EK3_*``); empty lists everything. A name or pattern that matches
+    nothing raises :class:`UnknownParamError` with close matches.
+    """
+    defaults = _defaults()
+    names = _select(patterns, defaults) if patterns else list(defaults)
+    aliases: dict[str, list[str]] = {}
+    for old, alias in ALIASES.items():
+        aliases.setdefault(alias.target, []).append(old)
+    return [_describe(n, defaults[n], PARAM_INFO.get(n), sorted(aliases.get(n, ())))
+            for n in names]
+
+
+def _select(patterns: Sequence[str], defaults: Mapping[str, float]) -> list[str]:
+    """Names matching ``patterns`` in name order (each pattern must match something)."""
+    import fnmatch
+
+    chosen: set[str] = set()
+    for raw in patterns:
+        pat = str(raw).strip().upper()
+        if any(c in pat for c in "*?["):
+            hits = fnmatch.filter(defaults, pat)
+        else:
+            target = ALIASES[pat].target if pat in ALIASES else pat
+            hits = [target] if target in defaults else []
+        if not hits:
+            raise UnknownParamError(
+                f"unknown parameter {raw!r}{_suggest(pat.strip('*?'), defaults)}")
+        chosen.update(hits)
+    return sorted(chosen)
+
+
+def _describe(name: str, default: float, info: ParamInfo | None,
+              aliases: list[str]) -> dict[str, Any]:
+    """One row of :func:`parameter_list`."""
+    row: dict[str, Any] = {"name": name, "default": default, "unit": None, "min": None,
+                           "max": None, "integer": None, "modelled": info is not None
+                           and info.modelled, "description": "", "aliases": aliases}
+    if info is not None:
+        row.update(unit=info.unit, min=info.min, max=info.max, integer=info.integer,
+                   description=info.description)
+    return row

@@ -167,12 +167,12 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_VEL_MAX] = v_h / math.sqrt(hover_thr)
     f[F_POWER_FACTOR] = p_hover / t_hover
 
-    ixx, iyy, izz = get("TLM_IXX"), get("TLM_IYY"), get("TLM_IZZ")
-    if ixx == 0.0 or iyy == 0.0 or izz == 0.0:
-        # half the mass on a ring of radius diag/2
-        ixx = iyy = mass * 0.25 * (0.5 * diag) ** 2
-        izz = mass * 0.5 * (0.5 * diag) ** 2
-    f[F_IXX], f[F_IYY], f[F_IZZ] = ixx, iyy, izz
+    # each moment of inertia as given, or (0) that of half the mass on a ring of radius diag/2
+    ring_xy = mass * 0.25 * (0.5 * diag) ** 2
+    ring_z = mass * 0.5 * (0.5 * diag) ** 2
+    f[F_IXX] = get("TLM_IXX") or ring_xy
+    f[F_IYY] = get("TLM_IYY") or ring_xy
+    f[F_IZZ] = get("TLM_IZZ") or ring_z
     rot_rate = get("TLM_REF_ROT_RATE")
     f[F_ROT_DAMP] = math.radians(400.0) / rot_rate if rot_rate > 0.0 else 0.0
 
