@@ -184,10 +184,10 @@ def make_flight(
     p_k = truth_position(t_end)
     baro = -p_k[:, 2] + 0.1 * rng.uniform(-1, 1, n)
     mag_new = (k_idx + 1) % 40 == 20
-    if mag_earth is None:
-        from tlm_sim.ekf.config import earth_field_ned
+    if mag_earth is None:  # the field the EKF assumes
+        from tlm_sim.params import Params, earth_field
 
-        mag_earth = earth_field_ned(12.5, -66.0, 0.58)
+        mag_earth = earth_field(Params())
     mag = np.einsum("nji,j->ni", r_k[1:], mag_earth) + 0.005 * rng.uniform(-1, 1, (n, 3))
     return Flight(
         t_us=t_us,

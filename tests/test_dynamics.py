@@ -30,6 +30,7 @@ from tlm_sim.dynamics import (
 )
 from tlm_sim.dynamics import frame as F
 from tlm_sim.dynamics import layout as X
+from tlm_sim.params import Params
 from tlm_sim.rng import new_rng
 
 G = GRAVITY_MSS
@@ -91,7 +92,7 @@ def set_euler(x: np.ndarray, roll: float, pitch: float, yaw: float) -> None:
 
 @pytest.fixture(scope="module")
 def frame() -> np.ndarray:
-    return build_frame({})
+    return build_frame(Params())
 
 
 # --------------------------------------------------------------------------- atmosphere
@@ -147,15 +148,15 @@ def test_derived_constants_match_reference_table(frame: np.ndarray) -> None:
 
 
 def test_motor_table_and_parameters() -> None:
-    f = build_frame({"TLM_DIAG": 0.5, "TLM_IXX": 0.1, "TLM_IYY": 0.2, "TLM_IZZ": 0.3})
+    f = build_frame(Params({"TLM_DIAG": 0.5, "TLM_IXX": 0.1, "TLM_IYY": 0.2, "TLM_IZZ": 0.3}))
     assert list(f[F.F_MOT_X : F.F_MOT_X + 4]) == [0.0, 0.0, 0.5, -0.5]
     assert list(f[F.F_MOT_Y : F.F_MOT_Y + 4]) == [0.5, -0.5, 0.0, 0.0]
     assert list(f[F.F_MOT_YAW : F.F_MOT_YAW + 4]) == [1.0, 1.0, -1.0, -1.0]
     assert (f[F.F_IXX], f[F.F_IYY], f[F.F_IZZ]) == (0.1, 0.2, 0.3)
-    assert build_frame({"SIM_BATT_CAP_AH": 2.0})[F.F_BATT_CAP_AH] == 2.0
-    assert build_frame({"TLM_BATT_CAP_AH": 3.0})[F.F_BATT_CAP_AH] == 3.0
+    assert build_frame(Params({"SIM_BATT_CAP_AH": 2.0}))[F.F_BATT_CAP_AH] == 2.0
+    assert build_frame(Params({"TLM_BATT_CAP_AH": 3.0}))[F.F_BATT_CAP_AH] == 3.0
     # a huge momentum-drag coefficient is scaled down to the reference drag, areaCd -> 0
-    g = build_frame({"TLM_MDRAG_COEF": 2.0})
+    g = build_frame(Params({"TLM_MDRAG_COEF": 2.0}))
     assert g[F.F_AREA_CD] == 0.0
     assert g[F.F_MDRAG_COEF] == pytest.approx(2.0 * g[F.F_D_REF] / g[F.F_D_MOM])
 
@@ -251,7 +252,7 @@ def test_free_fall_with_drag_matches_quadratic_drag_solution(frame: np.ndarray) 
 )
 def test_torque_free_spin_conserves_angular_momentum(rates: tuple[float, float, float]) -> None:
     # no rotor thrust (so no inflow torques) and no rotational damping: torque-free body
-    f = frame_copy(build_frame({}), F_ROT_DAMP=0.0, F_AREA_EFF=0.0)
+    f = frame_copy(build_frame(Params()), F_ROT_DAMP=0.0, F_AREA_EFF=0.0)
     x = airborne(f, 5000.0, 0.0)
     x[X.WX], x[X.WY], x[X.WZ] = rates
     inertia = np.array([f[F.F_IXX], f[F.F_IYY], f[F.F_IZZ]])
@@ -444,7 +445,7 @@ def test_infinite_battery_holds_voltage_and_counts_charge(frame: np.ndarray) -> 
 
 
 def test_finite_battery_sags_under_load(frame: np.ndarray) -> None:
-    f = build_frame({"SIM_BATT_CAP_AH": 1.0})
+    f = build_frame(Params({"SIM_BATT_CAP_AH": 1.0}))
     x = airborne(f, 100.0, hover_command(f))
     assert x[X.BATT_V] == 12.6
     assert x[X.BATT_REM_AH] == pytest.approx(1.0)
@@ -505,7 +506,7 @@ def wind_state(f: np.ndarray, height: float, settled_speed: float) -> np.ndarray
     ],
 )
 def test_wind_height_profile(kind: float, height: float, expected: float) -> None:
-    f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_T": kind})
+    f = build_frame(Params({"SIM_WIND_SPD": 10.0, "SIM_WIND_T": kind}))
     x = wind_state(f, height, 10.0)
     update_wind(x, f, DT, 10.0, RNG)
     # from the south (180 deg): the air moves north
@@ -514,7 +515,7 @@ def test_wind_height_profile(kind: float, height: float, expected: float) -> Non
 
 
 def test_wind_direction_delay_and_filter() -> None:
-    f = build_frame({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0})
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0}))
     x = wind_state(f, 100.0, 8.0)
     update_wind(x, f, DT, 4.9, RNG)  # no wind during the first 5 s
     assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
@@ -529,14 +530,14 @@ def test_wind_direction_delay_and_filter() -> None:
         update_wind(x, f, DT, t, RNG)
     assert -x[X.WIND_E] == pytest.approx(8.0 * (1.0 - math.exp(-1.0)), rel=0.01)
     # vertical direction 90 deg: a pure updraft (NED down negative)
-    g = build_frame({"SIM_WIND_SPD": 3.0, "SIM_WIND_DIR_Z": 90.0, "SIM_WIND_T": 1.0})
+    g = build_frame(Params({"SIM_WIND_SPD": 3.0, "SIM_WIND_DIR_Z": 90.0, "SIM_WIND_T": 1.0}))
     x = wind_state(g, 100.0, 3.0)
     update_wind(x, g, DT, 10.0, RNG)
     assert x[X.WIND_D] == pytest.approx(-3.0)
 
 
 def test_wind_pushes_hovering_vehicle_downwind() -> None:
-    f = build_frame({"SIM_WIND_SPD": 10.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0})
+    f = build_frame(Params({"SIM_WIND_SPD": 10.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0}))
     x = airborne(f, 100.0, hover_command(f))
     x[X.WIND_SPD_F] = 10.0
     run_ticks(x, hover_pwm(f), f, DT, 10.0, 2400, RNG)
@@ -545,7 +546,7 @@ def test_wind_pushes_hovering_vehicle_downwind() -> None:
 
 
 def run_turbulent(seed: int, n: int = 3000) -> np.ndarray:
-    f = build_frame({"SIM_WIND_SPD": 5.0, "SIM_WIND_TURB": 2.0})
+    f = build_frame(Params({"SIM_WIND_SPD": 5.0, "SIM_WIND_TURB": 2.0}))
     x = airborne(f, 50.0, hover_command(f))
     rng = new_rng(seed, 2)
     out = np.empty((n, X.N_STATE))
@@ -569,7 +570,7 @@ def test_turbulence_is_deterministic_with_a_seed() -> None:
 
 
 def test_no_turbulence_on_the_ground() -> None:
-    f = build_frame({"SIM_WIND_TURB": 3.0})
+    f = build_frame(Params({"SIM_WIND_TURB": 3.0}))
     x = new_state(f)
     run_ticks(x, pwm_all(1000.0), f, DT, 6.0, 100, new_rng(1, 2))
     assert x[X.GUST_H] == 0.0 and x[X.GUST_V] == 0.0

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.ekf_synth import DT, G, fly_ekf, make_flight, quat_angle_deg
-from tlm_sim.ekf import build_ekf_config, earth_field_ned, ekf_output, new_ekf
+from tlm_sim.ekf import build_ekf_config, ekf_output, new_ekf
 from tlm_sim.ekf import layout as L
 from tlm_sim.ekf.core import (
     apply_correction,
@@ -27,6 +27,9 @@ from tlm_sim.ekf.core import (
 )
 from tlm_sim.ekf.fusion import _bad_imu_check, lane_fuse_baro, reset_vel_pos_to_gps
 from tlm_sim.ekf.lanes import ekf_update, quat_to_euler
+from tlm_sim.params import Params, earth_field
+from tlm_sim.sensors import layout as S
+from tlm_sim.sensors.config import build_sensor_config
 
 NS = L.NS
 
@@ -56,7 +59,7 @@ def _filter_vp(e: np.ndarray) -> np.ndarray:
 
 
 def _lane(params: dict | None = None) -> np.ndarray:
-    ekf, _ = new_ekf(params or {})
+    ekf, _ = new_ekf(Params(params))
     e = ekf[0].copy()
     e[L.QW] = 1.0
     quat_to_rot(e)
@@ -94,7 +97,7 @@ def test_layout_blocks_do_not_overlap():
 
 
 def test_config_defaults_and_overrides():
-    c = build_ekf_config({})
+    c = build_ekf_config(Params())
     assert c[L.C_DT] == pytest.approx(0.0025)
     assert c[L.C_VELNE_NSE] == 0.3 and c[L.C_VELD_NSE] == 0.5 and c[L.C_POSNE_NSE] == 0.5
     assert c[L.C_ALT_NSE] == 2.0 and c[L.C_MAG_NSE] == 0.05
@@ -102,21 +105,28 @@ def test_config_defaults_and_overrides():
     assert (c[L.C_VEL_GATE], c[L.C_POS_GATE], c[L.C_HGT_GATE], c[L.C_MAG_GATE]) == (5, 5, 5, 3)
     assert c[L.C_GPS_DELAY] == pytest.approx(0.12) and c[L.C_HGT_DELAY] == pytest.approx(0.06)
     field = c[L.C_MAG_N : L.C_MAG_D + 1]
-    assert np.linalg.norm(field) == pytest.approx(0.58)
-    assert field[2] < 0.0  # inclination -66 deg: field points up
-    assert math.degrees(math.atan2(field[1], field[0])) == pytest.approx(12.5)
+    assert np.linalg.norm(field) == pytest.approx(0.579)  # TLM_MAG_INT_GA
+    assert field[2] < 0.0  # inclination -65.75 deg: field points up
+    assert math.degrees(math.atan2(field[1], field[0])) == pytest.approx(12.65)
+    # the EKF assumes exactly the field the simulated compass measures, for any setting
+    for p in (Params(), Params({"TLM_MAG_DEC_DEG": -3.0, "TLM_MAG_INT_GA": 0.4})):
+        scfg = build_sensor_config(p)
+        assert list(build_ekf_config(p)[L.C_MAG_N : L.C_MAG_D + 1]) == list(
+            scfg[S.C_MAG_EARTH : S.C_MAG_EARTH + 3])
     assert c[L.C_N_LANES] == 2 and list(c[L.C_LANE_IMU : L.C_LANE_IMU + 2]) == [0, 1]
-    c2 = build_ekf_config({"EK3_POS_I_GATE": 50, "GPS1_DELAY_MS": 120, "EK3_IMU_MASK": 2})
-    assert c2[L.C_POS_GATE] == 1.0  # gates never below one sigma
+    c2 = build_ekf_config(Params({"EK3_POS_I_GATE": 100, "GPS1_DELAY_MS": 120, "EK3_IMU_MASK": 2}))
+    assert c2[L.C_POS_GATE] == 1.0  # percent of one sigma
     assert c2[L.C_GPS_DELAY] == pytest.approx(0.12)
     assert c2[L.C_N_LANES] == 1 and c2[L.C_LANE_IMU] == 1
-    ekf, sel = new_ekf({"EK3_IMU_MASK": 2})
+    ekf, sel = new_ekf(Params({"EK3_IMU_MASK": 2}))
     assert ekf.shape == (1, L.N_EKF) and ekf[0, L.IMU_INDEX] == 1.0
-    assert build_ekf_config({"GPS1_DELAY_MS": 0, "GPS_DELAY_MS": 150})[L.C_GPS_DELAY] == 0.15
+    # GPS_DELAY_MS is the older name of GPS1_DELAY_MS (an alias)
+    delayed = Params({"GPS1_DELAY_MS": 0, "GPS_DELAY_MS": 150})
+    assert build_ekf_config(delayed)[L.C_GPS_DELAY] == 0.15
     with pytest.raises(ValueError):
-        build_ekf_config({"GPS1_DELAY_MS": 1000})
+        build_ekf_config(Params({"GPS1_DELAY_MS": 1000}))
     assert c[L.C_TAU_OUTPUT] == pytest.approx(0.25)  # EK3_TAU_OUTPUT 25 cs
-    assert build_ekf_config({"EK3_TAU_OUTPUT": 5})[L.C_TAU_OUTPUT] == pytest.approx(0.1)
+    assert build_ekf_config(Params({"EK3_TAU_OUTPUT": 10}))[L.C_TAU_OUTPUT] == pytest.approx(0.1)
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -238,7 +248,7 @@ def test_sparse_h_update_matches_filterpy(seed, n):
 
 
 def test_alignment_at_rest_recovers_tilt_and_yaw():
-    params = {}
+    params = Params()
     cfg = build_ekf_config(params)
     ekf, sel = new_ekf(params)
     roll, pitch, yaw = math.radians(5.0), math.radians(-3.0), math.radians(100.0)
@@ -247,7 +257,7 @@ def test_alignment_at_rest_recovers_tilt_and_yaw():
     r = e[L.R00 : L.R22 + 1].reshape(3, 3)
     dang = np.zeros((2, 3))
     dvel = np.tile(r.T @ np.array([0.0, 0.0, -G]) * DT, (2, 1))
-    mag = r.T @ earth_field_ned(12.5, -66.0, 0.58)
+    mag = r.T @ earth_field(params)
     gps = np.zeros(3)
     for k in range(400):
         ekf_update(
@@ -268,6 +278,7 @@ def test_alignment_at_rest_recovers_tilt_and_yaw():
 
 
 def _run(flight, params):
+    params = Params(params)
     cfg = build_ekf_config(params)
     ekf, sel = new_ekf(params)
     out, lanes_pos = fly_ekf(flight, ekf, sel, cfg)
@@ -408,7 +419,7 @@ def test_imu_stop_switches_primary_at_once():
 
 def _resting_lane(params: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(lane row, cfg): aligned, level, at rest at the origin, empty ring buffer."""
-    cfg = build_ekf_config(params or {})
+    cfg = build_ekf_config(Params(params))
     e = _lane(params)
     e[L.ALIGNED] = 1.0
     e[L.IMU_OK] = 1.0

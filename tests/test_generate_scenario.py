@@ -135,6 +135,9 @@ def test_tampered_mission_is_detected():
     ({"ranges": {"SIM_WIND_SPD": (5, 1)}}, "range of SIM_WIND_SPD"),
     ({"ranges": {"SIM_WIND_SPEED": (0, 1)}}, "unknown parameter"),
     ({"params": {"SIM_WIND_SPD": 1}}, "both drawn"),
+    # parameters tlm does not model are refused, drawn or fixed (they would change nothing)
+    ({"ranges": {"SIM_BAR2_RND": (0, 0.2)}}, "SIM_BAR2_RND is not modelled"),
+    ({"params": {"SIM_BARO_DISABLE": 1}}, "SIM_BARO_DISABLE is not modelled"),
     ({"profile": "old"}, "unknown profile"),
     ({"hold_s": (0, 0)}, "hold_s"),
 ])
@@ -142,3 +145,12 @@ def test_bad_settings_are_one_line_errors(kwargs, needle):
     with pytest.raises(GenerateError, match=needle) as err:
         ScenarioConfig(**kwargs)
     assert "\n" not in str(err.value)
+
+
+def test_default_draws_are_modelled_parameters():
+    """Every parameter the sampler draws by default changes a flight (SIM_BAR2_RND, read by
+    nothing, was drawn for every flight)."""
+    from tlm_sim.params import is_modelled
+
+    assert all(is_modelled(n) for n in DEFAULT_RANGES)
+    ScenarioConfig()  # the default configuration validates

@@ -360,7 +360,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seed of the flight and of its fault sequence (default 1)")
     d.set_defaults(func=cmd_demo)
 
-    from tlm_process import logcmd
+    from tlm_process import logcmd, paramscmd
     from tlm_process.crosscheck import command as crosscheck_cmd
     from tlm_process.evaluate import command as evaluate_cmd
     from tlm_process.generate import command as generate_cmd
@@ -371,6 +371,7 @@ def build_parser() -> argparse.ArgumentParser:
     process_cmd.add_parser(sub)
     evaluate_cmd.add_parser(sub)
     crosscheck_cmd.add_parser(sub)
+    paramscmd.add_parser(sub)
     return ap
 
 
@@ -389,6 +390,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
     ap = build_parser()
     args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
+    from tlm_process import paramscmd
     from tlm_process.generate.errors import GenerateError
     from tlm_process.logcmd import LogError
     from tlm_sim.faults import FaultScheduleError
@@ -396,6 +398,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from tlm_sim.params import ParamError
 
     _show_compile_notices()
+    paramscmd.show_param_warnings()
     if getattr(args, "seed", 0) is not None and getattr(args, "seed", 0) < 0:
         print("tlm: error: --seed must be >= 0", file=sys.stderr)
         return 2

@@ -35,7 +35,7 @@ from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.mission import Mission, builtin_mission
-from tlm_sim.params import Params
+from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng
 from tlm_sim.sensors import layout as S
@@ -45,8 +45,10 @@ from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas, vibe
 from tlm_sim.sensors.rc import rc_init, rc_update
 
-PHYSICS_DT_US = 833  # floor(1e6 / SIM_RATE_HZ) with SIM_RATE_HZ 1200
-LOOP_DT_US = 2500  # SCHED_LOOP_RATE 400 Hz
+# the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
+# SCHED_LOOP_RATE are pinned to them: tlm_sim.params refuses any other value)
+PHYSICS_DT_US = int(1e6 // PARAM_INFO["SIM_RATE_HZ"].min)  # 833 us at 1200 Hz, as SITL
+LOOP_DT_US = round(1e6 / PARAM_INFO["SCHED_LOOP_RATE"].min)  # 2500 us at 400 Hz
 GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.UTC)
 BOOT_UTC = _dt.datetime(2025, 10, 24, 12, 0, 0, tzinfo=_dt.UTC)  # simulated boot time (UTC)
 LEAP_SECONDS = 18
@@ -299,9 +301,9 @@ def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_ti
     if r >= 0:
         b = bufs[L.K_GPA]
         b[r, 1] = 0.0
-        b[r, 2] = 2.0  # VDop
-        b[r, 3] = 0.3  # HAcc (SIM_GPS1_ACC)
-        b[r, 4] = 0.3  # VAcc
+        b[r, 2] = scfg[S.C_GPS_VDOP]
+        b[r, 3] = scfg[S.C_GPS_ACC]  # HAcc
+        b[r, 4] = scfg[S.C_GPS_ACC]  # VAcc
         b[r, 5] = 0.0  # SAcc
         b[r, 6] = 0.0  # YAcc
         b[r, 7] = 1.0  # VV
@@ -523,7 +525,7 @@ def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9))
 
 
-def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(sensor, frame, control, ekf) configuration arrays for a parameter set."""
     return build_sensor_config(p), build_frame(p), build_control_config(p), build_ekf_config(p)
 
@@ -590,11 +592,10 @@ def mission_path(mission: Mission, g: np.ndarray) -> np.ndarray:
     return path
 
 
-def max_duration_s(mission: Mission, params: Mapping[str, float]) -> float:
+def max_duration_s(mission: Mission, params: Params) -> float:
     """Upper bound on a flight's simulated time (sizes the log buffers; the flight ends at
     disarm + 2 s long before): slow cruise along the path, return, landing, margins."""
-    return float(params.get("TLM_ARM_TIME", 10.0) + 120.0 + 2.5 * mission.path_length_3d_m / 3.0
-                 + 600.0)
+    return float(params["TLM_ARM_TIME"] + 120.0 + 2.5 * mission.path_length_3d_m / 3.0 + 600.0)
 
 
 def end_reason(disarm_time_s: float, err_rows: np.ndarray) -> str:
@@ -635,7 +636,6 @@ def fly(
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
 
-    ensure_compiled()  # a cold numba cache is compiled by several processes at once
     p = profile_params(profile, params)
     duration = max_duration_s(mission, p)
     schedule = faults if isinstance(faults, FaultSchedule) else None
@@ -644,12 +644,14 @@ def fly(
         changes: list[Any] = list(schedule.param_changes())
     else:
         changes = list(faults or ())
+        _check_changes(p, changes)  # a bad change fails before any compiling
+    ensure_compiled()  # a cold numba cache is compiled by several processes at once
     scfg, frame, g, ecfg = _configs(p)
     sched = build_schedule(p, changes, (scfg, frame, g, ecfg))
     applied = np.full(len(changes), -1.0)
     home = np.array(mission.home, dtype=np.float64)
     x = np.zeros(X.N_STATE)
-    init_state(x, frame, math.radians(p.get("SIM_OPOS_HDG", 353.0)))
+    init_state(x, frame, math.radians(p["SIM_OPOS_HDG"]))
     ekf, sel = new_ekf(p)
     c = np.zeros(C.N_CONTROL_STATE)
     c[C.THR_HOVER] = g[C.G_MOT_HOVER]
@@ -682,13 +684,14 @@ def fly(
                                  bufs["ERR"][:int(counts[L.K_ERR])]),
         "max_duration_s": duration,
         "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
+        "unmodelled_params": p.unmodelled(),
     }
     log = FlightLog.from_buffers(
         {n: bufs[n] for n in L.LOG_ORDER},
         {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
         params=p, mission=mission, faults=[], meta=meta,
     )
-    mu = p.get("TLM_SAT_JITTER", 0.0)
+    mu = p["TLM_SAT_JITTER"]
     if mu > 0.0 and log.n_rows("GPS"):
         gps = log.tables["GPS"]
         gps["NSats"] = jitter_nsats(gps["Status"].to_numpy(), int(seed), mu).astype(
@@ -699,6 +702,15 @@ def fly(
         log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
                                    t_last)
     return log
+
+
+def _check_changes(params: Params, changes: Sequence[Any]) -> None:
+    """Validate raw ``(time_s, NAME, value)`` changes as :func:`build_schedule` applies them
+    (names, values, parameters tlm models), without building configurations."""
+    current = params
+    for ch in changes:
+        _, _, name, value = _as_change(ch)
+        current = current.updated({name: value})
 
 
 def _change_record(ch: Any, applied_us: float) -> dict[str, Any]:

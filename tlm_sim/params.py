@@ -34,6 +34,7 @@ import functools
 import math
 import numbers
 import re
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,6 +53,11 @@ __all__ = [
     "ParamInfo",
     "Params",
     "UnknownParamError",
+    "UnmodelledParamError",
+    "UnmodelledParamWarning",
+    "earth_field",
+    "is_modelled",
+    "require_params",
 ]
 
 #: The default parameter file (ArduCopter SITL ``copter.parm`` + the reference params on top).
@@ -72,13 +78,25 @@ class UnknownParamError(ParamError, KeyError):
     __str__ = ValueError.__str__  # KeyError would print the message quoted
 
 
+class UnmodelledParamError(ParamError):
+    """An explicit value for a parameter that tlm does not model (a flight would ignore it)."""
+
+
+class UnmodelledParamWarning(UserWarning):
+    """A loaded parameter set (``.parm`` file, a log's PARM) changes parameters tlm does not
+    model: they are carried (written back to logs) but change nothing in a flight."""
+
+
 @dataclass(frozen=True, slots=True)
 class ParamInfo:
     """Unit, accepted range and meaning of one parameter.
 
     ``unit`` uses ArduPilot's unit names (``cm/s``, ``cdeg``, ``Hz``, ``""`` for none);
-    ``min``/``max`` bound the accepted values (inclusive); ``integer`` marks enums, counts and
-    bit masks, which must be whole numbers.
+    ``min``/``max`` bound the accepted values (inclusive; ``min == max`` pins a parameter to
+    the one value tlm simulates); ``integer`` marks enums, counts and bit masks, which must be
+    whole numbers. ``modelled``: some part of the simulation reads the parameter and a legal
+    change of it changes the flight. A parameter that is not modelled is refused when it is
+    set explicitly and only carried (and reported) when a whole parameter set is loaded.
     """
 
     unit: str
@@ -86,6 +104,12 @@ class ParamInfo:
     max: float
     description: str
     integer: bool = False
+    modelled: bool = True
+
+    @property
+    def pinned(self) -> bool:
+        """True when the range holds a single value (tlm simulates only that one)."""
+        return self.min == self.max
 
 
 # --------------------------------------------------------------------------------------------
@@ -214,88 +238,105 @@ _U32 = float(2**32 - 1)
 
 
 def _add(names: str | Iterable[str], unit: str, lo: float, hi: float, desc: str,
-         integer: bool = False) -> None:
+         integer: bool = False, *, modelled: bool = True) -> None:
+    """Declare parameters (once each): unit, accepted range, meaning, and whether tlm models
+    them (``modelled=False``: ArduPilot has it, tlm carries it from parameter files only)."""
     for name in [names] if isinstance(names, str) else names:
         if name in _INFO:
             raise AssertionError(f"duplicate PARAM_INFO entry {name}")
-        _INFO[name] = ParamInfo(unit, float(lo), float(hi), desc, integer)
+        _INFO[name] = ParamInfo(unit, float(lo), float(hi), desc, integer, modelled)
 
 
-def _flag(names: str | Iterable[str], desc: str) -> None:
-    _add(names, "", 0, 1, desc, integer=True)
+def _flag(names: str | Iterable[str], desc: str, *, modelled: bool = True) -> None:
+    _add(names, "", 0, 1, desc, integer=True, modelled=modelled)
 
 
 # ---- SIM_*: physics, sensors, faults (libraries/SITL/SITL.cpp, §1, §2.1) --------------------
-_add("SIM_RATE_HZ", "Hz", 100, 10000, "physics rate (§1.9)", True)
-_add("SIM_SPEEDUP", "", 0, 10000, "SITL wall-clock speed-up (no effect in tlm)")
-_add("SIM_IMU_COUNT", "", 0, 3, "number of simulated IMUs (§2.3)", True)
-_add("SIM_BARO_COUNT", "", 0, 3, "number of simulated barometers (§2.5)", True)
-_add("SIM_GPS1_TYPE", "", 0, 20, "GPS 1 protocol: 0 none, 1 u-blox (§2.2)", True)
+_add("SIM_RATE_HZ", "Hz", 1200, 1200,
+     "physics rate (§1.9); tlm's physics runs at 1200 Hz only (833 us ticks)", True)
+_add("SIM_SPEEDUP", "", 0, 10000, "SITL wall-clock speed-up (no effect in tlm)", modelled=False)
+_add("SIM_IMU_COUNT", "", 0, 3, "number of simulated IMUs (§2.3)", True, modelled=False)
+_add("SIM_BARO_COUNT", "", 0, 3, "number of simulated barometers (§2.5)", True, modelled=False)
+_add("SIM_GPS1_TYPE", "", 0, 20, "GPS 1 protocol: 0 none, 1 u-blox (§2.2)", True, modelled=False)
 _flag("SIM_GPS1_ENABLE", "GPS 1 enabled; 0 = streams 'no fix', 3 sats (GPS fault, §2.2)")
-_flag("SIM_GPS2_ENABLE", "GPS 2 enabled; 0 = sends nothing (§2.2)")
+_flag("SIM_GPS2_ENABLE", "GPS 2 enabled; 0 = sends nothing (§2.2)", modelled=False)
 _add("SIM_GPS1_HZ", "Hz", 1, 100, "GPS 1 update rate (§2.2)", True)
 _add("SIM_GPS1_LAG_MS", "ms", 0, 2000, "GPS 1 output delay (§2.2)", True)
 _add("SIM_GPS1_NUMSATS", "", 0, 50, "satellites GPS 1 reports while locked (§2.2)", True)
 _add("SIM_GPS1_ACC", "m", 0, 100, "horizontal/vertical accuracy GPS 1 reports (§2.2)")
 _add("SIM_GPS1_NOISE", "m", 0, 100, "amplitude of a slow sine on GPS altitude (§2.2)")
-_add("SIM_GPS1_DRFTALT", "m", 0, 1000, "amplitude of a very slow GPS altitude drift (§2.2)")
+_add("SIM_GPS1_DRFTALT", "m", 0, 1000, "amplitude of a very slow GPS altitude drift (§2.2)",
+     modelled=False)
 _add(["SIM_GPS1_GLTCH_X", "SIM_GPS1_GLTCH_Y"], "deg", -10, 10,
-     "GPS glitch offset added to lat (X) / lon (Y), in degrees (§2.2)")
-_add("SIM_GPS1_GLTCH_Z", "m", -10000, 10000, "GPS glitch offset added to altitude (§2.2)")
+     "GPS glitch offset added to lat (X) / lon (Y), in degrees (§2.2)", modelled=False)
+_add("SIM_GPS1_GLTCH_Z", "m", -10000, 10000, "GPS glitch offset added to altitude (§2.2)",
+     modelled=False)
 _add([f"SIM_GPS1_VERR_{a}" for a in _XYZ], "m/s", -100, 100,
      "GPS NED velocity error amplitude, uniform (§2.2)")
-_add("SIM_GPS1_LCKTIME", "s", 0, 3600, "time before GPS 1 first lock (§2.2)")
-_add("SIM_GPS1_BYTELOS", "%", 0, 100, "GPS 1 serial byte loss (§2.1)")
-_add([f"SIM_GPS1_POS_{a}" for a in _XYZ], "m", -10, 10, "GPS 1 antenna offset, body FRD (§2.2)")
-_add("SIM_GPS1_ALT_OFS", "m", -10000, 10000, "GPS 1 altitude offset (§2.2)")
-_flag("SIM_GPS1_JAM", "GPS 1 jamming simulation (§2.2)")
+_add("SIM_GPS1_LCKTIME", "s", 0, 3600, "time before GPS 1 first lock (§2.2)", modelled=False)
+_add("SIM_GPS1_BYTELOS", "%", 0, 100, "GPS 1 serial byte loss (§2.1)", modelled=False)
+_add([f"SIM_GPS1_POS_{a}" for a in _XYZ], "m", -10, 10, "GPS 1 antenna offset, body FRD (§2.2)",
+     modelled=False)
+_add("SIM_GPS1_ALT_OFS", "m", -10000, 10000, "GPS 1 altitude offset (§2.2)", modelled=False)
+_flag("SIM_GPS1_JAM", "GPS 1 jamming simulation (§2.2)", modelled=False)
 for _i in (1, 2, 3):
     _add(f"SIM_ACC{_i}_RND", "m/s/s", 0, 100,
-         f"IMU {_i} accel vibration amplitude, only with SIM_VIB_* (§2.3)")
+         f"IMU {_i} accel vibration amplitude, only with SIM_VIB_* (§2.3)", modelled=_i < 3)
     _add(f"SIM_GYR{_i}_RND", "deg/s", 0, 1000,
-         f"IMU {_i} gyro noise amplitude at full throttle (§2.3)")
-    _add([f"SIM_ACC{_i}_BIAS_{a}" for a in _XYZ], "m/s/s", -50, 50, f"IMU {_i} accel bias (§2.3)")
-    _add([f"SIM_GYR{_i}_BIAS_{a}" for a in _XYZ], "rad/s", -10, 10, f"IMU {_i} gyro bias (§2.3)")
+         f"IMU {_i} gyro noise amplitude at full throttle (§2.3)", modelled=_i < 3)
+    _add([f"SIM_ACC{_i}_BIAS_{a}" for a in _XYZ], "m/s/s", -50, 50, f"IMU {_i} accel bias (§2.3)",
+         modelled=_i < 3)
+    _add([f"SIM_GYR{_i}_BIAS_{a}" for a in _XYZ], "rad/s", -10, 10, f"IMU {_i} gyro bias (§2.3)",
+         modelled=_i < 3)
     _add([f"SIM_ACC{_i}_SCAL_{a}" for a in _XYZ], "", -10, 10,
-         f"IMU {_i} accel scale, reading divided by it if non-zero (§2.3)")
+         f"IMU {_i} accel scale, reading divided by it if non-zero (§2.3)", modelled=False)
     _add([f"SIM_GYR{_i}_SCALE_{a}" for a in _XYZ], "%", -1000, 1000,
-         f"IMU {_i} gyro scale error, reading x (1 + s/100) (§2.3)")
+         f"IMU {_i} gyro scale error, reading x (1 + s/100) (§2.3)", modelled=False)
     _add(f"SIM_ACCEL{_i}_FAIL", "m/s/s", -200, 200,
-         f"if non-zero, IMU {_i} accel reads this value on all axes (accel fault, §2.3)")
+         f"if non-zero, IMU {_i} accel reads this value on all axes (accel fault, §2.3)",
+         modelled=_i < 3)
 _add(["SIM_ACC_FAIL_MSK", "SIM_GYR_FAIL_MSK"], "", 0, 255,
-     "bit mask of accel / gyro instances whose samples stop (§2.3)", True)
-_add([f"SIM_ACC_TRIM_{a}" for a in _XYZ], "rad", -math.pi, math.pi, "accel mounting trim (§2.3)")
+     "bit mask of accel / gyro instances whose samples stop (§2.3)", True, modelled=False)
+_add([f"SIM_ACC_TRIM_{a}" for a in _XYZ], "rad", -math.pi, math.pi, "accel mounting trim (§2.3)",
+     modelled=False)
 _add("SIM_DRIFT_SPEED", "deg/s/min", -10, 10, "gyro drift rate, triangle wave (§2.3)")
 _add("SIM_DRIFT_TIME", "min", 0, 10000, "half period of the gyro drift triangle (§2.3)")
 _add("SIM_INS_THR_MIN", "", 0, 1, "throttle above which 'motors on' IMU noise is added (§2.3)")
-_add([f"SIM_VIB_FREQ_{a}" for a in _XYZ], "Hz", 0, 1000, "fixed vibration frequency (§2.3)")
+_add([f"SIM_VIB_FREQ_{a}" for a in _XYZ], "Hz", 0, 1000, "fixed vibration frequency (§2.3)",
+     modelled=False)
 _add("SIM_VIB_MOT_MAX", "Hz", 0, 1000, "motor vibration frequency at full command (§2.3)")
-_add("SIM_VIB_MOT_MULT", "", 0, 100, "scale of motor vibration amplitude (§2.3)")
+_add("SIM_VIB_MOT_MULT", "", 0, 100, "scale of motor vibration amplitude (§2.3)", modelled=False)
 _add(["SIM_VIB_MOT_HMNC", "SIM_VIB_MOT_MASK"], "", 0, 255,
-     "motor vibration harmonics / motor mask, bit masks (§2.3)", True)
+     "motor vibration harmonics / motor mask, bit masks (§2.3)", True, modelled=False)
 for _b in ("BARO", "BAR2", "BAR3"):
-    _add(f"SIM_{_b}_RND", "m", 0, 100, f"{_b} altitude noise amplitude, uniform (§2.5)")
-    _add(f"SIM_{_b}_DRIFT", "m/s", -10, 10, f"{_b} altitude drift rate (§2.5)")
-    _add(f"SIM_{_b}_GLITCH", "m", -10000, 10000, f"{_b} altitude offset (§2.5)")
-    _flag([f"SIM_{_b}_DISABLE", f"SIM_{_b}_FREEZE"], f"{_b} disabled / frozen (§2.5)")
-    _add(f"SIM_{_b}_DELAY", "ms", 0, 1000, f"{_b} delay (§2.5)", True)
-_add("SIM_TEMP_START", "degC", -40, 100, "ambient temperature at start (§2.5)")
-_add("SIM_TEMP_BRD_OFF", "degC", -50, 100, "board temperature offset over ambient (§2.5)")
-_add("SIM_TEMP_TCONST", "s", 1, 10000, "board warm-up time constant (§2.5)")
-_add(["SIM_IMUT_START", "SIM_IMUT_END"], "degC", -40, 100, "IMU temperature start / end (§2.3)")
-_add("SIM_IMUT_TCONST", "s", 1, 10000, "IMU warm-up time constant (§2.3)")
+    _add(f"SIM_{_b}_RND", "m", 0, 100, f"{_b} altitude noise amplitude, uniform (§2.5)",
+         modelled=_b == "BARO")
+    _add(f"SIM_{_b}_DRIFT", "m/s", -10, 10, f"{_b} altitude drift rate (§2.5)", modelled=False)
+    _add(f"SIM_{_b}_GLITCH", "m", -10000, 10000, f"{_b} altitude offset (§2.5)",
+         modelled=_b == "BARO")
+    _flag([f"SIM_{_b}_DISABLE", f"SIM_{_b}_FREEZE"], f"{_b} disabled / frozen (§2.5)",
+          modelled=False)
+    _add(f"SIM_{_b}_DELAY", "ms", 0, 1000, f"{_b} delay (§2.5)", True, modelled=False)
+_add("SIM_TEMP_START", "degC", -40, 100, "ambient temperature at start (§2.5)", modelled=False)
+_add("SIM_TEMP_BRD_OFF", "degC", -50, 100, "board temperature offset over ambient (§2.5)",
+     modelled=False)
+_add("SIM_TEMP_TCONST", "s", 1, 10000, "board warm-up time constant (§2.5)", modelled=False)
+_add(["SIM_IMUT_START", "SIM_IMUT_END"], "degC", -40, 100, "IMU temperature start / end (§2.3)",
+     modelled=False)
+_add("SIM_IMUT_TCONST", "s", 1, 10000, "IMU warm-up time constant (§2.3)", modelled=False)
 _add("SIM_MAG_RND", "mGauss", 0, 10000, "compass noise amplitude, uniform (§2.6)")
 _add([f"SIM_MAG_MOT_{a}" for a in _XYZ], "mGauss/A", -1000, 1000,
-     "motor current compass interference (§1.13)")
-_add("SIM_MAG_DELAY", "ms", 0, 1000, "compass delay (§2.6)", True)
+     "motor current compass interference (§1.13)", modelled=False)
+_add("SIM_MAG_DELAY", "ms", 0, 1000, "compass delay (§2.6)", True, modelled=False)
 _add([f"SIM_MAG{_i}_FAIL" for _i in (1, 2, 3)], "", 0, 2,
-     "compass fault: 0 ok, 1 no data, 2 frozen (§2.6)", True)
+     "compass fault: 0 ok, 1 no data, 2 frozen (§2.6)", True, modelled=False)
 _add([f"SIM_MAG_ALY_{a}" for a in _XYZ], "mGauss", -10000, 10000,
-     "magnetic anomaly at ground level, NED (§1.13)")
-_add("SIM_MAG_ALY_HGT", "m", 0.001, 1000, "decay height of the magnetic anomaly (§1.13)")
+     "magnetic anomaly at ground level, NED (§1.13)", modelled=False)
+_add("SIM_MAG_ALY_HGT", "m", 0.001, 1000, "decay height of the magnetic anomaly (§1.13)",
+     modelled=False)
 _add("SIM_RC_FAIL", "", 0, 2,
      "RC fault: 0 none, 1 no pulses, 2 neutral sticks + throttle 950 (RC fault, §2.7)", True)
-_add("SIM_RC_CHANCOUNT", "", 1, 32, "simulated RC channels (§2.1)", True)
+_add("SIM_RC_CHANCOUNT", "", 1, 32, "simulated RC channels (§2.1)", True, modelled=False)
 _add("SIM_ENGINE_MUL", "", 0, 2,
      "PWM above 1000 of the SIM_ENGINE_FAIL motors is scaled by this (engine fault, §1.15)")
 _add("SIM_ENGINE_FAIL", "", 0, _U32, "bit mask of motors SIM_ENGINE_MUL acts on (§1.15)", True)
@@ -309,15 +350,17 @@ _add("SIM_WIND_DIR_Z", "deg", -90, 90, "vertical wind direction, 90 = updraft (�
 _add("SIM_WIND_T", "", 0, 2, "wind height profile: 0 square root, 1 none, 2 linear (§1.10)", True)
 _add("SIM_WIND_T_ALT", "m", 0.01, 10000, "height of full wind strength (§1.10)")
 _add("SIM_WIND_T_COEF", "1/s", -10, 10, "linear wind profile coefficient (§1.10)")
-_add([f"SIM_SHOVE_{a}" for a in _XYZ], "m/s/s", -1000, 1000, "extra body acceleration (§1.1)")
+_add([f"SIM_SHOVE_{a}" for a in _XYZ], "m/s/s", -1000, 1000, "extra body acceleration (§1.1)",
+     modelled=False)
 _add([f"SIM_TWIST_{a}" for a in _XYZ], "rad/s/s", -1000, 1000,
-     "extra angular acceleration (§1.1)")
+     "extra angular acceleration (§1.1)", modelled=False)
 _add(["SIM_SHOVE_TIME", "SIM_TWIST_TIME"], "ms", 0, 600000, "shove / twist duration (§1.1)",
-     True)
-_flag("SIM_TERRAIN", "use the terrain database, flat if unavailable (§2.1)")
-_add("SIM_GND_BEHAV", "", -1, 3, "ground behaviour, -1 = model default (§1.9.1)", True)
-_add("SIM_OPOS_LAT", "deg", -90, 90, "start latitude (§1.12)")
-_add("SIM_OPOS_LNG", "deg", -180, 180, "start longitude (§1.12)")
+     True, modelled=False)
+_flag("SIM_TERRAIN", "use the terrain database, flat if unavailable (§2.1)", modelled=False)
+_add("SIM_GND_BEHAV", "", -1, 3, "ground behaviour, -1 = model default (§1.9.1)", True,
+     modelled=False)
+_add("SIM_OPOS_LAT", "deg", -90, 90, "start latitude (§1.12)", modelled=False)
+_add("SIM_OPOS_LNG", "deg", -180, 180, "start longitude (§1.12)", modelled=False)
 _add("SIM_OPOS_ALT", "m", -500, 10000, "start altitude AMSL (§1.12)")
 _add("SIM_OPOS_HDG", "deg", -360, 360, "start heading (§1.12)")
 
@@ -326,16 +369,19 @@ _add(["ATC_ANG_RLL_P", "ATC_ANG_PIT_P", "ATC_ANG_YAW_P"], "1/s", 0, 50,
      "angle controller P gain (§4.2)")
 _add(["ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX"], "cdeg/s/s", 0, 1e6,
      "max angular acceleration, 0 = no limit/no input shaping (§4.2)")
-_flag("ATC_RATE_FF_ENAB", "rate feed-forward enabled (§4.2)")
+_flag("ATC_RATE_FF_ENAB", "rate feed-forward enabled (§4.2)", modelled=False)
 _add("ATC_INPUT_TC", "s", 0, 1, "attitude input time constant (§4.2)")
 _add("ATC_SLEW_YAW", "cdeg/s", 0, 1e5, "yaw target slew rate (§4.2)")
-_flag("ATC_ANGLE_BOOST", "throttle boost with lean angle (§4.2)")
+_flag("ATC_ANGLE_BOOST", "throttle boost with lean angle (§4.2)", modelled=False)
 _add("ATC_ANG_LIM_TC", "s", 0.01, 100, "angle limit (to maintain altitude) time constant (§4.2)")
 _add(["ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX"], "deg/s", 0, 2000,
-     "max angular rate, 0 = no limit (§4.2)")
-_add("ATC_THR_MIX_MIN", "", 0, 1, "throttle vs attitude priority, minimum (landing) (§4.2)")
-_add("ATC_THR_MIX_MAX", "", 0, 5, "throttle vs attitude priority, maximum (active flight) (§4.2)")
-_add("ATC_THR_MIX_MAN", "", 0, 10, "throttle vs attitude priority, manual flight (§4.2)")
+     "max angular rate, 0 = no limit (§4.2)", modelled=False)
+_add("ATC_THR_MIX_MIN", "", 0, 1, "throttle vs attitude priority, minimum (landing) (§4.2)",
+     modelled=False)
+_add("ATC_THR_MIX_MAX", "", 0, 5, "throttle vs attitude priority, maximum (active flight) (§4.2)",
+     modelled=False)
+_add("ATC_THR_MIX_MAN", "", 0, 10, "throttle vs attitude priority, manual flight (§4.2)",
+     modelled=False)
 for _ax in ("RLL", "PIT", "YAW"):
     _r = f"ATC_RAT_{_ax}_"
     _add(_r + "P", "", 0, 5, f"{_ax} rate PID P gain (§4.3)")
@@ -345,11 +391,14 @@ for _ax in ("RLL", "PIT", "YAW"):
     _add(_r + "FF", "", 0, 5, f"{_ax} rate PID feed-forward gain (§4.3)")
     _add([_r + "FLTT", _r + "FLTE", _r + "FLTD"], "Hz", 0, 1000,
          f"{_ax} rate PID target / error / derivative filter, 0 = off (§4.3)")
-    _add(_r + "SMAX", "", 0, 1000, f"{_ax} rate PID slew rate limit, 0 = off (§4.3)")
-    _add(_r + "PDMX", "", 0, 10, f"{_ax} rate PID P+D sum limit, 0 = off (§4.3)")
-    _add(_r + "D_FF", "", 0, 1, f"{_ax} rate PID derivative feed-forward gain (§4.3)")
+    _add(_r + "SMAX", "", 0, 1000, f"{_ax} rate PID slew rate limit, 0 = off (§4.3)",
+         modelled=False)
+    _add(_r + "PDMX", "", 0, 10, f"{_ax} rate PID P+D sum limit, 0 = off (§4.3)", modelled=False)
+    _add(_r + "D_FF", "", 0, 1, f"{_ax} rate PID derivative feed-forward gain (§4.3)",
+         modelled=False)
 _add("ANGLE_MAX", "cdeg", 1000, 8000, "max lean angle (§4.2)")
-_add("PSC_ANGLE_MAX", "deg", 0, 80, "max lean angle of the position controller, 0 = ANGLE_MAX")
+_add("PSC_ANGLE_MAX", "deg", 0, 80, "max lean angle of the position controller, 0 = ANGLE_MAX",
+     modelled=False)
 
 # ---- position control and waypoint navigation (§4.5-4.6) ------------------------------------
 _add(["PSC_POSXY_P", "PSC_POSZ_P"], "", 0, 10, "position controller P gain (§4.5)")
@@ -357,27 +406,33 @@ _add("PSC_VELXY_P", "", 0, 20, "horizontal velocity PID P gain (§4.5)")
 _add("PSC_VELXY_I", "", 0, 20, "horizontal velocity PID I gain (§4.5)")
 _add("PSC_VELXY_D", "", 0, 10, "horizontal velocity PID D gain (§4.5)")
 _add("PSC_VELXY_IMAX", "cm/s/s", 0, 10000, "horizontal velocity PID integrator limit (§4.5)")
-_add("PSC_VELXY_FF", "", 0, 10, "horizontal velocity PID feed-forward gain (§4.5)")
+_add("PSC_VELXY_FF", "", 0, 10, "horizontal velocity PID feed-forward gain (§4.5)", modelled=False)
 _add(["PSC_VELXY_FLTE", "PSC_VELXY_FLTD"], "Hz", 0, 1000,
      "horizontal velocity PID error / derivative filter (§4.5)")
 _add("PSC_VELZ_P", "", 0, 50, "vertical velocity PID P gain (§4.5)")
-_add("PSC_VELZ_I", "", 0, 50, "vertical velocity PID I gain (§4.5)")
-_add("PSC_VELZ_D", "", 0, 10, "vertical velocity PID D gain (§4.5)")
-_add("PSC_VELZ_IMAX", "cm/s/s", 0, 10000, "vertical velocity PID integrator limit (§4.5)")
-_add("PSC_VELZ_FF", "", 0, 10, "vertical velocity PID feed-forward gain (§4.5)")
+_add("PSC_VELZ_I", "", 0, 50, "vertical velocity PID I gain (§4.5)", modelled=False)
+_add("PSC_VELZ_D", "", 0, 10, "vertical velocity PID D gain (§4.5)", modelled=False)
+_add("PSC_VELZ_IMAX", "cm/s/s", 0, 10000, "vertical velocity PID integrator limit (§4.5)",
+     modelled=False)
+_add("PSC_VELZ_FF", "", 0, 10, "vertical velocity PID feed-forward gain (§4.5)", modelled=False)
 _add(["PSC_VELZ_FLTE", "PSC_VELZ_FLTD"], "Hz", 0, 1000,
-     "vertical velocity PID error / derivative filter (§4.5)")
+     "vertical velocity PID error / derivative filter (§4.5)", modelled=False)
 _add("PSC_ACCZ_P", "", 0, 5, "vertical acceleration PID P gain (§4.5)")
 _add("PSC_ACCZ_I", "", 0, 10, "vertical acceleration PID I gain (§4.5)")
-_add("PSC_ACCZ_D", "", 0, 1, "vertical acceleration PID D gain (§4.5)")
+_add("PSC_ACCZ_D", "", 0, 1, "vertical acceleration PID D gain (§4.5)", modelled=False)
 _add("PSC_ACCZ_IMAX", "d%", 0, 1000, "vertical acceleration PID integrator limit (§4.5)")
-_add("PSC_ACCZ_FF", "", 0, 10, "vertical acceleration PID feed-forward gain (§4.5)")
-_add(["PSC_ACCZ_FLTT", "PSC_ACCZ_FLTE", "PSC_ACCZ_FLTD"], "Hz", 0, 1000,
-     "vertical acceleration PID target / error / derivative filter (§4.5)")
-_add("PSC_ACCZ_SMAX", "", 0, 1000, "vertical acceleration PID slew limit, 0 = off (§4.5)")
-_add("PSC_ACCZ_PDMX", "", 0, 1000, "vertical acceleration PID P+D limit, 0 = off (§4.5)")
-_add("PSC_ACCZ_D_FF", "", 0, 1, "vertical acceleration PID derivative feed-forward (§4.5)")
-_add(["PSC_JERK_XY", "PSC_JERK_Z"], "m/s/s/s", 0.1, 1000, "position controller jerk (§4.5)")
+_add("PSC_ACCZ_FF", "", 0, 10, "vertical acceleration PID feed-forward gain (§4.5)", modelled=False)
+_add("PSC_ACCZ_FLTE", "Hz", 0, 1000, "vertical acceleration PID error filter (§4.5)")
+_add(["PSC_ACCZ_FLTT", "PSC_ACCZ_FLTD"], "Hz", 0, 1000,
+     "vertical acceleration PID target / derivative filter (§4.5)", modelled=False)
+_add("PSC_ACCZ_SMAX", "", 0, 1000, "vertical acceleration PID slew limit, 0 = off (§4.5)",
+     modelled=False)
+_add("PSC_ACCZ_PDMX", "", 0, 1000, "vertical acceleration PID P+D limit, 0 = off (§4.5)",
+     modelled=False)
+_add("PSC_ACCZ_D_FF", "", 0, 1, "vertical acceleration PID derivative feed-forward (§4.5)",
+     modelled=False)
+_add(["PSC_JERK_XY", "PSC_JERK_Z"], "m/s/s/s", 0.1, 1000, "position controller jerk (§4.5)",
+     modelled=False)
 _add("WPNAV_SPEED", "cm/s", 10, 2000, "waypoint horizontal speed (§4.6)")
 _add("WPNAV_RADIUS", "cm", 5, 1000, "waypoint reached radius (§4.6)")
 _add("WPNAV_SPEED_UP", "cm/s", 10, 1000, "waypoint climb speed (§4.6)")
@@ -385,52 +440,60 @@ _add("WPNAV_SPEED_DN", "cm/s", 10, 500, "waypoint descent speed (§4.6)")
 _add("WPNAV_ACCEL", "cm/s/s", 50, 500, "waypoint horizontal acceleration (§4.6)")
 _add("WPNAV_ACCEL_Z", "cm/s/s", 50, 500, "waypoint vertical acceleration (§4.6)")
 _add("WPNAV_JERK", "m/s/s/s", 1, 20, "waypoint jerk (§4.6)")
-_add("WPNAV_ACCEL_C", "cm/s/s", 0, 500, "waypoint corner acceleration, 0 = 2 x WPNAV_ACCEL (§4.6)")
+_add("WPNAV_ACCEL_C", "cm/s/s", 0, 500, "waypoint corner acceleration, 0 = 2 x WPNAV_ACCEL (§4.6)",
+     modelled=False)
 _add("WP_YAW_BEHAVIOR", "", 0, 3,
      "0 never change yaw, 1 face next wp, 2 face next wp except RTL, 3 along course (§3.5)",
-     True)
-_add("PILOT_SPEED_UP", "cm/s", 10, 1000, "pilot max climb speed; position controller default")
-_add("PILOT_SPEED_DN", "cm/s", 0, 500, "pilot max descent speed, 0 = PILOT_SPEED_UP")
-_add("PILOT_ACCEL_Z", "cm/s/s", 50, 500, "pilot vertical acceleration")
+     True, modelled=False)
+_add("PILOT_SPEED_UP", "cm/s", 10, 1000, "pilot max climb speed; position controller default",
+     modelled=False)
+_add("PILOT_SPEED_DN", "cm/s", 0, 500, "pilot max descent speed, 0 = PILOT_SPEED_UP",
+     modelled=False)
+_add("PILOT_ACCEL_Z", "cm/s/s", 50, 500, "pilot vertical acceleration", modelled=False)
 
 # ---- RTL, LAND, failsafes, arming (§3.1-3.7) --------------------------------------------------
 _add("RTL_ALT", "cm", 30, 300000, "RTL return altitude above home (§3.5)")
-_add("RTL_ALT_FINAL", "cm", -1, 1000, "RTL final altitude, 0 = land (§3.5)")
+_add("RTL_ALT_FINAL", "cm", -1, 1000, "RTL final altitude, 0 = land (§3.5)", modelled=False)
 _add("RTL_CLIMB_MIN", "cm", 0, 3000, "RTL minimum climb before return (§3.5)")
 _add("RTL_CONE_SLOPE", "", 0, 10, "RTL cone slope, 0 = off, min effective 0.5 (§3.5)")
 _add("RTL_SPEED", "cm/s", 0, 2000, "RTL return speed, 0 = WPNAV_SPEED (§3.5)")
 _add("RTL_LOIT_TIME", "ms", 0, 60000, "RTL loiter time above home (§3.5)")
-_add("RTL_ALT_TYPE", "", 0, 1, "RTL altitude: 0 relative to home, 1 terrain (§3.5)", True)
-_add("RTL_OPTIONS", "", 0, _U32, "RTL option bits (§3.5)", True)
+_add("RTL_ALT_TYPE", "", 0, 1, "RTL altitude: 0 relative to home, 1 terrain (§3.5)", True,
+     modelled=False)
+_add("RTL_OPTIONS", "", 0, _U32, "RTL option bits (§3.5)", True, modelled=False)
 _add("LAND_SPEED", "cm/s", 30, 200, "final descent speed (§3.5)")
 _add("LAND_SPEED_HIGH", "cm/s", 0, 2500, "descent speed above LAND_ALT_LOW, 0 = WPNAV_SPEED_DN")
 _add("LAND_ALT_LOW", "cm", 100, 10000, "altitude where descent slows to LAND_SPEED (§3.5)")
-_flag("LAND_REPOSITION", "pilot may reposition during landing (§3.5)")
-_add("DISARM_DELAY", "s", 0, 127, "auto-disarm delay after landing (§3.5)", True)
+_flag("LAND_REPOSITION", "pilot may reposition during landing (§3.5)", modelled=False)
+_add("DISARM_DELAY", "s", 0, 127, "auto-disarm delay after landing (§3.5)", True, modelled=False)
 _add("FS_THR_ENABLE", "", 0, 7,
      "radio failsafe action: 0 off, 1 RTL, 3 Land, 4/5 SmartRTL, 6 DO_LAND_START, 7 Brake (§3.1)",
      True)
-_add("FS_THR_VALUE", "PWM", 910, 1100, "radio failsafe throttle PWM threshold (§3.1)")
-_add("FS_OPTIONS", "", 0, _U32, "failsafe option bits (§3.1)", True)
+_add("FS_THR_VALUE", "PWM", 910, 1100, "radio failsafe throttle PWM threshold (§3.1)",
+     modelled=False)
+_add("FS_OPTIONS", "", 0, _U32, "failsafe option bits (§3.1)", True, modelled=False)
 _add("RC_FS_TIMEOUT", "s", 0.1, 10, "radio failsafe timeout without RC frames (§3.1)")
 _add("FS_EKF_THRESH", "", 0, 10, "EKF failsafe variance threshold, 0 = check disabled (§3.2)")
 _add("FS_EKF_ACTION", "", 0, 3,
      "EKF failsafe action: 0 report, 1 Land, 2 AltHold, 3 Land always (§3.2)", True)
 _add("FS_EKF_FILT", "Hz", 0, 100, "EKF failsafe innovation filter (§3.2)")
-_add("FS_DR_ENABLE", "", 0, 6, "dead-reckoning failsafe action (§3.3)", True)
-_add("FS_DR_TIMEOUT", "s", 0, 120, "dead-reckoning failsafe timeout (§3.3)", True)
-_add("FS_GCS_ENABLE", "", 0, 7, "GCS failsafe action", True)
-_add("FS_GCS_TIMEOUT", "s", 0, 120, "GCS failsafe timeout")
+_add("FS_DR_ENABLE", "", 0, 6, "dead-reckoning failsafe action (§3.3)", True, modelled=False)
+_add("FS_DR_TIMEOUT", "s", 0, 120, "dead-reckoning failsafe timeout (§3.3)", True, modelled=False)
+_add("FS_GCS_ENABLE", "", 0, 7, "GCS failsafe action", True, modelled=False)
+_add("FS_GCS_TIMEOUT", "s", 0, 120, "GCS failsafe timeout", modelled=False)
 _flag("FS_CRASH_CHECK", "crash check disarms (§3.6)")
 _flag("FS_VIBE_ENABLE", "vibration failsafe (§3.6)")
-_add([f"FLTMODE{_i}" for _i in range(1, 7)], "", 0, 28, "flight mode of switch slot (§2.1)", True)
+_add([f"FLTMODE{_i}" for _i in range(1, 7)], "", 0, 28, "flight mode of switch slot (§2.1)", True,
+     modelled=False)
 _add("FRAME_CLASS", "", 1, 1, "frame class; tlm models only 1 = quad (§1.2)", True)
 _add("FRAME_TYPE", "", 0, 0, "frame type; tlm models only 0 = plus (§1.2)", True)
-_add("SCHED_LOOP_RATE", "Hz", 50, 2000, "main loop rate (§4.1)", True)
-_add("GPS_HDOP_GOOD", "", 100, 900, "HDOP x 100 below which GPS is good enough to arm", True)
+_add("SCHED_LOOP_RATE", "Hz", 400, 400, "main loop rate (§4.1); tlm runs it at 400 Hz only",
+     True)
+_add("GPS_HDOP_GOOD", "", 100, 900, "HDOP x 100 below which GPS is good enough to arm", True,
+     modelled=False)
 for _i in range(1, 9):
     _add([f"RC{_i}_MIN", f"RC{_i}_TRIM", f"RC{_i}_MAX"], "PWM", 800, 2200,
-         f"RC channel {_i} min / trim / max (§2.1)")
+         f"RC channel {_i} min / trim / max (§2.1)", modelled=False)
 
 # ---- motors and mixer (AP_Motors*, §4.4) -----------------------------------------------------
 _add("MOT_THST_EXPO", "", -1, 1, "thrust curve expo (§4.4)")
@@ -441,8 +504,10 @@ _add(["MOT_PWM_MIN", "MOT_PWM_MAX"], "PWM", 0, 2500, "motor PWM range, 0 = RC3 r
 _add(["MOT_BAT_VOLT_MAX", "MOT_BAT_VOLT_MIN"], "V", 0, 100,
      "battery voltage compensation range, 0 = off (§4.4)")
 _add("MOT_YAW_HEADROOM", "", 0, 500, "yaw headroom, motor output x 1000 (§4.4)", True)
-_add(["MOT_SPOOL_TIME", "MOT_SPOOL_TIM_DN"], "s", 0, 10, "spool up / down time (§4.4)")
-_add(["MOT_SLEW_UP_TIME", "MOT_SLEW_DN_TIME"], "s", 0, 1, "motor output slew time (§4.4)")
+_add(["MOT_SPOOL_TIME", "MOT_SPOOL_TIM_DN"], "s", 0, 10, "spool up / down time (§4.4)",
+     modelled=False)
+_add(["MOT_SLEW_UP_TIME", "MOT_SLEW_DN_TIME"], "s", 0, 1, "motor output slew time (§4.4)",
+     modelled=False)
 _add("MOT_HOVER_LEARN", "", 0, 2, "hover learning: 0 off, 1 learn, 2 learn and save (§4.4)",
      True)
 
@@ -455,9 +520,9 @@ _add("EK3_GYRO_P_NSE", "rad/s", 0.0001, 1, "gyro process noise (§3.8)")
 _add("EK3_ACC_P_NSE", "m/s/s", 0.01, 10, "accelerometer process noise (§3.8)")
 _add("EK3_GBIAS_P_NSE", "rad/s/s", 0, 1, "gyro bias process noise (§3.8)")
 _add("EK3_ABIAS_P_NSE", "m/s/s/s", 0, 1, "accel bias process noise (§3.8)")
-_add("EK3_MAGE_P_NSE", "gauss/s", 0, 1, "earth field process noise (§3.8)")
-_add("EK3_MAGB_P_NSE", "gauss/s", 0, 1, "body field process noise (§3.8)")
-_add("EK3_WIND_P_NSE", "m/s/s", 0, 10, "wind process noise (§3.8)")
+_add("EK3_MAGE_P_NSE", "gauss/s", 0, 1, "earth field process noise (§3.8)", modelled=False)
+_add("EK3_MAGB_P_NSE", "gauss/s", 0, 1, "body field process noise (§3.8)", modelled=False)
+_add("EK3_WIND_P_NSE", "m/s/s", 0, 10, "wind process noise (§3.8)", modelled=False)
 _add("EK3_NOAID_M_NSE", "m", 0.5, 50, "constant-position pseudo-measurement noise (§3.3)")
 _add("EK3_ACC_BIAS_LIM", "m/s/s", 0, 10, "accel bias limit (§3.8)")
 _add(["EK3_VEL_I_GATE", "EK3_POS_I_GATE", "EK3_HGT_I_GATE", "EK3_MAG_I_GATE"], "%", 100,
@@ -466,30 +531,38 @@ _add("EK3_GLITCH_RAD", "m", 0, 1000, "GPS glitch radius; reset to GPS beyond it 
 _add("EK3_ERR_THRESH", "", 0.05, 1, "lane switch relative error threshold (§3.4)")
 _add("EK3_HGT_DELAY", "ms", 0, 250, "height measurement delay (§3.8)", True)
 _add("EK3_TAU_OUTPUT", "cs", 10, 50, "output complementary filter time constant (§3.8)", True)
+_add("EK3_HRT_FILT", "Hz", 0.1, 30,
+     "height rate filter of the vertical complementary filter (failsafe checks, §3.2)")
+_add("GPS1_DELAY_MS", "ms", 0, 250,
+     "GPS 1 delay the EKF assumes, 0 = the u-blox driver's 120 ms (§3.8)", True)
 _add("EK3_IMU_MASK", "", 1, 127, "IMUs that get an EKF lane, bit mask (§3.4)", True)
-_add("EK3_AFFINITY", "", 0, 15, "lane sensor affinity bits (§3.4)", True)
-_flag("EK3_ENABLE", "EKF3 enabled (§3.8)")
+_add("EK3_AFFINITY", "", 0, 15, "lane sensor affinity bits (§3.4)", True, modelled=False)
+_flag("EK3_ENABLE", "EKF3 enabled (§3.8)", modelled=False)
 
 # ---- IMU filters and calibration, battery (§1.11, §2.3, §2.4) --------------------------------
 _add(["INS_GYRO_FILTER", "INS_ACCEL_FILTER"], "Hz", 0, 1000,
      "gyro / accel low-pass filter for control and the IMU log (§3.8)")
 for _s in ("", "2"):
     _add([f"INS_ACC{_s}OFFS_{a}" for a in _XYZ], "m/s/s", -3.5, 3.5,
-         f"accel {_s or '1'} calibration offset (§2.3)")
+         f"accel {_s or '1'} calibration offset (§2.3)", modelled=False)
     _add([f"INS_ACC{_s}SCAL_{a}" for a in _XYZ], "", 0.8, 1.2,
-         f"accel {_s or '1'} calibration scale (§2.3)")
-_flag(["INS_USE", "INS_USE2", "INS_USE3"], "use IMU 1 / 2 / 3")
+         f"accel {_s or '1'} calibration scale (§2.3)", modelled=False)
+_flag(["INS_USE", "INS_USE2", "INS_USE3"], "use IMU 1 / 2 / 3", modelled=False)
 _add("BATT_MONITOR", "", 0, 50, "battery monitor type, 4 = analog voltage and current (§1.11)",
-     True)
-_add("BATT_CAPACITY", "mAh", 0, 1e6, "battery capacity (§1.11)")
+     True, modelled=False)
+_add("BATT_CAPACITY", "mAh", 0, 1e6, "battery capacity (§1.11)", modelled=False)
 _add(["BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_ARM_VOLT"], "V", 0, 100,
-     "battery low / critical / arming voltage, 0 = off (§1.11)")
-_add("BATT_LOW_TIMER", "s", 0, 120, "time below BATT_LOW_VOLT before failsafe (§1.11)", True)
-_add(["BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT"], "", 0, 7, "battery failsafe action (§1.11)", True)
-_add(["BATT_LOW_MAH", "BATT_CRT_MAH"], "mAh", 0, 1e6, "battery low / critical capacity (§1.11)")
-_add("LOG_BITMASK", "", 0, _U32, "log message groups, bit mask (§5.4)", True)
-_flag("LOG_DISARMED", "log while disarmed (§5.5)")
-_add("LOG_FILE_RATEMAX", "Hz", 0, 1000, "max rate of any log message, 0 = no limit (§5.4)")
+     "battery low / critical / arming voltage, 0 = off (§1.11)", modelled=False)
+_add("BATT_LOW_TIMER", "s", 0, 120, "time below BATT_LOW_VOLT before failsafe (§1.11)", True,
+     modelled=False)
+_add(["BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT"], "", 0, 7, "battery failsafe action (§1.11)", True,
+     modelled=False)
+_add(["BATT_LOW_MAH", "BATT_CRT_MAH"], "mAh", 0, 1e6, "battery low / critical capacity (§1.11)",
+     modelled=False)
+_add("LOG_BITMASK", "", 0, _U32, "log message groups, bit mask (§5.4)", True, modelled=False)
+_flag("LOG_DISARMED", "log while disarmed (§5.5)", modelled=False)
+_add("LOG_FILE_RATEMAX", "Hz", 0, 1000, "max rate of any log message, 0 = no limit (§5.4)",
+     modelled=False)
 
 #: Unit, accepted range and meaning of the parameters tlm uses, by name.
 PARAM_INFO: Mapping[str, ParamInfo] = MappingProxyType(_INFO)
@@ -524,9 +597,10 @@ def _unchanged(value: float) -> float:
     return value
 
 
-# Renamed SIM_* parameters whose meaning and unit did not change (§6): ArduPilot made every
-# SIM_GPS_* a SIM_GPS1_* on 2024-11-12 (a few also got shorter names to fit 16 characters) and
-# numbered the IMU-1 noise, bias and scale parameters on 2021-01-20. Vectors are listed per
+# Renamed parameters whose meaning and unit did not change (§6): ArduPilot made every
+# SIM_GPS_* a SIM_GPS1_* on 2024-11-12 (a few also got shorter names to fit 16 characters),
+# GPS_DELAY_MS GPS1_DELAY_MS with the GPS1_* parameters, and numbered the IMU-1 noise, bias
+# and scale parameters on 2021-01-20. Vectors are listed per
 # component (ArduPilot's ``_X/_Y/_Z`` parameters). Only names whose target tlm has are listed.
 _RENAMED: dict[str, str] = {
     "SIM_GPS_TYPE": "SIM_GPS1_TYPE",
@@ -543,6 +617,7 @@ _RENAMED: dict[str, str] = {
     **{f"SIM_GPS_GLITCH_{a}": f"SIM_GPS1_GLTCH_{a}" for a in _XYZ},
     **{f"SIM_GPS_POS_{a}": f"SIM_GPS1_POS_{a}" for a in _XYZ},
     **{f"SIM_GPS_VERR_{a}": f"SIM_GPS1_VERR_{a}" for a in _XYZ},
+    "GPS_DELAY_MS": "GPS1_DELAY_MS",
     "SIM_ACC_RND": "SIM_ACC1_RND",
     "SIM_GYR_RND": "SIM_GYR1_RND",
     **{f"SIM_ACC_BIAS_{a}": f"SIM_ACC1_BIAS_{a}" for a in _XYZ},
@@ -619,8 +694,21 @@ def _defaults() -> Mapping[str, float]:
     return MappingProxyType(dict(sorted(values.items())))
 
 
-def _check(name: str, value: Any, defaults: Mapping[str, float]) -> tuple[str, float]:
-    """Validate one input; return the canonical name and the value as float."""
+def is_modelled(name: str) -> bool:
+    """Whether tlm models parameter ``name`` (declared in :data:`PARAM_INFO` with ``modelled``
+    true). Parameters only in the default ``.parm`` file are not modelled."""
+    info = PARAM_INFO.get(name)
+    return info is not None and info.modelled
+
+
+def _check(name: str, value: Any, defaults: Mapping[str, float],
+           explicit: bool = True) -> tuple[str, float]:
+    """Validate one input; return the canonical name and the value as float.
+
+    ``explicit``: the value was set on its own (``--param``, ``--set``, a schedule, the Python
+    API), so a parameter tlm does not model is refused; False for a whole loaded set, whose
+    unmodelled parameters are carried (range-checked where tlm knows the range).
+    """
     if not isinstance(name, str):
         raise ParamError(f"parameter names must be strings, got {name!r}")
     alias = ALIASES.get(name)
@@ -628,17 +716,29 @@ def _check(name: str, value: Any, defaults: Mapping[str, float]) -> tuple[str, f
         name, value = alias.target, alias.convert(_to_float(name, value))
     if name not in defaults:
         raise UnknownParamError(f"unknown parameter {name!r}{_suggest(name, defaults)}")
+    if explicit and not is_modelled(name):
+        raise UnmodelledParamError(
+            f"{name} is not modelled by tlm: a flight would ignore it "
+            f"(`tlm params {name}`; `tlm params --modelled` lists what tlm models)")
     x = _to_float(name, value)
     info = PARAM_INFO.get(name)
     if info is not None:
-        if not info.min <= x <= info.max:
-            unit = f" {info.unit}" if info.unit else ""
-            raise ParamError(
-                f"{name} = {_format_number(x)} is out of range "
-                f"[{_format_number(info.min)}, {_format_number(info.max)}]{unit}")
-        if info.integer and not x.is_integer():
-            raise ParamError(f"{name} = {x!r} must be a whole number")
+        _check_range(name, x, info)
     return name, x
+
+
+def _check_range(name: str, x: float, info: ParamInfo) -> None:
+    """Raise :class:`ParamError` when ``x`` is outside ``info``'s range or not whole."""
+    unit = f" {info.unit}" if info.unit else ""
+    if info.pinned and x != info.min:
+        raise ParamError(f"{name} = {_format_number(x)} is not supported: tlm simulates only "
+                         f"{name} = {_format_number(info.min)}{unit}")
+    if not info.min <= x <= info.max:
+        raise ParamError(
+            f"{name} = {_format_number(x)} is out of range "
+            f"[{_format_number(info.min)}, {_format_number(info.max)}]{unit}")
+    if info.integer and not x.is_integer():
+        raise ParamError(f"{name} = {x!r} must be a whole number")
 
 
 def _to_float(name: str, value: Any) -> float:
@@ -664,6 +764,20 @@ def _check_consistency(values: Mapping[str, float]) -> None:
                 f"{hi} ({_format_number(values[hi])})")
 
 
+def _unmodelled_message(source: str, ignored: Mapping[str, float], shown: int = 12) -> str:
+    """One line: the parameters of ``source`` that tlm does not model and that differ from its
+    defaults (the first ``shown`` of them with their values)."""
+    items = [f"{k}={_format_number(v)}" for k, v in ignored.items()]
+    more = f", ... ({len(items) - shown} more)" if len(items) > shown else ""
+    return (f"{source}: {len(items)} parameter(s) that tlm does not model differ from its "
+            f"defaults and are ignored: {', '.join(items[:shown])}{more}")
+
+
+def _restore(changed: dict[str, float]) -> Params:
+    """Unpickle a :class:`Params` from its changes (a loaded set's carried values included)."""
+    return Params._derived(_defaults(), changed, explicit=False)
+
+
 # --------------------------------------------------------------------------------------------
 # Params
 # --------------------------------------------------------------------------------------------
@@ -674,26 +788,45 @@ class Params(Mapping[str, float]):
     ``Params()`` holds the defaults; ``Params(overrides)`` the defaults with ``overrides``
     (a mapping ``name -> number``) validated and applied. Use :meth:`updated` to derive a
     changed copy. Instances are hashable, comparable and picklable (by their changes).
+
+    Explicit values (the constructor, :meth:`updated`) must be parameters tlm models
+    (:func:`is_modelled`); a whole parameter set (:meth:`from_parm`, :meth:`from_values`) may
+    also change parameters tlm does not model: they are carried, listed by
+    :meth:`unmodelled` and reported in one :class:`UnmodelledParamWarning`.
     """
 
     __slots__ = ("_values", "_hash")
 
     def __init__(self, overrides: Mapping[str, Any] | None = None) -> None:
+        self._init(_defaults(), overrides, explicit=True)
+
+    def _init(self, base: Mapping[str, float], overrides: Mapping[str, Any] | None,
+              explicit: bool) -> None:
+        """Set the values: ``base`` with ``overrides`` validated and applied."""
         defaults = _defaults()
-        if not overrides:
-            values: Mapping[str, float] = defaults
+        if isinstance(overrides, Params):  # already validated: a copy of it
+            values: Mapping[str, float] = overrides._values
+        elif not overrides:
+            values = base
         else:
             if not isinstance(overrides, Mapping):
                 raise ParamError(
                     f"overrides must be a mapping name -> value, got {type(overrides).__name__}")
-            merged = dict(defaults)
+            merged = dict(base)
             for name, value in overrides.items():
-                key, x = _check(name, value, defaults)
+                key, x = _check(name, value, defaults, explicit)
                 merged[key] = x
             _check_consistency(merged)
             values = MappingProxyType(merged)
         object.__setattr__(self, "_values", values)
         object.__setattr__(self, "_hash", None)
+
+    @classmethod
+    def _derived(cls, base: Mapping[str, float], overrides: Mapping[str, Any] | None,
+                 explicit: bool) -> Params:
+        new = cls.__new__(cls)
+        new._init(base, overrides, explicit)
+        return new
 
     # -- immutability ---------------------------------------------------------------------
     def __setattr__(self, name: str, value: Any) -> None:
@@ -702,8 +835,8 @@ class Params(Mapping[str, float]):
     def __delattr__(self, name: str) -> None:
         raise AttributeError("Params is immutable")
 
-    def __reduce__(self) -> tuple[type[Params], tuple[dict[str, float]]]:
-        return (Params, (self.changed(),))
+    def __reduce__(self) -> tuple[Callable[[dict[str, float]], Params], tuple[dict[str, float]]]:
+        return (_restore, (self.changed(),))
 
     # -- Mapping --------------------------------------------------------------------------
     def __getitem__(self, name: str) -> float:
@@ -742,15 +875,12 @@ class Params(Mapping[str, float]):
 
     # -- derived sets ---------------------------------------------------------------------
     def updated(self, overrides: Mapping[str, Any] | None = None, /, **kw: Any) -> Params:
-        """A new ``Params`` with these values changed (mapping and/or keywords)."""
-        merged = self.changed()
-        if overrides:
-            if not isinstance(overrides, Mapping):
-                raise ParamError(
-                    f"overrides must be a mapping name -> value, got {type(overrides).__name__}")
-            merged.update(overrides)
-        merged.update(kw)
-        return Params(merged)
+        """A new ``Params`` with these values changed (mapping and/or keywords; explicit values,
+        so parameters tlm does not model are refused). Carried values of a loaded set stay."""
+        if overrides and not isinstance(overrides, Mapping):
+            raise ParamError(
+                f"overrides must be a mapping name -> value, got {type(overrides).__name__}")
+        return Params._derived(self._values, {**(overrides or {}), **kw}, explicit=True)
 
     def changed(self) -> dict[str, float]:
         """``{name: value}`` of the values that differ from the defaults (sorted by name)."""
@@ -758,6 +888,11 @@ class Params(Mapping[str, float]):
         if self._values is defaults:
             return {}
         return {k: v for k, v in self._values.items() if v != defaults[k]}
+
+    def unmodelled(self) -> dict[str, float]:
+        """``{name: value}`` of the parameters tlm does not model that differ from the defaults
+        (only a loaded set can have any; a flight ignores them and lists them in its meta)."""
+        return {k: v for k, v in self.changed().items() if not is_modelled(k)}
 
     def to_dict(self) -> dict[str, float]:
         """All values as a plain ``dict`` (sorted by name)."""
@@ -798,14 +933,30 @@ class Params(Mapping[str, float]):
         overrides: dict[str, float] = {}
         for name, value, lineno in _parse_parm_text(text, source):
             try:
-                key, x = _check(name, value, defaults)
+                key, x = _check(name, value, defaults, explicit=False)
             except ParamError as exc:
                 raise type(exc)(f"{source}:{lineno}: {exc}") from None
             overrides[key] = x
+        return cls.from_values(overrides, source)
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any], source: str = "<parameters>") -> Params:
+        """Defaults with a whole parameter set applied (a ``.parm`` file's, a log's PARM values).
+
+        Unlike the constructor, parameters tlm does not model are accepted (range-checked where
+        tlm knows the range) and carried; when any differs from tlm's default, one
+        :class:`UnmodelledParamWarning` naming ``source`` lists them (see :meth:`unmodelled`).
+        Unknown names and bad values raise :class:`ParamError` naming ``source``.
+        """
         try:
-            return cls(overrides)
+            p = cls._derived(_defaults(), values, explicit=False)
         except ParamError as exc:
-            raise ParamError(f"{source}: {exc}") from None
+            raise type(exc)(f"{source}: {exc}") from None
+        ignored = p.unmodelled()
+        if ignored:
+            warnings.warn(UnmodelledParamWarning(_unmodelled_message(source, ignored)),
+                          stacklevel=2)
+        return p
 
     def to_parm_text(self, *, only_changed: bool = False, header: str | None = None) -> str:
         """``.parm`` text: ``NAME VALUE`` lines sorted by name, values exact (round-trip)."""
@@ -823,3 +974,78 @@ class Params(Mapping[str, float]):
         path = Path(path)
         path.write_text(self.to_parm_text(only_changed=only_changed, header=header))
         return path
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers for the configuration builders
+# --------------------------------------------------------------------------------------------
+
+def require_params(p: Any, who: str) -> Params:
+    """``p`` when it is a :class:`Params`, else ``TypeError``: the configuration builders read
+    every value from a ``Params`` (one source of defaults, no fallbacks of their own)."""
+    if not isinstance(p, Params):
+        raise TypeError(f"{who} reads a tlm_sim.params.Params, got {type(p).__name__}; "
+                        "build one with Params({NAME: value, ...})")
+    return p
+
+
+def earth_field(p: Params) -> np.ndarray:
+    """Earth magnetic field at home, NED [gauss], from ``TLM_MAG_DEC_DEG`` / ``TLM_MAG_INC_DEG``
+    [deg] and ``TLM_MAG_INT_GA`` [gauss]: what the simulated compass measures and what the EKF
+    assumes (one computation for both)."""
+    from tlm_sim.geo import earth_field_ned
+
+    return earth_field_ned(p["TLM_MAG_DEC_DEG"], p["TLM_MAG_INC_DEG"], p["TLM_MAG_INT_GA"])
+
+
+# --------------------------------------------------------------------------------------------
+# The parameter list (``tlm params``)
+# --------------------------------------------------------------------------------------------
+
+def parameter_list(patterns: Sequence[str] = ()) -> list[dict[str, Any]]:
+    """Every parameter tlm knows, sorted by name, as ``{name, default, unit, min, max, integer,
+    modelled, description, aliases}`` (``unit``/``min``/``max`` None where tlm declares no range:
+    ArduPilot parameters carried from the default file only, none of them modelled).
+
+    ``patterns``: names (case-insensitive; paper-era aliases resolve to the current name) or
+    shell-style patterns (``EK3_*``); empty lists everything. A name or pattern that matches
+    nothing raises :class:`UnknownParamError` with close matches.
+    """
+    defaults = _defaults()
+    names = _select(patterns, defaults) if patterns else list(defaults)
+    aliases: dict[str, list[str]] = {}
+    for old, alias in ALIASES.items():
+        aliases.setdefault(alias.target, []).append(old)
+    return [_describe(n, defaults[n], PARAM_INFO.get(n), sorted(aliases.get(n, ())))
+            for n in names]
+
+
+def _select(patterns: Sequence[str], defaults: Mapping[str, float]) -> list[str]:
+    """Names matching ``patterns`` in name order (each pattern must match something)."""
+    import fnmatch
+
+    chosen: set[str] = set()
+    for raw in patterns:
+        pat = str(raw).strip().upper()
+        if any(c in pat for c in "*?["):
+            hits = fnmatch.filter(defaults, pat)
+        else:
+            target = ALIASES[pat].target if pat in ALIASES else pat
+            hits = [target] if target in defaults else []
+        if not hits:
+            raise UnknownParamError(
+                f"unknown parameter {raw!r}{_suggest(pat.strip('*?'), defaults)}")
+        chosen.update(hits)
+    return sorted(chosen)
+
+
+def _describe(name: str, default: float, info: ParamInfo | None,
+              aliases: list[str]) -> dict[str, Any]:
+    """One row of :func:`parameter_list`."""
+    row: dict[str, Any] = {"name": name, "default": default, "unit": None, "min": None,
+                           "max": None, "integer": None, "modelled": info is not None
+                           and info.modelled, "description": "", "aliases": aliases}
+    if info is not None:
+        row.update(unit=info.unit, min=info.min, max=info.max, integer=info.integer,
+                   description=info.description)
+    return row

@@ -34,9 +34,8 @@ def profile_params(profile: str, params: Params | Mapping[str, float] | None = N
     values it changed from the defaults)."""
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}; known: {', '.join(PROFILES)}")
+    if isinstance(params, Params):  # already validated; a loaded set keeps its carried values
+        own = params.changed()
+        return params.updated({k: v for k, v in PROFILES[profile].items() if k not in own})
     base = Params(PROFILES[profile])
-    if params is None:
-        return base
-    if isinstance(params, Params):
-        return base.updated(params.changed()) if profile != "current" else params
-    return base.updated(params)
+    return base if params is None else base.updated(params)

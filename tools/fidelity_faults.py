@@ -139,7 +139,7 @@ def fly_like_reference(ref_dir: Path, name: str) -> dict[str, Any]:
     ref = read_bin(str(ref_dir / f"{name}.bin"), types=TYPES)
     ev = ref["EV"]
     ref_arm_us = float(ev[ev.Id == 10].TimeUS.iloc[0])
-    arm_s = float(Params().get("TLM_ARM_TIME", 10.0))
+    arm_s = float(Params()["TLM_ARM_TIME"])
     changes, tlm_faults = tlm_fault_schedule(sidecar, ref_arm_us, arm_s)
     log = fly(Mission.from_sidecar(str(sidecar_path)), faults=changes,
               seed=int(sidecar["seed"]))

@@ -29,11 +29,12 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
     from tlm_sim import fly
 
     sc = reconstruct(bin_path, sidecar, seed)
-    log = fly(sc.mission, faults=sc.schedule, params=sc.params or None, seed=sc.seed)
+    log = fly(sc.mission, faults=sc.schedule, params=sc.params, seed=sc.seed)
     r = crosscheck_metrics(log.tables, sc.tables, sc.mission.home, log.faults, sc.faults)
     r["scenario"] = {
         "log": str(bin_path), "name": sc.name, "source": sc.source, "seed": sc.seed,
-        "waypoints": int(sc.mission.n_waypoints), "params_from_log": sc.params,
+        "waypoints": int(sc.mission.n_waypoints), "params_from_log": sc.params.changed(),
+        "unmodelled_params": sc.params.unmodelled(),
         "faults": [{k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")}
                    for f in sc.faults],
         "sitl_arm_s": sc.sitl_arm_us * 1e-6, "tlm_arm_s": sc.tlm_arm_s,

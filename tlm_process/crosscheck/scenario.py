@@ -2,10 +2,12 @@
 
 From the log alone: the mission from its CMD messages (the last upload), home from ORGN (type
 1, the AHRS home set at arming) or the first 3D GPS fix, the parameters from PARM (the values
-at log start, only those tlm models), the arming time from EV 10, and the faults from the SIM_*
-parameter changes (``tlm_sim.faults.detect``). A sidecar JSON (the reference logs' ``.json``)
-is preferred where it is given: its mission (with Algorithm 1's raw points), SITL home, seed and
-fault records (Eq. 4, with the parameters set).
+at log start of the parameters tlm knows, loaded as a whole set: those tlm does not model are
+carried, reported in one warning and in the flight's meta, and change nothing), the arming
+time from EV 10, and the faults from the SIM_* parameter changes (``tlm_sim.faults.detect``).
+A sidecar JSON (the reference logs' ``.json``) is preferred where it is given: its mission
+(with Algorithm 1's raw points), SITL home, seed and fault records (Eq. 4, with the parameters
+set).
 
 Time lines differ: SITL arms ~40 s after boot (GPS lock, EKF start-up), tlm at TLM_ARM_TIME.
 Faults are moved to tlm's time line by keeping their offset from arming.
@@ -42,8 +44,9 @@ class SitlScenario:
         name: the log's file stem.
         tables: the SITL log's tables (``TYPES``).
         mission: a ``tlm_sim.Mission``.
-        params: parameter overrides for ``fly`` (PARM values at log start that tlm models and
-            that differ from tlm's defaults).
+        params: the ``Params`` to fly: tlm's defaults with the PARM values at log start
+            (``Params.from_values``; ``params.changed()`` is what differs from tlm's defaults,
+            ``params.unmodelled()`` what of that tlm does not model).
         faults: fault records on SITL's time line (type, label, start/end_time_us,
             params_start/params_end).
         schedule: the same faults as a ``FaultSchedule`` on tlm's time line, or None.
@@ -56,7 +59,7 @@ class SitlScenario:
     name: str
     tables: dict[str, pd.DataFrame]
     mission: Any
-    params: dict[str, float]
+    params: Any
     faults: list[dict[str, Any]]
     schedule: Any
     sitl_arm_us: float
@@ -171,8 +174,8 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10)")
     side_path = Path(sidecar) if sidecar else bin_path.with_suffix(".json")
     doc = json.loads(side_path.read_text()) if side_path.is_file() else None
-    params = _initial_params(t["PARM"])
-    tlm_arm_s = float(Params(params).get("TLM_ARM_TIME", 10.0))
+    params = Params.from_values(_initial_params(t["PARM"]), source=f"{bin_path.name} (PARM)")
+    tlm_arm_s = float(params["TLM_ARM_TIME"])
     sitl_arm_us = float(armed.iloc[0])
 
     def to_tlm_s(us: float) -> float:

@@ -90,7 +90,6 @@ DEFAULT_RANGES: dict[str, tuple[float, float]] = {
     "SIM_GYR1_RND": (0.0, 0.5),  # deg/s at full throttle
     "SIM_GYR2_RND": (0.0, 0.5),
     "SIM_BARO_RND": (0.0, 0.2),  # m
-    "SIM_BAR2_RND": (0.0, 0.2),
     "SIM_MAG_RND": (0.0, 20.0),  # mGauss
 }
 

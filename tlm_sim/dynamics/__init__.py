@@ -22,7 +22,6 @@ from tlm_sim.dynamics.body import (
     yaw_of,
 )
 from tlm_sim.dynamics.frame import (
-    FRAME_DEFAULTS,
     N_FRAME,
     build_frame,
     command_to_pwm,
@@ -37,7 +36,6 @@ from tlm_sim.dynamics.wind import init_wind, update_wind
 PHYSICS_DT_S: float = 833e-6
 
 __all__ = [
-    "FRAME_DEFAULTS",
     "GRAVITY_MSS",
     "N_FRAME",
     "PHYSICS_DT_S",

@@ -1,8 +1,9 @@
 """Frame constants of SITL's "+" quad: the model table, the derived constants and PWM helpers.
 
 A flight's frame is ONE float64 array indexed by the ``F_*`` constants below, built once per
-flight by :func:`build_frame` from a mapping of parameter names to floats (ArduPilot SITL
-names ``SIM_*`` plus ``TLM_*`` names for the model struct of ``SIM_Frame.h``). It holds the
+flight by :func:`build_frame` from a :class:`~tlm_sim.params.Params` (ArduPilot SITL names
+``SIM_*`` plus ``TLM_*`` names for the model struct of ``SIM_Frame.h``; their defaults live in
+``tlm_sim.params`` only). It holds the
 model values, the constants ``Frame::init`` derives from them (ardupilot-reference.md §1.3),
 the motor table and the environment parameters the physics reads (wind, battery, home
 altitude). Entries marked *live* may be rewritten by the flight loop while flying (a fault
@@ -23,12 +24,12 @@ motor servo    position (unit of diag) spin  yaw factor
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 
 import numpy as np
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
+from tlm_sim.params import Params, require_params
 
 #: number of motors of the plus frame
 N_MOTORS: int = 4
@@ -90,48 +91,6 @@ F_REF_ALT = 56  # refAlt [m AMSL]
 
 N_FRAME = 57
 
-#: parameter name -> SITL default (TLM_* mirror SIM_Frame.h's Model, SIM_* SITL.cpp)
-FRAME_DEFAULTS: dict[str, float] = {
-    "TLM_MASS": 3.0,
-    "TLM_DIAG": 0.35,
-    "TLM_REF_SPD": 15.08,
-    "TLM_REF_ANGLE": 45.0,
-    "TLM_REF_VOLT": 12.09,
-    "TLM_REF_CURR": 29.3,
-    "TLM_REF_ALT": 593.0,
-    "TLM_HOVER_THR": 0.39,
-    "TLM_PROP_EXPO": 0.65,
-    "TLM_REF_ROT_RATE": 120.0,
-    "TLM_PWM_MIN": 1000.0,
-    "TLM_PWM_MAX": 2000.0,
-    "TLM_SPIN_MIN": 0.15,
-    "TLM_SPIN_MAX": 0.95,
-    "TLM_SLEW_MAX": 150.0,
-    "TLM_DISC_AREA": 0.385,
-    "TLM_MDRAG_COEF": 0.2,
-    "TLM_BAT_RES": 0.01,
-    "TLM_MAX_VOLT": 12.6,
-    "TLM_BATT_CAP_AH": 0.0,
-    "TLM_IXX": 0.0,
-    "TLM_IYY": 0.0,
-    "TLM_IZZ": 0.0,
-    "TLM_FRAME_HEIGHT": 0.1,
-    "TLM_PROFILE": 0.0,
-    "TLM_GYRO_CPL": 1.0,
-    "SIM_BATT_VOLTAGE": 12.6,
-    "SIM_BATT_CAP_AH": 0.0,
-    "SIM_OPOS_ALT": 584.0,
-    "SIM_WIND_SPD": 0.0,
-    "SIM_WIND_DIR": 180.0,
-    "SIM_WIND_TURB": 0.0,
-    "SIM_WIND_TC": 5.0,
-    "SIM_WIND_DIR_Z": 0.0,
-    "SIM_WIND_T": 0.0,
-    "SIM_WIND_T_ALT": 60.0,
-    "SIM_WIND_T_COEF": 0.01,
-}
-
-
 def _hover_command(hover_thr: float, expo: float) -> float:
     """Command ``a`` in [0, 1] solving ``(1 - e) a + e a^2 = hover_thr``."""
     if expo <= 0.0:
@@ -140,18 +99,19 @@ def _hover_command(hover_thr: float, expo: float) -> float:
     return (-b + math.sqrt(b * b + 4.0 * expo * hover_thr)) / (2.0 * expo)
 
 
-def build_frame(params: Mapping[str, float] | None = None) -> np.ndarray:
+def build_frame(p: Params) -> np.ndarray:
     """Build the frame-constant array of one flight (run once per flight, in Python).
 
-    ``params`` maps parameter names (see :data:`FRAME_DEFAULTS`) to floats; missing names take
-    the SITL default. ``SIM_BATT_CAP_AH`` overrides ``TLM_BATT_CAP_AH`` when it is positive
-    (SITL sets the parameter's default to the model capacity). Returns a float64 array of
-    length :data:`N_FRAME` indexed by the ``F_*`` constants.
+    Reads the ``TLM_*`` frame model and the ``SIM_*`` environment parameters of ``p`` (see
+    ``tlm params TLM_`` for their units and defaults). ``SIM_BATT_CAP_AH`` overrides
+    ``TLM_BATT_CAP_AH`` when it is positive (SITL sets the parameter's default to the model
+    capacity). Returns a float64 array of length :data:`N_FRAME` indexed by the ``F_*``
+    constants.
     """
-    p = params if params is not None else {}
+    require_params(p, "build_frame")
 
     def get(name: str) -> float:
-        return float(p.get(name, FRAME_DEFAULTS[name]))
+        return float(p[name])
 
     f = np.zeros(N_FRAME, dtype=np.float64)
     mass = get("TLM_MASS")
@@ -207,12 +167,12 @@ def build_frame(params: Mapping[str, float] | None = None) -> np.ndarray:
     f[F_VEL_MAX] = v_h / math.sqrt(hover_thr)
     f[F_POWER_FACTOR] = p_hover / t_hover
 
-    ixx, iyy, izz = get("TLM_IXX"), get("TLM_IYY"), get("TLM_IZZ")
-    if ixx == 0.0 or iyy == 0.0 or izz == 0.0:
-        # half the mass on a ring of radius diag/2
-        ixx = iyy = mass * 0.25 * (0.5 * diag) ** 2
-        izz = mass * 0.5 * (0.5 * diag) ** 2
-    f[F_IXX], f[F_IYY], f[F_IZZ] = ixx, iyy, izz
+    # each moment of inertia as given, or (0) that of half the mass on a ring of radius diag/2
+    ring_xy = mass * 0.25 * (0.5 * diag) ** 2
+    ring_z = mass * 0.5 * (0.5 * diag) ** 2
+    f[F_IXX] = get("TLM_IXX") or ring_xy
+    f[F_IYY] = get("TLM_IYY") or ring_xy
+    f[F_IZZ] = get("TLM_IZZ") or ring_z
     rot_rate = get("TLM_REF_ROT_RATE")
     f[F_ROT_DAMP] = math.radians(400.0) / rot_rate if rot_rate > 0.0 else 0.0
 

@@ -36,7 +36,6 @@ Array layouts: :mod:`tlm_sim.ekf.layout`.
 
 from tlm_sim.ekf.config import (
     build_ekf_config,
-    earth_field_ned,
     gps_delay_s,
     lane_imus,
     new_ekf,
@@ -56,7 +55,6 @@ from tlm_sim.ekf.lanes import (
 
 __all__ = [
     "build_ekf_config",
-    "earth_field_ned",
     "ekf_fuse_baro",
     "ekf_fuse_gps",
     "ekf_fuse_mag",
