@@ -22,11 +22,11 @@ from tlm_process._lazy import lazy_exports
 _EXPORTS: dict[str, str] = {
     "anchoring": "AnchorComparison FaultWindow anchor_by_position anchor_by_time anchor_flight "
                  "compare_methods label_tables",
+    "dataset": "Dataset ProcessedFlight ProcessOptions",
     "errors": "AnchorError IngestError PipelineError",
     "features": "DROP feature_table merge_tables",
     "ingest": "FaultRecord Flight parse_records read_flights",
-    "process": "Dataset ProcessedFlight ProcessOptions build_dataset process_flight "
-               "write_dataset",
+    "process": "build_dataset process_flight write_dataset",
     "scaling": "MinMaxScaler split_flights",
     "stretching": "PAPER_TABLE_7 PAPER_TABLE_8 class_counts fault_share format_counts "
                   "implied_lambda lambda_for_target stretch_schedule target_for_lambda",
