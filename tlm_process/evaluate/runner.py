@@ -151,7 +151,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             r = classification_metrics(cm)
             r["split"] = split
             r.update(counts)
-            if tab.xt is not None:
+            if tab.yt is not None:  # transfer rows
                 last = _fit_all(tab, name, make) if len(tab.folds) > 1 else last
                 r["transfer"] = classification_metrics(
                     confusion_matrix(tab.yt, last.predict(tab.xt(name))))

@@ -1,6 +1,6 @@
 """The Time Line Modeling pipeline (paper §4-5): ingest, fault window anchoring (Eq. 4),
-feature processing (Algorithm 2), window stretching (Eq. 5), min-max scaling (Eq. 6), plots,
-and the ``tlm process`` command. See ``docs/pipeline.md``.
+feature processing (Algorithm 2), window stretching (Eq. 5), min-max scaling (Eq. 6), plots
+(the ``tlm process`` command is :mod:`tlm_process.commands.process`). See ``docs/pipeline.md``.
 
 Typical use::
 
@@ -11,8 +11,8 @@ Typical use::
     ds = build_dataset(processed, test_patterns=["combined_*"])
     ds.tables["GPS"]          # flight, split, TimeUS, label + scaled features
 
-Names are imported lazily (on first use), so that ``tlm_process.pipeline.command`` (imported
-by the ``tlm`` command line for ``--help``) does not pull in pandas and tlm_sim.
+Names are imported lazily (on first use), so that importing a submodule (the ``tlm``
+command line does for ``--help``) does not pull in pandas and tlm_sim.
 """
 
 from __future__ import annotations
