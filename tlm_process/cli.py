@@ -1,310 +1,33 @@
 """The ``tlm`` command line: one entry point with subcommands.
 
-Errors a user can cause (bad parameter, bad mission, bad path) print one line and exit 2.
+This module only routes: :data:`COMMANDS` names the module of each subcommand
+(``tlm_process.commands.<name>``), which exports ``add_parser(subparsers)`` and ``run(args) ->
+exit code``. Errors a user can cause (bad parameter, bad mission, bad path) print one line and
+exit 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import importlib
 import logging
-import math
 import sys
-import time
 from collections.abc import Sequence
-from pathlib import Path
-from typing import TYPE_CHECKING
+from types import ModuleType
 
-if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs it
-    from tlm_sim.faults import FaultSchedule, Trigger
-    from tlm_sim.flightlog import FlightLog
-    from tlm_sim.mission import Mission
-    from tlm_sim.params import Params
+from tlm_process.cliutil import UsageError, show_param_warnings
+from tlm_process.commands.fly import fault_lines as _fault_lines  # noqa: F401 (old imports)
 
-FORMATS = ("csv", "parquet", "bin")
+__all__ = ["COMMANDS", "UsageError", "build_parser", "command_module", "main"]
 
-#: A time trigger applied more than this after its time [s] is reported as late (the loop
-#: applies a change at its first tick at or after the time, well within this).
-LATE_S = 0.1
-
-FAULTS_HELP = """\
-faults (paper labels: gps 1, accel 2, engine 3, rc 4):
-  --fault TYPE:START-END   START/END are seconds since boot (log TimeUS / 1e6) or
-                           waypoints wpN (the moment waypoint N is reached)
-  --fault TYPE:START-      held until the flight ends (also TYPE:START)
-  --fault TYPE:START+DUR   held DUR seconds
-  e.g. --fault gps:60-110 --fault engine:wp40-wp48 --fault rc:200-
-  --faults FILE.json|.yaml|.yml holds the same as a list, in the order they happen:
-    {"faults": [{"fault": "gps", "start": 60, "end": 110},
-                {"fault": "engine", "start": "wp40", "end": "wp48"}]}
-  optional per fault: params_start / params_end (NAME: value, SITL parameters).
-  Faults must not overlap; a schedule is checked against the mission before flying.
-  DIR/faults.json gets one record per fault (paper Eq. 4: type, label, start/end
-  TimeUS and position, parameters); an empty list when no schedule is given.
-"""
+#: subcommand -> its module, in the order ``tlm --help`` lists them
+COMMANDS: dict[str, str] = {name: f"tlm_process.commands.{name}" for name in (
+    "fly", "demo", "convert", "info", "generate", "process", "evaluate", "crosscheck", "params")}
 
 
-class UsageError(Exception):
-    """A user mistake: reported as one line, exit code 2."""
-
-
-def _parse_formats(text: str) -> tuple[str, ...]:
-    fmts = tuple(f.strip().lower() for f in text.split(",") if f.strip())
-    bad = [f for f in fmts if f not in FORMATS]
-    if bad or not fmts:
-        raise UsageError(f"--format: unknown format(s) {bad or text!r}; choose from "
-                         f"{', '.join(FORMATS)}")
-    return fmts
-
-
-def _parse_param_args(items: Sequence[str]) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for it in items:
-        if "=" not in it:
-            raise UsageError(f"--param expects NAME=VALUE, got {it!r}")
-        k, v = it.split("=", 1)
-        try:
-            out[k.strip().upper()] = float(v)
-        except ValueError:
-            raise UsageError(f"--param {k}: {v!r} is not a number") from None
-    return out
-
-
-def _load_params(args: argparse.Namespace):
-    from tlm_sim.params import Params
-
-    p = Params.from_parm(args.params) if args.params else Params()
-    extra = _parse_param_args(args.param or [])
-    return p.updated(extra) if extra else p
-
-
-def _check_profile(name: str) -> str:
-    """The --profile name, if tlm_sim.profiles knows it."""
-    from tlm_sim.profiles import PROFILES
-
-    if name not in PROFILES:
-        raise UsageError(f"--profile: unknown profile {name!r}; choose from {', '.join(PROFILES)}")
-    return name
-
-
-def _load_mission(args: argparse.Namespace):
-    from tlm_sim.mission import builtin_mission, read_wpl
-
-    if args.mission_file:
-        return read_wpl(args.mission_file)
-    return builtin_mission(args.mission)
-
-
-def _parse_changes(items: Sequence[str]) -> list[tuple[float, str, float]]:
-    out = []
-    for it in items:
-        try:
-            t, rest = it.split(":", 1)
-            name, val = rest.split("=", 1)
-            out.append((float(t), name.strip().upper(), float(val)))
-        except ValueError:
-            raise UsageError(f"--set expects TIME_S:NAME=VALUE, got {it!r}") from None
-    return out
-
-
-def _prepare_out(out: str) -> Path:
-    d = Path(out)
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-        probe = d / ".tlm-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as e:
-        raise UsageError(f"cannot write to output folder {d}: {e.strerror or e}") from None
-    return d
-
-
-def _split_specs(items: Sequence[str]) -> list[str]:
-    """``--fault`` values, each possibly holding several specs separated by commas/spaces."""
-    return [s for it in items for s in it.replace(",", " ").split()]
-
-
-def _load_schedule(args: argparse.Namespace, mission: Mission,
-                   params: Params) -> FaultSchedule | None:
-    """The flight's FaultSchedule (None when neither --faults nor --fault is given), checked
-    against the mission's waypoint count and the longest the flight can last, before flying.
-
-    ``params``: the flight's parameters with the profile applied (they size the flight).
-    """
-    from tlm_sim.faults import FaultSchedule, FaultScheduleError
-    from tlm_sim.flight import max_duration_s
-
-    if args.faults is not None and args.fault:
-        raise UsageError("--faults and --fault are exclusive: give a schedule (paper or a file) "
-                         "or shorthand specs, not both")
-    lam = getattr(args, "lam", None)
-    if args.faults is None and not args.fault:
-        if lam is not None:
-            raise UsageError("--lambda needs a fault schedule (--faults or --fault)")
-        return None
-    if args.set:
-        raise UsageError("--set cannot be combined with --faults/--fault (a flight takes a fault "
-                         "schedule or raw parameter changes); put extra parameter values in a "
-                         "schedule file's params_start/params_end")
-    # whole seconds, rounded down: readable in messages and never past fly()'s own bound
-    bounds = {"n_waypoints": mission.n_waypoints,
-              "max_time_s": float(math.floor(max_duration_s(mission, params)))}
-    option = "--fault" if args.fault else "--faults"
-    try:
-        if args.fault:
-            schedule = FaultSchedule.from_shorthand(_split_specs(args.fault), **bounds)
-        elif args.faults.strip().lower() == "paper":
-            schedule = FaultSchedule.paper(args.seed)
-            schedule.validate(**bounds)
-        else:
-            schedule = FaultSchedule.from_file(args.faults, **bounds)
-    except FaultScheduleError as e:
-        raise UsageError(f"{option}: {e}") from None
-    if lam is None:
-        return schedule
-    try:
-        return schedule.stretched(lam, **bounds)
-    except FaultScheduleError as e:
-        raise UsageError(f"--lambda: {e}") from None
-
-
-def _fault_lines(log: FlightLog, schedule: FaultSchedule | None) -> list[str]:
-    """One line per scheduled fault: type, label, start/end (log TimeUS in s), duration; or
-    why it has no record (the flight ended before it started)."""
-    if schedule is None:
-        return []
-    started = {int(c["fault"]) for c in log.meta.get("param_changes", [])
-               if c.get("edge") == "start" and c.get("time_us") is not None}
-    records = iter(log.faults)
-    lines = []
-    for i, fault in enumerate(schedule):
-        if i not in started:
-            lines.append(f"fault {i + 1} {fault.type:<6} label {fault.label}  never started "
-                         "(the flight ended first)")
-            continue
-        r = next(records)
-        late = [f"{edge} due {trig.value:g} s"
-                for edge, trig in (("start", fault.start), ("end", fault.end))
-                if (edge == "start" or r["end_by"] == "schedule")
-                and _late(trig, r[f"{edge}_time_us"])]
-        notes = [f"late: {', '.join(late)}; waited for the boundaries before it"] if late else []
-        if r["end_by"] == "flight end":
-            notes.append("held to the end of the log")
-        note = f" ({'; '.join(notes)})" if notes else ""
-        lines.append(f"fault {i + 1} {r['type']:<6} label {r['label']}  "
-                     f"start {r['start_time_us'] * 1e-6:7.1f} s  "
-                     f"end {r['end_time_us'] * 1e-6:7.1f} s  "
-                     f"duration {r['duration_s']:5.1f} s{note}")
-    return lines
-
-
-def _late(trigger: Trigger | None, applied_us: int) -> bool:
-    """Whether a time trigger took effect well after its time [s]: it waited for an earlier
-    waypoint boundary of the schedule (time and waypoint boundaries are not comparable before
-    flying). Waypoint triggers and missing ends are never late."""
-    return (trigger is not None and trigger.kind == "time"
-            and applied_us * 1e-6 - trigger.value > LATE_S)
-
-
-def _write_faults(out: Path, log: FlightLog) -> Path:
-    """``OUT/faults.json``: ``{"faults": [...]}``, the flight's Eq. 4 fault records."""
-    from tlm_sim.flightlog.flightlog import to_jsonable
-
-    path = out / "faults.json"
-    path.write_text(json.dumps({"faults": to_jsonable(log.faults)}, indent=1) + "\n")
-    return path
-
-
-def _from_manifest(args: argparse.Namespace):
-    """(mission, schedule, params, seed, profile) of ``--from-manifest DS --flight N``."""
-    from tlm_process.generate.manifest import scenario_from_manifest
-
-    if args.flight is None:
-        raise UsageError("--from-manifest needs --flight N")
-    clash = [opt for opt, v in (("--mission-file", args.mission_file), ("--faults", args.faults),
-                                ("--fault", args.fault), ("--set", args.set),
-                                ("--param", args.param), ("--params", args.params),
-                                ("--lambda", args.lam)) if v]
-    if clash:
-        raise UsageError(f"--from-manifest flies the data set's own scenario: drop "
-                         f"{', '.join(clash)}")
-    return scenario_from_manifest(args.from_manifest, args.flight)
-
-
-def cmd_fly(args: argparse.Namespace) -> int:
-    """Fly one mission (with an optional fault schedule) and write its tables and faults.json."""
-    from tlm_process.summary import flight_summary, format_summary, plot_trajectory
-    from tlm_sim import fly
-    from tlm_sim.profiles import profile_params
-
-    fmts = _parse_formats(args.format)
-    if args.from_manifest is not None:
-        mission, schedule, params, seed, profile = _from_manifest(args)
-        changes = []
-    else:
-        params = _load_params(args)
-        mission = _load_mission(args)
-        changes = _parse_changes(args.set or [])
-        profile = _check_profile(args.profile)
-        schedule = _load_schedule(args, mission, profile_params(profile, params))
-        seed = args.seed
-    out = _prepare_out(args.out)
-    t0 = time.perf_counter()
-    faults = schedule if schedule is not None else (changes or None)
-    log = fly(mission, faults=faults, params=params, seed=seed, profile=profile)
-    wall = time.perf_counter() - t0
-    log.write(out, formats=fmts)
-    _write_faults(out, log)
-    if not args.no_plot:
-        plot_trajectory(log, out / "trajectory.png", f"{mission.name}, seed {seed}")
-    s = flight_summary(log)
-    (out / "summary.json").write_text(json.dumps(s, indent=1))
-    print(format_summary(s))
-    for line in _fault_lines(log, schedule):
-        print(line)
-    print(f"wall time          {wall:.2f} s ({s['duration_s'] / max(wall, 1e-9):.0f}x real time, "
-          "incl. compile on first run)")
-    extra = "" if args.no_plot else ", trajectory.png"
-    print(f"written            {out}/ ({', '.join(fmts)}, faults.json{extra})")
-    return 0
-
-
-def cmd_demo(args: argparse.Namespace) -> int:
-    """Fly built-in mission 1 with the paper's fault sequence, write its log (tables and .bin)
-    and run the TLM pipeline on it (anchoring, labels, features, scaling)."""
-    from tlm_process.summary import flight_summary, format_summary, plot_trajectory
-    from tlm_sim import fly
-    from tlm_sim.faults import FaultSchedule
-
-    out = _prepare_out(args.out)
-    schedule = FaultSchedule.paper(args.seed)
-    print(f"flying built-in mission 1 (paper-style, ~90 waypoints) with the paper's fault "
-          f"sequence GPS, accel, engine, RC (seed {args.seed}) ...")
-    t0 = time.perf_counter()
-    log = fly(1, faults=schedule, seed=args.seed)
-    wall = time.perf_counter() - t0
-    log.write(out, formats=FORMATS)
-    _write_faults(out, log)
-    plot_trajectory(log, out / "trajectory.png",
-                    f"demo: mission 1, paper fault sequence, seed {args.seed}")
-    s = flight_summary(log)
-    print(format_summary(s))
-    for line in _fault_lines(log, schedule):
-        print(line)
-    print(f"wall time          {wall:.2f} s (includes numba compile on the first run)")
-    print("\nrunning the TLM pipeline (anchoring, labelling, feature processing, scaling) ...")
-    ds = out / "tlm"
-    process_args = build_parser().parse_args(["process", str(out), "--out", str(ds)])
-    rc = process_args.func(process_args)
-    if rc != 0:
-        return rc
-    print(f"\noutputs            {out.resolve()}/")
-    print("  flight log       GPS.csv, IMU.csv, RATE.csv, VIBE.csv, ... (+ .parquet), "
-          "flight.bin (open it in Mission Planner or `tlm info`), faults.json, trajectory.png")
-    print("  TLM data set     tlm/GPS.parquet, tlm/IMU.parquet, tlm/RATE.parquet, "
-          "tlm/VIBE.parquet (labelled, scaled), tlm/report.json, tlm/label_shares.png, "
-          "tlm/plots/")
-    return 0
+def command_module(name: str) -> ModuleType:
+    """The module of subcommand ``name`` (imports only what its parser needs)."""
+    return importlib.import_module(COMMANDS[name])
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -312,66 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="tlm", description=__doc__.splitlines()[0])
     ap.add_argument("--version", action="version", version="tlm 0.1.0")
     sub = ap.add_subparsers(dest="command", required=True)
-
-    f = sub.add_parser("fly", help="fly one mission and write its log tables",
-                       description="Fly one mission (built-in 1-4 or a QGC WPL file), optionally "
-                                   "with faults, and write DIR/GPS.csv, DIR/IMU.csv, ... (and "
-                                   "their Parquet twins), meta.json, summary.json and "
-                                   "faults.json.",
-                       epilog=FAULTS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    f.add_argument("--mission", type=int, default=1, choices=(1, 2, 3, 4),
-                   help="built-in mission number (default 1)")
-    f.add_argument("--mission-file", help="QGC WPL 110 mission file instead of a built-in one")
-    f.add_argument("--seed", type=int, default=0,
-                   help="random seed of the flight and of --faults paper (default 0)")
-    f.add_argument("--out", required=True, help="output folder")
-    f.add_argument("--format", default="csv,parquet",
-                   help="any of csv,parquet,bin (default csv,parquet); bin writes the flight as "
-                        "an ArduPilot DataFlash log DIR/flight.bin")
-    f.add_argument("--params", help="ArduPilot .parm file applied on top of the defaults")
-    f.add_argument("--param", action="append", metavar="NAME=VALUE",
-                   help="set one parameter (repeatable), e.g. --param WPNAV_SPEED=500")
-    f.add_argument("--profile", default="current", metavar="current|paper",
-                   help="ArduPilot semantics: current (as the reference SITL logs, default) or "
-                        "paper (the paper's ArduPilot 4.1/4.2)")
-    f.add_argument("--faults", metavar="paper|FILE",
-                   help="fault schedule: 'paper' (the paper's GPS, accel, engine, RC sequence "
-                        "drawn with --seed) or a .json/.yaml/.yml schedule file (see below)")
-    f.add_argument("--fault", action="append", metavar="SPEC",
-                   help="one fault in shorthand (repeatable, in the order they happen), e.g. "
-                        "--fault gps:60-110 --fault engine:wp40-wp48 (see below)")
-    f.add_argument("--lambda", dest="lam", type=float, metavar="LAMBDA",
-                   help="stretch every fault window by LAMBDA (paper Eq. 5: longer faults in "
-                        "the flight); later faults move so the gaps keep their length")
-    f.add_argument("--set", action="append", metavar="TIME_S:NAME=VALUE",
-                   help="raw parameter change in flight (repeatable), e.g. "
-                        "120:SIM_GPS1_ENABLE=0; not with --faults/--fault, and no fault records")
-    f.add_argument("--from-manifest", metavar="DS",
-                   help="fly flight --flight N of a `tlm generate` data set again, alone "
-                        "(its mission, faults, parameters and seed; identical tables)")
-    f.add_argument("--flight", type=int, metavar="N", help="flight number for --from-manifest")
-    f.add_argument("--no-plot", action="store_true", help="skip trajectory.png")
-    f.set_defaults(func=cmd_fly)
-
-    d = sub.add_parser("demo", help="fly mission 1 with the paper's fault sequence, write its "
-                                    "log and run the TLM pipeline on it")
-    d.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
-    d.add_argument("--seed", type=int, default=1,
-                   help="seed of the flight and of its fault sequence (default 1)")
-    d.set_defaults(func=cmd_demo)
-
-    from tlm_process import logcmd, paramscmd
-    from tlm_process.crosscheck import command as crosscheck_cmd
-    from tlm_process.evaluate import command as evaluate_cmd
-    from tlm_process.generate import command as generate_cmd
-    from tlm_process.pipeline import command as process_cmd
-
-    logcmd.add_parsers(sub)
-    generate_cmd.add_parser(sub)
-    process_cmd.add_parser(sub)
-    evaluate_cmd.add_parser(sub)
-    crosscheck_cmd.add_parser(sub)
-    paramscmd.add_parser(sub)
+    for name in COMMANDS:
+        command_module(name).add_parser(sub)
     return ap
 
 
@@ -390,20 +55,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tlm`` console script."""
     ap = build_parser()
     args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
-    from tlm_process import paramscmd
+    from tlm_process.binlog import LogError
     from tlm_process.generate.errors import GenerateError
-    from tlm_process.logcmd import LogError
     from tlm_sim.faults import FaultScheduleError
     from tlm_sim.mission import MissionError
     from tlm_sim.params import ParamError
 
     _show_compile_notices()
-    paramscmd.show_param_warnings()
+    show_param_warnings()
     if getattr(args, "seed", 0) is not None and getattr(args, "seed", 0) < 0:
         print("tlm: error: --seed must be >= 0", file=sys.stderr)
         return 2
     try:
-        return args.func(args)
+        return command_module(args.command).run(args)
     except (UsageError, ParamError, MissionError, FaultScheduleError, LogError,
             GenerateError) as e:
         print(f"tlm: error: {e}", file=sys.stderr)

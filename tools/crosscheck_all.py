@@ -15,7 +15,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from tlm_process.crosscheck.command import crosscheck, plot, to_json
+from tlm_process.crosscheck.compare import crosscheck, plot, to_json
 
 LOGS = ("normal_s11", "gps_s12", "accel_s13", "engine_s14", "rc_s15", "combined_s21")
 

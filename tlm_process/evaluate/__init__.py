@@ -10,8 +10,9 @@ Typical use::
     results = evaluate(ds, tables=["GPS"], models=["RandomForest", "WindowHGB"], seed=0)
     results["GPS"]["RandomForest"]["macro_f1"]
 
-Names are imported lazily (on first use), so that ``tlm_process.evaluate.command`` (imported
-by the ``tlm`` command line for ``--help``) does not pull in scikit-learn or torch.
+Names are imported lazily (on first use), so that importing a submodule (the ``tlm evaluate``
+command, :mod:`tlm_process.commands.evaluate`, does for ``--help``) does not pull in
+scikit-learn or torch.
 """
 
 from __future__ import annotations

@@ -14,6 +14,8 @@ import inspect
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -137,98 +139,170 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
     out = Path(out_dir) if out_dir is not None else None
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for t in tables:
+        tab = _Table.build(ds, t, models, split, seed, folds, test_frac,
+                           transfer.get(t) if transfer is not None else None)
+        say(tab.describe())
+        results[t] = {}
+        for name in models:
+            make = partial(make_model, name, n_features=tab.x(name).shape[1], seed=seed,
+                           n_jobs=n_jobs, progress=lambda s, t=t: say(f"[{t}]   {s}"),
+                           cnn_epochs=cnn_epochs)
+            counts, cm, last, fit_s = _fit_folds(tab, name, make, say)
+            r = classification_metrics(cm)
+            r["split"] = split
+            r.update(counts)
+            if tab.yt is not None:  # transfer rows
+                last = _fit_all(tab, name, make) if len(tab.folds) > 1 else last
+                r["transfer"] = classification_metrics(
+                    confusion_matrix(tab.yt, last.predict(tab.xt(name))))
+            results[t][name] = r
+            say(_model_line(t, name, r, fit_s))
+            if out is not None:
+                _plot_model(out, t, name, split, r, cm, last)
+            if hasattr(last, "history_"):
+                r["history"] = last.history_
+    return results
+
+
+@dataclass
+class _Table:
+    """One table's rows as every model needs them: labels, flights, features per row and
+    per time window (window models), folds, and the transfer rows (``xt`` None without)."""
+
+    name: str
+    n_rows: int
+    n_flights: int
+    n_features: int
+    y: np.ndarray
+    groups: np.ndarray
+    x_rows: np.ndarray
+    x_win: dict[str, np.ndarray]
+    thin: np.ndarray | None  # rows the window models are fitted on
+    folds: list[Fold]
+    yt: np.ndarray | None = None
+    xt_rows: np.ndarray | None = None
+    xt_win: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
+              folds: int | None, test_frac: float | None,
+              xt: pd.DataFrame | None) -> _Table:
+        """Table ``t`` of ``ds`` (and its transfer rows ``xt``) split into folds."""
         if t not in ds.tables:
             raise EvaluateError(f"table {t} is not loaded")
         df = ds.tables[t]
         feats = ds.features[t]
-        y = df["label"].to_numpy(np.int64)
-        groups = df["flight"].astype(str).to_numpy()
-        X_rows = df[feats].to_numpy(np.float64)
         try:
             fold_list = _folds(df, split, seed, folds, test_frac)
         except ValueError as exc:
             raise EvaluateError(f"{t}: {exc}") from None
         specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
         rate = row_rate_hz(df) if specs else None  # measured once for every window model
-        X_win = {m: window_features(df, feats, sp, rate)[0] for m, sp in specs.items()}
-        thin = train_rows(df, rate) if specs else None
-        xt = transfer.get(t) if transfer is not None else None
+        groups = df["flight"].astype(str).to_numpy()
+        tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
+                  df["label"].to_numpy(np.int64), groups, df[feats].to_numpy(np.float64),
+                  {m: window_features(df, feats, sp, rate)[0] for m, sp in specs.items()},
+                  train_rows(df, rate) if specs else None, fold_list)
         if xt is not None:
-            yt = xt["label"].to_numpy(np.int64)
-            Xt_rows = xt[feats].to_numpy(np.float64)
-            Xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
-        say(f"[{t}] {len(df):,} rows, {len(pd.unique(groups))} flights, {len(feats)} features; "
-            f"{fold_list[0].name if len(fold_list) == 1 else f'{len(fold_list)} folds'}"
-            + (f"; transfer {len(xt):,} rows" if xt is not None else ""))
-        results[t] = {}
-        for name in models:
-            X = X_win[name] if name in TIME_MODELS else X_rows
-            cm = np.zeros((len(CLASS_NAMES),) * 2, dtype=np.int64)
-            fit_s = pred_s = 0.0
-            n_train = n_test = n_fit = 0
-            last = None
-            per_fold: list[dict[str, Any]] = []
-            for fold in fold_list:
-                est = make_model(name, n_features=X.shape[1], seed=seed, n_jobs=n_jobs,
-                                 progress=lambda s, t=t: say(f"[{t}]   {s}"),
-                                 cnn_epochs=cnn_epochs)
-                fit_rows = fold.train
-                if name in TIME_MODELS:
-                    fit_rows = fit_rows[thin[fit_rows]]
-                t0 = time.perf_counter()
-                _fit(est, X[fit_rows], y[fit_rows], groups[fit_rows])
-                t1 = time.perf_counter()
-                pred = est.predict(X[fold.test])
-                t2 = time.perf_counter()
-                fit_s += t1 - t0
-                pred_s += t2 - t1
-                n_train += len(fold.train)
-                n_fit += len(fit_rows)
-                n_test += len(fold.test)
-                fold_cm = confusion_matrix(y[fold.test], pred)
-                cm += fold_cm
-                last = est
-                if len(fold_list) > 1:
-                    fm = classification_metrics(fold_cm)
-                    per_fold.append({"fold": fold.name, "n_test": len(fold.test),
-                                     "accuracy": fm["accuracy"], "macro_f1": fm["macro_f1"]})
-                    say(f"[{t}]   {name} {fold.name}: accuracy {100 * fm['accuracy']:.2f}%, "
-                        f"macro-F1 {fm['macro_f1']:.3f} (fit {t1 - t0:.1f} s)")
-            r = classification_metrics(cm)
-            r.update({"split": split, "folds": len(fold_list), "n_train": n_train,
-                      "n_fit": n_fit, "n_test": n_test, "fit_seconds": round(fit_s, 3),
-                      "predict_seconds": round(pred_s, 3)})
-            if per_fold:
-                r["per_fold"] = per_fold
-            if xt is not None:
-                if len(fold_list) > 1:
-                    last = make_model(name, n_features=X.shape[1], seed=seed, n_jobs=n_jobs,
-                                      progress=lambda s, t=t: say(f"[{t}]   {s}"),
-                                      cnn_epochs=cnn_epochs)
-                    every = thin if name in TIME_MODELS else slice(None)
-                    _fit(last, X[every], y[every], groups[every])
-                Xt = Xt_win[name] if name in TIME_MODELS else Xt_rows
-                r["transfer"] = classification_metrics(confusion_matrix(yt, last.predict(Xt)))
-            results[t][name] = r
-            msg = (f"[{t}] {name}: accuracy {100 * r['accuracy']:.2f}%, macro-F1 "
-                   f"{r['macro_f1']:.3f} (fit {fit_s:.1f} s)")
-            if "transfer" in r:
-                msg += (f"; transfer accuracy {100 * r['transfer']['accuracy']:.2f}%, macro-F1 "
-                        f"{r['transfer']['macro_f1']:.3f}")
-            say(msg)
-            if out is not None:
-                plot_confusion(cm, out / f"{t}_{name}_confusion.png",
-                               f"{t}: {name} ({split} split), accuracy "
-                               f"{100 * r['accuracy']:.2f}%, macro-F1 {r['macro_f1']:.3f}")
-                if "transfer" in r:
-                    tr = r["transfer"]
-                    plot_confusion(tr["confusion"], out / f"{t}_{name}_transfer_confusion.png",
-                                   f"{t}: {name} on the transfer logs, accuracy "
-                                   f"{100 * tr['accuracy']:.2f}%, macro-F1 {tr['macro_f1']:.3f}")
-                if hasattr(last, "plot_history"):
-                    last.plot_history(out / f"{t}_{name}_training.png",
-                                      f"{t}: {name} training accuracy and loss (paper Figs. "
-                                      "20-21)")
-            if hasattr(last, "history_"):
-                r["history"] = last.history_
-    return results
+            tab.yt = xt["label"].to_numpy(np.int64)
+            tab.xt_rows = xt[feats].to_numpy(np.float64)
+            tab.xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
+        return tab
+
+    def x(self, model: str) -> np.ndarray:
+        """The model's inputs: window features for a window model, else the rows."""
+        return self.x_win[model] if model in TIME_MODELS else self.x_rows
+
+    def xt(self, model: str) -> np.ndarray:
+        """The model's inputs on the transfer rows."""
+        return self.xt_win[model] if model in TIME_MODELS else self.xt_rows
+
+    def describe(self) -> str:
+        """The progress line of the table."""
+        folds = self.folds
+        return (f"[{self.name}] {self.n_rows:,} rows, {self.n_flights} flights, "
+                f"{self.n_features} features; "
+                f"{folds[0].name if len(folds) == 1 else f'{len(folds)} folds'}"
+                + (f"; transfer {len(self.yt):,} rows" if self.yt is not None else ""))
+
+
+def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
+               ) -> tuple[dict[str, Any], np.ndarray, Any, float]:
+    """Fit a fresh model ``make()`` on each fold's training rows and predict its test rows.
+
+    Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
+    fit time [s])."""
+    X, y, groups, t = tab.x(name), tab.y, tab.groups, tab.name
+    cm = np.zeros((len(CLASS_NAMES),) * 2, dtype=np.int64)
+    fit_s = pred_s = 0.0
+    n_train = n_test = n_fit = 0
+    last = None
+    per_fold: list[dict[str, Any]] = []
+    for fold in tab.folds:
+        est = make()
+        fit_rows = fold.train
+        if name in TIME_MODELS:
+            fit_rows = fit_rows[tab.thin[fit_rows]]
+        t0 = time.perf_counter()
+        _fit(est, X[fit_rows], y[fit_rows], groups[fit_rows])
+        t1 = time.perf_counter()
+        pred = est.predict(X[fold.test])
+        t2 = time.perf_counter()
+        fit_s += t1 - t0
+        pred_s += t2 - t1
+        n_train += len(fold.train)
+        n_fit += len(fit_rows)
+        n_test += len(fold.test)
+        fold_cm = confusion_matrix(y[fold.test], pred)
+        cm += fold_cm
+        last = est
+        if len(tab.folds) > 1:
+            fm = classification_metrics(fold_cm)
+            per_fold.append({"fold": fold.name, "n_test": len(fold.test),
+                             "accuracy": fm["accuracy"], "macro_f1": fm["macro_f1"]})
+            say(f"[{t}]   {name} {fold.name}: accuracy {100 * fm['accuracy']:.2f}%, "
+                f"macro-F1 {fm['macro_f1']:.3f} (fit {t1 - t0:.1f} s)")
+    r: dict[str, Any] = {"folds": len(tab.folds), "n_train": n_train, "n_fit": n_fit,
+                         "n_test": n_test, "fit_seconds": round(fit_s, 3),
+                         "predict_seconds": round(pred_s, 3)}
+    if per_fold:
+        r["per_fold"] = per_fold
+    return r, cm, last, fit_s
+
+
+def _fit_all(tab: _Table, name: str, make: Callable[[], Any]) -> Any:
+    """A fresh model fitted on every row (window models: every training row) of the table:
+    the one tested on the transfer rows after cross-validation."""
+    est = make()
+    every = tab.thin if name in TIME_MODELS else slice(None)
+    X = tab.x(name)
+    _fit(est, X[every], tab.y[every], tab.groups[every])
+    return est
+
+
+def _model_line(t: str, name: str, r: dict[str, Any], fit_s: float) -> str:
+    """The progress line of one model's result."""
+    msg = (f"[{t}] {name}: accuracy {100 * r['accuracy']:.2f}%, macro-F1 "
+           f"{r['macro_f1']:.3f} (fit {fit_s:.1f} s)")
+    if "transfer" in r:
+        msg += (f"; transfer accuracy {100 * r['transfer']['accuracy']:.2f}%, macro-F1 "
+                f"{r['transfer']['macro_f1']:.3f}")
+    return msg
+
+
+def _plot_model(out: Path, t: str, name: str, split: str, r: dict[str, Any], cm: np.ndarray,
+                model: Any) -> None:
+    """``OUT/<t>_<name>_confusion.png`` (+ ``_transfer_confusion.png``, and the CNN's
+    ``_training.png``)."""
+    plot_confusion(cm, out / f"{t}_{name}_confusion.png",
+                   f"{t}: {name} ({split} split), accuracy "
+                   f"{100 * r['accuracy']:.2f}%, macro-F1 {r['macro_f1']:.3f}")
+    if "transfer" in r:
+        tr = r["transfer"]
+        plot_confusion(tr["confusion"], out / f"{t}_{name}_transfer_confusion.png",
+                       f"{t}: {name} on the transfer logs, accuracy "
+                       f"{100 * tr['accuracy']:.2f}%, macro-F1 {tr['macro_f1']:.3f}")
+    if hasattr(model, "plot_history"):
+        model.plot_history(out / f"{t}_{name}_training.png",
+                           f"{t}: {name} training accuracy and loss (paper Figs. "
+                           "20-21)")

@@ -15,10 +15,11 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
+from tlm_process.cliutil import WRITE_PROBE
 from tlm_process.generate.errors import GenerateError
 
-__all__ = ["BIN_DIR", "BLOCK_RE", "PART_RE", "ROOT_FILES", "owned_dirs", "part_name",
-           "table_names", "tmp_name", "tmp_target"]
+__all__ = ["BIN_DIR", "BLOCK_RE", "PART_RE", "ROOT_FILES", "WRITE_PROBE", "owned_dirs",
+           "part_name", "table_names", "tmp_name", "tmp_target"]
 
 BIN_DIR = "bin"
 #: a per-flight part (table folders: .parquet; bin: .bin)
@@ -27,7 +28,6 @@ PART_RE = re.compile(r"^flight-(\d{8})\.(parquet|bin)$")
 BLOCK_RE = re.compile(r"^flights-(\d{8})-(\d{8})\.parquet$")
 #: files tlm writes at the top of a data set (plus its write probe)
 ROOT_FILES = ("manifest.json", "flights.jsonl", "manifest.parquet")
-WRITE_PROBE = ".tlm-write-test"
 _TMP_RE = re.compile(r"^\.(.+)\.tmp$")
 
 

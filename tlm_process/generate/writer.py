@@ -30,6 +30,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from tlm_process.cliutil import UsageError, foreign_entries, prepare_out
 from tlm_process.generate.compact import block_flights, drop_compacted_parts
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.layout import (
@@ -102,16 +103,12 @@ class DatasetWriter:
         other settings."""
         root = self.root
         try:
-            root.mkdir(parents=True, exist_ok=True)
-            probe = root / WRITE_PROBE
-            probe.write_bytes(b"")
-            probe.unlink()
-        except OSError as exc:
-            raise GenerateError(f"cannot write to output folder {root}: "
-                                f"{exc.strerror or exc}") from None
+            prepare_out(root)
+        except UsageError as exc:
+            raise GenerateError(str(exc)) from None
         header = read_header(root)
         if header is None:
-            foreign = sorted(p.name for p in root.iterdir() if not p.name.startswith("."))
+            foreign = foreign_entries(root)
             if foreign:
                 raise GenerateError(f"{root} is not empty and holds no tlm data set "
                                     f"({foreign[0]}, ...); use a new or empty --out folder")

@@ -1,6 +1,6 @@
 """The Time Line Modeling pipeline (paper §4-5): ingest, fault window anchoring (Eq. 4),
-feature processing (Algorithm 2), window stretching (Eq. 5), min-max scaling (Eq. 6), plots,
-and the ``tlm process`` command. See ``docs/pipeline.md``.
+feature processing (Algorithm 2), window stretching (Eq. 5), min-max scaling (Eq. 6), plots
+(the ``tlm process`` command is :mod:`tlm_process.commands.process`). See ``docs/pipeline.md``.
 
 Typical use::
 
@@ -11,8 +11,8 @@ Typical use::
     ds = build_dataset(processed, test_patterns=["combined_*"])
     ds.tables["GPS"]          # flight, split, TimeUS, label + scaled features
 
-Names are imported lazily (on first use), so that ``tlm_process.pipeline.command`` (imported
-by the ``tlm`` command line for ``--help``) does not pull in pandas and tlm_sim.
+Names are imported lazily (on first use), so that importing a submodule (the ``tlm``
+command line does for ``--help``) does not pull in pandas and tlm_sim.
 """
 
 from __future__ import annotations
@@ -22,11 +22,11 @@ from tlm_process._lazy import lazy_exports
 _EXPORTS: dict[str, str] = {
     "anchoring": "AnchorComparison FaultWindow anchor_by_position anchor_by_time anchor_flight "
                  "compare_methods label_tables",
+    "dataset": "Dataset ProcessedFlight ProcessOptions",
     "errors": "AnchorError IngestError PipelineError",
     "features": "DROP feature_table merge_tables",
     "ingest": "FaultRecord Flight parse_records read_flights",
-    "process": "Dataset ProcessedFlight ProcessOptions build_dataset process_flight "
-               "write_dataset",
+    "process": "build_dataset process_flight write_dataset",
     "scaling": "MinMaxScaler split_flights",
     "stretching": "PAPER_TABLE_7 PAPER_TABLE_8 class_counts fault_share format_counts "
                   "implied_lambda lambda_for_target stretch_schedule target_for_lambda",

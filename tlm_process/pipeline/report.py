@@ -12,15 +12,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+import pandas as pd
+
+from tlm_process.pipeline.dataset import Dataset, ProcessedFlight
 from tlm_process.pipeline.features import DROP, INSTANCE_COLUMN, NON_FEATURE, TIME_COLUMNS
 from tlm_process.pipeline.stretching import class_counts, fault_share, lambda_for_target
 
-if TYPE_CHECKING:
-    from tlm_process.pipeline.process import Dataset, ProcessedFlight
-
-__all__ = ["REPORT_FORMAT", "build_report", "flight_lines", "stretching_report"]
+__all__ = ["REPORT_FORMAT", "build_report", "counts_dict", "flight_lines", "stretching_report"]
 
 REPORT_FORMAT = "tlm.process"
 
@@ -37,10 +37,19 @@ def stretching_report(alpha: Mapping[str, float], gamma: float) -> dict[str, Any
     return out
 
 
+def counts_dict(counts: pd.DataFrame) -> dict[str, dict[str, int]]:
+    """``{table: {"0": n, ..., "4": n, "total": n}}`` from a class_counts table."""
+    out = {}
+    for name, row in counts.iterrows():
+        vals = row.to_numpy()
+        d = {str(k): int(vals[k]) for k in range(5)}
+        d["total"] = int(vals[5])
+        out[str(name)] = d
+    return out
+
+
 def build_report(ds: Dataset, extra: Mapping[str, Any]) -> dict[str, Any]:
     """The report.json document of a data set (``extra`` is merged in at the top level)."""
-    from tlm_process.pipeline.process import counts_dict
-
     counts = ds.counts
     alpha = fault_share(counts)
     by_split = {}

@@ -11,10 +11,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from typing import Any
 
-__all__ = ["add_parser", "cmd_params", "format_rows", "show_param_warnings"]
+__all__ = ["add_parser", "format_rows", "run"]
 
 
 def _number(v: float | None) -> str:
@@ -38,7 +37,7 @@ def format_rows(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def cmd_params(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     """List the parameters (all, or those named), as a table or as JSON."""
     from tlm_sim.params import parameter_list
 
@@ -52,8 +51,8 @@ def cmd_params(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
-    """Add ``params`` to the ``tlm`` subcommands."""
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``params`` to ``tlm``'s subcommands; returns its parser."""
     p = sub.add_parser(
         "params", help="list tlm's parameters: unit, range, default, modelled, description",
         description="List every parameter tlm knows (ArduPilot names and units, plus TLM_* "
@@ -68,20 +67,5 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     which.add_argument("--modelled", action="store_true", help="only parameters tlm models")
     which.add_argument("--unmodelled", action="store_true",
                        help="only parameters tlm does not model")
-    p.set_defaults(func=cmd_params)
-
-
-def show_param_warnings() -> None:
-    """Print ``UnmodelledParamWarning`` (a loaded parameter set changes parameters tlm does not
-    model) as one ``tlm: warning: ...`` line on stderr; other warnings as Python shows them."""
-    from tlm_sim.params import UnmodelledParamWarning
-
-    previous = warnings.showwarning
-
-    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
-        if issubclass(category, UnmodelledParamWarning):
-            print(f"tlm: warning: {message}", file=sys.stderr)
-        else:
-            previous(message, category, filename, lineno, file, line)
-
-    warnings.showwarning = show
+    p.set_defaults(func=run)
+    return p

@@ -1,0 +1,125 @@
+"""What the ``tlm`` subcommands share: the user-mistake error, argparse ``type=`` converters and
+the output folder (``--out``).
+
+A leaf module: it imports nothing else of tlm_process (and nothing heavy), so every subcommand
+module and the data set writer can use it without an import cycle or a slow ``tlm --help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+__all__ = ["UsageError", "WRITE_PROBE", "foreign_entries", "fraction", "int_at_least",
+           "is_one_of", "number", "positive_number", "prepare_out", "show_param_warnings",
+           "whole_number"]
+
+#: the empty file written and removed to check that an output folder can be written
+WRITE_PROBE = ".tlm-write-test"
+
+
+class UsageError(Exception):
+    """A user mistake: ``tlm`` reports it as one line on stderr, exit code 2."""
+
+
+# ------------------------------------------------------------------ argument types -------
+def whole_number(text: str) -> int:
+    """An integer >= 0."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError("must be >= 0")
+    return v
+
+
+def number(text: str) -> float:
+    """Any float."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def positive_number(text: str) -> float:
+    """A float > 0."""
+    v = number(text)
+    if not v > 0:
+        raise argparse.ArgumentTypeError("must be > 0")
+    return v
+
+
+def int_at_least(low: int) -> Callable[[str], int]:
+    """A converter to a whole number >= ``low`` (``low`` >= 1)."""
+    def convert(text: str) -> int:
+        v = whole_number(text)
+        if v < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}")
+        return v
+
+    convert.__name__ = f"int_at_least_{low}"
+    return convert
+
+
+def fraction(*, zero: bool) -> Callable[[str], float]:
+    """A converter to a share below 1: in [0, 1) with ``zero``, else in (0, 1)."""
+    def convert(text: str) -> float:
+        v = number(text)
+        if not (0 <= v < 1 if zero else 0 < v < 1):
+            raise argparse.ArgumentTypeError(f"{text} is not in {'[' if zero else '('}0, 1)")
+        return v
+
+    convert.__name__ = "fraction"
+    return convert
+
+
+# ------------------------------------------------------------------ output folder --------
+def prepare_out(out: str | os.PathLike) -> Path:
+    """Create output folder ``out`` (and its parents) and check that a file can be written
+    in it (an empty probe file, removed at once).
+
+    Raises:
+        UsageError: ``cannot write to output folder OUT: REASON``.
+    """
+    d = Path(out)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        probe = d / WRITE_PROBE
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as e:
+        raise UsageError(f"cannot write to output folder {d}: {e.strerror or e}") from None
+    return d
+
+
+def foreign_entries(d: Path) -> list[str]:
+    """Sorted names of what folder ``d`` holds, hidden entries (``.name``) left out: a folder
+    with any is not empty for a command that refuses to mix its output with other files."""
+    return sorted(p.name for p in d.iterdir() if not p.name.startswith("."))
+
+
+def is_one_of(out: str | os.PathLike, paths: Iterable[str | os.PathLike]) -> bool:
+    """Whether output folder ``out`` is one of ``paths`` (compared resolved)."""
+    target = Path(out).resolve()
+    return any(Path(p).resolve() == target for p in paths)
+
+
+def show_param_warnings() -> None:
+    """Print ``UnmodelledParamWarning`` (a loaded parameter set changes parameters tlm does not
+    model) as one ``tlm: warning: ...`` line on stderr; other warnings as Python shows them."""
+    from tlm_sim.params import UnmodelledParamWarning
+
+    previous = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
+        if issubclass(category, UnmodelledParamWarning):
+            print(f"tlm: warning: {message}", file=sys.stderr)
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show

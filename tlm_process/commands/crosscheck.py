@@ -1,0 +1,77 @@
+"""``tlm crosscheck SITL.bin``: fly a SITL log's scenario in tlm and report how far apart they are
+(:mod:`tlm_process.crosscheck`).
+
+Writes ``DIR/report.md`` with overlay plots (trajectory, altitude and speed, IMU spectrum) and
+``R.json``; ``--max-flight-time-diff`` and ``--max-trajectory-rms`` turn it into a regression
+gate (exit code 1 when exceeded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from tlm_process.cliutil import UsageError, prepare_out
+from tlm_process.crosscheck.compare import (
+    DEFAULT_MAX_FLIGHT_TIME_DIFF,
+    DEFAULT_MAX_TRAJECTORY_RMS_M,
+    cell,
+)
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``crosscheck`` to ``tlm``'s subcommands; returns its parser."""
+    c = sub.add_parser(
+        "crosscheck", help="fly a SITL log's scenario in tlm and compare the two",
+        description="Rebuild a real ArduPilot SITL flight (mission from CMD, parameters from "
+                    "PARM, faults from the sidecar or from SIM_* parameter changes), fly it in "
+                    "tlm, align the two at arming and report per channel how far apart they "
+                    "are. Exit code 1 when a --max-* threshold is exceeded.")
+    c.add_argument("log", help="the SITL .bin")
+    c.add_argument("--sidecar", help="fault sidecar JSON (default: LOG.json beside the log)")
+    c.add_argument("--seed", type=int, help="tlm seed (default: the sidecar's, else 0)")
+    c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
+    c.add_argument("--out", metavar="DIR", help="write report.md and overlay PNGs here")
+    c.add_argument("--max-flight-time-diff", type=float, default=None, metavar="FRAC",
+                   help=f"fail when armed flight time differs by more than FRAC "
+                        f"(issue target {DEFAULT_MAX_FLIGHT_TIME_DIFF})")
+    c.add_argument("--max-trajectory-rms", type=float, default=None, metavar="M",
+                   help=f"fail when the trajectory RMS exceeds M metres (issue target "
+                        f"{DEFAULT_MAX_TRAJECTORY_RMS_M})")
+    c.set_defaults(func=run)
+    return c
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``tlm crosscheck``."""
+    from tlm_process.crosscheck.compare import crosscheck, format_report, gate, plot, to_json
+    from tlm_process.crosscheck.scenario import ScenarioError
+
+    if not Path(args.log).is_file():
+        raise FileNotFoundError(2, "no such log", args.log)
+    try:
+        r = crosscheck(args.log, args.sidecar, args.seed)
+    except ScenarioError as e:
+        raise UsageError(str(e)) from None
+    text = format_report(r)
+    print(text.split("\n| metric")[0])
+    ft = r["flight_time_s"]
+    print(f"flight time: tlm {ft['tlm']:.1f} s, SITL {ft['sitl']:.1f} s")
+    for f in r["faults"]:
+        keys = list(f["sitl"])[:3]
+        print(f"fault {f['type']}: " + ", ".join(
+            f"{k} tlm {cell(f['tlm'].get(k))} / SITL {cell(f['sitl'].get(k))}" for k in keys))
+    if args.out:
+        out = prepare_out(args.out)
+        plot(r, out)
+        (out / "report.md").write_text(text)
+        print(f"written            {out}/report.md (+ trajectory.png, profiles.png, imu_psd.png)")
+    if args.json:
+        Path(args.json).write_text(json.dumps(to_json(r), indent=1) + "\n")
+    bad = gate(r, args.max_flight_time_diff, args.max_trajectory_rms)
+    for b in bad:
+        print(f"tlm crosscheck: FAIL: {b}")
+    return 1 if bad else 0

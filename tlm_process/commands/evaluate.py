@@ -1,0 +1,272 @@
+"""``tlm evaluate DS``: the paper's classifiers, its CNN and a time-window model on a data set
+(:mod:`tlm_process.evaluate`).
+
+``run`` reports user mistakes itself (one line on stderr, exit code 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from tlm_process.cliutil import fraction, int_at_least, prepare_out, whole_number
+from tlm_process.commands.process import report_user_errors
+
+__all__ = ["MODEL_NAMES", "TABLE_NAMES", "add_parser", "run"]
+
+MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
+               "RandomForest", "RandomTree", "CNN", "WindowHGB", "WindowHGB60", "CentredHGB")
+TABLE_NAMES = ("GPS", "IMU", "RATE", "VIBE")
+
+DESCRIPTION = """\
+Evaluate fault classifiers on a 'tlm process' data set as the paper's section 5 does, and
+more honestly: the ten Weka classifiers of Table 11 (as scikit-learn estimators), the paper's
+row-image CNN and WindowHGB, a model that sees the last seconds of each flight. Prints the
+Table 11-style table per data table (Weka's weighted TP rate, FP rate, precision, recall, F1;
+'?' where precision is undefined because a class is never predicted) plus macro-F1.
+"""
+
+EPILOG = f"""\
+models: all, or a comma list of {', '.join(MODEL_NAMES)}
+
+splits:
+  --split flight   (default) no flight in both training and test: the data set's own
+                   train/test flights (tlm process --test-frac/--test-flight), else grouped
+                   k-fold over flights (--folds, default 5)
+  --split random   the paper's random row split (stratified; test share as the data set's,
+                   or --test-frac); --folds K gives row k-fold CV. Neighbouring rows of one
+                   flight then land on both sides: compare with --split flight to see the leak
+
+transfer:
+  --test-on LOG... trains on the data set and also tests on these logs (.bin + sidecar as
+                   the reference SITL logs, tlm fly folders, ...), processed with the data
+                   set's options and scaled with its scaler; adds a 'transfer' entry per model
+                   and, with --out, DIR/feature_shift.csv (per feature and class: KS statistic
+                   and percentiles of data set vs transfer rows)
+
+outputs:
+  stdout           Table 11 per table; confusion matrix and per-class scores (Tables 12-18)
+                   of the best model by macro-F1 (all models with --details)
+  --json R.json    {{TABLE: {{MODEL: {{accuracy, macro_f1, weighted_precision, weighted_recall,
+                   weighted_f1, weighted_tp_rate, weighted_fp_rate, per_class, confusion,
+                   transfer, ...}}}}}}; undefined values are null
+  --out DIR        DIR/<TABLE>_<MODEL>_confusion.png (+ _transfer_confusion.png),
+                   DIR/<TABLE>_CNN_training.png (Figs. 20-21), DIR/report.txt
+
+examples:
+  tlm evaluate ds --table GPS --models RandomForest,J48,WindowHGB
+  tlm evaluate ds --table all --split random --json random.json
+  tlm evaluate ds --table GPS --test-on ../shared/reference/sitl/*.bin --out eval-out
+"""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add the ``evaluate`` subcommand to ``tlm``'s subparsers; returns its parser."""
+    p = subparsers.add_parser(
+        "evaluate", help="train and score fault classifiers on a 'tlm process' data set",
+        description=DESCRIPTION, epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dataset", metavar="DS", help="a 'tlm process' output folder")
+    p.add_argument("--table", default="all", metavar="GPS|IMU|RATE|VIBE|all",
+                   help="data table(s), comma-separated (default all)")
+    p.add_argument("--models", default="all", metavar="all|NAME,NAME",
+                   help="models to run (default all; see below)")
+    p.add_argument("--split", choices=("flight", "random"), default="flight",
+                   help="flight: whole flights (default); random: the paper's row split")
+    p.add_argument("--folds", type=int_at_least(2), default=None, metavar="K",
+                   help="K-fold cross-validation (over flights, or rows with --split random) "
+                        "instead of one hold-out")
+    p.add_argument("--test-frac", type=fraction(zero=False), default=None, metavar="F",
+                   help="--split random: share of rows tested (default: the data set's test "
+                        "share, else 0.25)")
+    p.add_argument("--seed", type=whole_number, default=0,
+                   help="seed of the splits and models (default 0); same seed, same results")
+    p.add_argument("--json", metavar="R.json", help="write the results as JSON")
+    p.add_argument("--test-on", nargs="+", action="extend", default=[], metavar="LOG",
+                   help="transfer test: also test on these logs (.bin + sidecar, tlm fly "
+                        "folders, ...)")
+    p.add_argument("--out", metavar="DIR", help="write confusion-matrix PNGs, the CNN's "
+                                                "training curves and report.txt here")
+    p.add_argument("--details", action="store_true",
+                   help="print every model's confusion matrix and per-class scores")
+    p.add_argument("--jobs", type=int_at_least(1), default=1, metavar="N",
+                   help="CPU threads for RandomForest and KNN (default 1)")
+    p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
+                   help="CNN training epochs (default 10)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(func=run)
+    return p
+
+
+def _tables(text: str) -> list[str]:
+    from tlm_process.evaluate.data import EvaluateError
+
+    items = [s.strip().upper() for s in text.split(",") if s.strip()]
+    if not items:
+        raise EvaluateError("--table: no table given")
+    if "ALL" in items:
+        return list(TABLE_NAMES)
+    bad = [s for s in items if s not in TABLE_NAMES]
+    if bad:
+        raise EvaluateError(f"--table: unknown table {bad[0]!r}; choose from "
+                         f"{', '.join(TABLE_NAMES)} or all")
+    return list(dict.fromkeys(items))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``tlm evaluate``; 0 on success, 2 on a user error (one line on stderr)."""
+    return report_user_errors(_run, args)
+
+
+def _best(results: dict, key: str = "macro_f1", transfer: bool = False) -> str | None:
+    best, score = None, -1.0
+    for m, r in results.items():
+        v = (r.get("transfer") or {}).get(key) if transfer else r.get(key)
+        if v is not None and v == v and v > score:
+            best, score = m, v
+    return best
+
+
+def _check(args: argparse.Namespace, models: list[str]) -> None:
+    """Raise EvaluateError for options that exclude each other, a --json folder, or CNN
+    without torch: before anything is read."""
+    from tlm_process.evaluate.data import EvaluateError
+
+    if args.split != "random" and args.test_frac is not None:
+        raise EvaluateError("--test-frac applies to --split random only (the flight split "
+                            "uses the data set's test flights or --folds)")
+    if args.split == "random" and args.test_frac is not None and args.folds is not None:
+        raise EvaluateError("--test-frac and --folds exclude each other")
+    if args.json and Path(args.json).is_dir():
+        raise EvaluateError(f"--json {args.json}: is a folder")
+    if "CNN" in models:
+        from tlm_process.evaluate.cnn import require_torch
+
+        try:
+            require_torch()
+        except ImportError as e:
+            raise EvaluateError(str(e)) from None
+
+
+def _run(args: argparse.Namespace) -> int:
+    from tlm_process.evaluate.runner import resolve_models
+
+    tables = _tables(args.table)
+    models = resolve_models(args.models)
+    _check(args, models)
+    import numpy as np
+
+    from tlm_process.evaluate.data import load_dataset, load_transfer
+    from tlm_process.evaluate.runner import evaluate
+
+    t_start = time.perf_counter()
+    quiet = args.quiet
+
+    def say(msg: str) -> None:
+        if not quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    ds = load_dataset(args.dataset, tables)
+    transfer = None
+    if args.test_on:
+        say(f"reading {len(args.test_on)} transfer log(s) with the data set's options and "
+            f"scaler")
+        transfer = load_transfer(args.test_on, ds, tables)
+    out = prepare_out(args.out) if args.out else None
+    np.seterr(all="ignore")
+    results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
+                       folds=args.folds, test_frac=args.test_frac, transfer=transfer,
+                       out_dir=out, progress=say, n_jobs=args.jobs,
+                       cnn_epochs=args.cnn_epochs)
+    lines: list[str] = []
+    for t, res in results.items():
+        lines += _table_lines(t, res, args, details_of=_shown(res, args.details,
+                                                             transfer is not None))
+    if transfer is not None:
+        lines.append(_shift_text(ds, transfer, out))
+    text = "\n".join(lines).rstrip() + "\n"
+    print(text, end="")
+    _write(text, results, out, args.json)
+    say(f"done in {time.perf_counter() - t_start:.1f} s"
+        + (f"; wrote {args.json}" if args.json else "")
+        + (f"; plots in {out}/" if out is not None else ""))
+    return 0
+
+
+def _shown(res: dict, details: bool, transfer: bool) -> list[str]:
+    """Models whose confusion matrix is printed: all with --details, else the best by
+    macro-F1 (and the best on the transfer logs, when there are any)."""
+    shown = list(res) if details else [m for m in {_best(res)} if m]
+    if transfer and not details:
+        bt = _best(res, transfer=True)
+        if bt and bt not in shown:
+            shown.append(bt)
+    return shown
+
+
+def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[str]
+                 ) -> list[str]:
+    """One table's report: the Table 11-style table, the confusion matrices and per-class
+    scores of the models ``details_of``, the models with undefined precision."""
+    from tlm_process.evaluate.metrics import (
+        format_confusion,
+        format_per_class,
+        format_results_table,
+    )
+
+    first = next(iter(res.values()))
+    how = (f"{args.split} split, {first['folds']} folds" if first["folds"] > 1 else
+           f"{args.split} split")
+    lines = [format_results_table(
+        res, f"{t}: {first['n_test']:,} test rows, {first['n_train'] // first['folds']:,}"
+             f" training rows per fold ({how}, seed {args.seed})"
+             + (f"; transfer: {first['transfer']['n']:,} rows of "
+                f"{len(args.test_on)} log(s)" if "transfer" in first else ""),
+        transfer="transfer" in first)]
+    for m in details_of:
+        r = res[m]
+        lines.append("")
+        lines.append(format_confusion(r["confusion"], title=f"{t} {m}: confusion matrix "
+                                                             "(rows true, columns predicted)"))
+        lines.append(format_per_class(r, title=f"{t} {m}: per class"))
+        if "transfer" in r:
+            lines.append(format_confusion(r["transfer"]["confusion"],
+                                          title=f"{t} {m}: confusion on the transfer logs"))
+            lines.append(format_per_class(r["transfer"],
+                                          title=f"{t} {m}: per class on the transfer logs"))
+    undefined = {m: r["undefined_precision"] for m, r in res.items()
+                 if r["undefined_precision"]}
+    if undefined:
+        lines.append("")
+        lines.append("'?': precision undefined (paper: NaN) because the model never "
+                     "predicts " + "; ".join(f"{m}: {', '.join(c)}"
+                                             for m, c in undefined.items()))
+    lines.append("")
+    return lines
+
+
+def _shift_text(ds, transfer: dict, out: Path | None) -> str:
+    """The feature-shift table of data set vs transfer rows (also ``OUT/feature_shift.csv``)."""
+    from tlm_process.evaluate.shift import feature_shift, format_shift
+
+    scaled = bool((ds.report.get("scaling") or {}).get("applied", True))
+    shift = feature_shift(ds.tables, transfer, ds.features, ds.scaler, scaled)
+    if out is not None:
+        shift.to_csv(out / "feature_shift.csv", index=False, float_format="%.6g")
+    return format_shift(shift)
+
+
+def _write(text: str, results: dict, out: Path | None, json_path: str | None) -> None:
+    """``OUT/report.txt`` (with --out) and the results as JSON (with --json)."""
+    from tlm_process.evaluate.metrics import to_jsonable
+
+    if out is not None:
+        (out / "report.txt").write_text(text)
+    if json_path:
+        jp = Path(json_path)
+        if jp.parent != Path(""):
+            jp.parent.mkdir(parents=True, exist_ok=True)
+        jp.write_text(json.dumps(to_jsonable(results), indent=1) + "\n")

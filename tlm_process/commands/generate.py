@@ -1,0 +1,249 @@
+"""``tlm generate --flights N --out DS``: a labelled fault data set of many simulated flights
+(:func:`tlm_process.generate.generate`).
+
+``run`` reports user mistakes itself (one line on stderr, exit code 2); exit code 1 when some
+flights failed (they are in the manifest with their error), 130 after Ctrl-C or SIGTERM, 2
+when the Dask scheduler was lost (the data set is closed, incomplete).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import signal
+import sys
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from tlm_process.cliutil import UsageError
+
+__all__ = ["add_parser", "build_config", "run"]
+
+DESCRIPTION = """\
+Fly many Monte Carlo flights and write them as one labelled data set: missions (the four
+built-in shapes and random Algorithm 1 missions, fresh altitude profiles), no-fault,
+single-fault and paper-style flights (GPS, accel, engine, RC in one flight), fault start times
+and holds (scaled by lambda), wind and sensor noise, all drawn from --seed. Flight i is the
+same whatever --flights, executor or worker count; re-running the command continues an
+interrupted data set.
+"""
+
+EPILOG = """\
+writes:
+  DS/GPS.parquet DS/IMU.parquet ...  one folder per table, one part per flight, column
+                                     'flight'; read with tlm_process.generate.
+                                     read_dataset_table(DS, 'GPS') (or, once the manifest
+                                     says complete, pandas.read_parquet('DS/GPS.parquet'))
+  DS/faults.parquet                  Eq. 4 fault records, column 'flight'
+  DS/manifest.json                   settings, tlm version, state, runs
+  DS/flights.jsonl, DS/manifest.parquet   per flight: scenario, seed, status, timings, error
+  DS/bin/flight-00000042.bin         with --bin: ArduPilot DataFlash logs
+  DS/GPS.parquet/flights-00000000-00000099.parquet   with --compact: 100 flights per file
+
+defaults: kinds none=0.2,single=0.4,paper=0.4; missions builtin=0.5,random=0.5; wind
+SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/2_RND
+0-0.5 deg/s, SIM_BARO/BAR2_RND 0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: none of these).
+--config FILE (.json/.yaml) sets any scenario setting (docs/generate.md); flags override it.
+
+examples:
+  tlm generate --flights 1000 --out ds --seed 1
+  tlm generate --flights 200 --out ds-paper --kinds paper=1 --profile paper --lambda 1.5
+  tlm generate --flights 5000 --out ds --scheduler tcp://127.0.0.1:8786   # via an SSH tunnel
+  tlm fly --from-manifest ds --flight 123 --out flight123    # one flight again, alone
+"""
+
+
+def _shares(text: str, flag: str) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in (s for s in text.replace(" ", "").split(",") if s):
+        name, sep, value = item.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out[name.lower()] = float(value)
+        except ValueError:
+            raise UsageError(f"{flag} expects NAME=SHARE,..., got {text!r}") from None
+    return out
+
+
+def _params(items: Sequence[str]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for it in items:
+        name, sep, value = it.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out[name.strip().upper()] = float(value)
+        except ValueError:
+            raise UsageError(f"--param expects NAME=VALUE, got {it!r}") from None
+    return out
+
+
+def _ranges(items: Sequence[str]) -> dict[str, tuple[float, float]]:
+    out: dict[str, tuple[float, float]] = {}
+    for it in items:
+        name, sep, value = it.partition("=")
+        lo, sep2, hi = value.partition(":")
+        try:
+            if not (sep and sep2):
+                raise ValueError
+            out[name.strip().upper()] = (float(lo), float(hi))
+        except ValueError:
+            raise UsageError(f"--range expects NAME=LOW:HIGH, got {it!r}") from None
+    return out
+
+
+def _config_file(path: str) -> dict[str, Any]:
+    import yaml
+
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise UsageError(f"--config: cannot read {p}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise UsageError(f"--config: cannot read {p}: not UTF-8 text ({exc.reason} at byte "
+                          f"{exc.start})") from None
+    try:
+        doc = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as exc:
+        msg = str(exc).splitlines()[0]
+        raise UsageError(f"--config: {p} is not valid JSON/YAML: {msg}") from None
+    if not isinstance(doc, dict):
+        raise UsageError(f"--config: {p} must hold a mapping of scenario settings")
+    return doc
+
+
+def build_config(args: argparse.Namespace) -> Any:
+    """The ScenarioConfig of the command line (``--config`` file, then the flags)."""
+    from tlm_process.generate.scenario import ScenarioConfig
+
+    d: dict[str, Any] = _config_file(args.config) if args.config else {}
+    if args.kinds:
+        d["kinds"] = _shares(args.kinds, "--kinds")
+    if args.missions:
+        d["missions"] = _shares(args.missions, "--missions")
+    if args.profile:
+        d["profile"] = args.profile
+    if args.lam is not None:
+        d["lam"] = args.lam
+    ranges = dict(ScenarioConfig().ranges if "ranges" not in d else d["ranges"])
+    if args.no_env:
+        ranges = {}
+    ranges.update(_ranges(args.range or []))
+    params = {**dict(d.get("params") or {}), **_params(args.param or [])}
+    for name in params:  # a fixed value replaces a drawn one
+        ranges.pop(name, None)
+    d["ranges"], d["params"] = ranges, params
+    return ScenarioConfig.from_dict(d)
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``generate`` to ``tlm``'s subcommands; returns its parser."""
+    p = subparsers.add_parser(
+        "generate", help="fly many sampled flights into one labelled data set",
+        description=DESCRIPTION, epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--flights", type=int, required=True,
+                   help="number of flights N (0..N-1), at most 100000000")
+    p.add_argument("--out", required=True, help="data set folder (new, empty, or one to continue)")
+    p.add_argument("--seed", type=int, default=0, help="run seed: every draw comes from it "
+                                                       "(default 0)")
+    ex = p.add_argument_group("where flights run")
+    ex.add_argument("--workers", type=int, help="local workers (default: all cores)")
+    ex.add_argument("--executor", choices=("auto", "process", "thread"), default="auto",
+                    help="local threads or processes; auto (default): threads up to 4 "
+                         "workers (faster on few cores), processes above")
+    ex.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                    help="run on a Dask distributed cluster (unauthenticated: use only a "
+                         "scheduler you started, on loopback / an SSH tunnel or with TLS; see "
+                         "docs/generate.md)")
+    ex.add_argument("--dask-local", type=int, metavar="N",
+                    help="start a Dask LocalCluster of N worker processes")
+    ex.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
+                    help="give up reaching the Dask scheduler after S seconds, and stop a "
+                         "run whose scheduler is silent that long (default 10)")
+    sc = p.add_argument_group("scenarios")
+    lam = sc.add_mutually_exclusive_group()
+    lam.add_argument("--lambda", dest="lam", type=float, metavar="L",
+                     help="fault window factor: every fault is held L times as long "
+                          "(Eq. 5; default 1)")
+    lam.add_argument("--target-fault-ratio", type=float, metavar="G",
+                     help="choose lambda = G / alpha, alpha measured on pilot flights, so about "
+                          "a share G of the rows is in fault windows")
+    sc.add_argument("--kinds", metavar="none=A,single=B,paper=C",
+                    help="shares of no-fault, single-fault and paper-style (all four faults) "
+                         "flights")
+    sc.add_argument("--missions", metavar="builtin=A,random=B",
+                    help="shares of built-in shapes and random Algorithm 1 missions")
+    sc.add_argument("--profile", choices=("current", "paper"),
+                    help="ArduPilot semantics (default current)")
+    sc.add_argument("--param", action="append", metavar="NAME=VALUE",
+                    help="fixed parameter for every flight (repeatable)")
+    sc.add_argument("--range", action="append", metavar="NAME=LOW:HIGH",
+                    help="parameter drawn uniformly per flight (repeatable)")
+    sc.add_argument("--no-env", action="store_true",
+                    help="no drawn wind or extra sensor noise (the reference SITL settings)")
+    sc.add_argument("--config", metavar="FILE", help="scenario settings (.json/.yaml)")
+    out = p.add_argument_group("output")
+    out.add_argument("--tables", metavar="GPS,IMU,...",
+                     help="tables to write (default: all the simulator logs)")
+    out.add_argument("--bin", action="store_true", help="also write DS/bin/flight-N.bin")
+    out.add_argument("--compact", action="store_true",
+                     help="at the end, merge each table's per-flight parts into one file per "
+                          "100 flights (fewer files, faster reads; also on a finished data set)")
+    out.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt(handler: Any) -> Iterator[None]:
+    """SIGTERM stops a run like Ctrl-C (main thread only; elsewhere nothing changes)."""
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _print_line(line: str) -> None:
+    """Print ``line`` to stdout, escaping what its encoding cannot hold (the undecodable
+    bytes of a non-UTF-8 --out, which Python keeps as lone surrogates)."""
+    enc = getattr(sys.stdout, "encoding", None) or "utf-8"
+    print(line.encode(enc, "backslashreplace").decode(enc))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``tlm generate``; returns the exit code."""
+    from tlm_process.generate.errors import GenerateError
+    from tlm_process.generate.runner import GenerateOptions, generate
+
+    def _term(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        config = build_config(args)
+        tables = None if not args.tables else [t for t in args.tables.split(",") if t.strip()]
+        opts = GenerateOptions(
+            out=Path(args.out), flights=args.flights, seed=args.seed, config=config,
+            target_fault_ratio=args.target_fault_ratio, tables=tables, bin_log=args.bin,
+            executor=args.executor, workers=args.workers, scheduler=args.scheduler,
+            dask_local=args.dask_local, progress=False if args.no_progress else None,
+            connect_timeout_s=args.connect_timeout, compact=args.compact)
+        with _sigterm_as_interrupt(_term):
+            report = generate(opts)
+    except (UsageError, GenerateError) as exc:
+        print(f"tlm: error: {exc}", file=sys.stderr)
+        return 2
+    for line in report.lines():
+        _print_line(line)
+    if report.interrupted:
+        return 130
+    return 1 if report.failed else 0

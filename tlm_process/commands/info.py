@@ -1,0 +1,36 @@
+"""``tlm info LOG.bin``: the summary of a DataFlash log (:func:`tlm_process.binlog.log_info`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from tlm_process.binlog import format_info, log_info
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``info`` to ``tlm``'s subcommands; returns its parser."""
+    i = sub.add_parser(
+        "info", help="summarise a DataFlash .bin log: messages, modes, changes, faults",
+        description="Summarise an ArduPilot DataFlash .bin log: time span and armed time, "
+                    "firmware, each message type's count, instances and rate, flight modes "
+                    "with reasons, parameters changed in flight, and faults found (SIM_* "
+                    "parameter changes, tlm fault MSG lines, a sidecar LOG.json).")
+    i.add_argument("log", help="the .bin file")
+    i.add_argument("--json", metavar="R.json", help="also write the summary as JSON")
+    i.add_argument("--all-params", action="store_true",
+                   help="list housekeeping parameter changes too (STAT_*, MIS_TOTAL, ...)")
+    i.set_defaults(func=run)
+    return i
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the summary of one .bin log (and optionally write it as JSON)."""
+    info = log_info(args.log, all_params=args.all_params)
+    print(format_info(info))
+    if args.json:
+        Path(args.json).write_text(json.dumps(info, indent=1) + "\n")
+    return 0

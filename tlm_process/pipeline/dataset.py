@@ -1,0 +1,116 @@
+"""What the TLM pipeline works with: its options, a processed flight, and the data set of
+many flights (:mod:`.process` makes them, :mod:`.report` describes them)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import pandas as pd
+
+from tlm_process.pipeline.anchoring import (
+    DEFAULT_MAX_MATCH_M,
+    AnchorComparison,
+    FaultWindow,
+    Method,
+)
+from tlm_process.pipeline.errors import PipelineError
+from tlm_process.pipeline.ingest import DATA_TABLES, Flight
+from tlm_process.pipeline.scaling import MinMaxScaler
+from tlm_process.pipeline.stretching import class_counts
+
+__all__ = ["PHASES", "Dataset", "ProcessOptions", "ProcessedFlight"]
+
+PHASES = ("armed", "all")
+
+
+@dataclass(frozen=True)
+class ProcessOptions:
+    """How flights are processed.
+
+    ``method``: anchoring ("auto", "time", "position"; see :mod:`.anchoring`). ``phase``:
+    "armed" keeps rows from arming to disarming (EV 10/11) — what a log with ArduPilot's
+    default LOG_DISARMED=0 holds, as the paper's did — or "all" rows of the log. ``instance``:
+    sensor instance kept (0; None keeps all, see :mod:`.features`). ``max_match_m``: position
+    anchoring's "matches nowhere" distance [m]. ``tables``: data tables to build.
+    """
+
+    method: Method = "auto"
+    phase: str = "armed"
+    instance: int | None = 0
+    max_match_m: float = DEFAULT_MAX_MATCH_M
+    tables: tuple[str, ...] = DATA_TABLES
+
+    def __post_init__(self) -> None:
+        if self.phase not in PHASES:
+            raise PipelineError(f"unknown phase {self.phase!r}; use {' or '.join(PHASES)}")
+        bad = [t for t in self.tables if t not in DATA_TABLES]
+        if bad or not self.tables:
+            raise PipelineError(f"unknown data table(s) {', '.join(bad) or '(none)'}; choose "
+                                f"from {', '.join(DATA_TABLES)}")
+
+
+@dataclass
+class ProcessedFlight:
+    """One processed flight: its windows, the anchoring comparison, labelled raw tables (kept
+    phase; for plots) and feature tables (``flight, TimeUS, label, features``)."""
+
+    flight: Flight
+    windows: list[FaultWindow]
+    comparison: list[AnchorComparison]
+    labelled: dict[str, pd.DataFrame]
+    features: dict[str, pd.DataFrame]
+    span_us: tuple[int, int] | None
+    phase: str
+    home_alt: float | None = None
+    home_source: str | None = None
+
+    def release(self) -> None:
+        """Drop the raw and labelled tables (kept: windows, features, summary), to hold many
+        flights in memory."""
+        self.labelled = {}
+        self.flight.tables = {}
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary for report.json."""
+        f = self.flight
+        windows = []
+        for w in self.windows:
+            d: dict[str, Any] = {
+                "index": w.index, "type": w.type, "label": w.label, "method": w.method,
+                "start_us": int(w.start_us),
+                "end_us": int(w.end_us) if math.isfinite(w.end_us) else None,
+                "held_to_end": not math.isfinite(w.end_us),
+                "rows": {n: int(((df["TimeUS"] >= w.start_us) & (df["TimeUS"] < w.end_us)).sum())
+                         for n, df in self.features.items()},
+            }
+            windows.append(d)
+        return {
+            "id": f.id, "source": f.source, "kind": f.kind,
+            "phase": self.phase,
+            "span_us": list(self.span_us) if self.span_us is not None else None,
+            "rows": {n: len(df) for n, df in self.features.items()},
+            "home_alt_m": self.home_alt, "home_alt_source": self.home_source,
+            "faults": windows,
+            "anchoring_disagreement": [c.to_dict() for c in self.comparison],
+            **({"meta": f.meta} if f.meta else {}),
+        }
+
+
+@dataclass
+class Dataset:
+    """Merged, split and (optionally) scaled tables of many flights, plus what made them."""
+
+    tables: dict[str, pd.DataFrame]
+    features: dict[str, list[str]]
+    train: list[str]
+    test: list[str]
+    scaler: MinMaxScaler | None
+    flights: list[dict[str, Any]] = field(default_factory=list)
+    options: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def counts(self) -> pd.DataFrame:
+        """Rows per class and table (paper Table 7 layout)."""
+        return class_counts(self.tables)
