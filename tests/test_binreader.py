@@ -645,6 +645,21 @@ def test_renamed_fmt_is_reported(ref_slice, tmp_path):
         read_bin(ref_slice.path, ["RATE"])  # the intact log: no warning
 
 
+def test_a_real_message_of_a_known_layout_is_not_taken_for_a_renamed_one(ref_slice, tmp_path):
+    """NKF1 has XKF1's layout: a log cut before XKF1's FMT is not 'damaged' (found by
+    test_truncated_file_gives_prefix_without_warning); only a one-bit rename is."""
+    from tlm_sim.flightlog.binscan import _one_bit_apart
+
+    assert _one_bit_apart("RATA", "RATE") and _one_bit_apart("GPS", "GPR")
+    assert not _one_bit_apart("NKF1", "XKF1")  # N ^ X has three bits
+    assert not _one_bit_apart("RATE", "RATE") and not _one_bit_apart("RAT", "RATE")
+    xkf1 = _fmt_offset(ref_slice, "XKF1")
+    src = tmp_path / "cut.bin"
+    src.write_bytes(ref_slice.data[:xkf1])
+    log, warned = _read_checked(src)
+    assert not any("has the layout of" in w for w in warned)
+
+
 def test_lost_messages_are_counted_per_type(ref_slice, tmp_path, capsys):
     """Item 7: what the reader drops is counted per type and printed by tlm info/convert."""
     n_vibe = len(ref_slice.tables["VIBE"])

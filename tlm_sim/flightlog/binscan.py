@@ -413,10 +413,20 @@ def _by_name(p: Path, formats: dict[int, LogFormat], fmt_at: np.ndarray, counts:
     return by_name
 
 
+def _one_bit_apart(a: str, b: str) -> bool:
+    """Whether names ``a`` and ``b`` differ by one flipped bit (same length, one character)."""
+    if len(a) != len(b):
+        return False
+    diff = [ord(x) ^ ord(y) for x, y in zip(a, b, strict=True) if x != y]
+    return len(diff) == 1 and diff[0] & (diff[0] - 1) == 0
+
+
 def _renamed(p: Path, by_name: dict[str, LogFormat]) -> list[str]:
     """Types whose FMT name looks damaged: their layout (format and columns) is exactly that
-    of a message tlm knows which the log does not define (e.g. RATE's FMT with a flipped bit
-    in its name, so that every RATE message is read under another name)."""
+    of a message tlm knows which the log does not define, and their name is one flipped bit
+    from that message's (e.g. RATE's FMT read as 'RAUE', so that every RATE message is read
+    under another name). The bit test keeps real messages of the same layout apart: a log cut
+    before XKF1's FMT still holds NKF1, whose layout is XKF1's."""
     from .schema import SCHEMAS
 
     layouts = {(s.fmt, s.columns): n for n, s in SCHEMAS.items() if n not in by_name}
@@ -426,7 +436,7 @@ def _renamed(p: Path, by_name: dict[str, LogFormat]) -> list[str]:
         if known is not None and (known.fmt, known.columns) == (f.format, f.columns):
             continue
         was = layouts.get((f.format, f.columns))
-        if was is not None:
+        if was is not None and _one_bit_apart(name, was):
             out.append(f"{p.name}: type {f.type} is named {name!r} but has the layout of "
                        f"{was}, which the log does not define: a damaged FMT name? (its "
                        f"messages are read as {name}, none as {was})")
