@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _show_compile_notices() -> None:
     """Print tlm_sim.precompile's notices ("compiling the flight loop ...", "compiled in 20 s")
-    on stderr: a cold numba cache makes the first flight after an install take ~20 s."""
+    on stderr: a cold numba cache makes the first flight after an install take seconds."""
     lg = logging.getLogger("tlm_sim.precompile")
     if not lg.handlers:
         h = logging.StreamHandler(sys.stderr)

@@ -4,13 +4,12 @@ All three are ``concurrent.futures`` executors (Dask through ``Client.get_execut
 generator submits, waits and cancels the same way whichever runs the flights:
 
 * ``auto`` (default): ``thread`` for up to :data:`AUTO_THREADS_MAX` workers, ``process`` above.
-  On the project's 2-core machine threads were faster (no worker start-up, no result
-  pickling: 0.20-0.22 CPU s per paper-style flight against 0.24, and 25-50 % more flights per
-  minute in interleaved 300-flight runs); about a fifth of a flight holds the GIL, so threads
-  stop scaling at a few cores, where processes take over.
+  On a few cores threads are faster (no worker start-up, no result pickling; docs/generate.md
+  has the measurements); part of a flight holds the GIL, so threads stop scaling at a few
+  cores, where processes take over.
 * ``process``: ``ProcessPoolExecutor`` with the ``spawn`` start method, one flight per
   task. Workers ignore SIGINT and SIGTERM (the parent handles both and lets running flights
-  finish) and import tlm_sim on start (~2.6 s of CPU), which points them at the same on-disk
+  finish) and import tlm_sim on start (seconds of CPU), which points them at the same on-disk
   numba cache as the parent (``NUMBA_CACHE_DIR`` is inherited), so a worker loads the
   compiled flight instead of compiling it. A worker that dies (a crash in native code) does
   not stop the run. A worker whose parent dies (even by SIGKILL) exits within

@@ -7,7 +7,7 @@ Tables keep the column types of ``tlm_sim.flightlog.tableio`` (``f`` columns as 
 exact; integers in their ArduPilot width; scaled integers as float64) and its schema metadata
 (``tlm.message``, ``tlm.fmt``, ``tlm.units``, ``tlm.mults``). Encoding: zstd, no dictionary
 pages, BYTE_STREAM_SPLIT for floating-point columns, statistics for ``flight`` and ``TimeUS``
-only (measured on a paper-style flight: ~2x faster and ~40 % smaller than pyarrow's defaults).
+only (faster and smaller than pyarrow's defaults; measured in docs/generate.md).
 
 Fault parts have a fixed Arrow schema (:data:`FAULT_SCHEMA`, one row per record, zero rows for
 a flight without faults), so every flight's part reads into one table; ``params_start`` /
