@@ -18,8 +18,8 @@ import numpy as np
 
 from tlm_sim import logger as L
 from tlm_sim._jit import loop_jit, tick_jit
-from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
+from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.events import ERR_CRASH_CHECK
 from tlm_sim.control.modes import vehicle_step
@@ -29,7 +29,7 @@ from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
-from tlm_sim.ekf.lanes import ekf_init, ekf_update
+from tlm_sim.ekf.lanes import ekf_init, ekf_output, ekf_update
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
@@ -151,6 +151,7 @@ def run_flight(
     gyro = work[2][6]
     acc_ned = work[2][7]
     nav = work[2][8]
+    eo = work[3]
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
     rc_init(s, 0.0)
@@ -211,7 +212,7 @@ def run_flight(
         rc_update(s, scfg, float(t_us))
         switched = ekf_update(
             ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
-            gps_new, gps[0:3], gps[3:6], gps[8] > 0.5,
+            gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
             baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], c[C.ARMED] != 0.0,
         )
         if switched:  # ERR EKF_PRIMARY with the new lane index
@@ -219,36 +220,9 @@ def run_flight(
             if r >= 0:
                 bufs[L.K_ERR][r, 1] = 24.0
                 bufs[L.K_ERR][r, 2] = sel[EK.SEL_PRIMARY]
-        lane = int(sel[EK.SEL_PRIMARY])
-        e = ekf[lane]
-        for k in range(3):
-            pos[k] = e[EK.PN + k]
-            vel[k] = e[EK.VN + k]
-        if e[EK.F_CONST_POS] != 0.0:
-            # no horizontal position from the EKF (constant-position mode): AC_PosControl's
-            # estimate is then the EKF origin, as the AHRS call fails and leaves it at zero
-            # (gps_s12.bin: PSCN.PN / PSCE.PE are 0.000 from "stopped aiding" to "is using GPS")
-            pos[0] = 0.0
-            pos[1] = 0.0
-        for k in range(4):
-            q[k] = e[EK.QW + k]
-        ib = S.IMU_BASE + int(e[EK.IMU_INDEX]) * S.IMU_STRIDE
-        for k in range(3):
-            gyro[k] = s[ib + S.I_GYR_F + k] - e[EK.BGX + k]
-        # kinematic acceleration NED from the filtered accel rotated by the EKF attitude
-        ax = s[ib + S.I_ACC_F] - e[EK.BAX]
-        ay = s[ib + S.I_ACC_F + 1] - e[EK.BAY]
-        az = s[ib + S.I_ACC_F + 2] - e[EK.BAZ]
-        acc_ned[0] = e[EK.R00] * ax + e[EK.R01] * ay + e[EK.R02] * az
-        acc_ned[1] = e[EK.R10] * ax + e[EK.R11] * ay + e[EK.R12] * az
-        acc_ned[2] = e[EK.R20] * ax + e[EK.R21] * ay + e[EK.R22] * az + 9.80665
-        nav[FS.NAV_INNOV_VD] = e[EK.INNOV_VD]
-        nav[FS.NAV_INNOV_HGT] = e[EK.INNOV_HGT]
-        nav[FS.NAV_VEL_TR] = e[EK.VEL_TR]
-        nav[FS.NAV_POS_TR] = e[EK.POS_TR]
-        nav[FS.NAV_MAG_TR] = e[EK.MAG_TR]
-        nav[FS.NAV_BAD_IMU] = e[EK.BAD_IMU]
-        nav[FS.NAV_POS_OK] = 1.0 if e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0 else 0.0
+        ekf_output(ekf, sel, eo)
+        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
+        e = ekf[int(eo[EK.O_PRIMARY])]
         vehicle_step(
             c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, n_path, seg,
             s[S.RC_LAST_FRAME_US], nav,
@@ -516,11 +490,14 @@ def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, h
 # ------------------------------------------------------------------------- Python entry point
 
 
-def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3), and a (8, 9)
-    block whose rows are imu_ok, the GPS epoch, motor PWM, EKF position, velocity, attitude,
-    gyro, NED acceleration and the EKF status for the failsafe checks (control.failsafe NAV_*)."""
-    return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9))
+def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a (9, 9)
+    block whose rows are imu_ok, the GPS epoch (sensors.layout GE_*), motor PWM, and the
+    controllers' inputs of control.ahrs (position, velocity, attitude, gyro, NED acceleration,
+    the EKF status for the failsafe checks, control.failsafe NAV_*); the EKF output block
+    (ekf.layout O_*)."""
+    return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9)),
+            np.zeros(EK.N_OUT))
 
 
 def _configs(p: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

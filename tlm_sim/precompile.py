@@ -105,7 +105,7 @@ JOBS: tuple[Job, ...] = (
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.UniTuple(_F2, 3), _U1, _U1), 2.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U1, _U1), 2.0)
 
 
 @dataclass
