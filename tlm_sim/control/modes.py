@@ -68,10 +68,10 @@ HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
 
 
 @tick_jit
-def set_mode(c, mode, rsn, t_us, mode_buf, counts, k_mode):
+def set_mode(c, mode, rsn, t_us, bufs, counts):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
-    E.log_row3(mode_buf, counts, k_mode, t_us, mode, mode, rsn)
+    E.log_mode(bufs, counts, t_us, mode, rsn)
 
 
 @tick_jit
@@ -156,7 +156,7 @@ def _start_land(c, pos, failsafe):
 @tick_jit
 def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its sections
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
-    mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
+    bufs, counts,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
@@ -185,14 +185,14 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         rate_reset(c)
         if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
             # arm in GUIDED (as the reference driver did) and start the motors
-            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
+            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, bufs, counts)
             c[C.ARMED] = 1.0
             c[C.LANDED] = 1.0
             c[C.HOME_YAW] = _yaw(q)
             c[C.SUBMODE] = C.SUB_GROUND_IDLE
             c[C.SUB_TIMER] = 0.0
             c[C.SPOOL] = 1.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_ARMED)
+            E.log_ev(bufs, counts, t_us, E.EV_ARMED)
         return
 
     c[C.SUB_TIMER] += dt
@@ -202,35 +202,35 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     if rc_late and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
+        E.log_err(bufs, counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
+        E.log_err(bufs, counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
             if _position_ok(c):
-                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, bufs, counts)
                 _start_rtl(c, g, pos, vel, seg)
                 sub = C.SUB_RTL_CLIMB
             else:  # RTL needs a position: LAND without one, after a pause
-                set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, bufs, counts)
                 _start_land(c, pos, True)
                 sub = C.SUB_LAND
     elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+        E.log_err(bufs, counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
 
     # ------------------------------------------------- vibration and EKF failsafes (10 Hz)
-    fs = failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err)
+    fs = failsafe_checks(c, g, t_us, nav, bufs, counts)
     if fs != FS_NONE and sub != C.SUB_GROUND_IDLE and c[C.LANDED] == 0.0:
         needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
             c[C.MODE] == C.MODE_RTL)
         if needs_position or g[C.G_FS_EKF_ACTION] == 3.0:
             if fs == FS_EKF_ALTHOLD:
-                set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, bufs, counts)
                 _start_land(c, pos, True)
                 c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
             elif c[C.MODE] != C.MODE_LAND:
-                set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, bufs, counts)
                 _start_land(c, pos, True)
             sub = C.SUB_LAND
 
@@ -239,7 +239,7 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         output_idle(c, g, g[C.G_MOT_SPIN_ARM])
         attitude_reset(c, 0.0, 0.0, _yaw(q))
         if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_AUTO_ARMED)
+            E.log_ev(bufs, counts, t_us, E.EV_AUTO_ARMED)
         if c[C.SUB_TIMER] >= ARMING_DELAY_S:
             c[C.SUBMODE] = C.SUB_TAKEOFF
             c[C.SUB_TIMER] = 0.0
@@ -262,7 +262,7 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
         if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
             # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
-            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
+            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, bufs, counts)
             c[C.TAKEOFF_DONE_T] = -1.0
         if c[C.MODE] == C.MODE_AUTO and done > 0.0:
             if c[C.TAKEOFF_DONE_T] < 0.0:
@@ -343,8 +343,8 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
             c[C.PZ_VEL_FF] = 0.0
             c[C.PZ_POS_T] = pos[2]
         if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE)
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
+            E.log_ev(bufs, counts, t_us, E.EV_LAND_COMPLETE)
+            E.log_ev(bufs, counts, t_us, E.EV_DISARMED)
             c[C.ARMED] = 0.0
             c[C.SUBMODE] = C.SUB_LANDED
             c[C.DISARM_TIME] = t_s
@@ -401,7 +401,7 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE_MAYBE)
+            E.log_ev(bufs, counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
     else:
@@ -409,15 +409,15 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_NOT_LANDED)
+            E.log_ev(bufs, counts, t_us, E.EV_NOT_LANDED)
 
     # ------------------------------------------------------------- crash and thrust-loss checks
-    thrust_loss_check(c, dt, q, vel[2], err_buf, counts, k_err, t_us)
+    thrust_loss_check(c, dt, q, vel[2], bufs, counts, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
-            E.log_row2(err_buf, counts, k_err, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
+            E.log_err(bufs, counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
+            E.log_ev(bufs, counts, t_us, E.EV_DISARMED)
             c[C.ARMED] = 0.0
             c[C.SUBMODE] = C.SUB_LANDED
             c[C.DISARM_TIME] = t_s
