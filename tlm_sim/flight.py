@@ -142,105 +142,131 @@ def run_flight(
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
     generator, wind_rng: wind turbulence generator (tlm_sim.rng). Allocation-free.
+
+    The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
+    the flight ends 2 s after the autopilot disarms, or at t_end_us.
     """
-    n_path = path.shape[0]
-    dang, dvel = work[0], work[1]
-    imu_ok = work[2][0]
-    gps = work[2][1]
-    pwm = work[2][2]
-    pos = work[2][3]
-    vel = work[2][4]
-    q = work[2][5]
-    gyro = work[2][6]
-    acc_ned = work[2][7]
-    nav = work[2][8]
-    eo = work[3]
+    dang, dvel, rows, eo = work
+    imu_ok, gps, pwm = rows[0], rows[1], rows[2]
+    pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
+    _boot(s, scfg, ekf, sel, ecfg, bufs, counts)
+    k_sched = 0
+    t_us = 0
+    next_loop = 0
+    tick = 0
+    last_gps_ms = 0.0
+    stop_at = -1
+    while t_us < t_end_us:
+        k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
+                                  applied)
+        t_us = _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng)
+        if t_us < next_loop:
+            continue
+        next_loop += LOOP_DT_US
+        tick += 1
+        gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
+                                                   rng)
+        _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
+                  mag_new, s, c[C.ARMED] != 0.0, bufs, counts)
+        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
+        vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
+                     seg, s[S.RC_LAST_FRAME_US], nav, bufs, counts)
+        last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
+                                home, x, s, scfg, c, ekf, sel, eo, pos)
+        if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
+            stop_at = t_us + 2000000
+        if stop_at >= 0 and t_us >= stop_at:
+            break
+    return t_us
+
+
+@tick_jit
+def _boot(s, scfg, ekf, sel, ecfg, bufs, counts):
+    """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
     rc_init(s, 0.0)
     s[S.B_NEXT_US] = 0.0
     s[S.M_NEXT_US] = 0.0
     ekf_init(ekf, sel, ecfg)
-    home_lat, home_lon, home_alt = home[0], home[1], home[2]
-    k_sched = 0
-    t_us = 0
-    next_loop = 0
-    tick = 0
-    gps_new = False
-    baro_new = False
-    mag_new = False
-    last_gps_ms = 0.0
-    stop_at = -1
-    dt_loop = LOOP_DT_US * 1e-6
-    log_mode(bufs, counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)  # the boot mode
-    while t_us < t_end_us:
-        # ------------------------------------------------------------- physics tick (1200 Hz)
-        k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
-                                  applied)
-        _motor_pwm(c, scfg, pwm)
-        physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
-        t_us += PHYSICS_DT_US
-        thr_sum = 0.0
-        n_on = 0
-        for i in range(4):
-            if pwm[i] > 0.0:
-                thr_sum += (pwm[i] - 1000.0) / 1000.0
-                n_on += 1
-        throttle = thr_sum / n_on if n_on > 0 else 0.0
-        imu_sample(s, x, scfg, float(t_us), throttle, rng)
-        if t_us < next_loop:
-            continue
-        # ------------------------------------------------------------- main loop (400 Hz)
-        next_loop += LOOP_DT_US
-        tick += 1
-        for i in range(S.N_IMU):
-            imu_ok[i] = imu_take_deltas(s, i, dt_loop, dang, dvel)
-        gps_push_truth(s, x, t_us * 1e-6)
-        gps_new = False
-        if gps_due(s, float(t_us)):
-            gps_measure(s, scfg, float(t_us), gps, rng)
-            gps_new = True
-        baro_new = False
-        if t_us >= s[S.B_NEXT_US]:
-            s[S.B_NEXT_US] += 100000.0
-            baro_sample(s, x, scfg, rng)
-            baro_new = True
-        mag_new = False
-        if t_us >= s[S.M_NEXT_US]:
-            s[S.M_NEXT_US] += 100000.0
-            mag_sample(s, x, scfg, rng)
-            mag_new = True
-        rc_update(s, scfg, float(t_us))
-        switched = ekf_update(
-            ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
-            gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
-            baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], c[C.ARMED] != 0.0,
-        )
-        ekf_output(ekf, sel, eo)
-        if switched:
-            log_lane_switch(bufs, counts, t_us, eo)
-        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
-        vehicle_step(
-            c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, n_path, seg,
-            s[S.RC_LAST_FRAME_US], nav,
-            bufs, counts,
-        )
-        # ------------------------------------------------------------- logging
-        if gps_new:
-            last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt,
-                                  gps_time, last_gps_ms)
-        if tick % 16 == 0:  # IMU at 25 Hz, both instances
-            log_imu(bufs, counts, t_us, s, scfg)
-        if tick % 40 == 0:  # 10 Hz messages
-            log_sensors_10hz(bufs, counts, t_us, s, home_alt)
-            log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home_lat, home_lon, home_alt)
-            log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
-            log_dynamics_10hz(bufs, counts, t_us, x, home_lat, home_lon, home_alt)
-        if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
-            stop_at = t_us + 2000000
-        if stop_at >= 0 and t_us >= stop_at:
-            break
+    log_mode(bufs, counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
+
+
+@tick_jit
+def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
+    """One 1200 Hz physics step at t_us: the motors driven by the autopilot's PWM (as the
+    engine fault alters it), the rigid body, the IMU sampling it; returns the new time [us]."""
+    _motor_pwm(c, scfg, pwm)
+    physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
+    t_us += PHYSICS_DT_US
+    thr_sum = 0.0
+    n_on = 0
+    for i in range(4):
+        if pwm[i] > 0.0:
+            thr_sum += (pwm[i] - 1000.0) / 1000.0
+            n_on += 1
+    throttle = thr_sum / n_on if n_on > 0 else 0.0
+    imu_sample(s, x, scfg, float(t_us), throttle, rng)
     return t_us
+
+
+@tick_jit
+def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
+    """The main loop's sensor reads at t_us: IMU deltas (imu_ok per instance), the GPS epoch
+    into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
+    compass) new this tick."""
+    for i in range(S.N_IMU):
+        imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
+    gps_push_truth(s, x, t_us * 1e-6)
+    gps_new = False
+    if gps_due(s, float(t_us)):
+        gps_measure(s, scfg, float(t_us), gps, rng)
+        gps_new = True
+    baro_new = False
+    if t_us >= s[S.B_NEXT_US]:
+        s[S.B_NEXT_US] += 100000.0
+        baro_sample(s, x, scfg, rng)
+        baro_new = True
+    mag_new = False
+    if t_us >= s[S.M_NEXT_US]:
+        s[S.M_NEXT_US] += 100000.0
+        mag_sample(s, x, scfg, rng)
+        mag_new = True
+    rc_update(s, scfg, float(t_us))
+    return gps_new, baro_new, mag_new
+
+
+@tick_jit
+def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
+              armed, bufs, counts):
+    """The EKF's main-loop update with this tick's sensor data, its output block eo filled
+    (ekf.layout O_*) and a primary-lane change logged."""
+    switched = ekf_update(
+        ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
+        gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
+        baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], armed,
+    )
+    ekf_output(ekf, sel, eo)
+    if switched:
+        log_lane_switch(bufs, counts, t_us, eo)
+
+
+@tick_jit
+def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
+              c, ekf, sel, eo, pos):
+    """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz
+    messages. Returns the last GPS epoch's ms of week."""
+    if gps_new:
+        last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
+                              gps_time, last_gps_ms)
+    if tick % 16 == 0:  # IMU at 25 Hz, both instances
+        log_imu(bufs, counts, t_us, s, scfg)
+    if tick % 40 == 0:  # 10 Hz messages
+        log_sensors_10hz(bufs, counts, t_us, s, home[2])
+        log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])
+        log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
+        log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
+    return last_gps_ms
 
 
 # ------------------------------------------------------------------------- Python entry point
