@@ -77,7 +77,9 @@ class Job:
     cost_s: float
 
 
-#: run_flight's direct callees and fly()'s set-up, with their signatures. No job may call
+#: the big subtrees below run_flight (called directly or from its small per-tick helpers:
+#: _physics_tick, _read_sensors, _estimate, _log_tick, which run_flight's own compile covers)
+#: and fly()'s set-up, with the exact signatures they are called with. No job may call
 #: another: a function two jobs share (prepare_path, new_row, ekf_init) is compiled inside
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
