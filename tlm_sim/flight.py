@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from tlm_sim import logger as L
-from tlm_sim._jit import loop_jit, tick_jit
+from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.config import build_control_config
@@ -180,7 +180,7 @@ def run_flight(
     return t_us
 
 
-@tick_jit
+@inline_jit
 def _boot(s, scfg, ekf, sel, ecfg, bufs, counts):
     """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
@@ -192,7 +192,7 @@ def _boot(s, scfg, ekf, sel, ecfg, bufs, counts):
     log_mode(bufs, counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
 
-@tick_jit
+@inline_jit
 def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
     """One 1200 Hz physics step at t_us: the motors driven by the autopilot's PWM (as the
     engine fault alters it), the rigid body, the IMU sampling it; returns the new time [us]."""
@@ -210,7 +210,7 @@ def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
     return t_us
 
 
-@tick_jit
+@inline_jit
 def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
     """The main loop's sensor reads at t_us: IMU deltas (imu_ok per instance), the GPS epoch
     into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
@@ -236,7 +236,7 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
     return gps_new, baro_new, mag_new
 
 
-@tick_jit
+@inline_jit
 def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
               armed, bufs, counts):
     """The EKF's main-loop update with this tick's sensor data, its output block eo filled
@@ -251,7 +251,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
         log_lane_switch(bufs, counts, t_us, eo)
 
 
-@tick_jit
+@inline_jit
 def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
               c, ekf, sel, eo, pos):
     """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz

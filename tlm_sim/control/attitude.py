@@ -9,7 +9,7 @@ roll/pitch/yaw outputs in motor units (+-1).
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 
 
@@ -179,7 +179,7 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
 
 
-@tick_jit
+@inline_jit
 def _shape_yaw(c, g, tc, dt):
     """The heading target moves towards the command with its rate (YAW_RATE_CMD) as
     feed-forward, slew-limited (G_SLEW_YAW) and acceleration-limited; tc: input time constant
@@ -195,7 +195,7 @@ def _shape_yaw(c, g, tc, dt):
     c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
 
 
-@tick_jit
+@inline_jit
 def _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro_z):
     """Body-rate targets [rad/s] from the angle controllers' rates r0..r2 and the
     feed-forward ff0..ff2: the feed-forward fades out while the thrust-vector error te [rad]

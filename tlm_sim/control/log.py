@@ -4,7 +4,7 @@
 import math
 
 from tlm_sim import logger as L
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
@@ -27,7 +27,7 @@ def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
         _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
 
 
-@tick_jit
+@inline_jit
 def _log_rate(bufs, counts, t_us, c):
     """RATE: rate targets, measurements and outputs per axis [deg/s], vertical acceleration."""
     d = L.RAD2DEG
@@ -45,7 +45,7 @@ def _log_rate(bufs, counts, t_us, c):
         b[r, RATE.AOutSlew] = 0.0
 
 
-@tick_jit
+@inline_jit
 def _log_att(bufs, counts, t_us, c, eo):
     """ATT: attitude targets and the EKF's attitude [deg, yaw 0..360]."""
     d = L.RAD2DEG
@@ -63,7 +63,7 @@ def _log_att(bufs, counts, t_us, c, eo):
         b[r, ATT.AEKF] = 3.0
 
 
-@tick_jit
+@inline_jit
 def _log_ctun(bufs, counts, t_us, c, eo, s):
     """CTUN: throttle, altitude target and estimates, climb rates."""
     r = L.new_row(bufs, counts, L.K_CTUN, t_us)
@@ -83,7 +83,7 @@ def _log_ctun(bufs, counts, t_us, c, eo, s):
         b[r, CTUN.CRt] = round(-eo[EK.O_VD] * 100.0)
 
 
-@tick_jit
+@inline_jit
 def _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax):
     """PSCN (ax 0), PSCE (1) or PSCD (2): position, velocity and acceleration desired, target
     and actual. The three messages share one column order (PSC names PSCN's columns)."""

@@ -15,7 +15,7 @@ tlm_sim.control.failsafe.
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import (
@@ -195,7 +195,7 @@ def vehicle_step(
     _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, bufs, counts)
 
 
-@tick_jit
+@inline_jit
 def _estimates_update(c, g, pos, acc_ned, dt):
     """Every tick, armed or not: the 1 Hz low-pass of the earth-frame acceleration (land and
     crash detectors), the height-rate filter and the air density ratio of the motors' density
@@ -207,7 +207,7 @@ def _estimates_update(c, g, pos, acc_ned, dt):
     c[C.AIR_RHO_RATIO] = g[C.G_RHO_RATIO_HOME] - g[C.G_RHO_RATIO_GRAD] * pos[2]
 
 
-@tick_jit
+@inline_jit
 def _disarmed_step(c, g, t_us, t_s, q, bufs, counts):
     """Disarmed: motors off; at TLM_ARM_TIME arm in GUIDED (as the reference driver did) and
     start the motors."""
@@ -224,7 +224,7 @@ def _disarmed_step(c, g, t_us, t_s, q, bufs, counts):
         E.log_ev(bufs, counts, t_us, E.EV_ARMED)
 
 
-@tick_jit
+@inline_jit
 def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, bufs, counts):
     """The radio failsafe: no RC frame for RC_FS_TIMEOUT -> ERR 2/2, 5/1 and RTL (LAND without
     a position); frames again -> ERR 5/0. Returns the submode to continue with."""
@@ -250,7 +250,7 @@ def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, bufs, coun
     return sub
 
 
-@tick_jit
+@inline_jit
 def _nav_failsafes(c, g, t_us, sub, pos, nav, bufs, counts):
     """The vibration and EKF failsafes (10 Hz): an EKF failsafe in flight -> LAND (or AltHold
     with FS_EKF_ACTION 2) where the mode needs a position. Returns the submode."""
@@ -271,7 +271,7 @@ def _nav_failsafes(c, g, t_us, sub, pos, nav, bufs, counts):
     return C.SUB_LAND
 
 
-@tick_jit
+@inline_jit
 def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, bufs, counts):
     """Armed on the ground: motors at MOT_SPIN_ARM, EV AUTO_ARMED, then after ARMING_DELAY the
     takeoff starts (controllers reset here, a vertical segment to the takeoff altitude)."""
@@ -290,7 +290,7 @@ def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, bufs, counts):
         path_start(c)
 
 
-@tick_jit
+@inline_jit
 def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, bufs, counts):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
@@ -313,7 +313,7 @@ def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, bufs, counts):
     return yaw_cmd, yaw_rate_ff, sub == C.SUB_LAND
 
 
-@tick_jit
+@inline_jit
 def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, bufs, counts):
     """GUIDED takeoff up the vertical segment; AUTO at TAKEOFF_AUTO_FRAC of the altitude, the
     route once the first waypoint has been held TAKEOFF_WP_DWELL_S."""
@@ -335,7 +335,7 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, bufs, counts):
             path_start(c)
 
 
-@tick_jit
+@inline_jit
 def _nav_waypoints(c, g, pos, vel, path, n_path, seg):
     """AUTO along the mission; RTL once the last waypoint is reached. Returns the path's
     heading [rad] (NaN: keep the yaw)."""
@@ -349,7 +349,7 @@ def _nav_waypoints(c, g, pos, vel, path, n_path, seg):
     return heading
 
 
-@tick_jit
+@inline_jit
 def _nav_rtl_climb(c, g, pos, vel, seg):
     """RTL's climb to the return altitude, then the return leg home at that altitude."""
     heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, True)
@@ -360,7 +360,7 @@ def _nav_rtl_climb(c, g, pos, vel, seg):
         path_start(c)
 
 
-@tick_jit
+@inline_jit
 def _nav_rtl_return(c, g, pos, vel, seg):
     """RTL's return leg at RTL_SPEED; loiter once within WP_RADIUS of home."""
     speed_cap = g[C.G_RTL_SPEED]
@@ -370,7 +370,7 @@ def _nav_rtl_return(c, g, pos, vel, seg):
         c[C.SUB_TIMER] = 0.0
 
 
-@tick_jit
+@inline_jit
 def _nav_rtl_loiter(c, g):
     """RTL's loiter above home for RTL_LOIT_TIME, then LAND; returns the yaw command (home's)."""
     c[C.PXY_VEL_FF] = 0.0
@@ -385,7 +385,7 @@ def _nav_rtl_loiter(c, g):
     return c[C.HOME_YAW]
 
 
-@tick_jit
+@inline_jit
 def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, bufs, counts):
     """LAND: hold the height through a failsafe's pause, else hold the landing point and
     descend; disarm once landed. Returns True when it disarmed (the tick ends)."""
@@ -429,7 +429,7 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, bufs, counts):
     return False
 
 
-@tick_jit
+@inline_jit
 def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_yaw, sin_yaw, cos_tilt, yaw_cmd,
                  yaw_rate_ff, v_batt):
     """Position (xy, z), attitude and rate controllers and the mixer; returns the throttle."""
@@ -458,7 +458,7 @@ def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_yaw, sin_yaw, cos_til
     return thr
 
 
-@tick_jit
+@inline_jit
 def _hover_learning(c, g, dt, sub, thr, vel, q):
     """MOT_HOVER_LEARN 2 with ArduCopter's conditions: flying, no desired climb or descent,
     climb rate below 0.6 m/s, roll and pitch within 5 deg. (Cruise pitches the copter beyond
@@ -479,7 +479,7 @@ def _hover_learning(c, g, dt, sub, thr, vel, q):
         c[C.THR_HOVER] = min(max(h, 0.125), 0.6875)
 
 
-@tick_jit
+@inline_jit
 def _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts):
     """The land detector: throttle at its lower limit, little acceleration and climb rate for
     LAND_DETECT_S -> landed (EV LAND_COMPLETE_MAYBE after LAND_MAYBE_S); EV NOT_LANDED once
@@ -501,7 +501,7 @@ def _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts):
             E.log_ev(bufs, counts, t_us, E.EV_NOT_LANDED)
 
 
-@tick_jit
+@inline_jit
 def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, bufs, counts):
     """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
     (ERR 12/1, EV DISARMED)."""

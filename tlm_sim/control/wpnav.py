@@ -35,7 +35,7 @@ yaw rate, as ArduCopter's AUTO yaw follows them).
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 
 # path rows: (pn, pe, pd) of the point, then data of the leg that ENDS at that point
@@ -370,7 +370,7 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     return _set_targets(c, path, n, i, s, vff, aff), done
 
 
-@tick_jit
+@inline_jit
 def _allowed_speed(path, n, i, s, speed_cap):
     """(speed [m/s] allowed at arc length s [m] of leg i by the next legs' speeds and corners
     and by the path's end, two legs of look-ahead; the leg's acceleration [m/s^2])."""
@@ -397,7 +397,7 @@ def _allowed_speed(path, n, i, s, speed_cap):
     return v_allow, a_max
 
 
-@tick_jit
+@inline_jit
 def _start_stop(c, g, path, i, s, a_max, dt):
     """Start the S-curve's own jerk-limited stop (PATH_STOP_*) when the path's end is its
     stopping distance away (s: arc length on leg i [m]; a_max [m/s^2]; dt [s])."""
@@ -414,7 +414,7 @@ def _start_stop(c, g, path, i, s, a_max, dt):
                 c[C.PATH_STOP_A] = a_max
 
 
-@tick_jit
+@inline_jit
 def _speed_step(c, g, v_allow, a_max, dt):
     """One step of the target's speed: the stop profile once started, else a jerk-limited
     (WPNAV_JERK) tracker of v_allow [m/s] (acceleration-limited without a jerk limit).
@@ -448,7 +448,7 @@ def _speed_step(c, g, v_allow, a_max, dt):
     return v_new, a, False
 
 
-@tick_jit
+@inline_jit
 def _set_targets(c, path, n, i, s, vff, aff):
     """Position-controller targets at arc length s [m] of leg i, velocity and acceleration
     feed-forwards for the target's speed vff [m/s] and acceleration aff [m/s^2] along the path

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from tlm_sim._jit import loop_jit, tick_jit
+from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
@@ -141,7 +141,7 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
     smoothing_reset(x)
 
 
-@tick_jit
+@inline_jit
 def _ground_contact(x: np.ndarray, fh: float, was_on_ground: bool, vd: float,
                     t_s: float) -> None:
     """Ground contact (SITL's NO_MOVEMENT behaviour) after a step: on the ground (frame height

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ekf.layout import (
     ACC_DT,
     ACC_DVD,
@@ -316,7 +316,7 @@ def predict_covariance(e, q_att, q_vel, q_gb, q_ab):
     _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab)
 
 
-@tick_jit
+@inline_jit
 def _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab):
     """End of the covariance prediction: mirror the upper triangle of P's 9 x 15 block into
     the lower one, add the process noise (variances, see :func:`predict_covariance`) within

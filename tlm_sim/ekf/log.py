@@ -4,7 +4,7 @@ ERR row of a primary-lane change. Columns by name (:mod:`tlm_sim.logger`)."""
 import math
 
 from tlm_sim import logger as L
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ekf import layout as EK
 from tlm_sim.geo import ne_to_latlon_scalar
 
@@ -38,7 +38,7 @@ def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home_lat, home_lon, home_alt)
         b[r, POS.RelOriginAlt] = -eo[EK.O_PD]
 
 
-@tick_jit
+@inline_jit
 def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
     """XKF1 and XKF4 rows of lane ln (its row el of the ekf array)."""
     d = L.RAD2DEG

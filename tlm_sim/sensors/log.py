@@ -4,7 +4,7 @@
 import math
 
 from tlm_sim import logger as L
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.imu import vibe
@@ -43,7 +43,7 @@ def log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_tim
     return ms
 
 
-@tick_jit
+@inline_jit
 def _log_gpa(bufs, counts, t_us, ms, last_ms):
     """The GPA row of a GPS epoch at ms of week (last_ms: the previous epoch's, 0 for none)."""
     r = L.new_row(bufs, counts, L.K_GPA, t_us)
@@ -111,7 +111,7 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
             b[r, RCIN.C1 + k] = s[S.RC_CH + k]
 
 
-@tick_jit
+@inline_jit
 def _log_baro(bufs, counts, t_us, s, home_alt, i):
     """One BARO row (instance i; both instances log the one simulated barometer)."""
     r = L.new_row(bufs, counts, L.K_BARO, t_us)
