@@ -15,7 +15,7 @@ from tlm_sim import logger as L
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.ekf import layout as EK
-from tlm_sim.ekf.lanes import ekf_output
+from tlm_sim.ekf.lanes import ekf_output, ekf_output_nav
 from tlm_sim.flight import new_work
 from tlm_sim.flightlog.schema import SCHEMAS
 from tlm_sim.sensors import layout as S
@@ -161,6 +161,11 @@ def test_ekf_output_carries_what_the_autopilot_needs(primary):
                     (EK.O_PN, EK.PN), (EK.O_VD, EK.VD)):
         assert out[o] == e[lane]
     assert not np.isnan(out).any()
+    nav = np.full(EK.N_OUT, np.nan)  # the per-tick part: everything the autopilot reads
+    ekf_output_nav(ekf, sel, nav)
+    filled = ~np.isnan(nav)
+    assert (nav[filled] == out[filled]).all()
+    assert filled.sum() == EK.N_OUT - 10  # all but the Euler angles, square roots, counters
 
 
 @pytest.mark.parametrize("const_pos", [0.0, 1.0])

@@ -31,7 +31,7 @@ from tlm_sim.dynamics.frame import build_frame
 from tlm_sim.dynamics.log import log_dynamics_10hz
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
-from tlm_sim.ekf.lanes import ekf_init, ekf_output, ekf_update
+from tlm_sim.ekf.lanes import ekf_init, ekf_output, ekf_output_nav, ekf_update
 from tlm_sim.ekf.log import log_ekf_10hz, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
@@ -239,14 +239,14 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
 @inline_jit
 def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
               armed, bufs, counts):
-    """The EKF's main-loop update with this tick's sensor data, its output block eo filled
-    (ekf.layout O_*) and a primary-lane change logged."""
+    """The EKF's main-loop update with this tick's sensor data, the per-tick part of its output
+    block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
     switched = ekf_update(
         ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
         baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], armed,
     )
-    ekf_output(ekf, sel, eo)
+    ekf_output_nav(ekf, sel, eo)
     if switched:
         log_lane_switch(bufs, counts, t_us, eo)
 
@@ -262,6 +262,7 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
     if tick % 16 == 0:  # IMU at 25 Hz, both instances
         log_imu(bufs, counts, t_us, s, scfg)
     if tick % 40 == 0:  # 10 Hz messages
+        ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
         log_sensors_10hz(bufs, counts, t_us, s, home[2])
         log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])
         log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])

@@ -524,13 +524,14 @@ def ekf_update(
 
 
 @tick_jit
-def ekf_output(ekf, sel, out):
-    """Fill out[N_OUT] (layout O_*) from the primary lane: attitude, velocity, position, biases,
-    Euler angles, status flags, square roots of the test ratios (what ekf_check compares with
-    FS_EKF_THRESH), primary index and counters, the lane's IMU, rotation matrix, innovations,
-    test ratios and bad-IMU flag. The only EKF block the rest of the vehicle reads."""
+def ekf_output_nav(ekf, sel, out):
+    """Fill the per-tick part of out[N_OUT] (layout O_*) from the primary lane: what the
+    autopilot reads every main-loop tick (control.ahrs): primary index, attitude, velocity,
+    position, biases, status flags, the lane's IMU and rotation matrix, innovations, test
+    ratios and bad-IMU flag. :func:`ekf_output` fills the rest."""
     p = int(sel[SEL_PRIMARY])
     e = ekf[p]
+    out[O_PRIMARY] = p
     for j in range(4):
         out[O_QW + j] = e[QW + j]
     for j in range(6):
@@ -538,24 +539,12 @@ def ekf_output(ekf, sel, out):
     for j in range(3):
         out[O_BGX + j] = e[BGX + j]
         out[O_BAX + j] = e[BAX + j]
-    r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
-    out[O_ROLL] = r
-    out[O_PITCH] = pt
-    out[O_YAW] = y
     out[O_F_ATTITUDE] = e[F_ATTITUDE]
     out[O_F_HORIZ_VEL] = e[F_HORIZ_VEL]
     out[O_F_HORIZ_POS] = e[F_HORIZ_POS]
     out[O_F_VERT_POS] = e[F_VERT_POS]
     out[O_F_CONST_POS] = e[F_CONST_POS]
     out[O_F_USING_GPS] = e[F_USING_GPS]
-    out[O_SQRT_VEL] = math.sqrt(max(e[VEL_TR], 0.0))
-    out[O_SQRT_POS] = math.sqrt(max(e[POS_TR], 0.0))
-    out[O_SQRT_HGT] = math.sqrt(max(e[HGT_TR], 0.0))
-    out[O_SQRT_MAG] = math.sqrt(max(e[MAG_TR], 0.0))
-    out[O_PRIMARY] = p
-    out[O_PRIMARY_CHANGES] = sel[SEL_CHANGES]
-    out[O_POS_RESET_COUNT] = e[POS_RESET_COUNT]
-    out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
     out[O_IMU] = e[IMU_INDEX]
     for j in range(9):
         out[O_R00 + j] = e[R00 + j]
@@ -565,6 +554,27 @@ def ekf_output(ekf, sel, out):
     out[O_POS_TR] = e[POS_TR]
     out[O_MAG_TR] = e[MAG_TR]
     out[O_BAD_IMU] = e[BAD_IMU]
+
+
+@tick_jit
+def ekf_output(ekf, sel, out):
+    """Fill all of out[N_OUT] (layout O_*) from the primary lane: :func:`ekf_output_nav`'s
+    part, the Euler angles, the square roots of the test ratios (what ekf_check compares with
+    FS_EKF_THRESH) and the counters. The only EKF block the rest of the vehicle reads (the
+    flight fills the per-tick part every tick, all of it before the 10 Hz logging)."""
+    ekf_output_nav(ekf, sel, out)
+    e = ekf[int(sel[SEL_PRIMARY])]
+    r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
+    out[O_ROLL] = r
+    out[O_PITCH] = pt
+    out[O_YAW] = y
+    out[O_SQRT_VEL] = math.sqrt(max(e[VEL_TR], 0.0))
+    out[O_SQRT_POS] = math.sqrt(max(e[POS_TR], 0.0))
+    out[O_SQRT_HGT] = math.sqrt(max(e[HGT_TR], 0.0))
+    out[O_SQRT_MAG] = math.sqrt(max(e[MAG_TR], 0.0))
+    out[O_PRIMARY_CHANGES] = sel[SEL_CHANGES]
+    out[O_POS_RESET_COUNT] = e[POS_RESET_COUNT]
+    out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
 
 
 @tick_jit
