@@ -149,7 +149,9 @@ def run_flight(
     dang, dvel, rows, eo = work
     imu_ok, gps, pwm = rows[0], rows[1], rows[2]
     pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
-    _boot(s, scfg, ekf, sel, ecfg, bufs, counts)
+    events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
+    ev_counts = counts[L.K_MODE:L.K_ERR + 1]
+    _boot(s, scfg, ekf, sel, ecfg, events, ev_counts)
     k_sched = 0
     t_us = 0
     next_loop = 0
@@ -167,10 +169,10 @@ def run_flight(
         gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
                                                    rng)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
-                  mag_new, s, c[C.ARMED] != 0.0, bufs, counts)
+                  mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
-                     seg, s[S.RC_LAST_FRAME_US], nav, bufs, counts)
+                     seg, s[S.RC_LAST_FRAME_US], nav, events, ev_counts)
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, eo, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
@@ -181,7 +183,7 @@ def run_flight(
 
 
 @inline_jit
-def _boot(s, scfg, ekf, sel, ecfg, bufs, counts):
+def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
     """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
@@ -189,7 +191,7 @@ def _boot(s, scfg, ekf, sel, ecfg, bufs, counts):
     s[S.B_NEXT_US] = 0.0
     s[S.M_NEXT_US] = 0.0
     ekf_init(ekf, sel, ecfg)
-    log_mode(bufs, counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
+    log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
 
 @inline_jit
@@ -238,7 +240,7 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
 
 @inline_jit
 def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
-              armed, bufs, counts):
+              armed, events, ev_counts):
     """The EKF's main-loop update with this tick's sensor data, the per-tick part of its output
     block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
     switched = ekf_update(
@@ -248,7 +250,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
     )
     ekf_output_nav(ekf, sel, eo)
     if switched:
-        log_lane_switch(bufs, counts, t_us, eo)
+        log_lane_switch(events, ev_counts, t_us, eo)
 
 
 @inline_jit

@@ -34,6 +34,13 @@ LOG_ORDER = (
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD",
 )  # must equal tlm_sim.flightlog.LOGGED_MESSAGES (checked by the tests)
 
+#: The event messages (MODE, EV, ERR: consecutive in LOG_ORDER) as a tuple of their own,
+#: indexed by E_*, with their row counts ``counts[K_MODE:K_ERR + 1]`` (a view): what the
+#: vehicle logic writes into. A short tuple, because numba passes each array of a tuple as
+#: seven arguments to every function that takes it (the whole log is 22 arrays).
+E_MODE, E_EV, E_ERR = 0, 1, 2
+assert (K_EV, K_ERR) == (K_MODE + E_EV, K_MODE + E_ERR)
+
 RAD2DEG = 180.0 / math.pi
 TIME_US = 0  # every message's first column: TimeUS (checked against the schema by the tests)
 
@@ -51,6 +58,12 @@ RCIN_COLS, RCOU_COLS, MODE_COLS, EV_COLS, ERR_COLS, XKF1_COLS, XKF4_COLS, CTUN_C
     schema_columns(n) for n in LOG_ORDER[8:16])
 BAT_COLS, POS_COLS, SIM_COLS, PSCN_COLS, PSCE_COLS, PSCD_COLS = (
     schema_columns(n) for n in LOG_ORDER[16:])
+
+
+def event_buffers(bufs: tuple[np.ndarray, ...], counts: np.ndarray
+                  ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
+    """The event buffers (E_* order) of a log-buffer tuple and a view of their row counts."""
+    return (bufs[K_MODE], bufs[K_EV], bufs[K_ERR]), counts[K_MODE:K_ERR + 1]
 
 
 def new_buffers(duration_s: float) -> tuple[tuple[np.ndarray, ...], np.ndarray]:

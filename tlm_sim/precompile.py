@@ -64,6 +64,7 @@ _I1 = nt.int64[::1]
 _U1 = nt.uint64[::1]
 _f8, _i8, _b1 = nt.float64, nt.int64, nt.boolean
 _BUFS = nt.UniTuple(_F2, len(L.LOG_ORDER))
+_EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
 
 
 @dataclass(frozen=True)
@@ -84,15 +85,16 @@ class Job:
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
-        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _F1, _BUFS, _I1), 12.7),
+        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _F1, _EVENTS, _I1),
+        13.5),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 7.9),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.9),
     Job("tlm_sim.control.log:log_control_10hz",
-        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 0.6),
-    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _f8, _f8, _f8), 0.5),
-    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.4),
-    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.3),
+        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.5),
+    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _f8, _f8, _f8), 0.9),
+    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
+    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.6),
     Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 1.3),
     Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _U1), 0.6),
     Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),

@@ -26,28 +26,28 @@ ERR_CODE_LATE_FRAME = 2
 
 
 @tick_jit
-def log_mode(bufs, counts, t_us, mode, rsn):
+def log_mode(events, ev_counts, t_us, mode, rsn):
     """Append a MODE row (mode number, reason) to the flight's log buffers."""
-    r = L.new_row(bufs, counts, L.K_MODE, t_us)
+    r = L.new_row(events, ev_counts, L.E_MODE, t_us)
     if r >= 0:
-        b = bufs[L.K_MODE]
+        b = events[L.E_MODE]
         b[r, MODE.Mode] = mode
         b[r, MODE.ModeNum] = mode
         b[r, MODE.Rsn] = rsn
 
 
 @tick_jit
-def log_err(bufs, counts, t_us, subsys, code):
+def log_err(events, ev_counts, t_us, subsys, code):
     """Append an ERR row (subsystem, error code)."""
-    r = L.new_row(bufs, counts, L.K_ERR, t_us)
+    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
     if r >= 0:
-        bufs[L.K_ERR][r, ERR.Subsys] = subsys
-        bufs[L.K_ERR][r, ERR.ECode] = code
+        events[L.E_ERR][r, ERR.Subsys] = subsys
+        events[L.E_ERR][r, ERR.ECode] = code
 
 
 @tick_jit
-def log_ev(bufs, counts, t_us, ev_id):
+def log_ev(events, ev_counts, t_us, ev_id):
     """Append an EV row (event id)."""
-    r = L.new_row(bufs, counts, L.K_EV, t_us)
+    r = L.new_row(events, ev_counts, L.E_EV, t_us)
     if r >= 0:
-        bufs[L.K_EV][r, EV.Id] = ev_id
+        events[L.E_EV][r, EV.Id] = ev_id

@@ -68,10 +68,10 @@ HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
 
 
 @tick_jit
-def set_mode(c, mode, rsn, t_us, bufs, counts):
+def set_mode(c, mode, rsn, t_us, events, ev_counts):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
-    E.log_mode(bufs, counts, t_us, mode, rsn)
+    E.log_mode(events, ev_counts, t_us, mode, rsn)
 
 
 @tick_jit
@@ -156,7 +156,7 @@ def _start_land(c, pos, failsafe):
 @tick_jit
 def vehicle_step(
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
-    bufs, counts,
+    events, ev_counts,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
@@ -166,33 +166,34 @@ def vehicle_step(
     path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
     seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
     nav: the primary EKF lane's status for the failsafe checks (control.failsafe NAV_*);
-    bufs/counts: the flight's log buffers (tlm_sim.logger).
+    events/ev_counts: the flight's event log buffers and their row counts (tlm_sim.logger
+    E_*: MODE, EV, ERR).
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
     cos_yaw, sin_yaw, cos_tilt = _heading(q)
     _estimates_update(c, g, pos, acc_ned, dt)
     if c[C.ARMED] == 0.0:
-        _disarmed_step(c, g, t_us, t_s, q, bufs, counts)
+        _disarmed_step(c, g, t_us, t_s, q, events, ev_counts)
         return
     c[C.SUB_TIMER] += dt
     sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
-                          bufs, counts)
-    sub = _nav_failsafes(c, g, t_us, sub, pos, nav, bufs, counts)
+                          events, ev_counts)
+    sub = _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts)
     if sub == C.SUB_GROUND_IDLE:
-        _ground_idle(c, g, t_us, dt, pos, vel, q, seg, bufs, counts)
+        _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts)
         return
     yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path,
-                                                    seg, bufs, counts)
+                                                    seg, events, ev_counts)
     sub = int(c[C.SUBMODE])
-    if sub == C.SUB_LAND and _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, bufs,
-                                           counts):
+    if sub == C.SUB_LAND and _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events,
+                                           ev_counts):
         return
     thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_yaw, sin_yaw, cos_tilt,
                        yaw_cmd, yaw_rate_ff, v_batt)
     _hover_learning(c, g, dt, sub, thr, vel, q)
-    _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts)
-    _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, bufs, counts)
+    _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts)
+    _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts)
 
 
 @inline_jit
@@ -208,53 +209,53 @@ def _estimates_update(c, g, pos, acc_ned, dt):
 
 
 @inline_jit
-def _disarmed_step(c, g, t_us, t_s, q, bufs, counts):
+def _disarmed_step(c, g, t_us, t_s, q, events, ev_counts):
     """Disarmed: motors off; at TLM_ARM_TIME arm in GUIDED (as the reference driver did) and
     start the motors."""
     output_idle(c, g, 0.0)
     rate_reset(c)
     if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
-        set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, bufs, counts)
+        set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, events, ev_counts)
         c[C.ARMED] = 1.0
         c[C.LANDED] = 1.0
         c[C.HOME_YAW] = _yaw(q)
         c[C.SUBMODE] = C.SUB_GROUND_IDLE
         c[C.SUB_TIMER] = 0.0
         c[C.SPOOL] = 1.0
-        E.log_ev(bufs, counts, t_us, E.EV_ARMED)
+        E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
 
 
 @inline_jit
-def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, bufs, counts):
+def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, events, ev_counts):
     """The radio failsafe: no RC frame for RC_FS_TIMEOUT -> ERR 2/2, 5/1 and RTL (LAND without
     a position); frames again -> ERR 5/0. Returns the submode to continue with."""
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     if rc_late and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
-        E.log_err(bufs, counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
-        E.log_err(bufs, counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
+        E.log_err(events, ev_counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
+        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
             if _position_ok(c):
-                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, bufs, counts)
+                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
                 _start_rtl(c, g, pos, vel, seg)
                 return C.SUB_RTL_CLIMB
             # RTL needs a position: LAND without one, after a pause
-            set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, bufs, counts)
+            set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
             _start_land(c, pos, True)
             return C.SUB_LAND
     elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
-        E.log_err(bufs, counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
     return sub
 
 
 @inline_jit
-def _nav_failsafes(c, g, t_us, sub, pos, nav, bufs, counts):
+def _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts):
     """The vibration and EKF failsafes (10 Hz): an EKF failsafe in flight -> LAND (or AltHold
     with FS_EKF_ACTION 2) where the mode needs a position. Returns the submode."""
-    fs = failsafe_checks(c, g, t_us, nav, bufs, counts)
+    fs = failsafe_checks(c, g, t_us, nav, events, ev_counts)
     if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
         return sub
     needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
@@ -262,23 +263,23 @@ def _nav_failsafes(c, g, t_us, sub, pos, nav, bufs, counts):
     if not (needs_position or g[C.G_FS_EKF_ACTION] == 3.0):
         return sub
     if fs == FS_EKF_ALTHOLD:
-        set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, bufs, counts)
+        set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
         _start_land(c, pos, True)
         c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
     elif c[C.MODE] != C.MODE_LAND:
-        set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, bufs, counts)
+        set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
         _start_land(c, pos, True)
     return C.SUB_LAND
 
 
 @inline_jit
-def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, bufs, counts):
+def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts):
     """Armed on the ground: motors at MOT_SPIN_ARM, EV AUTO_ARMED, then after ARMING_DELAY the
     takeoff starts (controllers reset here, a vertical segment to the takeoff altitude)."""
     output_idle(c, g, g[C.G_MOT_SPIN_ARM])
     attitude_reset(c, 0.0, 0.0, _yaw(q))
     if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
-        E.log_ev(bufs, counts, t_us, E.EV_AUTO_ARMED)
+        E.log_ev(events, ev_counts, t_us, E.EV_AUTO_ARMED)
     if c[C.SUB_TIMER] >= ARMING_DELAY_S:
         c[C.SUBMODE] = C.SUB_TAKEOFF
         c[C.SUB_TIMER] = 0.0
@@ -291,14 +292,14 @@ def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, bufs, counts):
 
 
 @inline_jit
-def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, bufs, counts):
+def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, events, ev_counts):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
     [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
     if sub == C.SUB_TAKEOFF:
-        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, bufs, counts)
+        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts)
     elif sub == C.SUB_WP:
         heading = _nav_waypoints(c, g, pos, vel, path, n_path, seg)
         if not math.isnan(heading):
@@ -314,7 +315,7 @@ def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, bufs, counts):
 
 
 @inline_jit
-def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, bufs, counts):
+def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
     """GUIDED takeoff up the vertical segment; AUTO at TAKEOFF_AUTO_FRAC of the altitude, the
     route once the first waypoint has been held TAKEOFF_WP_DWELL_S."""
     # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
@@ -322,7 +323,7 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, bufs, counts):
     heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
     if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
         # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
-        set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, bufs, counts)
+        set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, events, ev_counts)
         c[C.TAKEOFF_DONE_T] = -1.0
     if c[C.MODE] == C.MODE_AUTO and done > 0.0:
         if c[C.TAKEOFF_DONE_T] < 0.0:
@@ -386,7 +387,7 @@ def _nav_rtl_loiter(c, g):
 
 
 @inline_jit
-def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, bufs, counts):
+def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
     """LAND: hold the height through a failsafe's pause, else hold the landing point and
     descend; disarm once landed. Returns True when it disarmed (the tick ends)."""
     if c[C.LAND_PAUSE] > 0.0:
@@ -419,8 +420,8 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, bufs, counts):
         c[C.PZ_VEL_FF] = 0.0
         c[C.PZ_POS_T] = pos[2]
     if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
-        E.log_ev(bufs, counts, t_us, E.EV_LAND_COMPLETE)
-        E.log_ev(bufs, counts, t_us, E.EV_DISARMED)
+        E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE)
+        E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
         c[C.ARMED] = 0.0
         c[C.SUBMODE] = C.SUB_LANDED
         c[C.DISARM_TIME] = t_s
@@ -480,7 +481,7 @@ def _hover_learning(c, g, dt, sub, thr, vel, q):
 
 
 @inline_jit
-def _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts):
+def _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts):
     """The land detector: throttle at its lower limit, little acceleration and climb rate for
     LAND_DETECT_S -> landed (EV LAND_COMPLETE_MAYBE after LAND_MAYBE_S); EV NOT_LANDED once
     above 0.5 m again."""
@@ -490,7 +491,7 @@ def _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts):
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
-            E.log_ev(bufs, counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
+            E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
     else:
@@ -498,19 +499,19 @@ def _land_detector(c, t_us, dt, sub, thr, pos, vel, bufs, counts):
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
-            E.log_ev(bufs, counts, t_us, E.EV_NOT_LANDED)
+            E.log_ev(events, ev_counts, t_us, E.EV_NOT_LANDED)
 
 
 @inline_jit
-def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, bufs, counts):
+def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
     """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
     (ERR 12/1, EV DISARMED)."""
-    thrust_loss_check(c, dt, q, vel[2], bufs, counts, t_us)
+    thrust_loss_check(c, dt, q, vel[2], events, ev_counts, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
-            E.log_err(bufs, counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            E.log_ev(bufs, counts, t_us, E.EV_DISARMED)
+            E.log_err(events, ev_counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
+            E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
             c[C.ARMED] = 0.0
             c[C.SUBMODE] = C.SUB_LANDED
             c[C.DISARM_TIME] = t_s

@@ -13,12 +13,13 @@ ERR_EKF_PRIMARY = 24  # ERR subsystem of a primary-lane change (ECode: the new l
 
 
 @tick_jit
-def log_lane_switch(bufs, counts, t_us, eo):
-    """ERR EKF_PRIMARY with the new primary lane (from the output block eo)."""
-    r = L.new_row(bufs, counts, L.K_ERR, t_us)
+def log_lane_switch(events, ev_counts, t_us, eo):
+    """ERR EKF_PRIMARY with the new primary lane (from the output block eo) into the event
+    buffers (tlm_sim.logger E_*)."""
+    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
     if r >= 0:
-        bufs[L.K_ERR][r, L.ERR_COLS.Subsys] = ERR_EKF_PRIMARY
-        bufs[L.K_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
+        events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_EKF_PRIMARY
+        events[L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
 
 
 @tick_jit
