@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tlm_sim import logger as L
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import rate_pid, sqrt_ctrl
@@ -185,11 +186,10 @@ def _vibe_run(thresh, bad_imu, seconds=3.0):
     nav[FS.NAV_VEL_TR] = 16.0
     nav[FS.NAV_POS_OK] = 1.0
     nav[FS.NAV_BAD_IMU] = bad_imu
-    err = np.zeros((16, 3))
-    counts = np.zeros(1, dtype=np.int64)
+    events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     for k in range(int(seconds / 0.1) + 1):
-        FS.failsafe_checks(c, g, k * 100000, nav, err, counts, 0)
-    return err[: counts[0]]
+        FS.failsafe_checks(c, g, k * 100000, nav, events, ev_counts)
+    return events[L.E_ERR][: ev_counts[L.E_ERR]]
 
 
 def test_vibration_check_innovation_clause_needs_the_ekf_check():
@@ -212,12 +212,11 @@ def _thrust_loss_run(g, roll_cmd, thr, vd, limit_hi=0.0, seconds=1.5):
     c[C.LIM_THR_HI] = limit_hi
     c[C.MIX_THRUST : C.MIX_THRUST + 4] = 1.0
     q = np.array([1.0, 0.0, 0.0, 0.0])
-    err = np.zeros((8, 3))
-    counts = np.zeros(1, dtype=np.int64)
+    events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     dt = g[C.G_DT]
     hits = [k for k in range(int(seconds / dt))
-            if FS.thrust_loss_check(c, dt, q, vd, err, counts, 0, k * 2500)]
-    return hits, err[: counts[0]], c
+            if FS.thrust_loss_check(c, dt, q, vd, events, ev_counts, k * 2500)]
+    return hits, events[L.E_ERR][: ev_counts[L.E_ERR]], c
 
 
 def test_thrust_loss_check_fires_after_one_second_of_full_throttle_descent(cfg):
@@ -233,8 +232,8 @@ def test_thrust_loss_check_fires_after_one_second_of_full_throttle_descent(cfg):
     assert not _thrust_loss_run(g, 0.0, 0.2, 2.0, limit_hi=1.0)[0]  # below 25 %
     # the boost holds the check off until the motors have headroom again
     c[C.MIX_THRUST : C.MIX_THRUST + 4] = 0.5
-    FS.thrust_loss_check(c, g[C.G_DT], np.array([1.0, 0, 0, 0]), 2.0, err, np.zeros(1, np.int64),
-                         0, 0)
+    events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
+    FS.thrust_loss_check(c, g[C.G_DT], np.array([1.0, 0, 0, 0]), 2.0, events, ev_counts, 0)
     assert c[C.THRUST_BOOST] == 0.0
 
 

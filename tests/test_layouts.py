@@ -17,7 +17,7 @@ from tlm_sim.slots import Layout
 LAYOUTS = [
     (X, X.STATE, "N_STATE"),
     (S, S.IMU, "IMU_STRIDE"), (S, S.GPS, "GPS_SIZE"), (S, S.STATE, "N_SENSOR_STATE"),
-    (S, S.CONFIG, "N_SENSOR_CFG"),
+    (S, S.CONFIG, "N_SENSOR_CFG"), (S, S.GPS_EPOCH, "N_GPS_EPOCH"),
     (L, L.ERROR_STATE, "NS"), (L, L.LANE, "N_EKF"), (L, L.SELECTOR, "N_SEL"),
     (L, L.CONFIG, "N_CFG"), (L, L.OUTPUT, "N_OUT"),
     (C, C.RATE, "RATE_STRIDE"), (C, C.STATE, "N_CONTROL_STATE"), (C, C.CONFIG, "N_CONTROL_CFG"),

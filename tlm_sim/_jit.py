@@ -11,7 +11,7 @@ build, chosen once per process.
 uses the plain build and says so once (a ``RuntimeWarning``), instead of failing. :data:`MODE`
 is the build in use. Every jitted module imports its decorators from here::
 
-    from tlm_sim._jit import loop_jit, tick_jit
+    from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["JIT_MODES", "MODE", "loop_jit", "requested_mode", "tick_jit"]
+__all__ = ["JIT_MODES", "MODE", "inline_jit", "loop_jit", "requested_mode", "tick_jit"]
 
 #: the builds ``TLM_JIT`` selects
 JIT_MODES: tuple[str, ...] = ("fast", "plain")
@@ -40,7 +40,7 @@ def requested_mode() -> str:
     return raw
 
 
-def _select() -> tuple[str, Callable[..., Any], Callable[..., Any]]:
+def _select() -> tuple[str, Callable[..., Any], Callable[..., Any], Callable[..., Any]]:
     if requested_mode() == "fast":
         try:
             from tlm_sim import _jit_fast
@@ -51,10 +51,12 @@ def _select() -> tuple[str, Callable[..., Any], Callable[..., Any]]:
                           f"({exc}); using the plain build (slower)", RuntimeWarning,
                           stacklevel=3)
         else:
-            return "fast", _jit_fast.tick_jit, _jit_fast.loop_jit
+            return "fast", _jit_fast.tick_jit, _jit_fast.loop_jit, _jit_fast.inline_jit
     from tlm_sim import _jit_plain
 
-    return "plain", _jit_plain.tick_jit, _jit_plain.loop_jit
+    return "plain", _jit_plain.tick_jit, _jit_plain.loop_jit, _jit_plain.inline_jit
 
 
-MODE, tick_jit, loop_jit = _select()
+#: ``tick_jit``: per-tick functions; ``loop_jit``: the loops over them; ``inline_jit``: named
+#: sections of a long per-tick function, inlined into their one caller by numba
+MODE, tick_jit, loop_jit, inline_jit = _select()

@@ -25,7 +25,7 @@ from typing import Any
 
 import numba
 
-__all__ = ["PLAIN_OPTIONS", "loop_jit", "tick_jit"]
+__all__ = ["PLAIN_OPTIONS", "inline_jit", "loop_jit", "tick_jit"]
 
 #: keyword arguments of ``numba.njit`` for every per-tick function and loop (public options)
 PLAIN_OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy",
@@ -35,6 +35,12 @@ PLAIN_OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "n
 def tick_jit(func: Callable[..., Any]) -> Callable[..., Any]:
     """``numba.njit(**PLAIN_OPTIONS)``."""
     return numba.njit(**PLAIN_OPTIONS)(func)
+
+
+def inline_jit(func: Callable[..., Any]) -> Callable[..., Any]:
+    """``numba.njit(inline="always", **PLAIN_OPTIONS)``: a section of a per-tick function,
+    inlined into its caller's numba IR."""
+    return numba.njit(inline="always", **PLAIN_OPTIONS)(func)
 
 
 def loop_jit(func: Callable[..., Any], *, cache: bool = True) -> Callable[..., Any]:

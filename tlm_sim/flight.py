@@ -17,23 +17,25 @@ from typing import Any
 import numpy as np
 
 from tlm_sim import logger as L
-from tlm_sim._jit import loop_jit, tick_jit
-from tlm_sim.control import failsafe as FS
+from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.control import layout as C
+from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.config import build_control_config
-from tlm_sim.control.events import ERR_CRASH_CHECK
+from tlm_sim.control.events import ERR_CRASH_CHECK, log_mode
+from tlm_sim.control.log import log_control_10hz
 from tlm_sim.control.modes import vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
+from tlm_sim.dynamics.log import log_dynamics_10hz
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
-from tlm_sim.ekf.lanes import ekf_init, ekf_update
+from tlm_sim.ekf.lanes import ekf_init, ekf_output, ekf_output_nav, ekf_update
+from tlm_sim.ekf.log import log_ekf_10hz, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
-from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
@@ -42,7 +44,8 @@ from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.baro import baro_sample, mag_sample
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
-from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas, vibe
+from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
+from tlm_sim.sensors.log import log_gps, log_imu, log_sensors_10hz
 from tlm_sim.sensors.rc import rc_init, rc_update
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
@@ -141,130 +144,39 @@ def run_flight(
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
     generator, wind_rng: wind turbulence generator (tlm_sim.rng). Allocation-free.
+
+    The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
+    the flight ends 2 s after the autopilot disarms, or at t_end_us.
     """
-    n_path = path.shape[0]
-    dang, dvel = work[0], work[1]
-    imu_ok = work[2][0]
-    gps = work[2][1]
-    pwm = work[2][2]
-    pos = work[2][3]
-    vel = work[2][4]
-    q = work[2][5]
-    gyro = work[2][6]
-    acc_ned = work[2][7]
-    nav = work[2][8]
-    imu_init(s, scfg, 0.0)
-    gps_init(s, 0.0)
-    rc_init(s, 0.0)
-    s[S.B_NEXT_US] = 0.0
-    s[S.M_NEXT_US] = 0.0
-    ekf_init(ekf, sel, ecfg)
-    home_lat, home_lon, home_alt = home[0], home[1], home[2]
+    dang, dvel, rows, eo = work
+    imu_ok, gps, pwm = rows[0], rows[1], rows[2]
+    pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
+    events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
+    ev_counts = counts[L.K_MODE:L.K_ERR + 1]
+    _boot(s, scfg, ekf, sel, ecfg, events, ev_counts)
     k_sched = 0
     t_us = 0
     next_loop = 0
     tick = 0
-    gps_new = False
-    baro_new = False
-    mag_new = False
     last_gps_ms = 0.0
     stop_at = -1
-    dt_loop = LOOP_DT_US * 1e-6
-    r = L.new_row(bufs, counts, L.K_MODE, 0)  # boot in STABILIZE, ModeReason INITIALISED
-    if r >= 0:
-        bufs[L.K_MODE][r, 3] = 26.0
     while t_us < t_end_us:
-        # ------------------------------------------------------------- physics tick (1200 Hz)
         k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
                                   applied)
-        _motor_pwm(c, scfg, pwm)
-        physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
-        t_us += PHYSICS_DT_US
-        thr_sum = 0.0
-        n_on = 0
-        for i in range(4):
-            if pwm[i] > 0.0:
-                thr_sum += (pwm[i] - 1000.0) / 1000.0
-                n_on += 1
-        throttle = thr_sum / n_on if n_on > 0 else 0.0
-        imu_sample(s, x, scfg, float(t_us), throttle, rng)
+        t_us = _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng)
         if t_us < next_loop:
             continue
-        # ------------------------------------------------------------- main loop (400 Hz)
         next_loop += LOOP_DT_US
         tick += 1
-        for i in range(S.N_IMU):
-            imu_ok[i] = imu_take_deltas(s, i, dt_loop, dang, dvel)
-        gps_push_truth(s, x, t_us * 1e-6)
-        gps_new = False
-        if gps_due(s, float(t_us)):
-            gps_measure(s, scfg, float(t_us), gps, rng)
-            gps_new = True
-        baro_new = False
-        if t_us >= s[S.B_NEXT_US]:
-            s[S.B_NEXT_US] += 100000.0
-            baro_sample(s, x, scfg, rng)
-            baro_new = True
-        mag_new = False
-        if t_us >= s[S.M_NEXT_US]:
-            s[S.M_NEXT_US] += 100000.0
-            mag_sample(s, x, scfg, rng)
-            mag_new = True
-        rc_update(s, scfg, float(t_us))
-        switched = ekf_update(
-            ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
-            gps_new, gps[0:3], gps[3:6], gps[8] > 0.5,
-            baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], c[C.ARMED] != 0.0,
-        )
-        if switched:  # ERR EKF_PRIMARY with the new lane index
-            r = L.new_row(bufs, counts, L.K_ERR, t_us)
-            if r >= 0:
-                bufs[L.K_ERR][r, 1] = 24.0
-                bufs[L.K_ERR][r, 2] = sel[EK.SEL_PRIMARY]
-        lane = int(sel[EK.SEL_PRIMARY])
-        e = ekf[lane]
-        for k in range(3):
-            pos[k] = e[EK.PN + k]
-            vel[k] = e[EK.VN + k]
-        if e[EK.F_CONST_POS] != 0.0:
-            # no horizontal position from the EKF (constant-position mode): AC_PosControl's
-            # estimate is then the EKF origin, as the AHRS call fails and leaves it at zero
-            # (gps_s12.bin: PSCN.PN / PSCE.PE are 0.000 from "stopped aiding" to "is using GPS")
-            pos[0] = 0.0
-            pos[1] = 0.0
-        for k in range(4):
-            q[k] = e[EK.QW + k]
-        ib = S.IMU_BASE + int(e[EK.IMU_INDEX]) * S.IMU_STRIDE
-        for k in range(3):
-            gyro[k] = s[ib + S.I_GYR_F + k] - e[EK.BGX + k]
-        # kinematic acceleration NED from the filtered accel rotated by the EKF attitude
-        ax = s[ib + S.I_ACC_F] - e[EK.BAX]
-        ay = s[ib + S.I_ACC_F + 1] - e[EK.BAY]
-        az = s[ib + S.I_ACC_F + 2] - e[EK.BAZ]
-        acc_ned[0] = e[EK.R00] * ax + e[EK.R01] * ay + e[EK.R02] * az
-        acc_ned[1] = e[EK.R10] * ax + e[EK.R11] * ay + e[EK.R12] * az
-        acc_ned[2] = e[EK.R20] * ax + e[EK.R21] * ay + e[EK.R22] * az + 9.80665
-        nav[FS.NAV_INNOV_VD] = e[EK.INNOV_VD]
-        nav[FS.NAV_INNOV_HGT] = e[EK.INNOV_HGT]
-        nav[FS.NAV_VEL_TR] = e[EK.VEL_TR]
-        nav[FS.NAV_POS_TR] = e[EK.POS_TR]
-        nav[FS.NAV_MAG_TR] = e[EK.MAG_TR]
-        nav[FS.NAV_BAD_IMU] = e[EK.BAD_IMU]
-        nav[FS.NAV_POS_OK] = 1.0 if e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0 else 0.0
-        vehicle_step(
-            c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, n_path, seg,
-            s[S.RC_LAST_FRAME_US], nav,
-            bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR], counts, L.K_MODE, L.K_EV, L.K_ERR,
-        )
-        # ------------------------------------------------------------- logging
-        if gps_new:
-            last_gps_ms = _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt,
-                                   gps_time, last_gps_ms)
-        if tick % 16 == 0:  # IMU at 25 Hz, both instances
-            _log_imu(bufs, counts, t_us, s, scfg)
-        if tick % 40 == 0:  # 10 Hz messages
-            _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt,
-                      throttle, pos)
+        gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
+                                                   rng)
+        _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
+                  mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
+        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
+        vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
+                     seg, s[S.RC_LAST_FRAME_US], nav, events, ev_counts)
+        last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
+                                home, x, s, scfg, c, ekf, sel, eo, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
@@ -272,257 +184,107 @@ def run_flight(
     return t_us
 
 
-@tick_jit
-def _log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_time, last_ms):
-    """GPS and GPA rows for one GPS epoch; returns the epoch's ms of week."""
-    r = L.new_row(bufs, counts, L.K_GPS, t_us)
-    ms = gps_time[1] + round(t_us / 200000.0) * 200.0
-    week = gps_time[0] + math.floor(ms / 604800000.0)
-    ms = ms % 604800000.0
-    if r >= 0:
-        b = bufs[L.K_GPS]
-        lat, lon = ne_to_latlon_scalar(gps[0], gps[1], home_lat, home_lon)
-        b[r, 1] = 0.0
-        b[r, 2] = gps[6]
-        b[r, 3] = ms
-        b[r, 4] = week
-        b[r, 5] = gps[7]
-        b[r, 6] = scfg[S.C_GPS_HDOP]
-        b[r, 7] = lat
-        b[r, 8] = lon
-        b[r, 9] = home_alt - gps[2]
-        b[r, 10] = math.sqrt(gps[3] * gps[3] + gps[4] * gps[4])
-        crs = math.degrees(math.atan2(gps[4], gps[3]))
-        b[r, 11] = crs + 360.0 if crs < 0.0 else crs
-        b[r, 12] = gps[5]
-        b[r, 13] = 0.0
-        b[r, 14] = 1.0
-    r = L.new_row(bufs, counts, L.K_GPA, t_us)
-    if r >= 0:
-        b = bufs[L.K_GPA]
-        b[r, 1] = 0.0
-        b[r, 2] = scfg[S.C_GPS_VDOP]
-        b[r, 3] = scfg[S.C_GPS_ACC]  # HAcc
-        b[r, 4] = scfg[S.C_GPS_ACC]  # VAcc
-        b[r, 5] = 0.0  # SAcc
-        b[r, 6] = 0.0  # YAcc
-        b[r, 7] = 1.0  # VV
-        b[r, 8] = t_us // 1000  # SMS
-        b[r, 9] = (ms - last_ms) if last_ms > 0.0 else 0.0  # Delta
-    return ms
+@inline_jit
+def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
+    """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
+    imu_init(s, scfg, 0.0)
+    gps_init(s, 0.0)
+    rc_init(s, 0.0)
+    s[S.B_NEXT_US] = 0.0
+    s[S.M_NEXT_US] = 0.0
+    ekf_init(ekf, sel, ecfg)
+    log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
 
-@tick_jit
-def _log_imu(bufs, counts, t_us, s, scfg):
-    """IMU rows (one per instance): filtered gyro/accel, error counts, temperature, rates."""
-    temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
+@inline_jit
+def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
+    """One 1200 Hz physics step at t_us: the motors driven by the autopilot's PWM (as the
+    engine fault alters it), the rigid body, the IMU sampling it; returns the new time [us]."""
+    _motor_pwm(c, scfg, pwm)
+    physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
+    t_us += PHYSICS_DT_US
+    thr_sum = 0.0
+    n_on = 0
+    for i in range(4):
+        if pwm[i] > 0.0:
+            thr_sum += (pwm[i] - 1000.0) / 1000.0
+            n_on += 1
+    throttle = thr_sum / n_on if n_on > 0 else 0.0
+    imu_sample(s, x, scfg, float(t_us), throttle, rng)
+    return t_us
+
+
+@inline_jit
+def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
+    """The main loop's sensor reads at t_us: IMU deltas (imu_ok per instance), the GPS epoch
+    into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
+    compass) new this tick."""
     for i in range(S.N_IMU):
-        r = L.new_row(bufs, counts, L.K_IMU, t_us)
-        if r < 0:
-            return
-        b = bufs[L.K_IMU]
-        ib = S.IMU_BASE + i * S.IMU_STRIDE
-        b[r, 1] = i
-        for k in range(3):
-            b[r, 2 + k] = s[ib + S.I_GYR_F + k]
-            b[r, 5 + k] = s[ib + S.I_ACC_F + k]
-        b[r, 8] = s[ib + S.I_EG]
-        b[r, 9] = s[ib + S.I_EA]
-        b[r, 10] = temp
-        b[r, 11] = 1.0
-        b[r, 12] = 1.0
-        b[r, 13] = round(1e6 / scfg[S.C_GYR_PERIOD_US + i])
-        b[r, 14] = round(1e6 / scfg[S.C_ACC_PERIOD_US + i])
+        imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
+    gps_push_truth(s, x, t_us * 1e-6)
+    gps_new = False
+    if gps_due(s, float(t_us)):
+        gps_measure(s, scfg, float(t_us), gps, rng)
+        gps_new = True
+    baro_new = False
+    if t_us >= s[S.B_NEXT_US]:
+        s[S.B_NEXT_US] += 100000.0
+        baro_sample(s, x, scfg, rng)
+        baro_new = True
+    mag_new = False
+    if t_us >= s[S.M_NEXT_US]:
+        s[S.M_NEXT_US] += 100000.0
+        mag_sample(s, x, scfg, rng)
+        mag_new = True
+    rc_update(s, scfg, float(t_us))
+    return gps_new, baro_new, mag_new
 
 
-@tick_jit
-def _log_10hz(bufs, counts, t_us, x, s, c, g, ekf, sel, e, home_lat, home_lon, home_alt, throttle,
-              pos):
-    """The 10 Hz messages: RATE, VIBE, ATT, BARO, MAG, RCIN, RCOU, XKF1, XKF4, CTUN, BAT, POS,
-    SIM, PSCN/E/D."""
-    d = L.RAD2DEG
-    r = L.new_row(bufs, counts, L.K_RATE, t_us)
-    if r >= 0:
-        b = bufs[L.K_RATE]
-        for k in range(3):
-            rb = C.RATE_BASE + k * C.RATE_STRIDE
-            b[r, 1 + 3 * k] = c[rb + C.R_TARGET] * d
-            b[r, 2 + 3 * k] = c[rb + C.R_MEAS] * d
-            b[r, 3 + 3 * k] = c[rb + C.R_OUT]
-        b[r, 10] = c[C.PZ_ACC_T] * 100.0
-        b[r, 11] = c[C.PZ_ACC_MEAS] * 100.0
-        b[r, 12] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
-        b[r, 13] = 0.0
-    for i in range(S.N_IMU):
-        r = L.new_row(bufs, counts, L.K_VIBE, t_us)
-        if r >= 0:
-            b = bufs[L.K_VIBE]
-            b[r, 1] = i
-            for k in range(3):
-                b[r, 2 + k] = vibe(s, i, k)
-            b[r, 5] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
-    roll, pitch, yaw = L.euler_deg(e[EK.QW], e[EK.QX], e[EK.QY], e[EK.QZ])
-    r = L.new_row(bufs, counts, L.K_ATT, t_us)
-    if r >= 0:
-        b = bufs[L.K_ATT]
-        b[r, 1] = c[C.ATT_ROLL_T] * d
-        b[r, 2] = roll
-        b[r, 3] = c[C.ATT_PITCH_T] * d
-        b[r, 4] = pitch
-        yd = c[C.ATT_YAW_T] * d
-        b[r, 5] = yd + 360.0 if yd < 0.0 else yd
-        b[r, 6] = yaw
-        b[r, 7] = 3.0
-    for i in range(2):
-        r = L.new_row(bufs, counts, L.K_BARO, t_us)
-        if r >= 0:
-            b = bufs[L.K_BARO]
-            b[r, 1] = i
-            b[r, 2] = s[S.B_ALT]
-            b[r, 3] = home_alt + s[S.B_ALT]
-            b[r, 4] = s[S.B_PRESS]
-            b[r, 5] = s[S.B_TEMP]
-            b[r, 6] = (s[S.B_ALT] - s[S.B_ALT_PREV]) * 10.0
-            b[r, 7] = t_us // 1000
-            b[r, 8] = 0.0
-            b[r, 9] = 25.0
-            b[r, 10] = 1.0
-            b[r, 11] = s[S.B_PRESS]
-    r = L.new_row(bufs, counts, L.K_MAG, t_us)
-    if r >= 0:
-        b = bufs[L.K_MAG]
-        b[r, 1] = 0.0
-        for k in range(3):
-            b[r, 2 + k] = round(s[S.M_FIELD + k] * 1000.0)
-        b[r, 11] = 1.0
-        b[r, 12] = t_us // 1000
-    r = L.new_row(bufs, counts, L.K_RCIN, t_us)
-    if r >= 0:
-        b = bufs[L.K_RCIN]
-        for k in range(8):
-            b[r, 1 + k] = s[S.RC_CH + k]
-    r = L.new_row(bufs, counts, L.K_RCOU, t_us)
-    if r >= 0:
-        b = bufs[L.K_RCOU]
-        for k in range(4):
-            b[r, 1 + k] = round(c[C.MIX_PWM + k])
-    n_lanes = int(sel[EK.SEL_N_LANES])
-    for ln in range(n_lanes):
-        el = ekf[ln]
-        r = L.new_row(bufs, counts, L.K_XKF1, t_us)
-        if r >= 0:
-            b = bufs[L.K_XKF1]
-            lr, lp, ly = L.euler_deg(el[EK.QW], el[EK.QX], el[EK.QY], el[EK.QZ])
-            b[r, 1] = ln
-            b[r, 2] = lr
-            b[r, 3] = lp
-            b[r, 4] = ly
-            b[r, 5] = el[EK.VN]
-            b[r, 6] = el[EK.VE]
-            b[r, 7] = el[EK.VD]
-            b[r, 8] = el[EK.VD]
-            b[r, 9] = el[EK.PN]
-            b[r, 10] = el[EK.PE]
-            b[r, 11] = el[EK.PD]
-            b[r, 12] = el[EK.BGX] * d
-            b[r, 13] = el[EK.BGY] * d
-            b[r, 14] = el[EK.BGZ] * d
-            b[r, 15] = home_alt
-        r = L.new_row(bufs, counts, L.K_XKF4, t_us)
-        if r >= 0:
-            b = bufs[L.K_XKF4]
-            b[r, 1] = ln
-            b[r, 2] = math.sqrt(max(el[EK.VEL_TR], 0.0))
-            b[r, 3] = math.sqrt(max(el[EK.POS_TR], 0.0))
-            b[r, 4] = math.sqrt(max(el[EK.HGT_TR], 0.0))
-            b[r, 5] = math.sqrt(max(el[EK.MAG_TR], 0.0))
-            b[r, 10] = el[EK.FAULT]
-            b[r, 11] = 0.0 if el[EK.F_HORIZ_POS] != 0.0 else 1.0
-            b[r, 14] = sel[EK.SEL_PRIMARY]
-    r = L.new_row(bufs, counts, L.K_CTUN, t_us)
-    if r >= 0:
-        b = bufs[L.K_CTUN]
-        alt = -e[EK.PD]
-        b[r, 1] = c[C.THR_OUT]
-        b[r, 2] = c[C.THR_OUT_BOOSTED] - c[C.THR_OUT]
-        b[r, 3] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
-        b[r, 4] = c[C.THR_HOVER]
-        b[r, 5] = -c[C.PZ_POS_T]
-        b[r, 6] = alt
-        b[r, 7] = s[S.B_ALT]
-        b[r, 8] = math.nan
-        b[r, 9] = 0.0
-        b[r, 10] = math.nan
-        b[r, 11] = round(-c[C.PZ_VEL_T] * 100.0)
-        b[r, 12] = round(-e[EK.VD] * 100.0)
-    r = L.new_row(bufs, counts, L.K_BAT, t_us)
-    if r >= 0:
-        b = bufs[L.K_BAT]
-        b[r, 1] = 0.0
-        b[r, 2] = x[X.BATT_V]
-        b[r, 3] = x[X.BATT_VREST]
-        b[r, 4] = x[X.BATT_I]
-        b[r, 5] = x[X.BATT_AH] * 1000.0
-        b[r, 6] = 0.0
-        b[r, 7] = 0.0
-        b[r, 8] = 0.0
-        b[r, 9] = 100.0
-        b[r, 10] = 1.0
-        b[r, 11] = 0.0
-    r = L.new_row(bufs, counts, L.K_POS, t_us)
-    if r >= 0:
-        b = bufs[L.K_POS]
-        lat, lon = ne_to_latlon_scalar(e[EK.PN], e[EK.PE], home_lat, home_lon)
-        b[r, 1] = lat
-        b[r, 2] = lon
-        b[r, 3] = home_alt - e[EK.PD]
-        b[r, 4] = -e[EK.PD]
-        b[r, 5] = -e[EK.PD]
-    r = L.new_row(bufs, counts, L.K_SIM, t_us)
-    if r >= 0:
-        b = bufs[L.K_SIM]
-        tr, tp, ty = L.euler_deg(x[X.QW], x[X.QX], x[X.QY], x[X.QZ])
-        lat, lon = ne_to_latlon_scalar(x[X.PN], x[X.PE], home_lat, home_lon)
-        b[r, 1] = tr
-        b[r, 2] = tp
-        b[r, 3] = ty
-        b[r, 4] = home_alt - x[X.PD]
-        b[r, 5] = lat
-        b[r, 6] = lon
-        for k in range(4):
-            b[r, 7 + k] = x[X.QW + k]
-    for ax in range(3):
-        kbuf = L.K_PSCN + ax
-        r = L.new_row(bufs, counts, kbuf, t_us)
-        if r >= 0:
-            b = bufs[kbuf]
-            if ax < 2:
-                b[r, 1] = c[C.PXY_POS_T + ax]
-                b[r, 2] = c[C.PXY_POS_T + ax]
-                b[r, 4] = c[C.PXY_VEL_FF + ax]
-                b[r, 5] = c[C.PXY_VEL_T + ax]
-                b[r, 7] = c[C.PXY_ACC_FF + ax]
-                b[r, 8] = c[C.PXY_ACC_T + ax]
-            else:
-                b[r, 1] = c[C.PZ_POS_T]
-                b[r, 2] = c[C.PZ_POS_T]
-                b[r, 4] = c[C.PZ_VEL_T]
-                b[r, 5] = c[C.PZ_VEL_T]
-                b[r, 7] = -c[C.PZ_ACC_T]
-                b[r, 8] = -c[C.PZ_ACC_T]
-            b[r, 3] = pos[ax]
-            b[r, 6] = e[EK.VN + ax]
-            b[r, 9] = x[X.AN + ax]
+@inline_jit
+def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
+              armed, events, ev_counts):
+    """The EKF's main-loop update with this tick's sensor data, the per-tick part of its output
+    block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
+    switched = ekf_update(
+        ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
+        gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
+        baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], armed,
+    )
+    ekf_output_nav(ekf, sel, eo)
+    if switched:
+        log_lane_switch(events, ev_counts, t_us, eo)
+
+
+@inline_jit
+def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
+              c, ekf, sel, eo, pos):
+    """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz
+    messages. Returns the last GPS epoch's ms of week."""
+    if gps_new:
+        last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
+                              gps_time, last_gps_ms)
+    if tick % 16 == 0:  # IMU at 25 Hz, both instances
+        log_imu(bufs, counts, t_us, s, scfg)
+    if tick % 40 == 0:  # 10 Hz messages
+        ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
+        log_sensors_10hz(bufs, counts, t_us, s, home[2])
+        log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])
+        log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
+        log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
+    return last_gps_ms
 
 
 # ------------------------------------------------------------------------- Python entry point
 
 
-def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3), and a (8, 9)
-    block whose rows are imu_ok, the GPS epoch, motor PWM, EKF position, velocity, attitude,
-    gyro, NED acceleration and the EKF status for the failsafe checks (control.failsafe NAV_*)."""
-    return np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9))
+def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a (9, 9)
+    block whose rows are imu_ok, the GPS epoch (sensors.layout GE_*), motor PWM, and the
+    controllers' inputs of control.ahrs (position, velocity, attitude, gyro, NED acceleration,
+    the EKF status for the failsafe checks, control.failsafe NAV_*); the EKF output block
+    (ekf.layout O_*)."""
+    return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9)),
+            np.zeros(EK.N_OUT))
 
 
 def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

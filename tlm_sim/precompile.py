@@ -64,6 +64,7 @@ _I1 = nt.int64[::1]
 _U1 = nt.uint64[::1]
 _f8, _i8, _b1 = nt.float64, nt.int64, nt.boolean
 _BUFS = nt.UniTuple(_F2, len(L.LOG_ORDER))
+_EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
 
 
 @dataclass(frozen=True)
@@ -77,22 +78,27 @@ class Job:
     cost_s: float
 
 
-#: run_flight's direct callees and fly()'s set-up, with their signatures. No job may call
+#: the big subtrees below run_flight (called directly or from its small per-tick helpers:
+#: _physics_tick, _read_sensors, _estimate, _log_tick, which run_flight's own compile covers)
+#: and fly()'s set-up, with the exact signatures they are called with. No job may call
 #: another: a function two jobs share (prepare_path, new_row, ekf_init) is compiled inside
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
-        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _F1, _F2, _F2, _F2, _I1,
-         _i8, _i8, _i8), 12.7),
+        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _F1, _EVENTS, _I1),
+        13.5),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 7.9),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.9),
-    Job("tlm_sim.flight:_log_10hz",
-        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F2, _F1, _F1, _f8, _f8, _f8, _f8, _F1), 1.6),
+    Job("tlm_sim.control.log:log_control_10hz",
+        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.5),
+    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _f8, _f8, _f8), 0.9),
+    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
+    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.6),
     Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 1.3),
     Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _U1), 0.6),
-    Job("tlm_sim.flight:_log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),
-    Job("tlm_sim.flight:_log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.5),
+    Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),
+    Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.5),
     Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.3),
     Job("tlm_sim.sensors.gps:gps_measure", (_F1, _F1, _f8, _F1, _U1), 0.2),
     Job("tlm_sim.flight:_apply_schedule", (_F2, _i8, _i8, _f8, _F1, _F1, _F1, _F1, _F1), 0.2),
@@ -105,7 +111,7 @@ JOBS: tuple[Job, ...] = (
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.UniTuple(_F2, 3), _U1, _U1), 2.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U1, _U1), 2.0)
 
 
 @dataclass

@@ -9,7 +9,7 @@ roll/pitch/yaw outputs in motor units (+-1).
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 
 
@@ -101,16 +101,7 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     _shape_axis(c, C.ATT_ROLL_T, C.ATT_ROLL_RATE_T, c[C.ATT_ROLL_CMD], tc, amax, dt, False)
     amax = g[C.G_ACCEL_MAX + 1]
     _shape_axis(c, C.ATT_PITCH_T, C.ATT_PITCH_RATE_T, c[C.ATT_PITCH_CMD], tc, amax, dt, False)
-    # heading: towards the command with its rate (YAW_RATE_CMD) as feed-forward, slew-limited
-    yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
-    yrate = c[C.YAW_RATE_CMD] + sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
-    smax = g[C.G_SLEW_YAW]
-    yrate = min(max(yrate, -smax), smax)
-    yr0 = c[C.ATT_YAW_RATE_T]
-    dv = g[C.G_ACCEL_MAX + 2] * dt
-    yrate = min(max(yrate, yr0 - dv), yr0 + dv)
-    c[C.ATT_YAW_RATE_T] = yrate
-    c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
+    _shape_yaw(c, g, tc, dt)
 
     # target quaternion from euler (ZYX)
     cr = math.cos(0.5 * c[C.ATT_ROLL_T])
@@ -185,20 +176,43 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     r0 = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt)
     r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt)
     r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt)
+    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+
+
+@inline_jit
+def _shape_yaw(c, g, tc, dt):
+    """The heading target moves towards the command with its rate (YAW_RATE_CMD) as
+    feed-forward, slew-limited (G_SLEW_YAW) and acceleration-limited; tc: input time constant
+    [s], dt [s]."""
+    yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
+    yrate = c[C.YAW_RATE_CMD] + sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
+    smax = g[C.G_SLEW_YAW]
+    yrate = min(max(yrate, -smax), smax)
+    yr0 = c[C.ATT_YAW_RATE_T]
+    dv = g[C.G_ACCEL_MAX + 2] * dt
+    yrate = min(max(yrate, yr0 - dv), yr0 + dv)
+    c[C.ATT_YAW_RATE_T] = yrate
+    c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
+
+
+@inline_jit
+def _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro_z):
+    """Body-rate targets [rad/s] from the angle controllers' rates r0..r2 and the
+    feed-forward ff0..ff2: the feed-forward fades out while the thrust-vector error te [rad]
+    is beyond THRUST_ERROR_ANGLE, the yaw target blending into the measured yaw rate gyro_z."""
     if te <= THRUST_ERROR_ANGLE:
         body_rate_out[0] = r0 + ff0
         body_rate_out[1] = r1 + ff1
         body_rate_out[2] = r2 + ff2
+    elif te > 2.0 * THRUST_ERROR_ANGLE:
+        body_rate_out[0] = r0
+        body_rate_out[1] = r1
+        body_rate_out[2] = gyro_z
     else:
-        if te > 2.0 * THRUST_ERROR_ANGLE:
-            body_rate_out[0] = r0
-            body_rate_out[1] = r1
-            body_rate_out[2] = gyro[2]
-        else:
-            k = 1.0 - (te - THRUST_ERROR_ANGLE) / THRUST_ERROR_ANGLE
-            body_rate_out[0] = r0 + ff0 * k
-            body_rate_out[1] = r1 + ff1 * k
-            body_rate_out[2] = gyro[2] * (1.0 - k) + (r2 + ff2) * k
+        k = 1.0 - (te - THRUST_ERROR_ANGLE) / THRUST_ERROR_ANGLE
+        body_rate_out[0] = r0 + ff0 * k
+        body_rate_out[1] = r1 + ff1 * k
+        body_rate_out[2] = gyro_z * (1.0 - k) + (r2 + ff2) * k
 
 
 @tick_jit

@@ -1,10 +1,11 @@
-"""Event log rows (MODE, EV, ERR) written by the vehicle logic into the flight's log buffers.
-
-Buffers follow tlm_sim.flightlog.schema: MODE (TimeUS, Mode, ModeNum, Rsn), EV (TimeUS, Id),
-ERR (TimeUS, Subsys, ECode). ``counts`` holds the row count of each buffer at the index given.
+"""Event log rows (MODE, EV, ERR) written by the vehicle logic into the flight's log buffers
+(the tuple and row counts of :mod:`tlm_sim.logger`, columns by name from the schema).
 """
 
+from tlm_sim import logger as L
 from tlm_sim._jit import tick_jit
+
+MODE, EV, ERR = L.MODE_COLS, L.EV_COLS, L.ERR_COLS
 
 # EV ids (AP_Logger LogEvent)
 EV_ARMED = 10
@@ -25,33 +26,28 @@ ERR_CODE_LATE_FRAME = 2
 
 
 @tick_jit
-def log_row3(buf, counts, k, t_us, a, b, c_):
-    """Append (TimeUS, a, b, c) to a 4-column buffer (MODE); drops rows when full."""
-    n = counts[k]
-    if n < buf.shape[0]:
-        buf[n, 0] = t_us
-        buf[n, 1] = a
-        buf[n, 2] = b
-        buf[n, 3] = c_
-        counts[k] = n + 1
+def log_mode(events, ev_counts, t_us, mode, rsn):
+    """Append a MODE row (mode number, reason) to the flight's log buffers."""
+    r = L.new_row(events, ev_counts, L.E_MODE, t_us)
+    if r >= 0:
+        b = events[L.E_MODE]
+        b[r, MODE.Mode] = mode
+        b[r, MODE.ModeNum] = mode
+        b[r, MODE.Rsn] = rsn
 
 
 @tick_jit
-def log_row2(buf, counts, k, t_us, a, b):
-    """Append (TimeUS, a, b) to a 3-column buffer (ERR)."""
-    n = counts[k]
-    if n < buf.shape[0]:
-        buf[n, 0] = t_us
-        buf[n, 1] = a
-        buf[n, 2] = b
-        counts[k] = n + 1
+def log_err(events, ev_counts, t_us, subsys, code):
+    """Append an ERR row (subsystem, error code)."""
+    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    if r >= 0:
+        events[L.E_ERR][r, ERR.Subsys] = subsys
+        events[L.E_ERR][r, ERR.ECode] = code
 
 
 @tick_jit
-def log_row1(buf, counts, k, t_us, a):
-    """Append (TimeUS, a) to a 2-column buffer (EV)."""
-    n = counts[k]
-    if n < buf.shape[0]:
-        buf[n, 0] = t_us
-        buf[n, 1] = a
-        counts[k] = n + 1
+def log_ev(events, ev_counts, t_us, ev_id):
+    """Append an EV row (event id)."""
+    r = L.new_row(events, ev_counts, L.E_EV, t_us)
+    if r >= 0:
+        events[L.E_EV][r, EV.Id] = ev_id

@@ -102,11 +102,11 @@ def vertical_cf_update(c, g, pd, acc_down, dt):
 
 
 @tick_jit
-def _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us):
+def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
     if g[C.G_FS_VIBE_ENABLE] == 0.0:
         if c[C.VIBE_COMP] != 0.0:
             c[C.VIBE_COMP] = 0.0
-            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
         return
     # EKF3 innovations are prediction - measurement: both positive = "sinking and low"; the
     # filtered velocity ratio is only valid while ekf_check filters it (FS_EKF_THRESH > 0)
@@ -119,16 +119,16 @@ def _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us):
             c[C.VIBE_FAIL_T] = t_s
         if c[C.VIBE_COMP] == 0.0 and t_s - c[C.VIBE_FAIL_T] >= VIBE_TRIGGER_S - 1e-6:
             c[C.VIBE_COMP] = 1.0
-            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_FAILSAFE)
+            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_FAILSAFE)
     else:
         c[C.VIBE_FAIL_T] = -1.0
         if c[C.VIBE_COMP] != 0.0 and t_s - c[C.VIBE_LAST_FAIL_T] >= VIBE_CLEAR_S - 1e-6:
             c[C.VIBE_COMP] = 0.0
-            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
 
 
 @tick_jit
-def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
+def _ekf_check(c, g, nav, events, ev_counts, t_us):
     """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle.
 
     With FS_EKF_THRESH <= 0 it only clears the failsafe and returns before filtering the test
@@ -139,7 +139,7 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
         c[C.EKF_FAIL_COUNT] = 0.0
         if c[C.EKF_FAILSAFE] != 0.0:
             c[C.EKF_FAILSAFE] = 0.0
-            E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_RESOLVED)
         return FS_NONE
     a = g[C.G_FS_EKF_ALPHA]
     c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
@@ -162,8 +162,8 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
             c[C.EKF_FAIL_COUNT] -= 1.0
             if c[C.EKF_FAIL_COUNT] == 0.0 and c[C.EKF_FAILSAFE] != 0.0:
                 c[C.EKF_FAILSAFE] = 0.0
-                E.log_row2(err_buf, counts, k_err, t_us, ERR_EKFCHECK, E.ERR_CODE_RESOLVED)
-                E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV,
+                E.log_err(events, ev_counts, t_us, ERR_EKFCHECK, E.ERR_CODE_RESOLVED)
+                E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV,
                            E.ERR_CODE_RESOLVED)
         return FS_NONE
     if c[C.EKF_CHECK_OK_ONCE] == 0.0 or c[C.EKF_FAILSAFE] != 0.0:
@@ -173,8 +173,8 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
         return FS_NONE
     c[C.EKF_FAIL_COUNT] = EKF_CHECK_ITERATIONS
     c[C.EKF_FAILSAFE] = 1.0
-    E.log_row2(err_buf, counts, k_err, t_us, ERR_EKFCHECK, ERR_CODE_EKF_BAD_VARIANCE)
-    E.log_row2(err_buf, counts, k_err, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_FAILSAFE)
+    E.log_err(events, ev_counts, t_us, ERR_EKFCHECK, ERR_CODE_EKF_BAD_VARIANCE)
+    E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_FAILSAFE)
     action = g[C.G_FS_EKF_ACTION]
     if action == 2.0:
         return FS_EKF_ALTHOLD
@@ -184,7 +184,7 @@ def _ekf_check(c, g, nav, err_buf, counts, k_err, t_us):
 
 
 @tick_jit
-def failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err):
+def failsafe_checks(c, g, t_us, nav, events, ev_counts):
     """The 10 Hz EKF and vibration checks (armed only, in that order); returns an FS_* action."""
     t_s = t_us * 1e-6
     c[C.EKF_POS_OK] = nav[NAV_POS_OK]
@@ -194,8 +194,8 @@ def failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err):
     if c[C.ARMED] == 0.0:
         c[C.VIBE_FAIL_T] = -1.0
         return FS_NONE
-    fs = _ekf_check(c, g, nav, err_buf, counts, k_err, t_us)
-    _vibration_check(c, g, t_s, nav, err_buf, counts, k_err, t_us)
+    fs = _ekf_check(c, g, nav, events, ev_counts, t_us)
+    _vibration_check(c, g, t_s, nav, events, ev_counts, t_us)
     return fs
 
 
@@ -224,7 +224,7 @@ def crash_check(c, g, dt, cos_tilt, roll, pitch, ground_speed):
 
 
 @tick_jit
-def thrust_loss_check(c, dt, q, vd, err_buf, counts, k_err, t_us):
+def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
     """ArduCopter's thrust-loss check, once per main-loop tick (after the mixer).
 
     q: EKF attitude quaternion body -> NED; vd: EKF down velocity [m/s]. Uses the attitude
@@ -258,5 +258,5 @@ def thrust_loss_check(c, dt, q, vd, err_buf, counts, k_err, t_us):
         return False
     c[C.THRUST_LOSS_T] = 0.0
     c[C.THRUST_BOOST] = 1.0
-    E.log_row2(err_buf, counts, k_err, t_us, E.ERR_THRUST_LOSS_CHECK, E.ERR_CODE_FAILSAFE)
+    E.log_err(events, ev_counts, t_us, E.ERR_THRUST_LOSS_CHECK, E.ERR_CODE_FAILSAFE)
     return True

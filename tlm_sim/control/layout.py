@@ -150,6 +150,7 @@ RSN_RADIO_FAILSAFE = 3
 RSN_EKF_FAILSAFE = 6
 RSN_MISSION_END = 8
 RSN_CRASH_FAILSAFE = 19
+RSN_INITIALISED = 26  # the boot mode
 
 # ------------------------------------------------------------ controller configuration g ------
 CONFIG = Layout("g", "controller configuration")

@@ -15,7 +15,7 @@ tlm_sim.control.failsafe.
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import (
@@ -68,10 +68,10 @@ HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
 
 
 @tick_jit
-def set_mode(c, mode, rsn, t_us, mode_buf, counts, k_mode):
+def set_mode(c, mode, rsn, t_us, events, ev_counts):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
-    E.log_row3(mode_buf, counts, k_mode, t_us, mode, mode, rsn)
+    E.log_mode(events, ev_counts, t_us, mode, rsn)
 
 
 @tick_jit
@@ -154,9 +154,9 @@ def _start_land(c, pos, failsafe):
 
 
 @tick_jit
-def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its sections
+def vehicle_step(
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
-    mode_buf, ev_buf, err_buf, counts, k_mode, k_ev, k_err,
+    events, ev_counts,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
@@ -165,193 +165,275 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
     [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
     path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
     seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
-    nav: the primary EKF lane's status for the failsafe checks (control.failsafe NAV_*).
+    nav: the primary EKF lane's status for the failsafe checks (control.failsafe NAV_*);
+    events/ev_counts: the flight's event log buffers and their row counts (tlm_sim.logger
+    E_*: MODE, EV, ERR).
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
     cos_yaw, sin_yaw, cos_tilt = _heading(q)
-    # 1 Hz low-pass of the earth-frame acceleration (land/crash detectors)
+    _estimates_update(c, g, pos, acc_ned, dt)
+    if c[C.ARMED] == 0.0:
+        _disarmed_step(c, g, t_us, t_s, q, events, ev_counts)
+        return
+    c[C.SUB_TIMER] += dt
+    sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
+                          events, ev_counts)
+    sub = _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts)
+    if sub == C.SUB_GROUND_IDLE:
+        _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts)
+        return
+    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path,
+                                                    seg, events, ev_counts)
+    sub = int(c[C.SUBMODE])
+    if sub == C.SUB_LAND and _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events,
+                                           ev_counts):
+        return
+    thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_yaw, sin_yaw, cos_tilt,
+                       yaw_cmd, yaw_rate_ff, v_batt)
+    _hover_learning(c, g, dt, sub, thr, vel, q)
+    _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts)
+    _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts)
+
+
+@inline_jit
+def _estimates_update(c, g, pos, acc_ned, dt):
+    """Every tick, armed or not: the 1 Hz low-pass of the earth-frame acceleration (land and
+    crash detectors), the height-rate filter and the air density ratio of the motors' density
+    compensation (ArduCopter reads it from the baro)."""
     alpha = dt / (dt + 1.0 / (2.0 * math.pi * 1.0))
     for k in range(3):
         c[C.ALP + k] += alpha * (acc_ned[k] - c[C.ALP + k])
-    acc_up = -acc_ned[2]
     vertical_cf_update(c, g, pos[2], acc_ned[2], dt)
-    # air density ratio for the motors' density compensation (ArduCopter reads it from the baro)
     c[C.AIR_RHO_RATIO] = g[C.G_RHO_RATIO_HOME] - g[C.G_RHO_RATIO_GRAD] * pos[2]
 
-    # ---------------------------------------------------------------- disarmed
-    if c[C.ARMED] == 0.0:
-        output_idle(c, g, 0.0)
-        rate_reset(c)
-        if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
-            # arm in GUIDED (as the reference driver did) and start the motors
-            set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
-            c[C.ARMED] = 1.0
-            c[C.LANDED] = 1.0
-            c[C.HOME_YAW] = _yaw(q)
-            c[C.SUBMODE] = C.SUB_GROUND_IDLE
-            c[C.SUB_TIMER] = 0.0
-            c[C.SPOOL] = 1.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_ARMED)
-        return
 
-    c[C.SUB_TIMER] += dt
-    sub = int(c[C.SUBMODE])
+@inline_jit
+def _disarmed_step(c, g, t_us, t_s, q, events, ev_counts):
+    """Disarmed: motors off; at TLM_ARM_TIME arm in GUIDED (as the reference driver did) and
+    start the motors."""
+    output_idle(c, g, 0.0)
+    rate_reset(c)
+    if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
+        set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, events, ev_counts)
+        c[C.ARMED] = 1.0
+        c[C.LANDED] = 1.0
+        c[C.HOME_YAW] = _yaw(q)
+        c[C.SUBMODE] = C.SUB_GROUND_IDLE
+        c[C.SUB_TIMER] = 0.0
+        c[C.SPOOL] = 1.0
+        E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
 
-    # ------------------------------------------------------------ radio failsafe
+
+@inline_jit
+def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, events, ev_counts):
+    """The radio failsafe: no RC frame for RC_FS_TIMEOUT -> ERR 2/2, 5/1 and RTL (LAND without
+    a position); frames again -> ERR 5/0. Returns the submode to continue with."""
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     if rc_late and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
+        E.log_err(events, ev_counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
+        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
             if _position_ok(c):
-                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
+                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
                 _start_rtl(c, g, pos, vel, seg)
-                sub = C.SUB_RTL_CLIMB
-            else:  # RTL needs a position: LAND without one, after a pause
-                set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, mode_buf, counts, k_mode)
-                _start_land(c, pos, True)
-                sub = C.SUB_LAND
+                return C.SUB_RTL_CLIMB
+            # RTL needs a position: LAND without one, after a pause
+            set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
+            _start_land(c, pos, True)
+            return C.SUB_LAND
     elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
-        E.log_row2(err_buf, counts, k_err, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+    return sub
 
-    # ------------------------------------------------- vibration and EKF failsafes (10 Hz)
-    fs = failsafe_checks(c, g, t_us, nav, err_buf, counts, k_err)
-    if fs != FS_NONE and sub != C.SUB_GROUND_IDLE and c[C.LANDED] == 0.0:
-        needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
-            c[C.MODE] == C.MODE_RTL)
-        if needs_position or g[C.G_FS_EKF_ACTION] == 3.0:
-            if fs == FS_EKF_ALTHOLD:
-                set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
-                _start_land(c, pos, True)
-                c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
-            elif c[C.MODE] != C.MODE_LAND:
-                set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, mode_buf, counts, k_mode)
-                _start_land(c, pos, True)
-            sub = C.SUB_LAND
 
-    # ---------------------------------------------------------------- ground idle
-    if sub == C.SUB_GROUND_IDLE:
-        output_idle(c, g, g[C.G_MOT_SPIN_ARM])
-        attitude_reset(c, 0.0, 0.0, _yaw(q))
-        if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_AUTO_ARMED)
-        if c[C.SUB_TIMER] >= ARMING_DELAY_S:
-            c[C.SUBMODE] = C.SUB_TAKEOFF
-            c[C.SUB_TIMER] = 0.0
-            c[C.SPOOL] = 2.0
-            xy_reset(c, pos[0], pos[1], vel[0], vel[1])
-            z_reset(c, g, pos[2], vel[2], 0.0)
-            c[C.THR_OUT] = 0.0
-            _set_segment(seg, g, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
-            path_start(c)
-        return
+@inline_jit
+def _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts):
+    """The vibration and EKF failsafes (10 Hz): an EKF failsafe in flight -> LAND (or AltHold
+    with FS_EKF_ACTION 2) where the mode needs a position. Returns the submode."""
+    fs = failsafe_checks(c, g, t_us, nav, events, ev_counts)
+    if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
+        return sub
+    needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
+        c[C.MODE] == C.MODE_RTL)
+    if not (needs_position or g[C.G_FS_EKF_ACTION] == 3.0):
+        return sub
+    if fs == FS_EKF_ALTHOLD:
+        set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+        _start_land(c, pos, True)
+        c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
+    elif c[C.MODE] != C.MODE_LAND:
+        set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+        _start_land(c, pos, True)
+    return C.SUB_LAND
 
-    # ---------------------------------------------------------------- navigation
-    speed_cap = 0.0
+
+@inline_jit
+def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts):
+    """Armed on the ground: motors at MOT_SPIN_ARM, EV AUTO_ARMED, then after ARMING_DELAY the
+    takeoff starts (controllers reset here, a vertical segment to the takeoff altitude)."""
+    output_idle(c, g, g[C.G_MOT_SPIN_ARM])
+    attitude_reset(c, 0.0, 0.0, _yaw(q))
+    if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
+        E.log_ev(events, ev_counts, t_us, E.EV_AUTO_ARMED)
+    if c[C.SUB_TIMER] >= ARMING_DELAY_S:
+        c[C.SUBMODE] = C.SUB_TAKEOFF
+        c[C.SUB_TIMER] = 0.0
+        c[C.SPOOL] = 2.0
+        xy_reset(c, pos[0], pos[1], vel[0], vel[1])
+        z_reset(c, g, pos[2], vel[2], 0.0)
+        c[C.THR_OUT] = 0.0
+        _set_segment(seg, g, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
+        path_start(c)
+
+
+@inline_jit
+def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, events, ev_counts):
+    """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
+    moves the position targets along its path and switches submodes. Returns (yaw command
+    [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
-    land_vertical = False
     if sub == C.SUB_TAKEOFF:
-        # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
-        # runs it outside AC_WPNav)
-        heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
-        if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
-            # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
-            set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, mode_buf, counts, k_mode)
-            c[C.TAKEOFF_DONE_T] = -1.0
-        if c[C.MODE] == C.MODE_AUTO and done > 0.0:
-            if c[C.TAKEOFF_DONE_T] < 0.0:
-                c[C.TAKEOFF_DONE_T] = 0.0
-            c[C.TAKEOFF_DONE_T] += dt
-            if c[C.TAKEOFF_DONE_T] >= TAKEOFF_WP_DWELL_S:
-                # first waypoint reached: the route starts from rest
-                c[C.SUBMODE] = C.SUB_WP
-                c[C.SUB_TIMER] = 0.0
-                path_start(c)
+        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts)
     elif sub == C.SUB_WP:
-        heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
+        heading = _nav_waypoints(c, g, pos, vel, path, n_path, seg)
         if not math.isnan(heading):
             yaw_cmd = heading
             yaw_rate_ff = c[C.YAW_RATE_CMD]
-        if done > 0.0:
-            dn = path[n_path - 1, 0] - pos[0]
-            de = path[n_path - 1, 1] - pos[1]
-            if dn * dn + de * de <= g[C.G_WP_RADIUS] ** 2:
-                c[C.WP_REACHED] += 1.0
-                _start_rtl(c, g, pos, vel, seg)
     elif sub == C.SUB_RTL_CLIMB:
-        heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, True)
-        if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
-            c[C.SUBMODE] = C.SUB_RTL_RETURN
-            c[C.SUB_TIMER] = 0.0
-            _set_segment(seg, g, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
-            path_start(c)
+        _nav_rtl_climb(c, g, pos, vel, seg)
     elif sub == C.SUB_RTL_RETURN:
-        speed_cap = g[C.G_RTL_SPEED]
-        heading, done = path_update(c, g, seg, 2, pos, vel, speed_cap, True)
-        if done > 0.0 and pos[0] * pos[0] + pos[1] * pos[1] <= g[C.G_WP_RADIUS] ** 2:
-            c[C.SUBMODE] = C.SUB_RTL_LOITER
-            c[C.SUB_TIMER] = 0.0
+        _nav_rtl_return(c, g, pos, vel, seg)
     elif sub == C.SUB_RTL_LOITER:
-        c[C.PXY_VEL_FF] = 0.0
-        c[C.PXY_VEL_FF + 1] = 0.0
-        c[C.PXY_ACC_FF] = 0.0
-        c[C.PXY_ACC_FF + 1] = 0.0
-        c[C.PZ_VEL_FF] = 0.0
-        c[C.PZ_ACC_FF] = 0.0
-        yaw_cmd = c[C.HOME_YAW]
-        if c[C.SUB_TIMER] >= g[C.G_RTL_LOIT_TIME]:
-            c[C.SUBMODE] = C.SUB_LAND
-            c[C.SUB_TIMER] = 0.0
-    elif sub == C.SUB_LAND:
-        land_vertical = True
-    sub = int(c[C.SUBMODE])
+        yaw_cmd = _nav_rtl_loiter(c, g)
+    return yaw_cmd, yaw_rate_ff, sub == C.SUB_LAND
 
-    if sub == C.SUB_LAND and c[C.LAND_PAUSE] > 0.0:
+
+@inline_jit
+def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
+    """GUIDED takeoff up the vertical segment; AUTO at TAKEOFF_AUTO_FRAC of the altitude, the
+    route once the first waypoint has been held TAKEOFF_WP_DWELL_S."""
+    # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
+    # runs it outside AC_WPNav)
+    heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
+    if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
+        # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
+        set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, events, ev_counts)
+        c[C.TAKEOFF_DONE_T] = -1.0
+    if c[C.MODE] == C.MODE_AUTO and done > 0.0:
+        if c[C.TAKEOFF_DONE_T] < 0.0:
+            c[C.TAKEOFF_DONE_T] = 0.0
+        c[C.TAKEOFF_DONE_T] += dt
+        if c[C.TAKEOFF_DONE_T] >= TAKEOFF_WP_DWELL_S:
+            # first waypoint reached: the route starts from rest
+            c[C.SUBMODE] = C.SUB_WP
+            c[C.SUB_TIMER] = 0.0
+            path_start(c)
+
+
+@inline_jit
+def _nav_waypoints(c, g, pos, vel, path, n_path, seg):
+    """AUTO along the mission; RTL once the last waypoint is reached. Returns the path's
+    heading [rad] (NaN: keep the yaw)."""
+    heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
+    if done > 0.0:
+        dn = path[n_path - 1, 0] - pos[0]
+        de = path[n_path - 1, 1] - pos[1]
+        if dn * dn + de * de <= g[C.G_WP_RADIUS] ** 2:
+            c[C.WP_REACHED] += 1.0
+            _start_rtl(c, g, pos, vel, seg)
+    return heading
+
+
+@inline_jit
+def _nav_rtl_climb(c, g, pos, vel, seg):
+    """RTL's climb to the return altitude, then the return leg home at that altitude."""
+    heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, True)
+    if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
+        c[C.SUBMODE] = C.SUB_RTL_RETURN
+        c[C.SUB_TIMER] = 0.0
+        _set_segment(seg, g, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
+        path_start(c)
+
+
+@inline_jit
+def _nav_rtl_return(c, g, pos, vel, seg):
+    """RTL's return leg at RTL_SPEED; loiter once within WP_RADIUS of home."""
+    speed_cap = g[C.G_RTL_SPEED]
+    heading, done = path_update(c, g, seg, 2, pos, vel, speed_cap, True)
+    if done > 0.0 and pos[0] * pos[0] + pos[1] * pos[1] <= g[C.G_WP_RADIUS] ** 2:
+        c[C.SUBMODE] = C.SUB_RTL_LOITER
+        c[C.SUB_TIMER] = 0.0
+
+
+@inline_jit
+def _nav_rtl_loiter(c, g):
+    """RTL's loiter above home for RTL_LOIT_TIME, then LAND; returns the yaw command (home's)."""
+    c[C.PXY_VEL_FF] = 0.0
+    c[C.PXY_VEL_FF + 1] = 0.0
+    c[C.PXY_ACC_FF] = 0.0
+    c[C.PXY_ACC_FF + 1] = 0.0
+    c[C.PZ_VEL_FF] = 0.0
+    c[C.PZ_ACC_FF] = 0.0
+    if c[C.SUB_TIMER] >= g[C.G_RTL_LOIT_TIME]:
+        c[C.SUBMODE] = C.SUB_LAND
+        c[C.SUB_TIMER] = 0.0
+    return c[C.HOME_YAW]
+
+
+@inline_jit
+def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
+    """LAND: hold the height through a failsafe's pause, else hold the landing point and
+    descend; disarm once landed. Returns True when it disarmed (the tick ends)."""
+    if c[C.LAND_PAUSE] > 0.0:
         # failsafe LAND: hold the height for LAND_WITH_DELAY before descending
         c[C.LAND_PAUSE] -= dt
         c[C.PZ_VEL_FF] = 0.0
         c[C.PZ_ACC_FF] = 0.0
-        land_vertical = False
-    elif sub == C.SUB_LAND:
-        # horizontal hold at the landing point, descent rate by height
-        c[C.PXY_VEL_FF] = 0.0
-        c[C.PXY_VEL_FF + 1] = 0.0
-        c[C.PXY_ACC_FF] = 0.0
-        c[C.PXY_ACC_FF + 1] = 0.0
-        c[C.PZ_ACC_FF] = 0.0
-        if land_vertical:
-            # ArduCopter's land descent rate: the square-root controller (PSC_POSZ_P,
-            # WPNAV_ACCEL_Z) towards LAND_ALT_LOW, kept between LAND_SPEED and LAND_SPEED_HIGH
-            # (or WPNAV_SPEED_DN); the velocity target changes at most at WPNAV_ACCEL_Z and the
-            # position target moves with it (velocity control, as land_at_climb_rate does)
-            v_high = g[C.G_LAND_SPEED_HIGH] if g[C.G_LAND_SPEED_HIGH] > 0.0 else (
-                g[C.G_WP_SPEED_DN])
-            alt_low = max(g[C.G_LAND_ALT_LOW], 1.0)
-            v_dn = sqrt_ctrl(-pos[2] - alt_low, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt)
-            v_dn = min(max(v_dn, g[C.G_LAND_SPEED]), max(v_high, g[C.G_LAND_SPEED]))
-            dv = g[C.G_WP_ACCEL_Z] * dt
-            v_dn = min(max(v_dn, c[C.PZ_VEL_FF] - dv), c[C.PZ_VEL_FF] + dv)
-            c[C.PZ_VEL_FF] = v_dn
-            c[C.PZ_POS_T] += v_dn * dt
-        else:
-            c[C.PZ_VEL_FF] = 0.0
-            c[C.PZ_POS_T] = pos[2]
-        if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE)
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
-            c[C.ARMED] = 0.0
-            c[C.SUBMODE] = C.SUB_LANDED
-            c[C.DISARM_TIME] = t_s
-            output_idle(c, g, 0.0)
-            return
+        return False
+    # horizontal hold at the landing point, descent rate by height
+    c[C.PXY_VEL_FF] = 0.0
+    c[C.PXY_VEL_FF + 1] = 0.0
+    c[C.PXY_ACC_FF] = 0.0
+    c[C.PXY_ACC_FF + 1] = 0.0
+    c[C.PZ_ACC_FF] = 0.0
+    if land_vertical:
+        # ArduCopter's land descent rate: the square-root controller (PSC_POSZ_P,
+        # WPNAV_ACCEL_Z) towards LAND_ALT_LOW, kept between LAND_SPEED and LAND_SPEED_HIGH
+        # (or WPNAV_SPEED_DN); the velocity target changes at most at WPNAV_ACCEL_Z and the
+        # position target moves with it (velocity control, as land_at_climb_rate does)
+        v_high = g[C.G_LAND_SPEED_HIGH] if g[C.G_LAND_SPEED_HIGH] > 0.0 else (
+            g[C.G_WP_SPEED_DN])
+        alt_low = max(g[C.G_LAND_ALT_LOW], 1.0)
+        v_dn = sqrt_ctrl(-pos[2] - alt_low, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt)
+        v_dn = min(max(v_dn, g[C.G_LAND_SPEED]), max(v_high, g[C.G_LAND_SPEED]))
+        dv = g[C.G_WP_ACCEL_Z] * dt
+        v_dn = min(max(v_dn, c[C.PZ_VEL_FF] - dv), c[C.PZ_VEL_FF] + dv)
+        c[C.PZ_VEL_FF] = v_dn
+        c[C.PZ_POS_T] += v_dn * dt
+    else:
+        c[C.PZ_VEL_FF] = 0.0
+        c[C.PZ_POS_T] = pos[2]
+    if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
+        E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE)
+        E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+        c[C.ARMED] = 0.0
+        c[C.SUBMODE] = C.SUB_LANDED
+        c[C.DISARM_TIME] = t_s
+        output_idle(c, g, 0.0)
+        return True
+    return False
 
-    # ------------------------------------------------------------- controllers
+
+@inline_jit
+def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_yaw, sin_yaw, cos_tilt, yaw_cmd,
+                 yaw_rate_ff, v_batt):
+    """Position (xy, z), attitude and rate controllers and the mixer; returns the throttle."""
     if c[C.LAND_NOGPS] != 0.0 and sub == C.SUB_LAND:
         c[C.ATT_ROLL_CMD] = 0.0  # no position control: level, drift with the wind
         c[C.ATT_PITCH_CMD] = 0.0
@@ -374,12 +456,15 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
     p_out = rate_pid(c, g, 1, rate_t1, gyro[1], lim_rp)
     y_out = rate_pid(c, g, 2, rate_t2, gyro[2], lim_y)
     mix(c, g, r_out, p_out, y_out, thr_b, v_batt)
+    return thr
 
-    # ------------------------------------------------------------- hover learning
-    # (MOT_HOVER_LEARN 2, ArduCopter's conditions: flying, no desired climb or descent, climb
-    # rate below 0.6 m/s, roll and pitch within 5 deg. Cruise pitches the copter beyond 5 deg,
-    # so SITL learns only in level hovers: normal_s11 keeps ThH 0.3876 from 15 s after arming
-    # to the RTL, where it drops to 0.3746.)
+
+@inline_jit
+def _hover_learning(c, g, dt, sub, thr, vel, q):
+    """MOT_HOVER_LEARN 2 with ArduCopter's conditions: flying, no desired climb or descent,
+    climb rate below 0.6 m/s, roll and pitch within 5 deg. (Cruise pitches the copter beyond
+    5 deg, so SITL learns only in level hovers: normal_s11 keeps ThH 0.3876 from 15 s after
+    arming to the RTL, where it drops to 0.3746.)"""
     learning = (c[C.LANDED] == 0.0 and c[C.LAND_TIMER] == 0.0 and c[C.LIM_THR_LO] == 0.0
                 and c[C.LIM_THR_HI] == 0.0 and abs(vel[2]) < 0.6 and c[C.PZ_VEL_FF] == 0.0
                 and sub >= C.SUB_WP and thr > 0.0)
@@ -394,14 +479,19 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         h = c[C.THR_HOVER] + (thr - c[C.THR_HOVER]) * dt / (dt + 10.0)
         c[C.THR_HOVER] = min(max(h, 0.125), 0.6875)
 
-    # ------------------------------------------------------------- land detector
+
+@inline_jit
+def _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts):
+    """The land detector: throttle at its lower limit, little acceleration and climb rate for
+    LAND_DETECT_S -> landed (EV LAND_COMPLETE_MAYBE after LAND_MAYBE_S); EV NOT_LANDED once
+    above 0.5 m again."""
     a_lp = math.sqrt(c[C.ALP] ** 2 + c[C.ALP + 1] ** 2 + c[C.ALP + 2] ** 2)
     at_lower = c[C.LIM_THR_LO] != 0.0 or thr <= 0.05
     if at_lower and a_lp <= 1.0 and abs(vel[2]) < 1.0 and sub != C.SUB_TAKEOFF:
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_LAND_COMPLETE_MAYBE)
+            E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
     else:
@@ -409,15 +499,19 @@ def vehicle_step(  # noqa: C901 - complexity 44; issue 18 splits it along its se
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_NOT_LANDED)
+            E.log_ev(events, ev_counts, t_us, E.EV_NOT_LANDED)
 
-    # ------------------------------------------------------------- crash and thrust-loss checks
-    thrust_loss_check(c, dt, q, vel[2], err_buf, counts, k_err, t_us)
+
+@inline_jit
+def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
+    """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
+    (ERR 12/1, EV DISARMED)."""
+    thrust_loss_check(c, dt, q, vel[2], events, ev_counts, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
-            E.log_row2(err_buf, counts, k_err, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            E.log_row1(ev_buf, counts, k_ev, t_us, E.EV_DISARMED)
+            E.log_err(events, ev_counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
+            E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
             c[C.ARMED] = 0.0
             c[C.SUBMODE] = C.SUB_LANDED
             c[C.DISARM_TIME] = t_s

@@ -10,7 +10,7 @@ NED positions/velocities in m, m/s; PZ_ACC_T is "up" acceleration like ArduPilot
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import sqrt_ctrl
 
@@ -87,6 +87,40 @@ def althold_lean_update(c, g, throttle):
     c[C.ALTHOLD_LEAN] += g[C.G_ANG_LIM_ALPHA] * (target - c[C.ALTHOLD_LEAN])
 
 
+@inline_jit
+def _limit_accel_xy(c, an, ae, accel_max):
+    """The horizontal acceleration (an, ae) [m/s^2] limited to accel_max, keeping the part
+    across the desired velocity (PXY_VEL_FF) first (AC_PosControl's limit_accel_xy); records
+    the unlimited vector in PXY_LIMIT while limited (else zero). Returns the limited vector."""
+    c[C.PXY_LIMIT] = 0.0
+    c[C.PXY_LIMIT + 1] = 0.0
+    amag2 = an * an + ae * ae
+    if amag2 > accel_max * accel_max:
+        c[C.PXY_LIMIT] = an
+        c[C.PXY_LIMIT + 1] = ae
+        vn, ve = c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1]
+        vm = math.sqrt(vn * vn + ve * ve)
+        if vm > 1e-6:
+            un, ue = vn / vm, ve / vm
+            a_dir = un * an + ue * ae
+            xn, xe = an - un * a_dir, ae - ue * a_dir
+            xm = math.sqrt(xn * xn + xe * xe)
+            if xm > accel_max:
+                xn *= accel_max / xm
+                xe *= accel_max / xm
+                a_dir = 0.0
+            else:
+                a_lim = math.sqrt(max(accel_max * accel_max - xm * xm, 0.0))
+                a_dir = min(max(a_dir, -a_lim), a_lim)
+            an = xn + un * a_dir
+            ae = xe + ue * a_dir
+        else:
+            k = accel_max / math.sqrt(amag2)
+            an *= k
+            ae *= k
+    return an, ae
+
+
 @tick_jit
 def xy_update(c, g, pos, vel, cy, sy):
     """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD.
@@ -159,33 +193,7 @@ def xy_update(c, g, pos, vel, cy, sy):
             an += a
         else:
             ae += a
-    c[C.PXY_LIMIT] = 0.0
-    c[C.PXY_LIMIT + 1] = 0.0
-    amag2 = an * an + ae * ae
-    if amag2 > accel_max * accel_max:
-        c[C.PXY_LIMIT] = an
-        c[C.PXY_LIMIT + 1] = ae
-        # limit, keeping the acceleration across the desired velocity first (limit_accel_xy)
-        vn, ve = c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1]
-        vm = math.sqrt(vn * vn + ve * ve)
-        if vm > 1e-6:
-            un, ue = vn / vm, ve / vm
-            a_dir = un * an + ue * ae
-            xn, xe = an - un * a_dir, ae - ue * a_dir
-            xm = math.sqrt(xn * xn + xe * xe)
-            if xm > accel_max:
-                xn *= accel_max / xm
-                xe *= accel_max / xm
-                a_dir = 0.0
-            else:
-                a_lim = math.sqrt(max(accel_max * accel_max - xm * xm, 0.0))
-                a_dir = min(max(a_dir, -a_lim), a_lim)
-            an = xn + un * a_dir
-            ae = xe + ue * a_dir
-        else:
-            k = accel_max / math.sqrt(amag2)
-            an *= k
-            ae *= k
+    an, ae = _limit_accel_xy(c, an, ae, accel_max)
     c[C.PXY_ACC_T] = an
     c[C.PXY_ACC_T + 1] = ae
     # acceleration -> lean angles in the heading frame

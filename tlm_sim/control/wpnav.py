@@ -35,7 +35,7 @@ yaw rate, as ArduCopter's AUTO yaw follows them).
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 
 # path rows: (pn, pe, pd) of the point, then data of the leg that ENDS at that point
@@ -338,65 +338,9 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
         i = n - 1
     length = path[i, P_LEN]
     s = c[C.PATH_S]
-    v_leg = path[i, P_VLEG]
-    if speed_cap > 0.0:
-        v_leg = min(v_leg, speed_cap)
-    a_max = path[i, P_ALEG]
-    # speed allowed by the next leg's speed / the end (two legs of look-ahead)
-    d_rem = max(length - s, 0.0)
-    v_corner = v_leg * path[i, P_CORNER]
-    if i + 1 < n:
-        v_corner = min(v_corner, path[i + 1, P_VLEG])
-    v_allow = v_leg
-    q = v_corner * v_corner + a_max * d_rem
-    if q < v_allow * v_allow:
-        v_allow = math.sqrt(q)
-    if i + 1 < n:
-        v_c2 = path[i + 1, P_VLEG] * path[i + 1, P_CORNER]
-        if i + 2 < n:
-            v_c2 = min(v_c2, path[i + 2, P_VLEG])
-        q = v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])
-        if q < v_allow * v_allow:
-            v_allow = math.sqrt(q)
-    # speed: a jerk-limited (WPNAV_JERK) tracker of the allowed speed, and at the path's end the
-    # S-curve's own jerk-limited stop, started when the end is its stopping distance away
-    v = c[C.PATH_V]
-    a = c[C.PATH_A]
-    jerk = g[C.G_WP_JERK]
-    if c[C.PATH_STOP_T] < 0.0 and jerk > 0.0 and v > 0.0:
-        d_end = length - s + path[i, P_DEND]
-        # (a bound of the stopping distance without the square root first)
-        if a_max > 0.0 and d_end <= v * (max(a_max / jerk, 0.5 * (v / a_max + a_max / jerk))
-                                         + dt):
-            if d_end <= blend_half_length(g, v, a_max) + v * dt:
-                c[C.PATH_STOP_T] = 0.0
-                c[C.PATH_STOP_V0] = v
-                c[C.PATH_STOP_A] = a_max
-    stopped = False
-    if c[C.PATH_STOP_T] >= 0.0:
-        c[C.PATH_STOP_T] += dt
-        v_new, a = stop_profile(g, c[C.PATH_STOP_V0], c[C.PATH_STOP_T], c[C.PATH_STOP_A])
-        stopped = v_new <= 0.0
-    elif jerk > 0.0 and a == 0.0 and v == v_allow:
-        v_new = v  # cruising at the allowed speed
-    elif jerk > 0.0:
-        e = v_allow - v
-        if e >= 0.0:
-            a_des = min(math.sqrt(2.0 * jerk * e), a_max)
-        else:
-            a_des = -min(math.sqrt(-2.0 * jerk * e), a_max)
-        a += min(max(a_des - a, -jerk * dt), jerk * dt)
-        v_new = v + a * dt
-        if (v_new - v_allow) * e >= 0.0 and abs(a) <= jerk * dt:
-            v_new = v_allow  # arrived (or passed by less than a tick's jerk): settle exactly
-            a = 0.0
-        if v_new < 0.0:
-            v_new = 0.0
-            a = 0.0
-    else:
-        v_new = min(v_allow, v + a_max * dt) if v_allow > v else max(v_allow, v - a_max * dt)
-        a = (v_new - v) / dt if dt > 0.0 else 0.0
-    v = v_new
+    v_allow, a_max = _allowed_speed(path, n, i, s, speed_cap)
+    _start_stop(c, g, path, i, s, a_max, dt)
+    v, a, stopped = _speed_step(c, g, v_allow, a_max, dt)
     c[C.PATH_A] = a
     c[C.PATH_V] = v
     s += v * dt
@@ -421,12 +365,99 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
             s = length
             done = 1.0
     c[C.PATH_S] = s
+    vff = 0.0 if done > 0.0 else v
+    aff = 0.0 if done > 0.0 else a
+    return _set_targets(c, path, n, i, s, vff, aff), done
+
+
+@inline_jit
+def _allowed_speed(path, n, i, s, speed_cap):
+    """(speed [m/s] allowed at arc length s [m] of leg i by the next legs' speeds and corners
+    and by the path's end, two legs of look-ahead; the leg's acceleration [m/s^2])."""
+    length = path[i, P_LEN]
+    v_leg = path[i, P_VLEG]
+    if speed_cap > 0.0:
+        v_leg = min(v_leg, speed_cap)
+    a_max = path[i, P_ALEG]
+    d_rem = max(length - s, 0.0)
+    v_corner = v_leg * path[i, P_CORNER]
+    if i + 1 < n:
+        v_corner = min(v_corner, path[i + 1, P_VLEG])
+    v_allow = v_leg
+    q = v_corner * v_corner + a_max * d_rem
+    if q < v_allow * v_allow:
+        v_allow = math.sqrt(q)
+    if i + 1 < n:
+        v_c2 = path[i + 1, P_VLEG] * path[i + 1, P_CORNER]
+        if i + 2 < n:
+            v_c2 = min(v_c2, path[i + 2, P_VLEG])
+        q = v_c2 * v_c2 + a_max * (d_rem + path[i + 1, P_LEN])
+        if q < v_allow * v_allow:
+            v_allow = math.sqrt(q)
+    return v_allow, a_max
+
+
+@inline_jit
+def _start_stop(c, g, path, i, s, a_max, dt):
+    """Start the S-curve's own jerk-limited stop (PATH_STOP_*) when the path's end is its
+    stopping distance away (s: arc length on leg i [m]; a_max [m/s^2]; dt [s])."""
+    v = c[C.PATH_V]
+    jerk = g[C.G_WP_JERK]
+    if c[C.PATH_STOP_T] < 0.0 and jerk > 0.0 and v > 0.0:
+        d_end = path[i, P_LEN] - s + path[i, P_DEND]
+        # (a bound of the stopping distance without the square root first)
+        if a_max > 0.0 and d_end <= v * (max(a_max / jerk, 0.5 * (v / a_max + a_max / jerk))
+                                         + dt):
+            if d_end <= blend_half_length(g, v, a_max) + v * dt:
+                c[C.PATH_STOP_T] = 0.0
+                c[C.PATH_STOP_V0] = v
+                c[C.PATH_STOP_A] = a_max
+
+
+@inline_jit
+def _speed_step(c, g, v_allow, a_max, dt):
+    """One step of the target's speed: the stop profile once started, else a jerk-limited
+    (WPNAV_JERK) tracker of v_allow [m/s] (acceleration-limited without a jerk limit).
+    Returns (speed [m/s], acceleration [m/s^2], whether the stop is complete)."""
+    v = c[C.PATH_V]
+    a = c[C.PATH_A]
+    jerk = g[C.G_WP_JERK]
+    if c[C.PATH_STOP_T] >= 0.0:
+        c[C.PATH_STOP_T] += dt
+        v_new, a = stop_profile(g, c[C.PATH_STOP_V0], c[C.PATH_STOP_T], c[C.PATH_STOP_A])
+        return v_new, a, v_new <= 0.0
+    if jerk > 0.0 and a == 0.0 and v == v_allow:
+        return v, a, False  # cruising at the allowed speed
+    if jerk > 0.0:
+        e = v_allow - v
+        if e >= 0.0:
+            a_des = min(math.sqrt(2.0 * jerk * e), a_max)
+        else:
+            a_des = -min(math.sqrt(-2.0 * jerk * e), a_max)
+        a += min(max(a_des - a, -jerk * dt), jerk * dt)
+        v_new = v + a * dt
+        if (v_new - v_allow) * e >= 0.0 and abs(a) <= jerk * dt:
+            v_new = v_allow  # arrived (or passed by less than a tick's jerk): settle exactly
+            a = 0.0
+        if v_new < 0.0:
+            v_new = 0.0
+            a = 0.0
+        return v_new, a, False
+    v_new = min(v_allow, v + a_max * dt) if v_allow > v else max(v_allow, v - a_max * dt)
+    a = (v_new - v) / dt if dt > 0.0 else 0.0
+    return v_new, a, False
+
+
+@inline_jit
+def _set_targets(c, path, n, i, s, vff, aff):
+    """Position-controller targets at arc length s [m] of leg i, velocity and acceleration
+    feed-forwards for the target's speed vff [m/s] and acceleration aff [m/s^2] along the path
+    (with its curvature), the heading's rate in YAW_RATE_CMD. Returns the heading of the
+    horizontal velocity [rad] (nan for a vertical or short leg)."""
     pn, pe, pd, dn, de, dd, kn, ke, kd = path_point(path, n, i, s)
     c[C.PXY_POS_T] = pn
     c[C.PXY_POS_T + 1] = pe
     c[C.PZ_POS_T] = pd
-    vff = 0.0 if done > 0.0 else v
-    aff = 0.0 if done > 0.0 else a
     v2 = vff * vff
     c[C.PXY_VEL_FF] = dn * vff
     c[C.PXY_VEL_FF + 1] = de * vff
@@ -437,7 +468,7 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     heading = math.nan
     c[C.YAW_RATE_CMD] = 0.0
     hh = dn * dn + de * de
-    if hh > 0.01 and length * math.sqrt(path[i, P_UN] ** 2 + path[i, P_UE] ** 2) > 0.5:
+    if hh > 0.01 and path[i, P_LEN] * math.sqrt(path[i, P_UN] ** 2 + path[i, P_UE] ** 2) > 0.5:
         heading = math.atan2(de, dn)
         c[C.YAW_RATE_CMD] = vff * (dn * ke - de * kn) / hh
-    return heading, done
+    return heading

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from tlm_sim._jit import loop_jit, tick_jit
+from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
@@ -141,6 +141,32 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
     smoothing_reset(x)
 
 
+@inline_jit
+def _ground_contact(x: np.ndarray, fh: float, was_on_ground: bool, vd: float,
+                    t_s: float) -> None:
+    """Ground contact (SITL's NO_MOVEMENT behaviour) after a step: on the ground (frame height
+    fh [m]) the copter sits level at its yaw, at rest (a downward velocity vd [m/s] cleared);
+    landing on it after IMPACT_HOLDOFF_S airborne counts an impact at vd."""
+    if -x[X.PD] - fh <= GROUND_EPS_M:
+        if not was_on_ground and t_s - x[X.TIME_LAST_AIRBORNE] > IMPACT_HOLDOFF_S:
+            x[X.IMPACT_SPEED] = vd
+            x[X.IMPACT_COUNT] += 1.0
+            x[X.TIME_LAST_AIRBORNE] = t_s
+        x[X.PD] = -fh
+        if x[X.QX] != 0.0 or x[X.QY] != 0.0:
+            set_yaw_level(x, yaw_of(x))
+        x[X.VN] = 0.0
+        x[X.VE] = 0.0
+        if vd > 0.0:
+            x[X.VD] = 0.0
+        x[X.WX] = 0.0
+        x[X.WY] = 0.0
+        x[X.WZ] = 0.0
+        x[X.ON_GROUND] = 1.0
+    else:
+        x[X.ON_GROUND] = 0.0
+
+
 @tick_jit
 def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t_s: float,
                  rng: np.ndarray) -> None:
@@ -219,25 +245,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     _, _, vd = step_translation(x, X.PN, aen, aee, aed, dt)
 
-    # --- ground contact (NO_MOVEMENT behaviour) ------------------------------------------
-    if -x[X.PD] - fh <= GROUND_EPS_M:
-        if not was_on_ground and t_s - x[X.TIME_LAST_AIRBORNE] > IMPACT_HOLDOFF_S:
-            x[X.IMPACT_SPEED] = vd
-            x[X.IMPACT_COUNT] += 1.0
-            x[X.TIME_LAST_AIRBORNE] = t_s
-        x[X.PD] = -fh
-        if qx != 0.0 or qy != 0.0:
-            set_yaw_level(x, yaw_of(x))
-        x[X.VN] = 0.0
-        x[X.VE] = 0.0
-        if vd > 0.0:
-            x[X.VD] = 0.0
-        x[X.WX] = 0.0
-        x[X.WY] = 0.0
-        x[X.WZ] = 0.0
-        x[X.ON_GROUND] = 1.0
-    else:
-        x[X.ON_GROUND] = 0.0
+    _ground_contact(x, fh, was_on_ground, vd, t_s)
 
     # --- battery ------------------------------------------------------------------------
     update_battery(x, frame, current, dt)

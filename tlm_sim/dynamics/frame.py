@@ -186,20 +186,22 @@ def build_frame(p: Params) -> np.ndarray:
         f[F_MOT_Y + i] = diag * MOTOR_DIR_Y[i]
         f[F_MOT_YAW + i] = MOTOR_YAW_FACTOR[i]
 
-    f[F_HOME_ALT] = get("SIM_OPOS_ALT")
-    f[F_BATT_VOLT] = get("SIM_BATT_VOLTAGE")
-    cap = get("SIM_BATT_CAP_AH")
-    f[F_BATT_CAP_AH] = cap if cap > 0.0 else get("TLM_BATT_CAP_AH")
-    f[F_BATT_RES] = get("TLM_BAT_RES")
-    f[F_WIND_SPD] = get("SIM_WIND_SPD")
-    f[F_WIND_DIR] = get("SIM_WIND_DIR")
-    f[F_WIND_TURB] = get("SIM_WIND_TURB")
-    f[F_WIND_TC] = get("SIM_WIND_TC")
-    f[F_WIND_DIR_Z] = get("SIM_WIND_DIR_Z")
-    f[F_WIND_T] = get("SIM_WIND_T")
-    f[F_WIND_T_ALT] = get("SIM_WIND_T_ALT")
-    f[F_WIND_T_COEF] = get("SIM_WIND_T_COEF")
+    _environment(f, p)
     return f
+
+
+def _environment(f: np.ndarray, p: Params) -> None:
+    """The ``SIM_*`` environment slots of frame array ``f``: home altitude, battery, wind."""
+    f[F_HOME_ALT] = float(p["SIM_OPOS_ALT"])
+    f[F_BATT_VOLT] = float(p["SIM_BATT_VOLTAGE"])
+    cap = float(p["SIM_BATT_CAP_AH"])
+    f[F_BATT_CAP_AH] = cap if cap > 0.0 else float(p["TLM_BATT_CAP_AH"])
+    f[F_BATT_RES] = float(p["TLM_BAT_RES"])
+    for slot, name in ((F_WIND_SPD, "SIM_WIND_SPD"), (F_WIND_DIR, "SIM_WIND_DIR"),
+                       (F_WIND_TURB, "SIM_WIND_TURB"), (F_WIND_TC, "SIM_WIND_TC"),
+                       (F_WIND_DIR_Z, "SIM_WIND_DIR_Z"), (F_WIND_T, "SIM_WIND_T"),
+                       (F_WIND_T_ALT, "SIM_WIND_T_ALT"), (F_WIND_T_COEF, "SIM_WIND_T_COEF")):
+        f[slot] = float(p[name])
 
 
 def hover_command(frame: np.ndarray) -> float:

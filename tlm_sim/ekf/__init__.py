@@ -29,7 +29,8 @@ Public API (all per-tick functions are ``@njit`` and allocation-free):
 * :func:`build_ekf_config` / :func:`new_ekf` -- Python, once per flight.
 * :func:`ekf_update` (or :func:`ekf_predict`, :func:`ekf_fuse_gps`, :func:`ekf_fuse_baro`,
   :func:`ekf_fuse_mag`, :func:`ekf_select_primary`) -- every 400 Hz main-loop tick.
-* :func:`ekf_output` / :func:`ekf_primary` -- what controllers and loggers read.
+* :func:`ekf_output` / :func:`ekf_output_nav` / :func:`ekf_primary` -- what controllers and
+  loggers read (the output block; ekf_output_nav fills its per-tick part).
 
 Array layouts: :mod:`tlm_sim.ekf.layout`.
 """
@@ -46,6 +47,7 @@ from tlm_sim.ekf.lanes import (
     ekf_fuse_mag,
     ekf_init,
     ekf_output,
+    ekf_output_nav,
     ekf_predict,
     ekf_primary,
     ekf_select_primary,
@@ -60,6 +62,7 @@ __all__ = [
     "ekf_fuse_mag",
     "ekf_init",
     "ekf_output",
+    "ekf_output_nav",
     "ekf_predict",
     "ekf_primary",
     "ekf_select_primary",

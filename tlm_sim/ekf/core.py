@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ekf.layout import (
     ACC_DT,
     ACC_DVD,
@@ -313,11 +313,17 @@ def predict_covariance(e, q_att, q_vel, q_gb, q_ab):
         # bias columns are unchanged by F^T: P'[r, 9..14] = A[r, 9..14]
         for c in range(9, NS):
             e[row + c] = e[a + c]
-    # mirror the upper triangle of the 9 x 15 block into the lower triangle
+    _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab)
+
+
+@inline_jit
+def _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab):
+    """End of the covariance prediction: mirror the upper triangle of P's 9 x 15 block into
+    the lower one, add the process noise (variances, see :func:`predict_covariance`) within
+    the variance limits, clear the accumulators."""
     for r in range(9):
         for c in range(r + 1, NS):
             e[P0 + c * NS + r] = e[P0 + r * NS + c]
-    # ---- process noise and variance limits ----
     for i in range(3):
         d = P0 + (i + 0) * (NS + 1)
         e[d] = min(max(e[d] + q_att, VAR_MIN), VAR_MAX_ATT)

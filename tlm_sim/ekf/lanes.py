@@ -88,6 +88,8 @@ from tlm_sim.ekf.layout import (
     HGT_TR,
     IMU_INDEX,
     IMU_OK,
+    INNOV_HGT,
+    INNOV_VD,
     MAG_HAVE,
     MAG_LX,
     MAG_LY,
@@ -97,6 +99,7 @@ from tlm_sim.ekf.layout import (
     N_EKF,
     N_PREDICT,
     NS,
+    O_BAD_IMU,
     O_BAX,
     O_BGX,
     O_F_ATTITUDE,
@@ -105,17 +108,24 @@ from tlm_sim.ekf.layout import (
     O_F_HORIZ_VEL,
     O_F_USING_GPS,
     O_F_VERT_POS,
+    O_IMU,
+    O_INNOV_HGT,
+    O_INNOV_VD,
+    O_MAG_TR,
     O_PITCH,
     O_POS_RESET_COUNT,
+    O_POS_TR,
     O_PRIMARY,
     O_PRIMARY_CHANGES,
     O_QW,
+    O_R00,
     O_ROLL,
     O_SQRT_HGT,
     O_SQRT_MAG,
     O_SQRT_POS,
     O_SQRT_VEL,
     O_VEL_RESET_COUNT,
+    O_VEL_TR,
     O_VN,
     O_YAW,
     OUT_EPN,
@@ -127,6 +137,7 @@ from tlm_sim.ekf.layout import (
     QX,
     QY,
     QZ,
+    R00,
     R20,
     R21,
     R22,
@@ -513,12 +524,14 @@ def ekf_update(
 
 
 @tick_jit
-def ekf_output(ekf, sel, out):
-    """Fill out[N_OUT] (layout O_*) from the primary lane: attitude, velocity, position, biases,
-    Euler angles, status flags, square roots of the test ratios (what ekf_check compares with
-    FS_EKF_THRESH), primary index and counters."""
+def ekf_output_nav(ekf, sel, out):
+    """Fill the per-tick part of out[N_OUT] (layout O_*) from the primary lane: what the
+    autopilot reads every main-loop tick (control.ahrs): primary index, attitude, velocity,
+    position, biases, status flags, the lane's IMU and rotation matrix, innovations, test
+    ratios and bad-IMU flag. :func:`ekf_output` fills the rest."""
     p = int(sel[SEL_PRIMARY])
     e = ekf[p]
+    out[O_PRIMARY] = p
     for j in range(4):
         out[O_QW + j] = e[QW + j]
     for j in range(6):
@@ -526,21 +539,39 @@ def ekf_output(ekf, sel, out):
     for j in range(3):
         out[O_BGX + j] = e[BGX + j]
         out[O_BAX + j] = e[BAX + j]
-    r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
-    out[O_ROLL] = r
-    out[O_PITCH] = pt
-    out[O_YAW] = y
     out[O_F_ATTITUDE] = e[F_ATTITUDE]
     out[O_F_HORIZ_VEL] = e[F_HORIZ_VEL]
     out[O_F_HORIZ_POS] = e[F_HORIZ_POS]
     out[O_F_VERT_POS] = e[F_VERT_POS]
     out[O_F_CONST_POS] = e[F_CONST_POS]
     out[O_F_USING_GPS] = e[F_USING_GPS]
+    out[O_IMU] = e[IMU_INDEX]
+    for j in range(9):
+        out[O_R00 + j] = e[R00 + j]
+    out[O_INNOV_VD] = e[INNOV_VD]
+    out[O_INNOV_HGT] = e[INNOV_HGT]
+    out[O_VEL_TR] = e[VEL_TR]
+    out[O_POS_TR] = e[POS_TR]
+    out[O_MAG_TR] = e[MAG_TR]
+    out[O_BAD_IMU] = e[BAD_IMU]
+
+
+@tick_jit
+def ekf_output(ekf, sel, out):
+    """Fill all of out[N_OUT] (layout O_*) from the primary lane: :func:`ekf_output_nav`'s
+    part, the Euler angles, the square roots of the test ratios (what ekf_check compares with
+    FS_EKF_THRESH) and the counters. The only EKF block the rest of the vehicle reads (the
+    flight fills the per-tick part every tick, all of it before the 10 Hz logging)."""
+    ekf_output_nav(ekf, sel, out)
+    e = ekf[int(sel[SEL_PRIMARY])]
+    r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
+    out[O_ROLL] = r
+    out[O_PITCH] = pt
+    out[O_YAW] = y
     out[O_SQRT_VEL] = math.sqrt(max(e[VEL_TR], 0.0))
     out[O_SQRT_POS] = math.sqrt(max(e[POS_TR], 0.0))
     out[O_SQRT_HGT] = math.sqrt(max(e[HGT_TR], 0.0))
     out[O_SQRT_MAG] = math.sqrt(max(e[MAG_TR], 0.0))
-    out[O_PRIMARY] = p
     out[O_PRIMARY_CHANGES] = sel[SEL_CHANGES]
     out[O_POS_RESET_COUNT] = e[POS_RESET_COUNT]
     out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]

@@ -254,4 +254,14 @@ O_PRIMARY = _o.add("O_PRIMARY", 1, "", "primary lane")
 O_PRIMARY_CHANGES = _o.add("O_PRIMARY_CHANGES", 1, "", "primary lane changes so far")
 O_POS_RESET_COUNT = _o.add("O_POS_RESET_COUNT", 1, "", "position resets of the primary")
 O_VEL_RESET_COUNT = _o.add("O_VEL_RESET_COUNT", 1, "", "velocity resets of the primary")
+O_IMU = _o.add("O_IMU", 1, "", "IMU instance the primary lane integrates")
+O_R00, O_R01, O_R02, O_R10, O_R11, O_R12, O_R20, O_R21, O_R22 = _o.vector(
+    ("O_R00", "O_R01", "O_R02", "O_R10", "O_R11", "O_R12", "O_R20", "O_R21", "O_R22"), "",
+    "rotation matrix body -> NED, row-major")
+O_INNOV_VD = _o.add("O_INNOV_VD", 1, "m/s",
+                    "GPS down-velocity innovation, measurement - prediction")
+O_INNOV_HGT = _o.add("O_INNOV_HGT", 1, "m", "height innovation (down), measurement - prediction")
+O_VEL_TR, O_POS_TR, O_MAG_TR = _o.vector(("O_VEL_TR", "O_POS_TR", "O_MAG_TR"), "",
+                                         "test ratios (velocity, horizontal position, compass)")
+O_BAD_IMU = _o.add("O_BAD_IMU", 1, "", "1 while the bad-IMU (vibration) response is active")
 N_OUT = OUTPUT.close()

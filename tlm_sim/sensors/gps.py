@@ -54,8 +54,9 @@ def gps_due(s, t_us):
 
 @tick_jit
 def gps_measure(s, cfg, t_us, out, rng):
-    """Produce one GPS epoch at t_us into out[0:9]: pn, pe, pd, vn, ve, vd (NED, m, m/s, from home
-    ground), status, nsats, fix_3d. Position and velocity are the truth interpolated at t - lag."""
+    """Produce one GPS epoch at t_us into out[N_GPS_EPOCH] (sensors.layout GE_*: position and
+    velocity NED from home ground [m, m/s], status, satellites, 3-D fix). Position and velocity
+    are the truth interpolated at t - lag."""
     g = S.GPS_BASE
     s[g + S.G_NEXT_US] += cfg[S.C_GPS_PERIOD_US]
     t_want = t_us * 1e-6 - cfg[S.C_GPS_LAG_S]
@@ -75,17 +76,17 @@ def gps_measure(s, cfg, t_us, out, rng):
     w = 0.0
     if j != head and t2 > t1:
         w = min(max((t_want - t1) / (t2 - t1), 0.0), 1.0)
-    for k in range(6):
-        out[k] = s[r1 + 1 + k] * (1.0 - w) + (s[r2 + 1 + k] * w if w > 0.0 else 0.0)
-    out[2] -= cfg[S.C_GPS_NOISE] * math.sin(0.0005 * t_us * 1e-3)
+    for k in range(6):  # GE_PN..GE_VD follow the history row's pn..vd
+        out[S.GE_PN + k] = s[r1 + 1 + k] * (1.0 - w) + (s[r2 + 1 + k] * w if w > 0.0 else 0.0)
+    out[S.GE_PD] -= cfg[S.C_GPS_NOISE] * math.sin(0.0005 * t_us * 1e-3)
     for k in range(3):
         if cfg[S.C_GPS_VERR + k] != 0.0:
-            out[3 + k] += cfg[S.C_GPS_VERR + k] * uniform_pm1(rng)
+            out[S.GE_VN + k] += cfg[S.C_GPS_VERR + k] * uniform_pm1(rng)
     if cfg[S.C_GPS_ENABLE] != 0.0:
-        out[6] = GPS_STATUS_RTK_FIXED
-        out[7] = cfg[S.C_GPS_NUMSATS]
-        out[8] = 1.0
+        out[S.GE_STATUS] = GPS_STATUS_RTK_FIXED
+        out[S.GE_NSATS] = cfg[S.C_GPS_NUMSATS]
+        out[S.GE_FIX_3D] = 1.0
     else:
-        out[6] = GPS_STATUS_NO_FIX
-        out[7] = 3.0
-        out[8] = 0.0
+        out[S.GE_STATUS] = GPS_STATUS_NO_FIX
+        out[S.GE_NSATS] = 3.0
+        out[S.GE_FIX_3D] = 0.0

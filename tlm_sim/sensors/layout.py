@@ -49,6 +49,17 @@ G_HIST = GPS.add("G_HIST", GPS_HIST_N * G_ROW, "s, m, m/s",
                  "history rows (t_s, pn, pe, pd, vn, ve, vd) x GPS_HIST_N")
 GPS_SIZE = GPS.close()
 
+# ---- one GPS epoch: what gps_measure produces, the EKF fuses and the GPS log writes ----------
+GPS_EPOCH = Layout("gps epoch", "one GPS measurement (gps_measure's output)")
+_ge = GPS_EPOCH
+GE_PN, GE_PE, GE_PD = _ge.vector(("GE_PN", "GE_PE", "GE_PD"), "m",
+                                 "position NED from home ground")
+GE_VN, GE_VE, GE_VD = _ge.vector(("GE_VN", "GE_VE", "GE_VD"), "m/s", "velocity NED")
+GE_STATUS = _ge.add("GE_STATUS", 1, "", "fix status as GPS.Status logs it")
+GE_NSATS = _ge.add("GE_NSATS", 1, "", "satellites in use")
+GE_FIX_3D = _ge.add("GE_FIX_3D", 1, "", "1 with a 3-D fix (the EKF may fuse the epoch)")
+N_GPS_EPOCH = GPS_EPOCH.close()
+
 # ---- the sensor state s ----------------------------------------------------------------------
 STATE = Layout("s", "sensor state")
 _s = STATE

@@ -168,19 +168,6 @@ def test_help_imports_no_heavy_module():
     assert r.stdout.strip() == "[]"
 
 
-def test_no_function_over_100_lines():
-    """No function (or method) of tlm_process is longer than 100 lines, decorators and
-    docstring included."""
-    long = []
-    for module, path in _modules().items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
-                first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
-                if node.end_lineno - first + 1 > 100:
-                    long.append(f"{module}.{node.name}: {node.end_lineno - first + 1} lines")
-    assert not long, long
-
-
 def test_user_mistake_is_one_line_when_run_as_module(tmp_path):
     """``python -m tlm_process.cli``: a subcommand's UsageError is the one ``main`` catches
     (it was a second copy of the cli module's class when logcmd imported it from the CLI, and

@@ -1,0 +1,204 @@
+"""The flight code's structure (issue 18 steps 3-5): subsystems read each other's output
+blocks only, log rows are addressed by column name through one row appender, and no function
+in tlm_sim or tlm_process is over 100 lines. Checked on the source (ast) and on the output
+blocks' contents."""
+
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tlm_sim import logger as L
+from tlm_sim.control import failsafe as FS
+from tlm_sim.control.ahrs import ahrs_update
+from tlm_sim.ekf import layout as EK
+from tlm_sim.ekf.lanes import ekf_output, ekf_output_nav
+from tlm_sim.flight import new_work
+from tlm_sim.flightlog.schema import SCHEMAS
+from tlm_sim.sensors import layout as S
+
+ROOT = Path(__file__).resolve().parents[1]
+MAX_LINES = 100
+
+
+def _sources(*packages: str) -> list[Path]:
+    return sorted(p for pkg in packages for p in (ROOT / pkg).rglob("*.py"))
+
+
+def _functions(path: Path) -> list[ast.FunctionDef | ast.AsyncFunctionDef]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
+
+
+def test_no_function_is_over_100_lines():
+    long = []
+    for path in _sources("tlm_sim", "tlm_process"):
+        rel = path.relative_to(ROOT).as_posix()
+        for fn in _functions(path):
+            n = fn.end_lineno - fn.lineno + 1
+            if n > MAX_LINES:
+                long.append(f"{rel}:{fn.name} ({n} lines)")
+    assert not long, "functions over 100 lines: " + ", ".join(long)
+
+
+# ----------------------------------------------------------------------------- logging
+
+
+def test_column_constants_follow_the_schema():
+    assert L.TIME_US == 0
+    for k, name in enumerate(L.LOG_ORDER):
+        cols = getattr(L, f"{name}_COLS")
+        assert cols._fields == SCHEMAS[name].columns
+        assert list(cols) == [SCHEMAS[name].index(c) for c in SCHEMAS[name].columns]
+        assert SCHEMAS[name].columns[L.TIME_US] == "TimeUS"
+        assert getattr(L, f"K_{name}") == k
+    # PSCN's names address PSCE and PSCD too (control.log writes all three with them)
+    assert list(L.PSCN_COLS) == list(L.PSCE_COLS) == list(L.PSCD_COLS)
+
+
+def _is_int(node: ast.AST) -> bool:
+    return isinstance(node, ast.Constant) and type(node.value) is int
+
+
+def _row_writes(path: Path) -> list[tuple[int, ast.AST]]:
+    """(line, column expression) of every ``X[r, col] = ...`` / ``X[n, col] = ...``."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        targets = node.targets if isinstance(node, ast.Assign) else (
+            [node.target] if isinstance(node, ast.AugAssign) else [])
+        for t in targets:
+            if (isinstance(t, ast.Subscript) and isinstance(t.slice, ast.Tuple)
+                    and len(t.slice.elts) == 2 and isinstance(t.slice.elts[0], ast.Name)
+                    and t.slice.elts[0].id in ("r", "n")):
+                out.append((node.lineno, t.slice.elts[1]))
+    return out
+
+
+def test_log_rows_are_written_by_column_name():
+    """No log column by number (``b[r, 9] = ...``): a column is a schema name (``GPS.Lat``),
+    possibly plus an offset (``IMU.GyrX + k``)."""
+    bad = []
+    for path in _sources("tlm_sim"):
+        for line, col in _row_writes(path):
+            numeric = _is_int(col) or (isinstance(col, ast.BinOp) and _is_int(col.left))
+            if numeric:
+                bad.append(f"{path.relative_to(ROOT)}:{line}")
+    assert not bad, "log columns by number at " + ", ".join(bad)
+
+
+def test_one_row_appender():
+    """Only logger.new_row advances a buffer's row count."""
+    writers = []
+    for path in _sources("tlm_sim"):
+        for fn in _functions(path):
+            for node in ast.walk(fn):
+                targets = node.targets if isinstance(node, ast.Assign) else (
+                    [node.target] if isinstance(node, ast.AugAssign) else [])
+                if any(isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name)
+                       and t.value.id == "counts" for t in targets):
+                    writers.append(f"{path.relative_to(ROOT).as_posix()}:{fn.name}")
+    assert sorted(set(writers)) == ["tlm_sim/logger.py:new_row"]
+
+
+def test_new_row_appends_until_the_buffer_is_full():
+    bufs, counts = L.new_buffers(0.1)
+    cap = bufs[L.K_EV].shape[0]
+    rows = [L.new_row(bufs, counts, L.K_EV, t) for t in range(cap + 2)]
+    assert rows[:cap] == list(range(cap)) and rows[cap:] == [-1, -1]
+    assert counts[L.K_EV] == cap and bufs[L.K_EV][cap - 1, L.TIME_US] == cap - 1
+
+
+# ----------------------------------------------------------------------------- output blocks
+
+
+def _ekf_layout_names(path: Path) -> set[str]:
+    """Names read from the EKF layout module (imported as EK) in a source file."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
+            and isinstance(n.value, ast.Name) and n.value.id == "EK"}
+
+
+@pytest.mark.parametrize("rel", ["tlm_sim/flight.py", "tlm_sim/control/ahrs.py",
+                                 "tlm_sim/control/log.py"])
+def test_the_vehicle_reads_the_ekf_through_its_output_block(rel):
+    names = _ekf_layout_names(ROOT / rel)
+    inside = sorted(n for n in names if not n.startswith("O_") and n != "N_OUT")
+    assert not inside, f"{rel} reads EKF lane internals: {inside}"
+
+
+def _lanes(primary: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(3)
+    ekf = rng.normal(size=(2, EK.N_EKF))
+    sel = np.zeros(EK.N_SEL)
+    sel[EK.SEL_PRIMARY] = primary
+    sel[EK.SEL_N_LANES] = 2
+    ekf[:, EK.IMU_INDEX] = (0.0, 1.0)
+    ekf[:, EK.QW:EK.QW + 4] /= np.linalg.norm(ekf[:, EK.QW:EK.QW + 4], axis=1)[:, None]
+    return ekf, sel
+
+
+@pytest.mark.parametrize("primary", [0, 1])
+def test_ekf_output_carries_what_the_autopilot_needs(primary):
+    ekf, sel = _lanes(primary)
+    out = np.full(EK.N_OUT, np.nan)
+    ekf_output(ekf, sel, out)
+    e = ekf[primary]
+    assert out[EK.O_IMU] == primary
+    assert list(out[EK.O_R00:EK.O_R22 + 1]) == list(e[EK.R00:EK.R22 + 1])
+    for o, lane in ((EK.O_INNOV_VD, EK.INNOV_VD), (EK.O_INNOV_HGT, EK.INNOV_HGT),
+                    (EK.O_VEL_TR, EK.VEL_TR), (EK.O_POS_TR, EK.POS_TR),
+                    (EK.O_MAG_TR, EK.MAG_TR), (EK.O_BAD_IMU, EK.BAD_IMU),
+                    (EK.O_PN, EK.PN), (EK.O_VD, EK.VD)):
+        assert out[o] == e[lane]
+    assert not np.isnan(out).any()
+    nav = np.full(EK.N_OUT, np.nan)  # the per-tick part: everything the autopilot reads
+    ekf_output_nav(ekf, sel, nav)
+    filled = ~np.isnan(nav)
+    assert (nav[filled] == out[filled]).all()
+    assert filled.sum() == EK.N_OUT - 10  # all but the Euler angles, square roots, counters
+
+
+@pytest.mark.parametrize("const_pos", [0.0, 1.0])
+def test_ahrs_builds_the_controllers_inputs_from_the_output_block(const_pos):
+    ekf, sel = _lanes(1)
+    ekf[1, EK.F_CONST_POS] = const_pos
+    ekf[1, EK.F_HORIZ_POS] = 1.0
+    eo = np.zeros(EK.N_OUT)
+    ekf_output(ekf, sel, eo)
+    s = np.random.default_rng(4).normal(size=S.N_SENSOR_STATE)
+    pos, vel, q, gyro, acc = (np.zeros(3), np.zeros(3), np.zeros(4), np.zeros(3), np.zeros(3))
+    nav = np.zeros(FS.N_NAV)
+    ahrs_update(eo, s, pos, vel, q, gyro, acc, nav)
+    e = ekf[1]
+    ib = S.IMU_BASE + S.IMU_STRIDE  # lane 1 integrates IMU 1
+    assert list(pos[:2]) == ([0.0, 0.0] if const_pos else list(e[EK.PN:EK.PN + 2]))
+    assert pos[2] == e[EK.PD] and list(vel) == list(e[EK.VN:EK.VN + 3])
+    assert list(q) == list(e[EK.QW:EK.QW + 4])
+    assert gyro == pytest.approx(s[ib + S.I_GYR_F:ib + S.I_GYR_F + 3] - e[EK.BGX:EK.BGX + 3])
+    r = e[EK.R00:EK.R22 + 1].reshape(3, 3)
+    f = s[ib + S.I_ACC_F:ib + S.I_ACC_F + 3] - e[EK.BAX:EK.BAX + 3]
+    assert acc == pytest.approx(r @ f + np.array([0.0, 0.0, 9.80665]))
+    assert nav[FS.NAV_POS_OK] == (0.0 if const_pos else 1.0)
+    assert nav[FS.NAV_VEL_TR] == e[EK.VEL_TR] and nav[FS.NAV_BAD_IMU] == e[EK.BAD_IMU]
+    assert not math.isnan(nav[FS.NAV_INNOV_HGT])
+
+
+def test_run_flight_work_rows_hold_a_gps_epoch_and_the_ekf_output():
+    dang, dvel, rows, eo = new_work()
+    assert rows.shape[1] >= S.N_GPS_EPOCH and eo.shape == (EK.N_OUT,)
+    assert dang.shape == dvel.shape == (S.N_IMU, 3)
+
+
+def test_sections_are_inlined_by_numba():
+    """The named sections of the long flight functions are inline_jit (numba inline="always"):
+    as separately compiled functions they made a cold compile ~35 % longer."""
+    from tlm_sim import flight
+    from tlm_sim.control import modes, wpnav
+
+    for fn in (modes._navigate, modes._controllers, modes._crash_checks, wpnav._speed_step,
+               flight._physics_tick, flight._log_tick):
+        assert getattr(fn, "targetoptions", {}).get("inline") == "always", fn

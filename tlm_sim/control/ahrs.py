@@ -1,0 +1,51 @@
+"""The autopilot's view of the vehicle (ArduPilot's AHRS): built each main-loop tick from the
+EKF's output block (``tlm_sim.ekf.layout`` O_*, filled by :func:`tlm_sim.ekf.lanes.ekf_output`)
+and the filtered samples of the IMU the primary lane integrates. The controllers read only this.
+"""
+
+from tlm_sim._jit import tick_jit
+from tlm_sim.control import failsafe as FS
+from tlm_sim.ekf import layout as EK
+from tlm_sim.sensors import layout as S
+
+GRAVITY = 9.80665  # [m/s^2]
+
+
+@tick_jit
+def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
+    """Fill the controllers' inputs from the EKF output eo and the sensor state s.
+
+    pos, vel: position / velocity NED [m, m/s] (position (0, 0) in constant-position mode);
+    q: attitude body->NED; gyro: filtered body rates minus the EKF's gyro bias [rad/s];
+    acc_ned: kinematic acceleration NED [m/s^2] (filtered accel minus the EKF's bias, rotated
+    by the EKF attitude, gravity removed); nav: the EKF status for the failsafe checks
+    (control.failsafe NAV_*).
+    """
+    for k in range(3):
+        pos[k] = eo[EK.O_PN + k]
+        vel[k] = eo[EK.O_VN + k]
+    if eo[EK.O_F_CONST_POS] != 0.0:
+        # no horizontal position from the EKF (constant-position mode): AC_PosControl's
+        # estimate is then the EKF origin, as the AHRS call fails and leaves it at zero
+        # (gps_s12.bin: PSCN.PN / PSCE.PE are 0.000 from "stopped aiding" to "is using GPS")
+        pos[0] = 0.0
+        pos[1] = 0.0
+    for k in range(4):
+        q[k] = eo[EK.O_QW + k]
+    ib = S.IMU_BASE + int(eo[EK.O_IMU]) * S.IMU_STRIDE
+    for k in range(3):
+        gyro[k] = s[ib + S.I_GYR_F + k] - eo[EK.O_BGX + k]
+    ax = s[ib + S.I_ACC_F] - eo[EK.O_BAX]
+    ay = s[ib + S.I_ACC_F + 1] - eo[EK.O_BAY]
+    az = s[ib + S.I_ACC_F + 2] - eo[EK.O_BAZ]
+    acc_ned[0] = eo[EK.O_R00] * ax + eo[EK.O_R01] * ay + eo[EK.O_R02] * az
+    acc_ned[1] = eo[EK.O_R10] * ax + eo[EK.O_R11] * ay + eo[EK.O_R12] * az
+    acc_ned[2] = eo[EK.O_R20] * ax + eo[EK.O_R21] * ay + eo[EK.O_R22] * az + GRAVITY
+    nav[FS.NAV_INNOV_VD] = eo[EK.O_INNOV_VD]
+    nav[FS.NAV_INNOV_HGT] = eo[EK.O_INNOV_HGT]
+    nav[FS.NAV_VEL_TR] = eo[EK.O_VEL_TR]
+    nav[FS.NAV_POS_TR] = eo[EK.O_POS_TR]
+    nav[FS.NAV_MAG_TR] = eo[EK.O_MAG_TR]
+    nav[FS.NAV_BAD_IMU] = eo[EK.O_BAD_IMU]
+    nav[FS.NAV_POS_OK] = 1.0 if (eo[EK.O_F_HORIZ_POS] != 0.0
+                                 and eo[EK.O_F_CONST_POS] == 0.0) else 0.0

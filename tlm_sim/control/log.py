@@ -1,0 +1,111 @@
+"""The autopilot's 10 Hz log messages: RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD. Columns by name
+(:mod:`tlm_sim.logger`); attitude and heights from the EKF output block (``ekf.layout`` O_*)."""
+
+import math
+
+from tlm_sim import logger as L
+from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.control import layout as C
+from tlm_sim.ekf import layout as EK
+from tlm_sim.sensors import layout as S
+
+RATE, ATT, RCOU, CTUN, PSC = L.RATE_COLS, L.ATT_COLS, L.RCOU_COLS, L.CTUN_COLS, L.PSCN_COLS
+
+
+@tick_jit
+def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
+    """The autopilot's 10 Hz rows from its state c, the EKF output eo, the baro altitude in the
+    sensor state s, its position estimate pos [m, NED] and the acceleration NED acc [m/s^2]."""
+    _log_rate(bufs, counts, t_us, c)
+    _log_att(bufs, counts, t_us, c, eo)
+    r = L.new_row(bufs, counts, L.K_RCOU, t_us)
+    if r >= 0:
+        for k in range(4):
+            bufs[L.K_RCOU][r, RCOU.C1 + k] = round(c[C.MIX_PWM + k])
+    _log_ctun(bufs, counts, t_us, c, eo, s)
+    for ax in range(3):
+        _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
+
+
+@inline_jit
+def _log_rate(bufs, counts, t_us, c):
+    """RATE: rate targets, measurements and outputs per axis [deg/s], vertical acceleration."""
+    d = L.RAD2DEG
+    r = L.new_row(bufs, counts, L.K_RATE, t_us)
+    if r >= 0:
+        b = bufs[L.K_RATE]
+        for k in range(3):  # (RDes, R, ROut), (PDes, P, POut), (YDes, Y, YOut)
+            rb = C.RATE_BASE + k * C.RATE_STRIDE
+            b[r, RATE.RDes + 3 * k] = c[rb + C.R_TARGET] * d
+            b[r, RATE.R + 3 * k] = c[rb + C.R_MEAS] * d
+            b[r, RATE.ROut + 3 * k] = c[rb + C.R_OUT]
+        b[r, RATE.ADes] = c[C.PZ_ACC_T] * 100.0
+        b[r, RATE.A] = c[C.PZ_ACC_MEAS] * 100.0
+        b[r, RATE.AOut] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
+        b[r, RATE.AOutSlew] = 0.0
+
+
+@inline_jit
+def _log_att(bufs, counts, t_us, c, eo):
+    """ATT: attitude targets and the EKF's attitude [deg, yaw 0..360]."""
+    d = L.RAD2DEG
+    r = L.new_row(bufs, counts, L.K_ATT, t_us)
+    if r >= 0:
+        b = bufs[L.K_ATT]
+        yaw = eo[EK.O_YAW] * d
+        b[r, ATT.DesRoll] = c[C.ATT_ROLL_T] * d
+        b[r, ATT.Roll] = eo[EK.O_ROLL] * d
+        b[r, ATT.DesPitch] = c[C.ATT_PITCH_T] * d
+        b[r, ATT.Pitch] = eo[EK.O_PITCH] * d
+        yd = c[C.ATT_YAW_T] * d
+        b[r, ATT.DesYaw] = yd + 360.0 if yd < 0.0 else yd
+        b[r, ATT.Yaw] = yaw + 360.0 if yaw < 0.0 else yaw
+        b[r, ATT.AEKF] = 3.0
+
+
+@inline_jit
+def _log_ctun(bufs, counts, t_us, c, eo, s):
+    """CTUN: throttle, altitude target and estimates, climb rates."""
+    r = L.new_row(bufs, counts, L.K_CTUN, t_us)
+    if r >= 0:
+        b = bufs[L.K_CTUN]
+        b[r, CTUN.ThI] = c[C.THR_OUT]
+        b[r, CTUN.ABst] = c[C.THR_OUT_BOOSTED] - c[C.THR_OUT]
+        b[r, CTUN.ThO] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
+        b[r, CTUN.ThH] = c[C.THR_HOVER]
+        b[r, CTUN.DAlt] = -c[C.PZ_POS_T]
+        b[r, CTUN.Alt] = -eo[EK.O_PD]
+        b[r, CTUN.BAlt] = s[S.B_ALT]
+        b[r, CTUN.DSAlt] = math.nan
+        b[r, CTUN.SAlt] = 0.0
+        b[r, CTUN.TAlt] = math.nan
+        b[r, CTUN.DCRt] = round(-c[C.PZ_VEL_T] * 100.0)
+        b[r, CTUN.CRt] = round(-eo[EK.O_VD] * 100.0)
+
+
+@inline_jit
+def _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax):
+    """PSCN (ax 0), PSCE (1) or PSCD (2): position, velocity and acceleration desired, target
+    and actual. The three messages share one column order (PSC names PSCN's columns)."""
+    kbuf = L.K_PSCN + ax
+    r = L.new_row(bufs, counts, kbuf, t_us)
+    if r < 0:
+        return
+    b = bufs[kbuf]
+    if ax < 2:
+        b[r, PSC.DPN] = c[C.PXY_POS_T + ax]
+        b[r, PSC.TPN] = c[C.PXY_POS_T + ax]
+        b[r, PSC.DVN] = c[C.PXY_VEL_FF + ax]
+        b[r, PSC.TVN] = c[C.PXY_VEL_T + ax]
+        b[r, PSC.DAN] = c[C.PXY_ACC_FF + ax]
+        b[r, PSC.TAN] = c[C.PXY_ACC_T + ax]
+    else:
+        b[r, PSC.DPN] = c[C.PZ_POS_T]
+        b[r, PSC.TPN] = c[C.PZ_POS_T]
+        b[r, PSC.DVN] = c[C.PZ_VEL_T]
+        b[r, PSC.TVN] = c[C.PZ_VEL_T]
+        b[r, PSC.DAN] = -c[C.PZ_ACC_T]
+        b[r, PSC.TAN] = -c[C.PZ_ACC_T]
+    b[r, PSC.PN] = pos[ax]
+    b[r, PSC.VN] = eo[EK.O_VN + ax]
+    b[r, PSC.AN] = acc[ax]

@@ -1,0 +1,75 @@
+"""The EKF's log messages: XKF1 and XKF4 per lane, POS from the output block (10 Hz), and the
+ERR row of a primary-lane change. Columns by name (:mod:`tlm_sim.logger`)."""
+
+import math
+
+from tlm_sim import logger as L
+from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ekf import layout as EK
+from tlm_sim.geo import ne_to_latlon_scalar
+
+XKF1, XKF4, POS = L.XKF1_COLS, L.XKF4_COLS, L.POS_COLS
+ERR_EKF_PRIMARY = 24  # ERR subsystem of a primary-lane change (ECode: the new lane)
+
+
+@tick_jit
+def log_lane_switch(events, ev_counts, t_us, eo):
+    """ERR EKF_PRIMARY with the new primary lane (from the output block eo) into the event
+    buffers (tlm_sim.logger E_*)."""
+    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    if r >= 0:
+        events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_EKF_PRIMARY
+        events[L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
+
+
+@tick_jit
+def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home_lat, home_lon, home_alt):
+    """The EKF's 10 Hz rows: XKF1 and XKF4 for every lane, POS of the output (home: degrees,
+    m AMSL)."""
+    for ln in range(int(sel[EK.SEL_N_LANES])):
+        _log_lane(bufs, counts, t_us, ekf[ln], ln, sel[EK.SEL_PRIMARY], home_alt)
+    r = L.new_row(bufs, counts, L.K_POS, t_us)
+    if r >= 0:
+        b = bufs[L.K_POS]
+        lat, lon = ne_to_latlon_scalar(eo[EK.O_PN], eo[EK.O_PE], home_lat, home_lon)
+        b[r, POS.Lat] = lat
+        b[r, POS.Lng] = lon
+        b[r, POS.Alt] = home_alt - eo[EK.O_PD]
+        b[r, POS.RelHomeAlt] = -eo[EK.O_PD]
+        b[r, POS.RelOriginAlt] = -eo[EK.O_PD]
+
+
+@inline_jit
+def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
+    """XKF1 and XKF4 rows of lane ln (its row el of the ekf array)."""
+    d = L.RAD2DEG
+    r = L.new_row(bufs, counts, L.K_XKF1, t_us)
+    if r >= 0:
+        b = bufs[L.K_XKF1]
+        lr, lp, ly = L.euler_deg(el[EK.QW], el[EK.QX], el[EK.QY], el[EK.QZ])
+        b[r, XKF1.C] = ln
+        b[r, XKF1.Roll] = lr
+        b[r, XKF1.Pitch] = lp
+        b[r, XKF1.Yaw] = ly
+        b[r, XKF1.VN] = el[EK.VN]
+        b[r, XKF1.VE] = el[EK.VE]
+        b[r, XKF1.VD] = el[EK.VD]
+        b[r, XKF1.dPD] = el[EK.VD]
+        b[r, XKF1.PN] = el[EK.PN]
+        b[r, XKF1.PE] = el[EK.PE]
+        b[r, XKF1.PD] = el[EK.PD]
+        b[r, XKF1.GX] = el[EK.BGX] * d
+        b[r, XKF1.GY] = el[EK.BGY] * d
+        b[r, XKF1.GZ] = el[EK.BGZ] * d
+        b[r, XKF1.OH] = home_alt
+    r = L.new_row(bufs, counts, L.K_XKF4, t_us)
+    if r >= 0:
+        b = bufs[L.K_XKF4]
+        b[r, XKF4.C] = ln
+        b[r, XKF4.SV] = math.sqrt(max(el[EK.VEL_TR], 0.0))
+        b[r, XKF4.SP] = math.sqrt(max(el[EK.POS_TR], 0.0))
+        b[r, XKF4.SH] = math.sqrt(max(el[EK.HGT_TR], 0.0))
+        b[r, XKF4.SM] = math.sqrt(max(el[EK.MAG_TR], 0.0))
+        b[r, XKF4.FS] = el[EK.FAULT]
+        b[r, XKF4.TS] = 0.0 if el[EK.F_HORIZ_POS] != 0.0 else 1.0
+        b[r, XKF4.PI] = primary

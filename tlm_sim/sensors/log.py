@@ -1,0 +1,130 @@
+"""The sensors' log messages: GPS, GPA (per GPS epoch), IMU (25 Hz), VIBE, BARO, MAG, RCIN
+(10 Hz). Columns by name (:mod:`tlm_sim.logger`), values in the tables' units."""
+
+import math
+
+from tlm_sim import logger as L
+from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.geo import ne_to_latlon_scalar
+from tlm_sim.sensors import layout as S
+from tlm_sim.sensors.imu import vibe
+
+GPS, GPA, IMU = L.GPS_COLS, L.GPA_COLS, L.IMU_COLS
+VIBE, BARO, MAG, RCIN = L.VIBE_COLS, L.BARO_COLS, L.MAG_COLS, L.RCIN_COLS
+
+
+@tick_jit
+def log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_time, last_ms):
+    """GPS and GPA rows for one GPS epoch gps (layout GE_*); home in degrees and m AMSL;
+    gps_time: (week, ms of week at boot). Returns the epoch's ms of week."""
+    r = L.new_row(bufs, counts, L.K_GPS, t_us)
+    ms = gps_time[1] + round(t_us / 200000.0) * 200.0
+    week = gps_time[0] + math.floor(ms / 604800000.0)
+    ms = ms % 604800000.0
+    if r >= 0:
+        b = bufs[L.K_GPS]
+        lat, lon = ne_to_latlon_scalar(gps[S.GE_PN], gps[S.GE_PE], home_lat, home_lon)
+        b[r, GPS.I] = 0.0
+        b[r, GPS.Status] = gps[S.GE_STATUS]
+        b[r, GPS.GMS] = ms
+        b[r, GPS.GWk] = week
+        b[r, GPS.NSats] = gps[S.GE_NSATS]
+        b[r, GPS.HDop] = scfg[S.C_GPS_HDOP]
+        b[r, GPS.Lat] = lat
+        b[r, GPS.Lng] = lon
+        b[r, GPS.Alt] = home_alt - gps[S.GE_PD]
+        b[r, GPS.Spd] = math.sqrt(gps[S.GE_VN] * gps[S.GE_VN] + gps[S.GE_VE] * gps[S.GE_VE])
+        crs = math.degrees(math.atan2(gps[S.GE_VE], gps[S.GE_VN]))
+        b[r, GPS.GCrs] = crs + 360.0 if crs < 0.0 else crs
+        b[r, GPS.VZ] = gps[S.GE_VD]
+        b[r, GPS.Yaw] = 0.0
+        b[r, GPS.U] = 1.0
+    _log_gpa(bufs, counts, t_us, scfg, ms, last_ms)
+    return ms
+
+
+@inline_jit
+def _log_gpa(bufs, counts, t_us, scfg, ms, last_ms):
+    """The GPA row of a GPS epoch at ms of week (last_ms: the previous epoch's, 0 for none)."""
+    r = L.new_row(bufs, counts, L.K_GPA, t_us)
+    if r >= 0:
+        b = bufs[L.K_GPA]
+        b[r, GPA.I] = 0.0
+        b[r, GPA.VDop] = scfg[S.C_GPS_VDOP]
+        b[r, GPA.HAcc] = scfg[S.C_GPS_ACC]
+        b[r, GPA.VAcc] = scfg[S.C_GPS_ACC]
+        b[r, GPA.SAcc] = 0.0
+        b[r, GPA.YAcc] = 0.0
+        b[r, GPA.VV] = 1.0
+        b[r, GPA.SMS] = t_us // 1000
+        b[r, GPA.Delta] = (ms - last_ms) if last_ms > 0.0 else 0.0
+
+
+@tick_jit
+def log_imu(bufs, counts, t_us, s, scfg):
+    """IMU rows (one per instance): filtered gyro/accel, error counts, temperature, rates."""
+    temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
+    for i in range(S.N_IMU):
+        r = L.new_row(bufs, counts, L.K_IMU, t_us)
+        if r < 0:
+            return
+        b = bufs[L.K_IMU]
+        ib = S.IMU_BASE + i * S.IMU_STRIDE
+        b[r, IMU.I] = i
+        for k in range(3):
+            b[r, IMU.GyrX + k] = s[ib + S.I_GYR_F + k]
+            b[r, IMU.AccX + k] = s[ib + S.I_ACC_F + k]
+        b[r, IMU.EG] = s[ib + S.I_EG]
+        b[r, IMU.EA] = s[ib + S.I_EA]
+        b[r, IMU.T] = temp
+        b[r, IMU.GH] = 1.0
+        b[r, IMU.AH] = 1.0
+        b[r, IMU.GHz] = round(1e6 / scfg[S.C_GYR_PERIOD_US + i])
+        b[r, IMU.AHz] = round(1e6 / scfg[S.C_ACC_PERIOD_US + i])
+
+
+@tick_jit
+def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
+    """The sensors' 10 Hz rows: VIBE (per IMU), BARO (two instances), MAG, RCIN."""
+    for i in range(S.N_IMU):
+        r = L.new_row(bufs, counts, L.K_VIBE, t_us)
+        if r >= 0:
+            b = bufs[L.K_VIBE]
+            b[r, VIBE.IMU] = i
+            for k in range(3):
+                b[r, VIBE.VibeX + k] = vibe(s, i, k)
+            b[r, VIBE.Clip] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
+    for i in range(2):
+        _log_baro(bufs, counts, t_us, s, home_alt, i)
+    r = L.new_row(bufs, counts, L.K_MAG, t_us)
+    if r >= 0:
+        b = bufs[L.K_MAG]
+        b[r, MAG.I] = 0.0
+        for k in range(3):
+            b[r, MAG.MagX + k] = round(s[S.M_FIELD + k] * 1000.0)
+        b[r, MAG.Health] = 1.0
+        b[r, MAG.S] = t_us // 1000
+    r = L.new_row(bufs, counts, L.K_RCIN, t_us)
+    if r >= 0:
+        b = bufs[L.K_RCIN]
+        for k in range(8):
+            b[r, RCIN.C1 + k] = s[S.RC_CH + k]
+
+
+@inline_jit
+def _log_baro(bufs, counts, t_us, s, home_alt, i):
+    """One BARO row (instance i; both instances log the one simulated barometer)."""
+    r = L.new_row(bufs, counts, L.K_BARO, t_us)
+    if r >= 0:
+        b = bufs[L.K_BARO]
+        b[r, BARO.I] = i
+        b[r, BARO.Alt] = s[S.B_ALT]
+        b[r, BARO.AltAMSL] = home_alt + s[S.B_ALT]
+        b[r, BARO.Press] = s[S.B_PRESS]
+        b[r, BARO.Temp] = s[S.B_TEMP]
+        b[r, BARO.CRt] = (s[S.B_ALT] - s[S.B_ALT_PREV]) * 10.0
+        b[r, BARO.SMS] = t_us // 1000
+        b[r, BARO.Offset] = 0.0
+        b[r, BARO.GndTemp] = 25.0
+        b[r, BARO.H] = 1.0
+        b[r, BARO.CPress] = s[S.B_PRESS]
