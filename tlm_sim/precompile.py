@@ -1,8 +1,8 @@
 """Cold-cache compile of the flight loop, split across processes.
 
 A flight is one numba function, :func:`tlm_sim.flight.run_flight`, calling ~150 jitted
-functions. On an empty numba cache they are compiled one after another: about 30 s of CPU on
-the project's 2-core machine, most of it numba's own Python (type inference and lowering) under
+functions. On an empty numba cache they are compiled one after another: tens of seconds of
+CPU (``benchmarks/RESULTS.md``), most of it numba's own Python (type inference and lowering) under
 its process-wide compiler lock, so more cores do not help within one process. The call tree
 below ``run_flight`` splits into independent subtrees (the autopilot's ``vehicle_step``, the
 EKF's ``ekf_update``, the rigid body's ``physics_step``, sensors and logging), each cached on

@@ -3,7 +3,7 @@
 xorshift64* (Vigna 2016) with its state in a one-element uint64 array, seeded through
 splitmix64. The IMUs draw ~10^4 numbers per simulated second and the wind turbulence two
 Gaussians and a direction every physics tick: numba's ``np.random`` (a Mersenne Twister behind
-a thread-local state lookup) cost the turbulence ~140 ns per tick, over a third of the tick.
+a thread-local state lookup) made the turbulence a large share of the physics tick.
 """
 
 import math

@@ -3,12 +3,12 @@
 All kernels are allocation-free ``@njit`` functions that read and write the lane row only
 (scratch space included). Conventions in :mod:`tlm_sim.ekf.layout`.
 
-Why ``_nrt=False``: every numba function that receives arrays increments and decrements their
-reference counts with atomic instructions on entry and exit (also when inlined), about 8 ns each
-on the development machine. With ~10 small kernels per tick per lane that alone cost
-~150 us per simulated second. The EKF kernels never allocate, so they are compiled without the
-numba runtime (``_nrt=False``): no reference counting, and any accidental allocation fails to
-compile. Measured: 2 lanes 255 -> 65 us per simulated second.
+Why no numba runtime: every numba function that receives arrays increments and decrements
+their reference counts with atomic instructions on entry and exit (also when inlined), and with
+~10 small kernels per tick per lane that is a large share of the EKF's time. The kernels never
+allocate, so the fast build (:mod:`tlm_sim._jit_fast`) compiles them without the runtime
+(``_nrt=False``): no reference counting, and an accidental allocation fails to compile
+(``benchmarks/RESULTS.md`` has the measured gain).
 
 Model (error state dx = [phi, dv, dp, dbg, dba], earth-frame attitude error phi):
 
