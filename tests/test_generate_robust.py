@@ -24,10 +24,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from tests.test_generate import SEED, SHORT
 from tlm_process.generate import (
     GenerateError,
     GenerateOptions,
-    ScenarioConfig,
     generate,
     read_dataset_table,
     read_header,
@@ -38,9 +38,6 @@ from tlm_process.generate import writer as writer_mod
 from tlm_process.pipeline.errors import IngestError
 from tlm_process.pipeline.ingest import read_dataset
 
-SHORT = ScenarioConfig(kinds={"single": 1.0}, fault_weights={"rc": 1.0},
-                       single_start_s=(5.0, 10.0), missions={"builtin": 1.0})
-SEED = 5
 REPO = Path(__file__).resolve().parents[1]
 
 
