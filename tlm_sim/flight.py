@@ -39,7 +39,7 @@ from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
-from tlm_sim.rng import new_rng
+from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.baro import baro_sample, mag_sample
 from tlm_sim.sensors.config import build_sensor_config
@@ -142,8 +142,9 @@ def run_flight(
     segment; sched: rows of parameter changes (see :func:`build_schedule`); applied: per change,
     the time [us] it took effect (filled in, -1 if never); home: (lat,
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
-    s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: IMU noise
-    generator, wind_rng: wind turbulence generator (tlm_sim.rng). Allocation-free.
+    s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: the sensor
+    noise streams, one row per sensor (S.RNG_*, :func:`tlm_sim.rng.new_streams`); wind_rng:
+    wind turbulence generator (tlm_sim.rng). Allocation-free.
 
     The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
     the flight ends 2 s after the autopilot disarms, or at t_end_us.
@@ -224,17 +225,17 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
     gps_push_truth(s, x, t_us * 1e-6)
     gps_new = False
     if gps_due(s, float(t_us)):
-        gps_measure(s, scfg, float(t_us), gps, rng)
+        gps_measure(s, scfg, float(t_us), gps, rng[S.RNG_GPS])
         gps_new = True
     baro_new = False
     if t_us >= s[S.B_NEXT_US]:
         s[S.B_NEXT_US] += 100000.0
-        baro_sample(s, x, scfg, rng)
+        baro_sample(s, x, scfg, rng[S.RNG_BARO])
         baro_new = True
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += 100000.0
-        mag_sample(s, x, scfg, rng)
+        mag_sample(s, x, scfg, rng[S.RNG_MAG])
         mag_new = True
     rc_update(s, scfg, float(t_us))
     return gps_new, baro_new, mag_new
@@ -428,7 +429,8 @@ def fly(
     t_final = run_flight(
         x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied,
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
-        np.zeros(S.N_SENSOR_STATE), new_work(), new_rng(int(seed), 1), new_rng(int(seed), 2),
+        np.zeros(S.N_SENSOR_STATE), new_work(), new_streams(int(seed), S.N_NOISE_STREAMS),
+        new_rng(int(seed), 2),
     )
     meta: dict[str, Any] = {
         "seed": int(seed),

@@ -62,6 +62,7 @@ _F1 = nt.float64[::1]
 _F2 = nt.float64[:, ::1]
 _I1 = nt.int64[::1]
 _U1 = nt.uint64[::1]
+_U2 = nt.uint64[:, ::1]  # the sensor noise streams (tlm_sim.rng.new_streams)
 _f8, _i8, _b1 = nt.float64, nt.int64, nt.boolean
 _BUFS = nt.UniTuple(_F2, len(L.LOG_ORDER))
 _EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
@@ -96,7 +97,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
     Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.6),
     Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 1.3),
-    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _U1), 0.6),
+    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _U2), 0.6),
     Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),
     Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.5),
     Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.3),
@@ -111,7 +112,7 @@ JOBS: tuple[Job, ...] = (
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.Tuple((_F2, _F2, _F2, _F1)), _U1, _U1), 2.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1), 2.0)
 
 
 @dataclass

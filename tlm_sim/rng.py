@@ -16,6 +16,17 @@ _MUL = np.uint64(2685821657736338717)
 _INV53 = 1.0 / 9007199254740992.0  # 2^-53
 
 
+#: first stream id of the sensor noise streams (ids 1 and 2 are the old shared sensor stream
+#: and the wind turbulence)
+SENSOR_STREAM_BASE = 16
+
+
+def new_streams(seed: int, n: int, base: int = SENSOR_STREAM_BASE) -> np.ndarray:
+    """``n`` independent generator states for ``seed`` (streams ``base .. base + n - 1``), as
+    the rows of an (n, 1) array: row ``k`` is passed to :func:`uniform_pm1` as ``rng[k]``."""
+    return np.stack([new_rng(seed, base + k) for k in range(n)])
+
+
 def new_rng(seed: int, stream: int = 0) -> np.ndarray:
     """Generator state for (seed, stream): splitmix64 of the pair, never zero."""
     z = (int(seed) * 0x9E3779B97F4A7C15 + int(stream) * 0xD1B54A32D192ED03 + 0x632BE59BD9B4E019)

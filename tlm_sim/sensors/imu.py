@@ -77,7 +77,8 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
     """Take every IMU sample due at physics time t_us [us] from truth state x.
 
     throttle: mean motor output 0..1 (SITL's noise scaling; "motors on" above SIM_INS_THR_MIN).
-    rng: noise generator state (tlm_sim.rng).
+    rng: the sensor noise streams (rows S.RNG_*, tlm_sim.rng.new_streams); IMU i draws its gyro
+    noise from row RNG_GYRO + i and its accelerometer noise from row RNG_ACC + i only.
     """
     t_s = t_us * 1e-6
     motors_on = throttle > cfg[S.C_INS_THR_MIN]
@@ -94,9 +95,9 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
                 a_g = cfg[S.C_GYR_NOISE] * sc
             for k in range(3):
                 g = x[X.SWX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
-                g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
+                g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng[S.RNG_GYRO + i])
                 if a_g != 0.0:
-                    g += a_g * uniform_pm1(rng)
+                    g += a_g * uniform_pm1(rng[S.RNG_GYRO + i])
                 s[b + S.I_LAST_GYR + k] = g
                 s[b + S.I_DANG + k] += g
                 d = b + S.I_GYR_LPF + 2 * k
@@ -111,7 +112,8 @@ def imu_sample(s, x, cfg, t_us, throttle, rng):
                     a = fail
                 else:
                     a = x[X.SFX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
-                    a += cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng)
+                    a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i]
+                          * uniform_pm1(rng[S.RNG_ACC + i]))
                     if motors_on and cfg[S.C_ACC_RND + i] != 0.0 and cfg[S.C_VIB_MOT_MAX] != 0.0:
                         # motor vibration: a sinusoid at the motor rotation rate (SIM_VIB_MOT_MAX)
                         f_hz = throttle * cfg[S.C_VIB_MOT_MAX]

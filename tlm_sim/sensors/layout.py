@@ -121,3 +121,15 @@ C_ENGINE_MASK = _c.add("C_ENGINE_MASK", 1, "",
                        "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
 C_NOISE_SCALE = _c.add("C_NOISE_SCALE", 2, "", "per-IMU scale of the base noise amplitudes")
 N_SENSOR_CFG = CONFIG.close()
+
+# ---- sensor noise streams: rows of the flight's noise generator array ------------------------
+# One xorshift64* stream per sensor (tlm_sim.rng.new_streams), so a fault that stops one
+# sensor's draws (a failed accelerometer draws no noise) leaves every other sensor's noise as
+# it was.
+NOISE = Layout("noise", "sensor noise streams (rows of the rng array)")
+RNG_GYRO = NOISE.add("RNG_GYRO", N_IMU, "", "gyro noise, one stream per IMU")
+RNG_ACC = NOISE.add("RNG_ACC", N_IMU, "", "accelerometer noise, one stream per IMU")
+RNG_GPS = NOISE.add("RNG_GPS", 1, "", "GPS velocity noise")
+RNG_BARO = NOISE.add("RNG_BARO", 1, "", "barometer noise")
+RNG_MAG = NOISE.add("RNG_MAG", 1, "", "compass noise")
+N_NOISE_STREAMS = NOISE.close()
