@@ -43,6 +43,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from tlm_sim.textfile import TextFileError, read_text
+
 __all__ = [
     "ALIASES",
     "DEFAULT_PARM_PATH",
@@ -918,12 +920,9 @@ class Params(Mapping[str, float]):
         """Defaults with the parameters of an ArduPilot ``.parm`` file applied on top."""
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ParamError(f"cannot read parameter file {path}: {exc.strerror}") from None
-        except UnicodeDecodeError as exc:
-            raise ParamError(f"cannot read parameter file {path}: not UTF-8 text ({exc.reason} "
-                             f"at byte {exc.start})") from None
+            text = read_text(path)
+        except TextFileError as exc:
+            raise ParamError(f"cannot read parameter file {path}: {exc}") from None
         return cls.from_parm_text(text, source=str(path))
 
     @classmethod

@@ -99,13 +99,12 @@ def _config_file(path: str) -> dict[str, Any]:
     import yaml
 
     p = Path(path)
+    from tlm_sim.textfile import TextFileError, read_text
+
     try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise UsageError(f"--config: cannot read {p}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise UsageError(f"--config: cannot read {p}: not UTF-8 text ({exc.reason} at byte "
-                          f"{exc.start})") from None
+        text = read_text(p)
+    except TextFileError as exc:
+        raise UsageError(f"--config: cannot read {p}: {exc}") from None
     try:
         doc = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:

@@ -43,6 +43,7 @@ import pandas as pd
 
 from tlm_process.pipeline.errors import IngestError
 from tlm_sim.faults.types import FAULT_TYPES
+from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
     "AUX_TABLES",
@@ -220,12 +221,9 @@ def parse_records(records: Any, source: str = "") -> list[FaultRecord]:
 
 def _read_json(path: Path) -> Any:
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise IngestError(f"cannot read: {exc.strerror or exc}", source=str(path)) from None
-    except UnicodeDecodeError as exc:
-        raise IngestError(f"not UTF-8 text ({exc.reason} at byte {exc.start})",
-                          source=str(path)) from None
+        return json.loads(read_text(path))
+    except TextFileError as exc:
+        raise IngestError(f"cannot read: {exc}", source=str(path)) from None
     except json.JSONDecodeError as exc:
         raise IngestError(f"invalid JSON: {exc}", source=str(path)) from None
 

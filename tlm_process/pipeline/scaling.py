@@ -151,14 +151,13 @@ class MinMaxScaler:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> MinMaxScaler:
+        from tlm_sim.textfile import TextFileError, read_text
+
         p = Path(path)
         try:
-            return cls.from_dict(json.loads(p.read_text(encoding="utf-8")))
-        except OSError as exc:
-            raise PipelineError(f"cannot read: {exc.strerror or exc}", source=str(p)) from None
-        except UnicodeDecodeError as exc:
-            raise PipelineError(f"not UTF-8 text ({exc.reason} at byte {exc.start})",
-                                source=str(p)) from None
+            return cls.from_dict(json.loads(read_text(p)))
+        except TextFileError as exc:
+            raise PipelineError(f"cannot read: {exc}", source=str(p)) from None
         except json.JSONDecodeError as exc:
             raise PipelineError(f"invalid JSON: {exc}", source=str(p)) from None
         except PipelineError as exc:

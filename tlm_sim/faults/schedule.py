@@ -45,6 +45,7 @@ from tlm_sim.faults.trigger import (
     trigger_problem,
 )
 from tlm_sim.faults.types import FAULT_TYPES
+from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
     "PAPER_GAP_S",
@@ -342,13 +343,9 @@ class FaultSchedule:
         path = Path(path)
         suffix = _suffix(path)
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise FaultScheduleError(
-                f"cannot read fault schedule {path}: {exc.strerror or exc}") from None
-        except UnicodeDecodeError as exc:
-            raise FaultScheduleError(f"cannot read fault schedule {path}: not UTF-8 text "
-                                     f"({exc.reason} at byte {exc.start})") from None
+            text = read_text(path)
+        except TextFileError as exc:
+            raise FaultScheduleError(f"cannot read fault schedule {path}: {exc}") from None
         try:
             data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
         except json.JSONDecodeError as exc:

@@ -24,6 +24,7 @@ import numpy as np
 from tlm_sim.geo import HOME_CMAC
 from tlm_sim.mission.errors import MissionError
 from tlm_sim.mission.mission import Mission
+from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
     "MAV_CMD_NAV_RETURN_TO_LAUNCH",
@@ -125,12 +126,9 @@ def read_wpl(
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise MissionError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise MissionError(f"{path}: cannot read: not UTF-8 text ({exc.reason} at byte "
-                           f"{exc.start})") from None
+        text = read_text(path, encoding="utf-8-sig")
+    except TextFileError as exc:
+        raise MissionError(f"{path}: cannot read: {exc}") from None
     lines = text.splitlines()
     items: list[tuple[int, int, int, int, float, float, float]] = []  # lineno + fields
     header_seen = False
