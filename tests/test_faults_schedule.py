@@ -49,17 +49,8 @@ SIDECARS = sorted(REFERENCE.glob("*.json"))
 
 
 def _sidecar_param(path):
-    """A sidecar as a test parameter; one whose fault types tlm does not model yet (the second
-    reference set, labels 5-11: issue 19) is a strict xfail, so modelling them flips it."""
-    try:
-        types = {rec["type"] for rec in json.loads(path.read_text())["faults"]}
-    except (OSError, ValueError, KeyError, TypeError):
-        types = set()
-    missing = sorted(types - set(FAULT_TYPES))
-    marks = [pytest.mark.xfail(strict=True, raises=KeyError,
-                               reason=f"fault type(s) {', '.join(missing)} not modelled yet "
-                                      "(issue 19)")] if missing else []
-    return pytest.param(path, id=path.stem, marks=marks)
+    """A sidecar as a test parameter, named after its flight."""
+    return pytest.param(path, id=path.stem)
 
 
 def one_line_error(fn, *args, match: str | None = None, **kw) -> FaultScheduleError:
@@ -75,9 +66,11 @@ def one_line_error(fn, *args, match: str | None = None, **kw) -> FaultScheduleEr
 # fault types
 # ---------------------------------------------------------------------------------------------
 
-def test_fault_types_are_the_papers_four():
-    assert list(FAULT_TYPES) == ["gps", "accel", "engine", "rc"]
-    assert [t.label for t in FAULT_TYPES.values()] == [1, 2, 3, 4]
+def test_fault_types_and_their_stable_labels():
+    assert list(FAULT_TYPES) == ["gps", "accel", "engine", "rc", "gyro", "baro", "compass",
+                                 "gps_glitch", "motor_partial", "vibration", "battery",
+                                 "gps_jam", "accel_samples"]
+    assert [t.label for t in FAULT_TYPES.values()] == list(range(1, 14))
     assert dict(FAULT_TYPES["gps"].params_start) == {"SIM_GPS1_ENABLE": 0}
     assert dict(FAULT_TYPES["gps"].params_end) == {"SIM_GPS1_ENABLE": 1}
     assert dict(FAULT_TYPES["accel"].params_start) == {"SIM_ACCEL1_FAIL": 1, "SIM_ACCEL2_FAIL": 1}
@@ -187,7 +180,7 @@ def test_fault_defaults_and_coercion():
     assert f == same and hash(f) == hash(same)
     assert len({f, same}) == 1
     assert Fault("rc", "wp5").end is None
-    assert [Fault(n, 1, 2).label for n in FAULT_TYPES] == [1, 2, 3, 4]
+    assert [Fault(n, 1, 2).label for n in FAULT_TYPES] == list(range(1, 14))
     with pytest.raises(TypeError):
         f.params_start["SIM_GPS1_ENABLE"] = 1  # type: ignore[index]
     with pytest.raises(AttributeError):
