@@ -33,6 +33,7 @@ import pandas as pd
 
 from .quantise import column_to_raw, quantise_frame
 from .schema import FORMAT_CHARS, MULTS, SCHEMAS, UNITS, MessageSchema
+from .texts import event_texts
 
 __all__ = [
     "FIRMWARE_STRING", "FRAME_STRING", "encode_bin", "fault_messages", "merge_order",
@@ -136,13 +137,16 @@ def fault_messages(faults: Sequence[Mapping[str, Any]]) -> list[tuple[int, str]]
 
 
 def _msg_frame(log: Any, t0_us: int) -> pd.DataFrame:
-    """MSG rows: firmware, frame and tlm flight identity at ``t0_us``, then fault lines."""
+    """MSG rows: firmware, frame and tlm flight identity at ``t0_us``, then the fault lines
+    and the firmware's text for the flight's events (:func:`tlm_sim.flightlog.texts.event_texts`)
+    in time order."""
     meta = log.meta or {}
     lines = [(t0_us, FIRMWARE_STRING), (t0_us, FRAME_STRING)]
     ident = [f"{k} {meta[k]}" for k in ("mission", "seed", "profile") if meta.get(k) is not None]
     if ident:
         lines.append((t0_us, "tlm: " + ", ".join(ident)))
-    lines += fault_messages(log.faults or ())
+    lines += sorted(fault_messages(log.faults or ()) + event_texts(log.tables),
+                    key=lambda line: line[0])
     return pd.DataFrame({"TimeUS": [t for t, _ in lines], "Message": [m for _, m in lines]})
 
 
