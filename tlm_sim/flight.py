@@ -211,17 +211,19 @@ def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
             thr_sum += (pwm[i] - 1000.0) / 1000.0
             n_on += 1
     throttle = thr_sum / n_on if n_on > 0 else 0.0
-    imu_sample(s, x, scfg, float(t_us), throttle, rng)
+    imu_sample(s, x, scfg, float(t_us), throttle, pwm, rng)
     return t_us
 
 
 @inline_jit
 def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
-    """The main loop's sensor reads at t_us: IMU deltas (imu_ok per instance), the GPS epoch
+    """The main loop's sensor reads at t_us: IMU deltas (imu_ok[i]: IMU i's accel delivered
+    samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch
     into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
     compass) new this tick."""
     for i in range(S.N_IMU):
         imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
+        imu_ok[S.N_IMU + i] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_GYR_OK]
     gps_push_truth(s, x, t_us * 1e-6)
     gps_new = False
     if gps_due(s, float(t_us)):

@@ -291,25 +291,38 @@ for _i in (1, 2, 3):
     _add([f"SIM_GYR{_i}_BIAS_{a}" for a in _XYZ], "rad/s", -10, 10, f"IMU {_i} gyro bias (§2.3)",
          modelled=_i < 3)
     _add([f"SIM_ACC{_i}_SCAL_{a}" for a in _XYZ], "", -10, 10,
-         f"IMU {_i} accel scale, reading divided by it if non-zero (§2.3)", modelled=False)
+         f"IMU {_i} accel scale: the specific force is divided by it if non-zero, before the "
+         f"bias (§2.3)", modelled=_i < 3)
     _add([f"SIM_GYR{_i}_SCALE_{a}" for a in _XYZ], "%", -1000, 1000,
-         f"IMU {_i} gyro scale error, reading x (1 + s/100) (§2.3)", modelled=False)
+         f"IMU {_i} gyro scale error: reading x (1 + s/100), before the bias (§2.3)",
+         modelled=_i < 3)
     _add(f"SIM_ACCEL{_i}_FAIL", "m/s/s", -200, 200,
          f"if non-zero, IMU {_i} accel reads this value on all axes (accel fault, §2.3)",
          modelled=_i < 3)
-_add(["SIM_ACC_FAIL_MSK", "SIM_GYR_FAIL_MSK"], "", 0, 255,
-     "bit mask of accel / gyro instances whose samples stop (§2.3)", True, modelled=False)
+_add("SIM_ACC_FAIL_MSK", "", 0, 255,
+     "bit mask of accelerometers whose samples stop (bit 0 = IMU 1): IMU.AH 0, the logged accel "
+     "holds, the EKF and the controllers use the first healthy accel; with every accel masked "
+     "they integrate the held (stale) samples (§2.3)", True)
+_add("SIM_GYR_FAIL_MSK", "", 0, 255,
+     "bit mask of gyros whose samples stop (bit 0 = IMU 1): IMU.GH 0, the logged gyro holds, "
+     "the EKF and the controllers use the first healthy gyro. Masking every gyro (bits 0 and 1: "
+     "tlm has 2 IMUs) is refused: SITL's firmware then waits for a gyro sample forever and the "
+     "simulation freezes, so there is no flight to reproduce (§2.3)", True)
 _add([f"SIM_ACC_TRIM_{a}" for a in _XYZ], "rad", -math.pi, math.pi, "accel mounting trim (§2.3)",
      modelled=False)
 _add("SIM_DRIFT_SPEED", "deg/s/min", -10, 10, "gyro drift rate, triangle wave (§2.3)")
 _add("SIM_DRIFT_TIME", "min", 0, 10000, "half period of the gyro drift triangle (§2.3)")
 _add("SIM_INS_THR_MIN", "", 0, 1, "throttle above which 'motors on' IMU noise is added (§2.3)")
-_add([f"SIM_VIB_FREQ_{a}" for a in _XYZ], "Hz", 0, 1000, "fixed vibration frequency (§2.3)",
-     modelled=False)
-_add("SIM_VIB_MOT_MAX", "Hz", 0, 1000, "motor vibration frequency at full command (§2.3)")
-_add("SIM_VIB_MOT_MULT", "", 0, 100, "scale of motor vibration amplitude (§2.3)", modelled=False)
-_add(["SIM_VIB_MOT_HMNC", "SIM_VIB_MOT_MASK"], "", 0, 255,
-     "motor vibration harmonics / motor mask, bit masks (§2.3)", True, modelled=False)
+_add([f"SIM_VIB_FREQ_{a}" for a in _XYZ], "Hz", 0, 1000,
+     "fixed vibration frequency on that axis, amplitude SIM_ACCn_RND / SIM_GYRn_RND (§2.3)")
+_add("SIM_VIB_MOT_MAX", "Hz", 0, 1000,
+     "motor vibration frequency at full command: motor i vibrates at command_i x this (§2.3)")
+_add("SIM_VIB_MOT_MULT", "", 0, 100, "scale of motor vibration amplitude (§2.3)")
+_add("SIM_VIB_MOT_HMNC", "", 0, 255, "motor vibration harmonics: bit k-1 adds harmonic k (§2.3)",
+     True)
+_add("SIM_VIB_MOT_MASK", "", 0, 255,
+     "extra motors ORed into the vibrating motor mask (for external simulators; tlm's quad "
+     "vibrates on motors 1-4 always, higher bits name no motor and add nothing) (§2.3)", True)
 for _b in ("BARO", "BAR2", "BAR3"):
     _add(f"SIM_{_b}_RND", "m", 0, 100, f"{_b} altitude noise amplitude, uniform (§2.5)",
          modelled=_b == "BARO")
@@ -758,7 +771,17 @@ def _to_float(name: str, value: Any) -> float:
     return x
 
 
+#: gyro instances tlm simulates, as SIM_GYR_FAIL_MSK bits (IMUs 1 and 2)
+_ALL_GYROS = 0b11
+
+
 def _check_consistency(values: Mapping[str, float]) -> None:
+    if int(values["SIM_GYR_FAIL_MSK"]) & _ALL_GYROS == _ALL_GYROS:
+        raise ParamError(
+            f"SIM_GYR_FAIL_MSK = {_format_number(values['SIM_GYR_FAIL_MSK'])} masks every gyro "
+            f"(tlm simulates 2 IMUs, bits 0 and 1): SITL's firmware then waits for a gyro sample "
+            f"forever and the simulation freezes, so there is no flight to simulate; keep bit 0 "
+            f"or bit 1 clear")
     for lo, hi in _STRICTLY_LESS:
         if not values[lo] < values[hi]:
             raise ParamError(

@@ -97,7 +97,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
     Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.6),
     Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 1.3),
-    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _U2), 0.6),
+    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _F1, _U2), 0.6),
     Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),
     Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.5),
     Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.3),

@@ -1,6 +1,7 @@
 """The autopilot's view of the vehicle (ArduPilot's AHRS): built each main-loop tick from the
 EKF's output block (``tlm_sim.ekf.layout`` O_*, filled by :func:`tlm_sim.ekf.lanes.ekf_output`)
-and the filtered samples of the IMU the primary lane integrates. The controllers read only this.
+and the filtered samples of the IMU the primary lane integrates (or of the first healthy IMU
+while that one's gyro or accel is stopped). The controllers read only this.
 """
 
 from tlm_sim._jit import tick_jit
@@ -9,6 +10,22 @@ from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
 
 GRAVITY = 9.80665  # [m/s^2]
+
+
+@tick_jit
+def _usable_imu(s, imu, ok_slot):
+    """Record base of the IMU whose gyro (ok_slot I_GYR_OK) or accel (I_ACC_OK) the controllers
+    read: the primary lane's IMU while that sensor is healthy, else the first healthy one
+    (ArduPilot's AHRS falls back to the INS's first usable sensor); the primary's own (its held
+    value) when none is healthy."""
+    ib = S.IMU_BASE + imu * S.IMU_STRIDE
+    if s[ib + ok_slot] != 0.0:
+        return ib
+    for j in range(S.N_IMU):
+        jb = S.IMU_BASE + j * S.IMU_STRIDE
+        if s[jb + ok_slot] != 0.0:
+            return jb
+    return ib
 
 
 @tick_jit
@@ -32,12 +49,13 @@ def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
         pos[1] = 0.0
     for k in range(4):
         q[k] = eo[EK.O_QW + k]
-    ib = S.IMU_BASE + int(eo[EK.O_IMU]) * S.IMU_STRIDE
+    gb = _usable_imu(s, int(eo[EK.O_IMU]), S.I_GYR_OK)
     for k in range(3):
-        gyro[k] = s[ib + S.I_GYR_F + k] - eo[EK.O_BGX + k]
-    ax = s[ib + S.I_ACC_F] - eo[EK.O_BAX]
-    ay = s[ib + S.I_ACC_F + 1] - eo[EK.O_BAY]
-    az = s[ib + S.I_ACC_F + 2] - eo[EK.O_BAZ]
+        gyro[k] = s[gb + S.I_GYR_F + k] - eo[EK.O_BGX + k]
+    ab = _usable_imu(s, int(eo[EK.O_IMU]), S.I_ACC_OK)
+    ax = s[ab + S.I_ACC_F] - eo[EK.O_BAX]
+    ay = s[ab + S.I_ACC_F + 1] - eo[EK.O_BAY]
+    az = s[ab + S.I_ACC_F + 2] - eo[EK.O_BAZ]
     acc_ned[0] = eo[EK.O_R00] * ax + eo[EK.O_R01] * ay + eo[EK.O_R02] * az
     acc_ned[1] = eo[EK.O_R10] * ax + eo[EK.O_R11] * ay + eo[EK.O_R12] * az
     acc_ned[2] = eo[EK.O_R20] * ax + eo[EK.O_R21] * ay + eo[EK.O_R22] * az + GRAVITY

@@ -133,20 +133,22 @@ def set_quat_euler(e, roll, pitch, yaw):
 
 
 @tick_jit
-def propagate(e, dang, dvel, imu, dt):
+def propagate(e, dang, dvel, gi, ai, dt):
     """Integrate one IMU interval into the nominal state and the covariance accumulators.
 
-    dang[imu, 0:3]: delta angle [rad, body FRD]; dvel[imu, 0:3]: delta velocity (integral of the
-    specific force) [m/s, body FRD]; dt: interval [s]. Biases are removed, the delta velocity is
-    rotated to mid-interval (first-order rotation compensation), velocity and position are
-    integrated (trapezoid) and the quaternion is advanced by the corrected delta angle.
+    dang[gi, 0:3]: delta angle [rad, body FRD] of gyro gi; dvel[ai, 0:3]: delta velocity
+    (integral of the specific force) [m/s, body FRD] of accel ai (the lane's own IMU, or the
+    first healthy one while its own is stopped); dt: interval [s]. Biases are removed, the
+    delta velocity is rotated to mid-interval (first-order rotation compensation), velocity and
+    position are integrated (trapezoid) and the quaternion is advanced by the corrected delta
+    angle.
     """
-    ax = dang[imu, 0] - e[BGX] * dt
-    ay = dang[imu, 1] - e[BGY] * dt
-    az = dang[imu, 2] - e[BGZ] * dt
-    ux = dvel[imu, 0] - e[BAX] * dt
-    uy = dvel[imu, 1] - e[BAY] * dt
-    uz = dvel[imu, 2] - e[BAZ] * dt
+    ax = dang[gi, 0] - e[BGX] * dt
+    ay = dang[gi, 1] - e[BGY] * dt
+    az = dang[gi, 2] - e[BGZ] * dt
+    ux = dvel[ai, 0] - e[BAX] * dt
+    uy = dvel[ai, 1] - e[BAY] * dt
+    uz = dvel[ai, 2] - e[BAZ] * dt
     # rotate the delta velocity to the middle of the interval
     bx = ux + 0.5 * (ay * uz - az * uy)
     by = uy + 0.5 * (az * ux - ax * uz)

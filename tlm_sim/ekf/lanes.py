@@ -262,7 +262,7 @@ def _align(e, cfg, t):
 
 
 @tick_jit
-def _static_tilt_check(e, dang, dvel, imu, dt):
+def _static_tilt_check(e, dang, dvel, gi, ai, dt):
     """Re-level a lane whose tilt is grossly wrong while its IMU is at rest (tlm model choice).
 
     After a tumble the simulated ground contact sets the vehicle level without a rotation the
@@ -279,11 +279,11 @@ def _static_tilt_check(e, dang, dvel, imu, dt):
     # the tests on the deltas, squared (|dang| > STATIC_GYRO dt, ...): no square root or
     # division on the every-tick path, which in hover and steady cruise passes the first two
     # tests and ends at the third
-    ax, ay, az = dang[imu, 0], dang[imu, 1], dang[imu, 2]
+    ax, ay, az = dang[gi, 0], dang[gi, 1], dang[gi, 2]
     if ax * ax + ay * ay + az * az > (STATIC_GYRO * dt) ** 2:
         e[TILT_BAD_T] = 0.0
         return
-    vx, vy, vz = dvel[imu, 0], dvel[imu, 1], dvel[imu, 2]
+    vx, vy, vz = dvel[ai, 0], dvel[ai, 1], dvel[ai, 2]
     dv2 = vx * vx + vy * vy + vz * vz
     lo = (GRAVITY - STATIC_ACC) * dt
     hi = (GRAVITY + STATIC_ACC) * dt
@@ -308,29 +308,50 @@ def _static_tilt_check(e, dang, dvel, imu, dt):
 
 
 @tick_jit
+def lane_imu_sources(imu, imu_ok, n_imu):
+    """(gyro, accel) instance a lane whose own IMU is imu integrates this tick: its own sensor
+    while it delivers samples, else the first one that does (EKF3's readIMUData: no lane
+    switch, no message); -1 when none does. imu_ok[i]: accel i delivered samples this tick;
+    imu_ok[n_imu + i]: gyro i did (a shorter imu_ok: the gyros follow the accels).
+
+    EKF3 swaps in the bias it learnt separately for the borrowed sensor ("inactive bias"); tlm
+    keeps the lane's bias states, which model what every tlm IMU shares (the common gyro drift;
+    SIM_GYRn_BIAS and SIM_ACCn_BIAS differences between IMUs are not transferred)."""
+    g0 = n_imu if imu_ok.shape[0] >= 2 * n_imu else 0
+    ai = imu if imu_ok[imu] != 0 else -1
+    gi = imu if imu_ok[g0 + imu] != 0 else -1
+    for j in range(n_imu):
+        if ai < 0 and imu_ok[j] != 0:
+            ai = j
+        if gi < 0 and imu_ok[g0 + j] != 0:
+            gi = j
+    return gi, ai
+
+
+@tick_jit
 def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
     """One main-loop tick of one lane (see the module docstring); t in seconds."""
     dt = cfg[C_DT] if e[T_LAST] < 0.0 else t - e[T_LAST]
     e[T_LAST] = t
     if dt <= 0.0 or dt > 0.1:
         dt = cfg[C_DT]
-    imu = int(e[IMU_INDEX])
-    if imu_ok[imu] == 0 or e[FAULT] != 0.0:
-        e[IMU_OK] = 1.0 if imu_ok[imu] != 0 else 0.0
+    gi, ai = lane_imu_sources(int(e[IMU_INDEX]), imu_ok, dang.shape[0])
+    if gi < 0 or ai < 0 or e[FAULT] != 0.0:
+        e[IMU_OK] = 1.0 if gi >= 0 and ai >= 0 else 0.0
         update_flags(e, cfg, t)
         return
     e[IMU_OK] = 1.0
     if e[ALIGNED] == 0.0:
-        e[ALIGN_FX] += dvel[imu, 0]
-        e[ALIGN_FY] += dvel[imu, 1]
-        e[ALIGN_FZ] += dvel[imu, 2]
+        e[ALIGN_FX] += dvel[ai, 0]
+        e[ALIGN_FY] += dvel[ai, 1]
+        e[ALIGN_FZ] += dvel[ai, 2]
         e[ALIGN_DT] += dt
         if e[ALIGN_DT] >= cfg[C_ALIGN_TIME] and e[MAG_HAVE] != 0.0:
             _align(e, cfg, t)
         update_flags(e, cfg, t)
         return
-    _static_tilt_check(e, dang, dvel, imu, dt)
-    propagate(e, dang, dvel, imu, dt)
+    _static_tilt_check(e, dang, dvel, gi, ai, dt)
+    propagate(e, dang, dvel, gi, ai, dt)
     output_track(e, dt, cfg[C_TAU_OUTPUT], int(cfg[C_GPS_DELAY] / cfg[C_DT] + 0.5),
                  e[BAD_IMU] != 0.0)
     buffer_push(e)
@@ -369,8 +390,9 @@ def ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed):
     """Predict all lanes by one main-loop tick.
 
     t_us: time since boot [us]; dang[imu, 0:3] delta angle [rad] and dvel[imu, 0:3] delta
-    velocity [m/s] (body FRD) accumulated over the tick; imu_ok[imu]: 0 when that IMU's samples
-    stopped; armed: selects the constant-position noise (on-ground value while disarmed).
+    velocity [m/s] (body FRD) accumulated over the tick; imu_ok[imu] / imu_ok[N_IMU + imu]: 0
+    when that IMU's accel / gyro samples stopped (:func:`lane_imu_sources`); armed: selects the
+    constant-position noise (on-ground value while disarmed).
     """
     t = t_us * 1e-6
     for i in range(ekf.shape[0]):
@@ -508,9 +530,10 @@ def ekf_update(
     """One main-loop tick: predict, fuse the new samples flagged, select the primary lane.
 
     t_us: time since boot [us]; dang/dvel[imu, 0:3]: IMU deltas of this tick (body FRD);
-    imu_ok[imu]; gps_new + gps_pos[0:3] (NED from the origin, m) + gps_vel[0:3] (NED, m/s) +
-    gps_fix (3-D fix); baro_new + baro_alt (m above the origin, up); mag_new + mag[0:3] (body
-    field, gauss); armed (vehicle armed: enables lane switching, sets the constant-position noise).
+    imu_ok[imu] (accel) / imu_ok[N_IMU + imu] (gyro) delivered samples; gps_new + gps_pos[0:3]
+    (NED from the origin, m) + gps_vel[0:3] (NED, m/s) + gps_fix (3-D fix); baro_new +
+    baro_alt (m above the origin, up); mag_new + mag[0:3] (body field, gauss); armed (vehicle
+    armed: enables lane switching, sets the constant-position noise).
     Returns True when the primary lane changed on this tick (log ERR 24 then).
     """
     ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed)

@@ -14,6 +14,13 @@ from tlm_sim.sensors.imu import lpf2p_coefficients
 
 # SITL's IMU sample rates ("like a Pixhawk 1"): (gyro Hz, accel Hz) per instance
 IMU_RATES_HZ = ((1000.0, 1000.0), (760.0, 800.0))
+# sub-samples SITL averages into one published sample (gyro IMU0, IMU1, accel IMU0, IMU1):
+# INS_FAST_SAMPLE (default 1) fast-samples the first IMU, 8 gyro and 4 accel sub-samples. tlm
+# draws the base noise once per published sample (its amplitude fitted, TLM_INSn_NSE_SC) and
+# sub-samples only the vibration sinusoids, whose phases advance per sub-sample.
+IMU_SUBSAMPLES = (8.0, 1.0, 4.0, 1.0)
+# the motors of tlm's quad frame (outputs 1-4): SITL's motor mask, ORed with SIM_VIB_MOT_MASK
+FRAME_MOTOR_MASK = 0b1111
 
 
 def _imu_config(c: np.ndarray, p: Params) -> None:
@@ -26,6 +33,8 @@ def _imu_config(c: np.ndarray, p: Params) -> None:
         for k, ax in enumerate("XYZ"):
             c[S.C_ACC_BIAS + 3 * i + k] = p[f"SIM_ACC{n}_BIAS_{ax}"]
             c[S.C_GYR_BIAS + 3 * i + k] = p[f"SIM_GYR{n}_BIAS_{ax}"]
+            c[S.C_ACC_SCAL + 3 * i + k] = p[f"SIM_ACC{n}_SCAL_{ax}"]
+            c[S.C_GYR_SCALE + 3 * i + k] = 1.0 + p[f"SIM_GYR{n}_SCALE_{ax}"] / 100.0
         c[S.C_ACC_FAIL + i] = p[f"SIM_ACCEL{n}_FAIL"]
         c[S.C_NOISE_SCALE + i] = p[f"TLM_INS{n}_NSE_SC"]
         g_hz, a_hz = IMU_RATES_HZ[i]
@@ -42,7 +51,23 @@ def _imu_config(c: np.ndarray, p: Params) -> None:
     c[S.C_DRIFT_SPEED] = math.radians(p["SIM_DRIFT_SPEED"])
     c[S.C_DRIFT_TIME] = p["SIM_DRIFT_TIME"]
     c[S.C_INS_THR_MIN] = p["SIM_INS_THR_MIN"]
+    c[S.C_ACC_FAIL_MSK] = p["SIM_ACC_FAIL_MSK"]
+    c[S.C_GYR_FAIL_MSK] = p["SIM_GYR_FAIL_MSK"]
+    _vibration_config(c, p)
+
+
+def _vibration_config(c: np.ndarray, p: Params) -> None:
+    """SITL's vibration model: motor-locked (SIM_VIB_MOT_*) and fixed-frequency (SIM_VIB_FREQ_*)
+    sinusoids, amplitudes SIM_ACCn_RND / SIM_GYRn_RND (sensors.imu)."""
     c[S.C_VIB_MOT_MAX] = p["SIM_VIB_MOT_MAX"]
+    for k, ax in enumerate("XYZ"):
+        c[S.C_VIB_FREQ + k] = p[f"SIM_VIB_FREQ_{ax}"]
+    c[S.C_VIB_ON] = 1.0 if (p["SIM_VIB_MOT_MAX"] > 0.0
+                            or any(c[S.C_VIB_FREQ:S.C_VIB_FREQ + 3] != 0.0)) else 0.0
+    c[S.C_VIB_MOT_MULT] = p["SIM_VIB_MOT_MULT"]
+    c[S.C_VIB_MOT_HMNC] = p["SIM_VIB_MOT_HMNC"]
+    c[S.C_VIB_MOT_MASK] = float(FRAME_MOTOR_MASK | int(p["SIM_VIB_MOT_MASK"]))
+    c[S.C_IMU_NSUB:S.C_IMU_NSUB + 4] = IMU_SUBSAMPLES
 
 
 def _gps_config(c: np.ndarray, p: Params) -> None:

@@ -3,9 +3,11 @@
 Samples at each instance's own rate (IMU0 gyro/accel 1000/1000 Hz, IMU1 760/800 Hz) from the
 latest physics state (zero-order hold; the sensors' view of it, ``X.SWX``/``X.SFX``, SITL's
 sensor smoothing, see tlm_sim.dynamics.smoothing), adds SITL's noise, bias, gyro drift and
-failure overrides (SIM_ACCELn_FAIL), then does what the autopilot does with raw samples: accumulates
-them for the EKF, low-pass filters them at INS_GYRO_FILTER / INS_ACCEL_FILTER (2nd-order
-Butterworth) for the controllers and the IMU log, and computes the VIBE metric and clip count.
+scale errors, vibration (SITL's motor-locked and fixed-frequency sinusoids) and failures
+(SIM_ACCELn_FAIL values, SIM_ACC_FAIL_MSK / SIM_GYR_FAIL_MSK stopped samples), then does what
+the autopilot does with raw samples: accumulates them for the EKF, sets the health flags,
+low-pass filters them at INS_GYRO_FILTER / INS_ACCEL_FILTER (2nd-order Butterworth) for the
+controllers and the IMU log, and computes the VIBE metric and clip count.
 Body frame FRD; accel in m/s^2 (specific force, about (0, 0, -g) at rest), gyro in rad/s.
 """
 
@@ -13,12 +15,15 @@ import math
 
 import numpy as np
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
 CLIP_LIMIT = (16.0 - 0.5) * 9.80665  # m/s^2, a sample beyond this on any axis counts as a clip
+TWO_PI = 2.0 * math.pi
+VIB_AMP_VARIATION = 0.05  # SITL: each vibration amplitude x (1 + 0.05 U)
+VIB_FREQ_VARIATION = 0.12  # SITL: each motor phase step x (1 + 0.12 U), smearing the peaks
 
 
 def lpf2p_coefficients(sample_hz: float, cutoff_hz: float) -> np.ndarray:
@@ -68,71 +73,165 @@ def imu_init(s, cfg, t_us):
         s[b + S.I_NEXT_GYR_US] = t_us
         s[b + S.I_NEXT_ACC_US] = t_us
         s[b + S.I_ACC_OK] = 1.0
+        s[b + S.I_GYR_OK] = 1.0
         s[b + S.I_T_SAMPLE_US] = t_us
         s[b + S.I_T_TAKE_US] = -1.0
 
 
 @tick_jit
-def imu_sample(s, x, cfg, t_us, throttle, rng):
+def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
     """Take every IMU sample due at physics time t_us [us] from truth state x.
 
     throttle: mean motor output 0..1 (SITL's noise scaling; "motors on" above SIM_INS_THR_MIN).
+    pwm[0:4]: the motors' PWM [us] (what they run at after an engine fault): their commands
+    (PWM - 1000) / 1000 set the motor vibration frequencies.
     rng: the sensor noise streams (rows S.RNG_*, tlm_sim.rng.new_streams); IMU i draws its gyro
     noise from row RNG_GYRO + i and its accelerometer noise from row RNG_ACC + i only.
+    A gyro (accel) whose SIM_GYR_FAIL_MSK (SIM_ACC_FAIL_MSK) bit is set produces nothing and
+    its sample timer stands still, as in SITL; when the bit clears it samples at once and its
+    timer catches up with the physics clock.
     """
     t_s = t_us * 1e-6
     motors_on = throttle > cfg[S.C_INS_THR_MIN]
     drift = gyro_drift(t_s, cfg)
+    gyr_mask = int(cfg[S.C_GYR_FAIL_MSK])
+    acc_mask = int(cfg[S.C_ACC_FAIL_MSK])
     for i in range(S.N_IMU):
         b = S.IMU_BASE + i * S.IMU_STRIDE
         s[b + S.I_T_SAMPLE_US] = t_us
-        if t_us >= s[b + S.I_NEXT_GYR_US]:
-            s[b + S.I_NEXT_GYR_US] += cfg[S.C_GYR_PERIOD_US + i]
-            sc = cfg[S.C_NOISE_SCALE + i]
-            if motors_on:
-                a_g = cfg[S.C_GYR_RND + i] * throttle
-            else:
-                a_g = cfg[S.C_GYR_NOISE] * sc
-            for k in range(3):
-                g = x[X.SWX + k] + drift + cfg[S.C_GYR_BIAS + 3 * i + k]
-                g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng[S.RNG_GYRO + i])
-                if a_g != 0.0:
-                    g += a_g * uniform_pm1(rng[S.RNG_GYRO + i])
-                s[b + S.I_LAST_GYR + k] = g
-                s[b + S.I_DANG + k] += g
-                d = b + S.I_GYR_LPF + 2 * k
-                s[b + S.I_GYR_F + k] = _biquad(s, d, cfg, S.C_GYR_LPF + 5 * i, g)
-            s[b + S.I_GYR_COUNT] += 1.0
-        if t_us >= s[b + S.I_NEXT_ACC_US]:
-            s[b + S.I_NEXT_ACC_US] += cfg[S.C_ACC_PERIOD_US + i]
-            fail = cfg[S.C_ACC_FAIL + i]
-            clipped = False
-            for k in range(3):
-                if abs(fail) > 1e-6:
-                    a = fail
-                else:
-                    a = x[X.SFX + k] + cfg[S.C_ACC_BIAS + 3 * i + k]
-                    a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i]
-                          * uniform_pm1(rng[S.RNG_ACC + i]))
-                    if motors_on and cfg[S.C_ACC_RND + i] != 0.0 and cfg[S.C_VIB_MOT_MAX] != 0.0:
-                        # motor vibration: a sinusoid at the motor rotation rate (SIM_VIB_MOT_MAX)
-                        f_hz = throttle * cfg[S.C_VIB_MOT_MAX]
-                        a += cfg[S.C_ACC_RND + i] * math.sin(2.0 * math.pi * f_hz * t_s + k)
-                if abs(a) > CLIP_LIMIT:
-                    clipped = True
-                s[b + S.I_LAST_ACC + k] = a
-                s[b + S.I_DVEL + k] += a
-                d = b + S.I_ACC_LPF + 2 * k
-                s[b + S.I_ACC_F + k] = _biquad(s, d, cfg, S.C_ACC_LPF + 5 * i, a)
-                # VIBE: deviation from a 5 Hz floor, squared, filtered at 2 Hz
-                fl = s[b + S.I_VIB_FLOOR + k]
-                fl += cfg[S.C_VIB_FLOOR_A + i] * (a - fl)
-                s[b + S.I_VIB_FLOOR + k] = fl
-                dev = a - fl
-                s[b + S.I_VIB_SQ + k] += cfg[S.C_VIB_SQ_A + i] * (dev * dev - s[b + S.I_VIB_SQ + k])
-            if clipped:
-                s[b + S.I_CLIP] += 1.0
-            s[b + S.I_ACC_COUNT] += 1.0
+        if t_us >= s[b + S.I_NEXT_GYR_US] and (gyr_mask >> i) & 1 == 0:
+            _advance_timer(s, b + S.I_NEXT_GYR_US, cfg[S.C_GYR_PERIOD_US + i], t_us)
+            _gyro_sample(s, b, i, x, cfg, t_s, drift, motors_on, throttle, pwm,
+                         rng[S.RNG_GYRO + i])
+        if t_us >= s[b + S.I_NEXT_ACC_US] and (acc_mask >> i) & 1 == 0:
+            _advance_timer(s, b + S.I_NEXT_ACC_US, cfg[S.C_ACC_PERIOD_US + i], t_us)
+            _accel_sample(s, b, i, x, cfg, t_s, motors_on, pwm, rng[S.RNG_ACC + i])
+
+
+@inline_jit
+def _advance_timer(s, slot, period, t_us):
+    """Next sample time: one period on, and on past t_us after a stop (SIM_*_FAIL_MSK)."""
+    nxt = s[slot] + period
+    while nxt <= t_us:
+        nxt += period
+    s[slot] = nxt
+
+
+@inline_jit
+def _gyro_sample(s, b, i, x, cfg, t_s, drift, motors_on, throttle, pwm, rng):
+    """One published gyro sample of IMU i (record at b), SITL's pipeline (§2.2): truth rates +
+    drift + base noise, the second noise term (no SIM_VIB_*) or the vibration terms (with
+    SIM_VIB_*, motors on, amplitude radians(SIM_GYRn_RND) x throttle), x (1 + SCALE/100),
+    + BIAS; then accumulated for the EKF and low-pass filtered."""
+    sc = cfg[S.C_NOISE_SCALE + i]
+    vib_on = cfg[S.C_VIB_ON] != 0.0
+    if motors_on:
+        a_g = cfg[S.C_GYR_RND + i] * throttle
+    else:
+        a_g = cfg[S.C_GYR_NOISE] * sc
+    v_mot = 0.0
+    vib = vib_on and motors_on and a_g != 0.0
+    if vib:
+        v_mot = _motor_vibration(s, b + S.I_GYR_PHASE, cfg, pwm, a_g * cfg[S.C_VIB_MOT_MULT],
+                                 cfg[S.C_IMU_NSUB + i], cfg[S.C_GYR_PERIOD_US + i], rng)
+    for k in range(3):
+        g = x[X.SWX + k] + drift
+        g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
+        if not vib_on:
+            if a_g != 0.0:
+                g += a_g * uniform_pm1(rng)
+        elif vib:
+            g += v_mot + _fixed_vibration(cfg, k, t_s, a_g, rng)
+        g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k]
+        s[b + S.I_LAST_GYR + k] = g
+        s[b + S.I_DANG + k] += g
+        d = b + S.I_GYR_LPF + 2 * k
+        s[b + S.I_GYR_F + k] = _biquad(s, d, cfg, S.C_GYR_LPF + 5 * i, g)
+    s[b + S.I_GYR_COUNT] += 1.0
+
+
+@inline_jit
+def _accel_sample(s, b, i, x, cfg, t_s, motors_on, pwm, rng):
+    """One published accel sample of IMU i (record at b), SITL's pipeline (§2.2): truth specific
+    force / SCAL (per non-zero axis) + BIAS + base noise + the vibration terms (SIM_VIB_*,
+    motors on, amplitude SIM_ACCn_RND), all replaced by SIM_ACCELn_FAIL when that is set; then
+    accumulated for the EKF, low-pass filtered, and the VIBE metric and clip count."""
+    fail = cfg[S.C_ACC_FAIL + i]
+    amp = cfg[S.C_ACC_RND + i]
+    vib = motors_on and amp != 0.0 and cfg[S.C_VIB_ON] != 0.0 and abs(fail) <= 1e-6
+    v_mot = 0.0
+    if vib:
+        v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
+                                 cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i], rng)
+    clipped = False
+    for k in range(3):
+        if abs(fail) > 1e-6:
+            a = fail
+        else:
+            a = x[X.SFX + k]
+            scal = cfg[S.C_ACC_SCAL + 3 * i + k]
+            if scal != 0.0:
+                a /= scal
+            a += cfg[S.C_ACC_BIAS + 3 * i + k]
+            a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng))
+            if vib:
+                a += v_mot + _fixed_vibration(cfg, k, t_s, amp, rng)
+        if abs(a) > CLIP_LIMIT:
+            clipped = True
+        s[b + S.I_LAST_ACC + k] = a
+        s[b + S.I_DVEL + k] += a
+        d = b + S.I_ACC_LPF + 2 * k
+        s[b + S.I_ACC_F + k] = _biquad(s, d, cfg, S.C_ACC_LPF + 5 * i, a)
+        # VIBE: deviation from a 5 Hz floor, squared, filtered at 2 Hz
+        fl = s[b + S.I_VIB_FLOOR + k]
+        fl += cfg[S.C_VIB_FLOOR_A + i] * (a - fl)
+        s[b + S.I_VIB_FLOOR + k] = fl
+        dev = a - fl
+        s[b + S.I_VIB_SQ + k] += cfg[S.C_VIB_SQ_A + i] * (dev * dev - s[b + S.I_VIB_SQ + k])
+    if clipped:
+        s[b + S.I_CLIP] += 1.0
+    s[b + S.I_ACC_COUNT] += 1.0
+
+
+@inline_jit
+def _fixed_vibration(cfg, k, t_s, amp, rng):
+    """SIM_VIB_FREQ term of axis k: sin(2 pi f_k t) x amp (1 + 0.05 U); 0 when f_k is 0."""
+    f = cfg[S.C_VIB_FREQ + k]
+    if f == 0.0:
+        return 0.0
+    return math.sin(TWO_PI * f * t_s) * amp * (1.0 + VIB_AMP_VARIATION * uniform_pm1(rng))
+
+
+@tick_jit
+def _motor_vibration(s, ph, cfg, pwm, amp, nsub, period_us, rng):
+    """SITL's motor vibration (SIM_VIB_MOT_*), the same on every axis: the mean over the nsub
+    sub-samples of one published sample of, for each vibrating motor m and each harmonic h
+    (SIM_VIB_MOT_HMNC bit h - 1), sin(h phi_m) amp (1 + 0.05 U). Motor m's phase phi_m (s[ph + m])
+    advances each sub-sample by 2 pi f_m (1 + 0.12 U) / sub-sample rate, f_m = command_m x
+    SIM_VIB_MOT_MAX with command_m = (PWM_m - 1000) / 1000: rpm-locked, smeared like real
+    motors. 0 when SIM_VIB_MOT_MAX is 0."""
+    f_max = cfg[S.C_VIB_MOT_MAX]
+    if f_max <= 0.0:
+        return 0.0
+    mask = int(cfg[S.C_VIB_MOT_MASK])
+    hmnc = int(cfg[S.C_VIB_MOT_HMNC])
+    n = int(nsub)
+    w = TWO_PI * f_max * period_us * 1e-6 / nsub  # phase step per unit command
+    total = 0.0
+    for _ in range(n):
+        for m in range(4):  # tlm's quad: motors 1-4 (higher mask bits name no motor)
+            if (mask >> m) & 1 == 0:
+                continue
+            cmd = min(max((pwm[m] - 1000.0) * 1e-3, 0.0), 1.0)
+            p = s[ph + m] + w * cmd * (1.0 + VIB_FREQ_VARIATION * uniform_pm1(rng))
+            if p >= TWO_PI:
+                p %= TWO_PI
+            s[ph + m] = p
+            for h in range(1, 9):
+                if (hmnc >> (h - 1)) & 1:
+                    total += (math.sin(h * p) * amp
+                              * (1.0 + VIB_AMP_VARIATION * uniform_pm1(rng)))
+    return total / nsub
 
 
 @tick_jit
@@ -146,7 +245,9 @@ def imu_take_deltas(s, i, dt, dang, dvel):
     period) on the first call. Integrating the deltas over the nominal period instead leaves the
     EKF's gravity term uncompensated for the extra 833 us: a 8 mm/s vertical velocity step every
     2.08 s that the altitude controller answers with a throttle and pitch kick.
-    Returns 1.0 if the accel delivered samples this tick, else 0.0 (and holds the last value).
+    Returns 1.0 if the accel delivered samples this tick, else 0.0 (and holds the last value);
+    sets the health flags I_ACC_OK / I_GYR_OK (IMU.AH / IMU.GH: a sample since the last tick,
+    as ArduPilot's INS front end decides health every loop).
     """
     b = S.IMU_BASE + i * S.IMU_STRIDE
     t_now = s[b + S.I_T_SAMPLE_US]
@@ -169,6 +270,8 @@ def imu_take_deltas(s, i, dt, dang, dvel):
         s[b + S.I_DVEL + k] = 0.0
     s[b + S.I_GYR_COUNT] = 0.0
     s[b + S.I_ACC_COUNT] = 0.0
+    s[b + S.I_GYR_OK] = 1.0 if ng > 0.0 else 0.0
+    s[b + S.I_ACC_OK] = 1.0 if na > 0.0 else 0.0
     return 1.0 if na > 0.0 else 0.0
 
 

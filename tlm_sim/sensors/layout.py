@@ -32,10 +32,17 @@ I_GYR_COUNT = _i.add("I_GYR_COUNT", 1, "", "gyro samples accumulated this tick")
 I_ACC_COUNT = _i.add("I_ACC_COUNT", 1, "", "accel samples accumulated this tick")
 I_EG = _i.add("I_EG", 1, "", "gyro error count")
 I_EA = _i.add("I_EA", 1, "", "accel error count")
-I_ACC_OK = _i.add("I_ACC_OK", 1, "", "1 while the accel delivers samples this tick")
+I_ACC_OK = _i.add("I_ACC_OK", 1, "",
+                  "accel health (IMU.AH): 1 when it delivered a sample in the last main-loop tick")
 I_T_SAMPLE_US = _i.add("I_T_SAMPLE_US", 1, "us", "physics time of the latest sampling call")
 I_T_TAKE_US = _i.add("I_T_TAKE_US", 1, "us",
                      "physics time at which the EKF last took the deltas (-1: never)")
+I_GYR_OK = _i.add("I_GYR_OK", 1, "",
+                  "gyro health (IMU.GH): 1 when it delivered a sample in the last main-loop tick")
+I_ACC_PHASE = _i.add("I_ACC_PHASE", 4, "rad",
+                     "motor vibration phase per motor, accelerometer (SITL's accel_motor_phase)")
+I_GYR_PHASE = _i.add("I_GYR_PHASE", 4, "rad",
+                     "motor vibration phase per motor, gyro (SITL's gyro_motor_phase)")
 IMU_STRIDE = IMU.close()
 
 # ---- GPS record: a delay line of main-loop ticks ---------------------------------------------
@@ -120,6 +127,27 @@ C_ENGINE_MUL = _c.add("C_ENGINE_MUL", 1, "",
 C_ENGINE_MASK = _c.add("C_ENGINE_MASK", 1, "",
                        "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
 C_NOISE_SCALE = _c.add("C_NOISE_SCALE", 2, "", "per-IMU scale of the base noise amplitudes")
+C_ACC_SCAL = _c.add("C_ACC_SCAL", 6, "",
+                     "SIM_ACC1_SCAL, SIM_ACC2_SCAL (2 x 3): reading divided by it if non-zero")
+C_GYR_SCALE = _c.add("C_GYR_SCALE", 6, "",
+                     "gyro scale factor 1 + SIM_GYRn_SCALE / 100 per IMU and axis (2 x 3)")
+C_ACC_FAIL_MSK = _c.add("C_ACC_FAIL_MSK", 1, "",
+                        "SIM_ACC_FAIL_MSK: bit i set -> IMU i's accel produces no samples")
+C_GYR_FAIL_MSK = _c.add("C_GYR_FAIL_MSK", 1, "",
+                        "SIM_GYR_FAIL_MSK: bit i set -> IMU i's gyro produces no samples")
+C_VIB_ON = _c.add("C_VIB_ON", 1, "",
+                  "1 when SIM_VIB_FREQ or SIM_VIB_MOT_MAX is set (vibration instead of the "
+                  "second gyro noise term)")
+C_VIB_FREQ = _c.add("C_VIB_FREQ", 3, "Hz", "SIM_VIB_FREQ_X/Y/Z: fixed vibration frequencies")
+C_VIB_MOT_MULT = _c.add("C_VIB_MOT_MULT", 1, "",
+                        "SIM_VIB_MOT_MULT: motor vibration amplitude scale")
+C_VIB_MOT_HMNC = _c.add("C_VIB_MOT_HMNC", 1, "",
+                        "SIM_VIB_MOT_HMNC: harmonics bit mask (bit k-1 -> harmonic k)")
+C_VIB_MOT_MASK = _c.add("C_VIB_MOT_MASK", 1, "",
+                        "motors that vibrate: the frame's motors OR SIM_VIB_MOT_MASK (bit mask)")
+C_IMU_NSUB = _c.add("C_IMU_NSUB", 4, "",
+                    "sub-samples averaged per published sample (gyro IMU0, IMU1, accel IMU0, "
+                    "IMU1): SITL's fast sampling of the first IMU")
 N_SENSOR_CFG = CONFIG.close()
 
 # ---- sensor noise streams: rows of the flight's noise generator array ------------------------

@@ -62,7 +62,8 @@ def _log_gpa(bufs, counts, t_us, scfg, ms, last_ms):
 
 @tick_jit
 def log_imu(bufs, counts, t_us, s, scfg):
-    """IMU rows (one per instance): filtered gyro/accel, error counts, temperature, rates."""
+    """IMU rows (one per instance): filtered gyro/accel (held while the sensor is stopped),
+    error counts, temperature, health (GH/AH: a sample in the last main-loop tick), rates."""
     temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
     for i in range(S.N_IMU):
         r = L.new_row(bufs, counts, L.K_IMU, t_us)
@@ -77,8 +78,8 @@ def log_imu(bufs, counts, t_us, s, scfg):
         b[r, IMU.EG] = s[ib + S.I_EG]
         b[r, IMU.EA] = s[ib + S.I_EA]
         b[r, IMU.T] = temp
-        b[r, IMU.GH] = 1.0
-        b[r, IMU.AH] = 1.0
+        b[r, IMU.GH] = s[ib + S.I_GYR_OK]
+        b[r, IMU.AH] = s[ib + S.I_ACC_OK]
         b[r, IMU.GHz] = round(1e6 / scfg[S.C_GYR_PERIOD_US + i])
         b[r, IMU.AHz] = round(1e6 / scfg[S.C_ACC_PERIOD_US + i])
 
