@@ -403,15 +403,35 @@ def test_both_accels_failed_bad_imu_response_bounds_the_error():
     assert out[-1, L.O_F_HORIZ_POS] == 1.0
 
 
-def test_imu_stop_switches_primary_at_once():
+def test_a_stopped_imu_is_replaced_by_the_first_healthy_one_without_a_lane_switch():
+    """EKF3's readIMUData (sitl-faults.md §2.3): a lane whose IMU stops delivering takes the
+    deltas of the first IMU that does, silently; no lane switch, the lane stays healthy and on
+    track (its own IMU's held deltas are not integrated: they would be garbage here)."""
     flight = make_flight(30.0, seed=3)
     t = flight.t_us * 1e-6
-    flight.imu_ok[t >= 20.0, 0] = 0.0
-    flight.armed[:] = False  # an IMU without samples switches even while disarmed
-    ekf, sel, out, _ = _run(flight, {"GPS1_DELAY_MS": 100.0})
-    k = int(np.argmax(t >= 20.0))
-    assert out[k - 1, L.O_PRIMARY] == 0.0 and out[k, L.O_PRIMARY] == 1.0
-    assert ekf[0, L.IMU_OK] == 0.0 and ekf[0, L.HEALTHY] == 0.0
+    stop = t >= 20.0
+    flight.imu_ok[stop, 0] = 0.0
+    flight.dang[stop, 0, :] = 0.3 * DT  # what a stopped IMU would hand over: never used
+    flight.dvel[stop, 0, :] = 5.0 * DT
+    ekf, sel, out, lanes_pos = _run(flight, {"GPS1_DELAY_MS": 100.0})
+    assert sel[L.SEL_CHANGES] == 0.0 and np.all(out[:, L.O_PRIMARY] == 0.0)
+    assert ekf[0, L.IMU_OK] == 1.0 and ekf[0, L.HEALTHY] == 1.0
+    np.testing.assert_allclose(lanes_pos[stop, 0], lanes_pos[stop, 1], atol=0.05)
+    assert np.linalg.norm(out[-1, L.O_PN:L.O_PN + 3] - flight.pos[-1]) < 0.5
+
+
+def test_lane_imu_sources():
+    """(gyro, accel) a lane integrates: its own, else the first delivering; every accel
+    stopped: its own held one; every gyro stopped: none (-1)."""
+    from tlm_sim.ekf.lanes import lane_imu_sources
+
+    ok = np.ones(4)  # accel 0, accel 1, gyro 0, gyro 1
+    assert lane_imu_sources(0, ok, 2) == (0, 0) and lane_imu_sources(1, ok, 2) == (1, 1)
+    assert lane_imu_sources(0, np.array([1.0, 1.0, 0.0, 1.0]), 2) == (1, 0)  # gyro 0 stopped
+    assert lane_imu_sources(0, np.array([0.0, 1.0, 1.0, 1.0]), 2) == (0, 1)  # accel 0 stopped
+    assert lane_imu_sources(1, np.array([0.0, 0.0, 1.0, 1.0]), 2) == (1, 1)  # all accels: own
+    assert lane_imu_sources(1, np.array([1.0, 1.0, 0.0, 0.0]), 2)[0] == -1  # all gyros
+    assert lane_imu_sources(0, np.array([0.0, 1.0]), 2) == (1, 1)  # short imu_ok: both follow
 
 
 # ----------------------------------------------------------------------------- output observer

@@ -32,7 +32,7 @@ from tlm_sim.sensors.config import build_sensor_config
 
 #: parameters the issue found accepted and ignored: each must now be refused
 ISSUE_IGNORED = ("SIM_BARO_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
-                 "SIM_GYR_FAIL_MSK", "SIM_ACC_FAIL_MSK", "SIM_BARO_DRIFT", "SIM_BARO_FREEZE",
+                 "SIM_BARO_DRIFT", "SIM_BARO_FREEZE",
                  "SIM_BAR2_DISABLE", "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
                  "SIM_BAR2_RND", "DISARM_DELAY", "FS_THR_VALUE", "PSC_ACCZ_D")
 
@@ -128,7 +128,7 @@ def test_unmodelled_parameters_are_refused_mid_flight_and_in_schedules():
 
 
 @pytest.mark.parametrize("option", [["--param", "SIM_BARO_DISABLE=1"],
-                                    ["--set", "120:SIM_GYR_FAIL_MSK=1"],
+                                    ["--set", "120:SIM_IMUT_START=30"],
                                     ["--param", "SCHED_LOOP_RATE=50"],
                                     ["--param", "SIM_RATE_HZ=400"]])
 def test_cli_refuses_unmodelled_and_pinned_values(option, tmp_path, capsys):

@@ -55,8 +55,9 @@ def _sample_run(cfg: np.ndarray, ticks: int = 2000) -> tuple[np.ndarray, np.ndar
     s = np.zeros(S.N_SENSOR_STATE)
     imu_init(s, cfg, 0.0)
     rng = new_streams(7, S.N_NOISE_STREAMS)
+    pwm = np.full(4, 1400.0)
     for k in range(1, ticks + 1):
-        imu_sample(s, x, cfg, k * 833.0, 0.4, rng)
+        imu_sample(s, x, cfg, k * 833.0, 0.4, pwm, rng)
     return s, rng
 
 

@@ -311,8 +311,11 @@ def _static_tilt_check(e, dang, dvel, gi, ai, dt):
 def lane_imu_sources(imu, imu_ok, n_imu):
     """(gyro, accel) instance a lane whose own IMU is imu integrates this tick: its own sensor
     while it delivers samples, else the first one that does (EKF3's readIMUData: no lane
-    switch, no message); -1 when none does. imu_ok[i]: accel i delivered samples this tick;
-    imu_ok[n_imu + i]: gyro i did (a shorter imu_ok: the gyros follow the accels).
+    switch, no message). With every accel stopped the lane goes on integrating its own
+    accel's held (stale) sample, as EKF3 keeps reading its stale "first usable" accel; with
+    every gyro stopped (which tlm refuses in a flight: SITL freezes) gi is -1 and the lane
+    stops predicting. imu_ok[i]: accel i delivered samples this tick; imu_ok[n_imu + i]: gyro i
+    did (a shorter imu_ok: the gyros follow the accels).
 
     EKF3 swaps in the bias it learnt separately for the borrowed sensor ("inactive bias"); tlm
     keeps the lane's bias states, which model what every tlm IMU shares (the common gyro drift;
@@ -325,6 +328,8 @@ def lane_imu_sources(imu, imu_ok, n_imu):
             ai = j
         if gi < 0 and imu_ok[g0 + j] != 0:
             gi = j
+    if ai < 0:
+        ai = imu
     return gi, ai
 
 
