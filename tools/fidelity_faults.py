@@ -64,6 +64,24 @@ ArduPilot facts are in `docs/crosscheck.md` ("GPS loss"). The EKF errors below s
 SITL's because EKF3's XKF1 position also jumps towards the origin when it stops aiding, which
 tlm does not reproduce (no mechanism found).
 
+**IMU sample loss and vibration** (issue 19; `tests/test_fault_imu.py` flies gyro_s42 and
+vibration_s48). `SIM_GYR_FAIL_MSK` / `SIM_ACC_FAIL_MSK` stop a sensor's samples: `IMU.GH` /
+`IMU.AH` 0 from the first IMU record after the set, its logged values held (standard deviation
+0), and the EKF lanes and the controllers use the first healthy sensor instead (EKF3's
+readIMUData: no lane switch, no ERR, no message). gyro_s42, tlm vs SITL: GH 0 at +0.005 s vs
++0.041 s (the first 25 Hz record), back at +30.005 vs +30.001 s, no ERR, no lane switch, EKF-truth
+0.07 vs 0.13 m, |roll| 0.12 vs 0.13 deg. **Every gyro masked** (`SIM_GYR_FAIL_MSK` with bits 0
+and 1, tlm's two IMUs) is refused with a `ParamError` wherever it is set (parameters, fault,
+schedule): SITL's firmware then waits for a gyro sample forever and the simulation freezes, so
+there is no flight to reproduce. Every accel masked (SITL's behaviour not established) flies on:
+the EKF integrates the held samples, as EKF3 keeps reading its stale "first usable" accel.
+Vibration is SITL's model: per motor a sinusoid at command x `SIM_VIB_MOT_MAX` Hz with a
+smeared phase, harmonics per `SIM_VIB_MOT_HMNC`, amplitude `SIM_ACCn_RND` x `SIM_VIB_MOT_MULT`
+(gyro: radians(`SIM_GYRn_RND`) x throttle), the same on every axis, averaged over IMU 0's fast
+sub-samples. vibration_s48, tlm vs SITL: VIBE mean 5.33 / 6.32 vs 5.73 / 6.74 (IMU 0 / 1), max
+11.0 / 12.0 vs 11.8 / 11.5, Clip 0, IMU.AccZ std 0.03 -> 0.25 vs 0.03 -> 0.22, ThO 0.366 vs
+0.366, no ERR (no vibration failsafe).
+
 """
 
 

@@ -66,7 +66,8 @@ FAULT_TYPES: Mapping[str, FaultType] = MappingProxyType({
         _type("rc", 4, {"SIM_RC_FAIL": 1.0}, {"SIM_RC_FAIL": 0.0},
               "no RC frames arrive: radio failsafe, RTL (the vehicle stays in RTL after)"),
         _type("gyro", 5, {"SIM_GYR_FAIL_MSK": 1.0}, {"SIM_GYR_FAIL_MSK": 0.0},
-              "IMU 1's gyro stops producing samples (IMU.GH 0, its logged gyro frozen)"),
+              "IMU 1's gyro stops producing samples (IMU.GH 0, its logged gyro frozen; the EKF "
+              "and controllers use IMU 2's); masking every gyro is refused (SITL freezes)"),
         _type("baro", 6, {"SIM_BARO_DISABLE": 1.0, "SIM_BAR2_DISABLE": 1.0},
               {"SIM_BARO_DISABLE": 0.0, "SIM_BAR2_DISABLE": 0.0},
               "both barometers stop (BARO.H 0); ~10 s later the height estimate is lost"),
