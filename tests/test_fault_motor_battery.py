@@ -231,7 +231,7 @@ def test_battery_capacity_failsafe_needs_no_timer():
     bat = t["BAT"]
     at = bat[bat.TimeUS <= err[0][0] * 1e6 + 1].iloc[-1]
     assert len(err) == 1 and 295.0 <= at.CurrTot < 305.0  # 3300 - 3000 mAh used
-    assert _modes(t, err[0][0] - 1e-6)[0][1] != 9  # action none: no LAND
+    assert all(m != 9 for _, m, _ in _modes(t, err[0][0] - 1e-6))  # action none: no LAND
 
 
 def test_battery_critical_after_low_escalates_with_its_own_action():
