@@ -217,7 +217,7 @@ def test_fault_paper_names_come_out_canonical():
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"type": "gsp", "start": 1}, r"unknown fault type 'gsp' \(did you mean 'gps'\?\)"),
     ({"type": "enigne", "start": 1}, "did you mean 'engine'"),
-    ({"type": "battery", "start": 1}, "unknown fault type 'battery'; known: gps, accel"),
+    ({"type": "wind", "start": 1}, "unknown fault type 'wind'; known: gps, accel"),
     ({"type": 3, "start": 1}, "not a string"),
     ({"type": "engine", "start": 120, "end": 90},
      r"^fault \(engine\): end 90 s is before start 120 s$"),

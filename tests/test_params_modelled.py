@@ -34,7 +34,7 @@ from tlm_sim.sensors.config import build_sensor_config
 ISSUE_IGNORED = ("SIM_BARO_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
                  "SIM_BARO_DRIFT", "SIM_BARO_FREEZE",
                  "SIM_BAR2_DISABLE", "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
-                 "SIM_BAR2_RND", "DISARM_DELAY", "FS_THR_VALUE", "PSC_ACCZ_D")
+                 "SIM_BAR2_RND", "DISARM_DELAY", "PSC_ACCZ_D")
 
 
 def _inputs(p: Params) -> list[np.ndarray]:

@@ -20,6 +20,7 @@ from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
+from tlm_sim.control.battery import battery_monitor
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.events import ERR_CRASH_CHECK, log_mode
 from tlm_sim.control.log import log_control_10hz
@@ -120,13 +121,15 @@ def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
 
 @tick_jit
 def _motor_pwm(c, scfg, pwm):
-    """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs."""
+    """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs,
+    ``1000 + (pwm - 1000) * mul`` truncated to whole microseconds as SITL's uint16 servo value
+    (sitl-faults.md §6.1; RCOU keeps the commanded value)."""
     mask = int(scfg[S.C_ENGINE_MASK])
     mul = scfg[S.C_ENGINE_MUL]
     for i in range(4):
         p = c[C.MIX_PWM + i]
         if (mask >> i) & 1:
-            p = 1000.0 + (p - 1000.0) * mul
+            p = 1000.0 + float(int((p - 1000.0) * mul))
         pwm[i] = p
 
 
@@ -174,8 +177,9 @@ def run_flight(
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
+        battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
-                     seg, s[S.RC_LAST_FRAME_US], nav, events, ev_counts)
+                     seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, eo, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:

@@ -365,12 +365,13 @@ _add("SIM_WIND_DIR_Z", "deg", -90, 90, "vertical wind direction, 90 = updraft (�
 _add("SIM_WIND_T", "", 0, 2, "wind height profile: 0 square root, 1 none, 2 linear (§1.10)", True)
 _add("SIM_WIND_T_ALT", "m", 0.01, 10000, "height of full wind strength (§1.10)")
 _add("SIM_WIND_T_COEF", "1/s", -10, 10, "linear wind profile coefficient (§1.10)")
-_add([f"SIM_SHOVE_{a}" for a in _XYZ], "m/s/s", -1000, 1000, "extra body acceleration (§1.1)",
-     modelled=False)
+_add([f"SIM_SHOVE_{a}" for a in _XYZ], "m/s/s", -1000, 1000,
+     "extra body-frame specific force while SIM_SHOVE_TIME runs (sitl-faults.md §6.2)")
 _add([f"SIM_TWIST_{a}" for a in _XYZ], "rad/s/s", -1000, 1000,
-     "extra angular acceleration (§1.1)", modelled=False)
-_add(["SIM_SHOVE_TIME", "SIM_TWIST_TIME"], "ms", 0, 600000, "shove / twist duration (§1.1)",
-     True, modelled=False)
+     "extra body angular acceleration while SIM_TWIST_TIME runs (sitl-faults.md §6.2)")
+_add(["SIM_SHOVE_TIME", "SIM_TWIST_TIME"], "ms", 0, 600000,
+     "shove / twist duration, one-shot from the first physics step after it is set; the "
+     "simulator resets it to 0 when it has elapsed (sitl-faults.md §6.2)", True)
 _flag("SIM_TERRAIN", "use the terrain database, flat if unavailable (§2.1)", modelled=False)
 _add("SIM_GND_BEHAV", "", -1, 3, "ground behaviour, -1 = model default (§1.9.1)", True,
      modelled=False)
@@ -484,8 +485,8 @@ _add("DISARM_DELAY", "s", 0, 127, "auto-disarm delay after landing (§3.5)", Tru
 _add("FS_THR_ENABLE", "", 0, 7,
      "radio failsafe action: 0 off, 1 RTL, 3 Land, 4/5 SmartRTL, 6 DO_LAND_START, 7 Brake (§3.1)",
      True)
-_add("FS_THR_VALUE", "PWM", 910, 1100, "radio failsafe throttle PWM threshold (§3.1)",
-     modelled=False)
+_add("FS_THR_VALUE", "PWM", 910, 1100,
+     "radio failsafe when 3 RC frames in a row carry throttle below this PWM (§3.1)")
 _add("FS_OPTIONS", "", 0, _U32, "failsafe option bits (§3.1)", True, modelled=False)
 _add("RC_FS_TIMEOUT", "s", 0.1, 10, "radio failsafe timeout without RC frames (§3.1)")
 _add("FS_EKF_THRESH", "", 0, 10, "EKF failsafe variance threshold, 0 = check disabled (§3.2)")
@@ -565,15 +566,19 @@ for _s in ("", "2"):
 _flag(["INS_USE", "INS_USE2", "INS_USE3"], "use IMU 1 / 2 / 3", modelled=False)
 _add("BATT_MONITOR", "", 0, 50, "battery monitor type, 4 = analog voltage and current (§1.11)",
      True, modelled=False)
-_add("BATT_CAPACITY", "mAh", 0, 1e6, "battery capacity (§1.11)", modelled=False)
-_add(["BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_ARM_VOLT"], "V", 0, 100,
-     "battery low / critical / arming voltage, 0 = off (§1.11)", modelled=False)
-_add("BATT_LOW_TIMER", "s", 0, 120, "time below BATT_LOW_VOLT before failsafe (§1.11)", True,
-     modelled=False)
-_add(["BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT"], "", 0, 7, "battery failsafe action (§1.11)", True,
-     modelled=False)
-_add(["BATT_LOW_MAH", "BATT_CRT_MAH"], "mAh", 0, 1e6, "battery low / critical capacity (§1.11)",
-     modelled=False)
+_add("BATT_CAPACITY", "mAh", 0, 1e6,
+     "battery capacity: BAT.RemPct and the capacity failsafes (0 = unknown, RemPct 100)")
+_add(["BATT_LOW_VOLT", "BATT_CRT_VOLT"], "V", 0, 100,
+     "battery low / critical failsafe voltage, 0 = off (sitl-faults.md §7)")
+_add("BATT_ARM_VOLT", "V", 0, 100, "minimum arming voltage (§1.11)", modelled=False)
+_add("BATT_LOW_TIMER", "s", 0, 120,
+     "time the voltage must stay below BATT_LOW_VOLT / BATT_CRT_VOLT before the failsafe, "
+     "0 = no voltage failsafes (sitl-faults.md §7)", True)
+_add(["BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT"], "", 0, 7,
+     "battery failsafe action: 0 none, 1 Land, 2 RTL, 3 SmartRTL->RTL, 4 SmartRTL->Land, "
+     "5 Terminate, 6 DO_LAND_START->RTL, 7 Brake->Land (tlm: 3, 6 fly RTL, 4, 7 Land)", True)
+_add(["BATT_LOW_MAH", "BATT_CRT_MAH"], "mAh", 0, 1e6,
+     "battery low / critical remaining capacity, 0 = off (sitl-faults.md §7)")
 _add("LOG_BITMASK", "", 0, _U32, "log message groups, bit mask (§5.4)", True, modelled=False)
 _flag("LOG_DISARMED", "log while disarmed (§5.5)", modelled=False)
 _add("LOG_FILE_RATEMAX", "Hz", 0, 1000, "max rate of any log message, 0 = no limit (§5.4)",

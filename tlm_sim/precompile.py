@@ -86,7 +86,8 @@ class Job:
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
-        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _F1, _EVENTS, _I1),
+        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _f8, _F1, _EVENTS,
+         _I1),
         13.5),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 7.9),

@@ -100,6 +100,7 @@ def _motors(g: np.ndarray, p: Params) -> None:
     g[C.G_MOT_YAW_HEADROOM] = p["MOT_YAW_HEADROOM"] / 1000.0
     g[C.G_HOVER_LEARN] = p["MOT_HOVER_LEARN"]
     g[C.G_BATT_SAG_HOVER] = p["TLM_BATT_SAG_HOV"]
+    g[C.G_BATT_RES0] = p["TLM_BATT_SAG_HOV"] / p["TLM_REF_CURR"]
     # the barometer's air density ratio for the motors' density compensation: the 1976
     # atmosphere at the home altitude (field elevation) plus the height above it
     home_alt = p["SIM_OPOS_ALT"]
@@ -108,7 +109,8 @@ def _motors(g: np.ndarray, p: Params) -> None:
 
 
 def _failsafes(g: np.ndarray, p: Params) -> None:
-    """Radio, EKF, vibration and crash failsafes (FS_*, RC_FS_TIMEOUT, EK3_HRT_FILT)."""
+    """Radio, EKF, vibration, crash and battery failsafes (FS_*, RC_FS_TIMEOUT, EK3_HRT_FILT,
+    BATT_*)."""
     g[C.G_FS_THR_ENABLE] = p["FS_THR_ENABLE"]
     g[C.G_RC_FS_TIMEOUT] = p["RC_FS_TIMEOUT"]
     g[C.G_FS_CRASH_CHECK] = p["FS_CRASH_CHECK"]
@@ -116,6 +118,15 @@ def _failsafes(g: np.ndarray, p: Params) -> None:
     g[C.G_FS_VIBE_ENABLE] = p["FS_VIBE_ENABLE"]
     g[C.G_FS_EKF_THRESH] = p["FS_EKF_THRESH"]
     g[C.G_FS_EKF_ACTION] = p["FS_EKF_ACTION"]
+    g[C.G_FS_THR_VALUE] = p["FS_THR_VALUE"]
+    g[C.G_BATT_CAPACITY] = p["BATT_CAPACITY"]
+    g[C.G_BATT_LOW_VOLT] = p["BATT_LOW_VOLT"]
+    g[C.G_BATT_CRT_VOLT] = p["BATT_CRT_VOLT"]
+    g[C.G_BATT_LOW_TIMER] = p["BATT_LOW_TIMER"]
+    g[C.G_BATT_LOW_MAH] = p["BATT_LOW_MAH"]
+    g[C.G_BATT_CRT_MAH] = p["BATT_CRT_MAH"]
+    g[C.G_BATT_FS_LOW_ACT] = p["BATT_FS_LOW_ACT"]
+    g[C.G_BATT_FS_CRT_ACT] = p["BATT_FS_CRT_ACT"]
     filt = p["FS_EKF_FILT"]
     g[C.G_FS_EKF_ALPHA] = 1.0 if filt <= 0.0 else 0.1 / (0.1 + 1.0 / (2.0 * math.pi * filt))
 

@@ -121,6 +121,31 @@ PXY_LIMIT = _c.add("PXY_LIMIT", 2, "",
 TRACK_K = _c.add("TRACK_K", 1, "", "AC_WPNav's S-curve time scaler (track_scalar_dt), 0..1")
 TAKEOFF_DONE_T = _c.add("TAKEOFF_DONE_T", 1, "s",
                         "time since the AUTO takeoff reached its altitude (-1: not yet)")
+# battery monitor (AP_BattMonitor, 10 Hz) and its failsafe (tlm_sim.control.battery)
+BM_NEXT_T = _c.add("BM_NEXT_T", 1, "s", "time of the next battery monitor update")
+BM_LAST_T = _c.add("BM_LAST_T", 1, "s", "time of the last battery monitor update (-1: none)")
+BM_VOLT = _c.add("BM_VOLT", 1, "V", "battery monitor: voltage")
+BM_CURR = _c.add("BM_CURR", 1, "A", "battery monitor: current")
+BM_MAH = _c.add("BM_MAH", 1, "mAh", "battery monitor: charge consumed")
+BM_WH = _c.add("BM_WH", 1, "Wh", "battery monitor: energy consumed")
+BM_REMPCT = _c.add("BM_REMPCT", 1, "%", "battery monitor: remaining capacity (100: unknown)")
+BM_RES = _c.add("BM_RES", 1, "ohm", "battery monitor: internal resistance estimate")
+BM_VFILT = _c.add("BM_VFILT", 1, "V", "resistance estimator: low-passed voltage")
+BM_IFILT = _c.add("BM_IFILT", 1, "A", "resistance estimator: low-passed current")
+BM_IMAX = _c.add("BM_IMAX", 1, "A", "resistance estimator: largest current seen")
+BM_VREF = _c.add("BM_VREF", 1, "V", "resistance estimator: highest voltage seen")
+BM_IREF = _c.add("BM_IREF", 1, "A", "resistance estimator: current when BM_VREF was seen")
+BATT_FS = _c.add("BATT_FS", 1, "", "battery failsafe state: 0 none, 1 low, 2 critical (latched)")
+BATT_FS_RANK = _c.add("BATT_FS_RANK", 1, "",
+                      "priority rank of the last battery failsafe action taken (lower = "
+                      "more severe; 99 before any)")
+BATT_LOW_T0 = _c.add("BATT_LOW_T0", 1, "s", "start of the voltage below BATT_LOW_VOLT (-1: not)")
+BATT_CRT_T0 = _c.add("BATT_CRT_T0", 1, "s", "start of the voltage below BATT_CRT_VOLT (-1: not)")
+BATT_FS_ACT = _c.add("BATT_FS_ACT", 1, "",
+                     "battery failsafe action for the vehicle logic to take (-1: none pending)")
+RC_THR_LOW_N = _c.add("RC_THR_LOW_N", 1, "",
+                      "radio failsafe counter: RC frames with throttle below FS_THR_VALUE (0..3)")
+RC_LAST_SEEN_US = _c.add("RC_LAST_SEEN_US", 1, "us", "time of the last RC frame processed")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
@@ -147,6 +172,7 @@ MODE_LAND = 9
 RSN_UNKNOWN = 0
 RSN_GCS = 2
 RSN_RADIO_FAILSAFE = 3
+RSN_BATTERY_FAILSAFE = 4
 RSN_EKF_FAILSAFE = 6
 RSN_MISSION_END = 8
 RSN_CRASH_FAILSAFE = 19
@@ -238,4 +264,16 @@ G_POSZ_ERR_UP = _g.add("G_POSZ_ERR_UP", 1, "m",
                        "largest vertical position error (target above) it acts on")
 G_POSZ_ERR_DN = _g.add("G_POSZ_ERR_DN", 1, "m",
                        "largest vertical position error (target below) it acts on")
+G_FS_THR_VALUE = _g.add("G_FS_THR_VALUE", 1, "us", "FS_THR_VALUE")
+G_BATT_CAPACITY = _g.add("G_BATT_CAPACITY", 1, "mAh", "BATT_CAPACITY")
+G_BATT_LOW_VOLT = _g.add("G_BATT_LOW_VOLT", 1, "V", "BATT_LOW_VOLT")
+G_BATT_CRT_VOLT = _g.add("G_BATT_CRT_VOLT", 1, "V", "BATT_CRT_VOLT")
+G_BATT_LOW_TIMER = _g.add("G_BATT_LOW_TIMER", 1, "s", "BATT_LOW_TIMER")
+G_BATT_LOW_MAH = _g.add("G_BATT_LOW_MAH", 1, "mAh", "BATT_LOW_MAH")
+G_BATT_CRT_MAH = _g.add("G_BATT_CRT_MAH", 1, "mAh", "BATT_CRT_MAH")
+G_BATT_FS_LOW_ACT = _g.add("G_BATT_FS_LOW_ACT", 1, "", "BATT_FS_LOW_ACT")
+G_BATT_FS_CRT_ACT = _g.add("G_BATT_FS_CRT_ACT", 1, "", "BATT_FS_CRT_ACT")
+G_BATT_RES0 = _g.add("G_BATT_RES0", 1, "ohm",
+                     "battery monitor's starting resistance estimate: TLM_BATT_SAG_HOV at the "
+                     "frame's hover current TLM_REF_CURR")
 N_CONTROL_CFG = CONFIG.close()

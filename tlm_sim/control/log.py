@@ -1,15 +1,18 @@
-"""The autopilot's 10 Hz log messages: RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD. Columns by name
-(:mod:`tlm_sim.logger`); attitude and heights from the EKF output block (``ekf.layout`` O_*)."""
+"""The autopilot's 10 Hz log messages: RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD and BAT (the battery
+monitor, :mod:`tlm_sim.control.battery`). Columns by name (:mod:`tlm_sim.logger`); attitude and
+heights from the EKF output block (``ekf.layout`` O_*)."""
 
 import math
 
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
+from tlm_sim.control.battery import resting_voltage
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
 
 RATE, ATT, RCOU, CTUN, PSC = L.RATE_COLS, L.ATT_COLS, L.RCOU_COLS, L.CTUN_COLS, L.PSCN_COLS
+BAT = L.BAT_COLS
 
 
 @tick_jit
@@ -25,6 +28,27 @@ def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
     _log_ctun(bufs, counts, t_us, c, eo, s)
     for ax in range(3):
         _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
+    _log_bat(bufs, counts, t_us, c)
+
+
+@inline_jit
+def _log_bat(bufs, counts, t_us, c):
+    """BAT: the battery monitor's voltage, resting voltage, current, consumed mAh and Wh,
+    resistance estimate and remaining percentage."""
+    r = L.new_row(bufs, counts, L.K_BAT, t_us)
+    if r >= 0:
+        b = bufs[L.K_BAT]
+        b[r, BAT.Inst] = 0.0
+        b[r, BAT.Volt] = c[C.BM_VOLT]
+        b[r, BAT.VoltR] = resting_voltage(c)
+        b[r, BAT.Curr] = c[C.BM_CURR]
+        b[r, BAT.CurrTot] = c[C.BM_MAH]
+        b[r, BAT.EnrgTot] = c[C.BM_WH]
+        b[r, BAT.Temp] = 0.0
+        b[r, BAT.Res] = c[C.BM_RES]
+        b[r, BAT.RemPct] = c[C.BM_REMPCT]
+        b[r, BAT.H] = 1.0
+        b[r, BAT.SH] = 0.0
 
 
 @inline_jit

@@ -60,13 +60,17 @@ def density_gain(c):
 def resting_voltage_estimate(c, g, v_batt):
     """The battery monitor's resting-voltage estimate [V]: the voltage plus the sag it infers
     from the current, modelled as G_BATT_SAG_HOVER (TLM_BATT_SAG_HOV) times the mean motor
-    thrust fraction over MOT_THST_HOVER (the current follows the thrust)."""
+    thrust fraction over MOT_THST_HOVER (the current follows the thrust), plus what the
+    monitor's resistance estimate has learnt beyond its start value (I (R - R0): zero while
+    the voltage holds, see tlm_sim.control.battery)."""
+    extra = c[C.BM_CURR] * (c[C.BM_RES] - g[C.G_BATT_RES0]) if c[C.BM_VREF] > 0.0 else 0.0
+    v = v_batt + extra
     sag = g[C.G_BATT_SAG_HOVER]
     hover = c[C.THR_HOVER]
     if sag == 0.0 or hover <= 0.0:
-        return v_batt
+        return v
     t = 0.25 * (c[C.MIX_THRUST] + c[C.MIX_THRUST + 1] + c[C.MIX_THRUST + 2] + c[C.MIX_THRUST + 3])
-    return v_batt + sag * t / hover
+    return v + sag * t / hover
 
 
 @tick_jit

@@ -7,7 +7,8 @@ TLM_ARM_TIME, take off to the first waypoint's altitude, switch to AUTO, fly the
 the mission's RETURN_TO_LAUNCH (climb to RTL_ALT, return at WPNAV_SPEED, loiter RTL_LOIT_TIME,
 land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports landed.
 
-Failsafes: radio (RTL, or LAND when there is no position), EKF (FS_EKF_THRESH/FS_EKF_ACTION:
+Failsafes: radio (RTL, or LAND when there is no position; by RC timeout or low throttle),
+battery (tlm_sim.control.battery: BATT_FS_*_ACT), EKF (FS_EKF_THRESH/FS_EKF_ACTION:
 LAND without position control after a 4 s pause, or AltHold), vibration (vibration compensation
 in the altitude controller), the crash check (disarm) and the thrust-loss check (ERR 25); see
 tlm_sim.control.failsafe.
@@ -16,6 +17,7 @@ tlm_sim.control.failsafe.
 import math
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.control import battery as B
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import (
@@ -155,8 +157,8 @@ def _start_land(c, pos, failsafe):
 
 @tick_jit
 def vehicle_step(
-    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us, nav,
-    events, ev_counts,
+    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
+    rc_throttle, nav, events, ev_counts,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
@@ -165,9 +167,9 @@ def vehicle_step(
     [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
     path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
     seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
-    nav: the primary EKF lane's status for the failsafe checks (control.failsafe NAV_*);
-    events/ev_counts: the flight's event log buffers and their row counts (tlm_sim.logger
-    E_*: MODE, EV, ERR).
+    rc_throttle: that frame's throttle channel [us]; nav: the primary EKF lane's status for the
+    failsafe checks (control.failsafe NAV_*); events/ev_counts: the flight's event log buffers
+    and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
@@ -178,8 +180,11 @@ def vehicle_step(
         return
     c[C.SUB_TIMER] += dt
     sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
-                          events, ev_counts)
+                          rc_throttle, events, ev_counts)
     sub = _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts)
+    sub = _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts)
+    if c[C.ARMED] == 0.0:
+        return
     if sub == C.SUB_GROUND_IDLE:
         _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts)
         return
@@ -225,30 +230,95 @@ def _disarmed_step(c, g, t_us, t_s, q, events, ev_counts):
         E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
 
 
+@tick_jit
+def _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle):
+    """ArduCopter's throttle failsafe counter, once per new RC frame: 3 frames in a row with
+    throttle below FS_THR_VALUE (counting up to 3) ask for the radio failsafe; good frames
+    count down and the failsafe may clear at 0. Returns (failsafe asked, clear allowed)."""
+    if rc_last_frame_us != c[C.RC_LAST_SEEN_US]:
+        c[C.RC_LAST_SEEN_US] = rc_last_frame_us
+        if g[C.G_FS_THR_ENABLE] != 0.0:
+            if rc_throttle < g[C.G_FS_THR_VALUE]:
+                if c[C.RC_FAILSAFE] == 0.0:
+                    c[C.RC_THR_LOW_N] = min(c[C.RC_THR_LOW_N] + 1.0, 3.0)
+            else:
+                c[C.RC_THR_LOW_N] = max(c[C.RC_THR_LOW_N] - 1.0, 0.0)
+    low = g[C.G_FS_THR_ENABLE] != 0.0 and c[C.RC_THR_LOW_N] >= 3.0
+    return low, c[C.RC_THR_LOW_N] == 0.0
+
+
 @inline_jit
-def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, events, ev_counts):
-    """The radio failsafe: no RC frame for RC_FS_TIMEOUT -> ERR 2/2, 5/1 and RTL (LAND without
-    a position); frames again -> ERR 5/0. Returns the submode to continue with."""
+def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, rc_throttle, events,
+                    ev_counts):
+    """The radio failsafe: no RC frame for RC_FS_TIMEOUT (ERR 2/2 and 5/1) or three frames with
+    throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> RTL (LAND without a
+    position); frames again with a good throttle -> ERR 5/0. Returns the submode to continue
+    with."""
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
-    if rc_late and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
+    thr_low, thr_ok = _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle)
+    if (rc_late or thr_low) and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
-        E.log_err(events, ev_counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
+        if rc_late:
+            E.log_err(events, ev_counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
         E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
-            if _position_ok(c):
-                set_mode(c, C.MODE_RTL, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
-                _start_rtl(c, g, pos, vel, seg)
-                return C.SUB_RTL_CLIMB
-            # RTL needs a position: LAND without one, after a pause
-            set_mode(c, C.MODE_LAND, C.RSN_RADIO_FAILSAFE, t_us, events, ev_counts)
-            _start_land(c, pos, True)
-            return C.SUB_LAND
-    elif not rc_late and c[C.RC_FAILSAFE] != 0.0:
+            return _rtl_or_land(c, g, t_us, pos, vel, seg, C.RSN_RADIO_FAILSAFE, events,
+                                ev_counts)
+    elif not rc_late and thr_ok and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
         E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
     return sub
+
+
+@inline_jit
+def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, events, ev_counts):
+    """A failsafe's RTL, or LAND after a pause when there is no position; returns the new
+    submode."""
+    if _position_ok(c):
+        set_mode(c, C.MODE_RTL, rsn, t_us, events, ev_counts)
+        _start_rtl(c, g, pos, vel, seg)
+        return C.SUB_RTL_CLIMB
+    set_mode(c, C.MODE_LAND, rsn, t_us, events, ev_counts)
+    _start_land(c, pos, True)
+    return C.SUB_LAND
+
+
+@inline_jit
+def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
+    """The battery failsafe's action (Copter's handle_battery_failsafe), once the monitor has
+    asked for one (c[BATT_FS_ACT], tlm_sim.control.battery): on the ground disarm; else Land
+    (with a pause), RTL (or Land without a position), Terminate (disarm in the air). tlm has
+    no SmartRTL, DO_LAND_START or Brake: their fallbacks fly (RTL, RTL, Land). Returns the
+    submode."""
+    act = int(c[C.BATT_FS_ACT])
+    if act < 0:
+        return sub
+    c[C.BATT_FS_ACT] = -1.0
+    landed = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
+    if landed or act == B.ACT_TERMINATE:
+        _disarm(c, g, t_us, events, ev_counts)
+        return C.SUB_LANDED
+    if act == B.ACT_LAND or act == B.ACT_SMARTRTL_LAND or act == B.ACT_BRAKE_LAND:
+        if c[C.MODE] != C.MODE_LAND:
+            set_mode(c, C.MODE_LAND, C.RSN_BATTERY_FAILSAFE, t_us, events, ev_counts)
+            _start_land(c, pos, True)
+            return C.SUB_LAND
+    elif act != B.ACT_NONE and c[C.MODE] != C.MODE_RTL and c[C.MODE] != C.MODE_LAND:
+        return _rtl_or_land(c, g, t_us, pos, vel, seg, C.RSN_BATTERY_FAILSAFE, events,
+                            ev_counts)
+    return sub
+
+
+@inline_jit
+def _disarm(c, g, t_us, events, ev_counts):
+    """Disarm now (EV DISARMED, motors stopped; the flight ends 2 s later)."""
+    E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+    c[C.ARMED] = 0.0
+    c[C.SUBMODE] = C.SUB_LANDED
+    c[C.DISARM_TIME] = t_us * 1e-6
+    output_idle(c, g, 0.0)
 
 
 @inline_jit
@@ -511,10 +581,6 @@ def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
             E.log_err(events, ev_counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
-            c[C.ARMED] = 0.0
-            c[C.SUBMODE] = C.SUB_LANDED
-            c[C.DISARM_TIME] = t_s
-            output_idle(c, g, 0.0)
+            _disarm(c, g, t_us, events, ev_counts)
     else:
         c[C.CRASH_TIMER] = 0.0

@@ -1,9 +1,10 @@
 """Rigid-body step of SITL's multicopter: one 1200 Hz physics tick (ardupilot-reference.md §1.9).
 
 Sequence of :func:`physics_step`: wind -> body airspeed and air density -> motors and frame
-sum -> semi-implicit Euler (rates first, attitude with the new rates, then velocity and
-position) -> accelerometer specific force -> ground contact -> battery -> the sensors' view of
-the truth (SITL's sensor smoothing, :mod:`tlm_sim.dynamics.smoothing`).
+sum (plus SIM_SHOVE / SIM_TWIST while they run) -> semi-implicit Euler (rates first, attitude
+with the new rates, then velocity and position) -> accelerometer specific force -> ground
+contact -> battery -> the sensors' view of the truth (SITL's sensor smoothing,
+:mod:`tlm_sim.dynamics.smoothing`).
 
 Differences from SITL, on purpose:
 
@@ -35,6 +36,10 @@ from tlm_sim.dynamics.frame import (
     F_IZZ,
     F_MASS,
     F_ROT_DAMP,
+    F_SHOVE,
+    F_SHOVE_TIME,
+    F_TWIST,
+    F_TWIST_TIME,
     N_MOTORS,
 )
 from tlm_sim.dynamics.kinematics import step_translation
@@ -141,6 +146,39 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
     smoothing_reset(x)
 
 
+@tick_jit
+def _one_shot(x: np.ndarray, frame: np.ndarray, slot_ms: int, slot_t: int, dt: float) -> bool:
+    """SITL's one-shot SIM_SHOVE / SIM_TWIST timer (sitl-faults.md §6.2): True while the
+    push acts this tick. It starts at the first tick after ``frame[slot_t]`` [ms] becomes
+    non-zero and acts while the time it has run (``x[slot_ms]``) is below it; then the
+    simulator sets the parameter back to 0 (the X/Y/Z values stay)."""
+    dur = frame[slot_t]
+    if dur <= 0.0:
+        x[slot_ms] = 0.0
+        return False
+    if x[slot_ms] < dur:
+        x[slot_ms] += dt * 1000.0
+        return True
+    x[slot_ms] = 0.0
+    frame[slot_t] = 0.0
+    return False
+
+
+@inline_jit
+def _disturbances(x: np.ndarray, frame: np.ndarray, dt: float
+                  ) -> tuple[float, float, float, float, float, float]:
+    """This tick's SIM_TWIST angular acceleration [rad/s^2] and SIM_SHOVE specific force
+    [m/s^2], body axes (zeros when neither runs)."""
+    twx = twy = twz = shx = shy = shz = 0.0
+    if frame[F_TWIST_TIME] > 0.0 or x[X.TWIST_MS] > 0.0:
+        if _one_shot(x, frame, X.TWIST_MS, F_TWIST_TIME, dt):
+            twx, twy, twz = frame[F_TWIST], frame[F_TWIST + 1], frame[F_TWIST + 2]
+    if frame[F_SHOVE_TIME] > 0.0 or x[X.SHOVE_MS] > 0.0:
+        if _one_shot(x, frame, X.SHOVE_MS, F_SHOVE_TIME, dt):
+            shx, shy, shz = frame[F_SHOVE], frame[F_SHOVE + 1], frame[F_SHOVE + 2]
+    return twx, twy, twz, shx, shy, shz
+
+
 @inline_jit
 def _ground_contact(x: np.ndarray, fh: float, was_on_ground: bool, vd: float,
                     t_s: float) -> None:
@@ -197,11 +235,12 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     ixx, iyy, izz = frame[F_IXX], frame[F_IYY], frame[F_IZZ]
     rxx, ryy, rzz = 1.0 / ixx, 1.0 / iyy, 1.0 / izz  # three divisions instead of six
     damp = frame[F_ROT_DAMP]
+    twx, twy, twz, shx, shy, shz = _disturbances(x, frame, dt)
 
     # --- rates (semi-implicit: rates first, attitude with the new rates) ---------------------
-    wx = _clamp(x[X.WX] + (tx * rxx - damp * x[X.WX]) * dt, GYRO_LIMIT)
-    wy = _clamp(x[X.WY] + (ty * ryy - damp * x[X.WY]) * dt, GYRO_LIMIT)
-    wz = _clamp(x[X.WZ] + (tz * rzz - damp * x[X.WZ]) * dt, GYRO_LIMIT)
+    wx = _clamp(x[X.WX] + (tx * rxx - damp * x[X.WX] + twx) * dt, GYRO_LIMIT)
+    wy = _clamp(x[X.WY] + (ty * ryy - damp * x[X.WY] + twy) * dt, GYRO_LIMIT)
+    wz = _clamp(x[X.WZ] + (tz * rzz - damp * x[X.WZ] + twz) * dt, GYRO_LIMIT)
 
     # rotation over the step: dq = (c, u) = (cos(th/2), w_hat sin(th/2)), th = |w| dt
     c, k = rotation_half_angle(wx, wy, wz, dt)
@@ -225,9 +264,9 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     # --- translation -------------------------------------------------------------------
     rm = 1.0 / frame[F_MASS]
-    bx = _clamp(fx * rm, ACCEL_LIMIT)
-    by = _clamp(fy * rm, ACCEL_LIMIT)
-    bz = _clamp(fz * rm, ACCEL_LIMIT)
+    bx = _clamp(fx * rm + shx, ACCEL_LIMIT)
+    by = _clamp(fy * rm + shy, ACCEL_LIMIT)
+    bz = _clamp(fz * rm + shz, ACCEL_LIMIT)
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
     aen = r00 * bx + r01 * by + r02 * bz
     aee = r10 * bx + r11 * by + r12 * bz

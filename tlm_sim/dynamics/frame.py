@@ -88,8 +88,13 @@ F_WIND_T = 53  # SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)
 F_WIND_T_ALT = 54  # SIM_WIND_T_ALT [m] (live)
 F_WIND_T_COEF = 55  # SIM_WIND_T_COEF [1/s] (live)
 F_REF_ALT = 56  # refAlt [m AMSL]
+# ---- airframe disturbances (SIM_SHOVE_*, SIM_TWIST_*, sitl-faults.md §6.2; live) ----------
+F_SHOVE = 57  # 3 entries: SIM_SHOVE_X/Y/Z, extra body specific force [m/s^2]
+F_SHOVE_TIME = 60  # SIM_SHOVE_TIME [ms]; the physics sets it back to 0 once elapsed
+F_TWIST = 61  # 3 entries: SIM_TWIST_X/Y/Z, extra body angular acceleration [rad/s^2]
+F_TWIST_TIME = 64  # SIM_TWIST_TIME [ms]; the physics sets it back to 0 once elapsed
 
-N_FRAME = 57
+N_FRAME = 65
 
 def _hover_command(hover_thr: float, expo: float) -> float:
     """Command ``a`` in [0, 1] solving ``(1 - e) a + e a^2 = hover_thr``."""
@@ -191,7 +196,8 @@ def build_frame(p: Params) -> np.ndarray:
 
 
 def _environment(f: np.ndarray, p: Params) -> None:
-    """The ``SIM_*`` environment slots of frame array ``f``: home altitude, battery, wind."""
+    """The ``SIM_*`` environment slots of frame array ``f``: home altitude, battery, wind,
+    shove and twist."""
     f[F_HOME_ALT] = float(p["SIM_OPOS_ALT"])
     f[F_BATT_VOLT] = float(p["SIM_BATT_VOLTAGE"])
     cap = float(p["SIM_BATT_CAP_AH"])
@@ -202,6 +208,11 @@ def _environment(f: np.ndarray, p: Params) -> None:
                        (F_WIND_DIR_Z, "SIM_WIND_DIR_Z"), (F_WIND_T, "SIM_WIND_T"),
                        (F_WIND_T_ALT, "SIM_WIND_T_ALT"), (F_WIND_T_COEF, "SIM_WIND_T_COEF")):
         f[slot] = float(p[name])
+    for k, axis in enumerate("XYZ"):
+        f[F_SHOVE + k] = float(p[f"SIM_SHOVE_{axis}"])
+        f[F_TWIST + k] = float(p[f"SIM_TWIST_{axis}"])
+    f[F_SHOVE_TIME] = float(p["SIM_SHOVE_TIME"])
+    f[F_TWIST_TIME] = float(p["SIM_TWIST_TIME"])
 
 
 def hover_command(frame: np.ndarray) -> float:

@@ -71,5 +71,9 @@ SWX, SWY, SWZ = _x.vector(("SWX", "SWY", "SWZ"), "rad/s", "sensor shadow: body r
 SMOOTH_ACTIVE = _x.add("SMOOTH_ACTIVE", 1, "",
                        "1.0 while the shadow differs from the truth (after a ground contact); "
                        "else the shadow is the truth itself")
+SHOVE_MS = _x.add("SHOVE_MS", 1, "ms",
+                  "time the running SIM_SHOVE push has acted (0 when none runs)")
+TWIST_MS = _x.add("TWIST_MS", 1, "ms",
+                  "time the running SIM_TWIST angular push has acted (0 when none runs)")
 
 N_STATE = STATE.close()

@@ -1,31 +1,17 @@
-"""The simulated vehicle's log messages: BAT (battery) and SIM (the truth attitude and
-position), 10 Hz. Columns by name (:mod:`tlm_sim.logger`)."""
+"""The simulated vehicle's log message SIM (the truth attitude and position), 10 Hz. Columns by
+name (:mod:`tlm_sim.logger`). (BAT is the autopilot's battery monitor: tlm_sim.control.log.)"""
 
 from tlm_sim import logger as L
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.geo import ne_to_latlon_scalar
 
-BAT, SIM = L.BAT_COLS, L.SIM_COLS
+SIM = L.SIM_COLS
 
 
 @tick_jit
 def log_dynamics_10hz(bufs, counts, t_us, x, home_lat, home_lon, home_alt):
-    """BAT and SIM rows from the truth state x (home: degrees, m AMSL)."""
-    r = L.new_row(bufs, counts, L.K_BAT, t_us)
-    if r >= 0:
-        b = bufs[L.K_BAT]
-        b[r, BAT.Inst] = 0.0
-        b[r, BAT.Volt] = x[X.BATT_V]
-        b[r, BAT.VoltR] = x[X.BATT_VREST]
-        b[r, BAT.Curr] = x[X.BATT_I]
-        b[r, BAT.CurrTot] = x[X.BATT_AH] * 1000.0
-        b[r, BAT.EnrgTot] = 0.0
-        b[r, BAT.Temp] = 0.0
-        b[r, BAT.Res] = 0.0
-        b[r, BAT.RemPct] = 100.0
-        b[r, BAT.H] = 1.0
-        b[r, BAT.SH] = 0.0
+    """The SIM row from the truth state x (home: degrees, m AMSL)."""
     r = L.new_row(bufs, counts, L.K_SIM, t_us)
     if r >= 0:
         b = bufs[L.K_SIM]

@@ -20,7 +20,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-__all__ = ["ERR_TEXTS", "EV_TEXTS", "event_texts"]
+__all__ = ["ERR_TEXTS", "EV_TEXTS", "event_texts", "ground_impacts"]
 
 Tables = Mapping[str, pd.DataFrame]
 Render = Callable[[Tables, int, int], list[str]]
@@ -36,17 +36,62 @@ def _at(tables: Tables, name: str, t_us: int) -> pd.Series | None:
 
 
 def _lost_motor(tables: Tables, t_us: int, _code: int) -> list[str]:
-    """ArduCopter names the motor with the highest output (1-based) as the one that lost
-    thrust (motors saturated at full output on the weak motor's side)."""
+    """ArduCopter names the motor with the highest 0.5 s-filtered output (1-based) as the one
+    that lost thrust: the weak motor, saturated at full output (here: the highest RCOU)."""
     row = _at(tables, "RCOU", t_us)
     motor = 1 if row is None else int(np.argmax([row[f"C{i}"] for i in range(1, 5)])) + 1
     return [f"Potential Thrust Loss ({motor})"]
 
 
 def _battery_low(tables: Tables, t_us: int, _code: int) -> list[str]:
+    """AP_BattMonitor's escalation text and Copter's failsafe announcement. The battery state
+    only escalates (low, then critical), so a flight's second ERR 6/1 is the critical one; a
+    disarm at the same time (EV 11: landed, or Terminate) reads "Battery Failsafe -
+    Disarming"."""
     row = _at(tables, "BAT", t_us)
     volt, used = (0.0, 0.0) if row is None else (float(row["Volt"]), float(row["CurrTot"]))
-    return [f"Battery 1 is low {volt:.2f}V used {used:.0f} mAh", "Battery Failsafe"]
+    err = tables["ERR"]
+    earlier = int(((err["Subsys"] == 6) & (err["ECode"] == 1) & (err["TimeUS"] < t_us)).sum())
+    level = "low" if earlier == 0 else "critical"
+    ev = tables.get("EV")
+    disarm = ev is not None and bool(((ev["Id"] == 11) & (ev["TimeUS"] == t_us)).any())
+    return [f"Battery 1 is {level} {volt:.2f}V used {used:.0f} mAh",
+            "Battery Failsafe - Disarming" if disarm else "Battery Failsafe"]
+
+
+#: SIM height above its pre-arming level below which the vehicle touches the ground [m]
+GROUND_CONTACT_M = 0.02
+#: SITL prints an impact only this long after the last one it printed [us]
+IMPACT_HOLDOFF_US = 1_000_000
+
+
+def ground_impacts(tables: Tables) -> list[tuple[int, str]]:
+    """SITL's "SIM Hit ground at %f m/s" (SIM_Aircraft, on touching the ground more than 1 s
+    after the last impact it printed), from the SIM truth: a row on the ground after one
+    above it, after arming; the speed is the descent rate over the last two rows in the air
+    (10 Hz), the time where that rate meets the ground."""
+    sim, ev = tables.get("SIM"), tables.get("EV")
+    if sim is None or ev is None or len(sim) < 3:
+        return []
+    armed = ev["TimeUS"][ev["Id"] == 10]
+    if not len(armed):
+        return []
+    t = sim["TimeUS"].to_numpy(np.float64)
+    alt = sim["Alt"].to_numpy(np.float64)
+    before = alt[t < float(armed.iloc[0])]
+    h = alt - float(np.median(before if len(before) else alt[:1]))
+    on = h <= GROUND_CONTACT_M
+    out: list[tuple[int, str]] = []
+    last = -np.inf
+    for k in np.flatnonzero(on[2:] & ~on[1:-1]) + 2:
+        if t[k] <= float(armed.iloc[0]) or t[k] - last <= IMPACT_HOLDOFF_US:
+            continue
+        v = (h[k - 2] - h[k - 1]) / ((t[k - 1] - t[k - 2]) * 1e-6)
+        t_hit = t[k - 1] + (h[k - 1] / v * 1e6 if v > 0.0 else 0.0)
+        t_hit = min(t_hit, t[k])
+        out.append((int(t_hit), f"SIM Hit ground at {max(v, 0.0):.6f} m/s"))
+        last = t_hit
+    return out
 
 
 def _fixed(*lines: str) -> Render:
@@ -78,8 +123,9 @@ EV_TEXTS: dict[int, str] = {
 
 
 def event_texts(tables: Tables) -> list[tuple[int, str]]:
-    """``(TimeUS, text)`` MSG lines for the ERR and EV events of a flight's tables, in time
-    order (the order of the events at equal times)."""
+    """``(TimeUS, text)`` MSG lines for the ERR and EV events of a flight's tables and its
+    ground impacts (:func:`ground_impacts`), in time order (the order of the events at equal
+    times)."""
     out: list[tuple[int, str]] = []
     err = tables.get("ERR")
     if err is not None:
@@ -93,4 +139,5 @@ def event_texts(tables: Tables) -> list[tuple[int, str]]:
             text = EV_TEXTS.get(int(ev_id))
             if text is not None:
                 out.append((int(t), text))
+    out += ground_impacts(tables)
     return sorted(out, key=lambda line: line[0])
