@@ -136,8 +136,8 @@ def test_tampered_mission_is_detected():
     ({"ranges": {"SIM_WIND_SPEED": (0, 1)}}, "unknown parameter"),
     ({"params": {"SIM_WIND_SPD": 1}}, "both drawn"),
     # parameters tlm does not model are refused, drawn or fixed (they would change nothing)
-    ({"ranges": {"SIM_BAR2_RND": (0, 0.2)}}, "SIM_BAR2_RND is not modelled"),
-    ({"params": {"SIM_BARO_DISABLE": 1}}, "SIM_BARO_DISABLE is not modelled"),
+    ({"ranges": {"SIM_BAR3_RND": (0, 0.2)}}, "SIM_BAR3_RND is not modelled"),
+    ({"params": {"SIM_BAR3_DISABLE": 1}}, "SIM_BAR3_DISABLE is not modelled"),
     ({"profile": "old"}, "unknown profile"),
     ({"hold_s": (0, 0)}, "hold_s"),
 ])

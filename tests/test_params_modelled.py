@@ -31,10 +31,10 @@ from tlm_sim.profiles import profile_params
 from tlm_sim.sensors.config import build_sensor_config
 
 #: parameters the issue found accepted and ignored: each must now be refused
-ISSUE_IGNORED = ("SIM_BARO_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
-                 "SIM_BARO_DRIFT", "SIM_BARO_FREEZE",
-                 "SIM_BAR2_DISABLE", "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
-                 "SIM_BAR2_RND", "DISARM_DELAY", "PSC_ACCZ_D")
+ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
+                 "SIM_BAR3_DRIFT", "SIM_BAR3_FREEZE", "SIM_BARO_DELAY",
+                 "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
+                 "SIM_BAR3_RND", "DISARM_DELAY", "PSC_ACCZ_D")
 
 
 def _inputs(p: Params) -> list[np.ndarray]:
@@ -110,8 +110,8 @@ def test_every_unmodelled_parameter_is_refused_explicitly():
     for name in unmodelled:
         with pytest.raises(UnmodelledParamError, match=f"^{name} is not modelled by tlm"):
             Params({name: p[name]})
-    with pytest.raises(UnmodelledParamError, match="SIM_BARO_DISABLE"):
-        p.updated(SIM_BARO_DISABLE=1)
+    with pytest.raises(UnmodelledParamError, match="SIM_BAR3_DISABLE"):
+        p.updated(SIM_BAR3_DISABLE=1)
     with pytest.raises(UnmodelledParamError, match="SIM_GPS1_GLTCH_X"):  # via its old name
         Params({"SIM_GPS_GLITCH_X": 0.001})
 
@@ -119,15 +119,15 @@ def test_every_unmodelled_parameter_is_refused_explicitly():
 def test_unmodelled_parameters_are_refused_mid_flight_and_in_schedules():
     with pytest.raises(UnmodelledParamError, match="SIM_MAG1_FAIL"):
         FL.build_schedule(Params(), [(120.0, "SIM_MAG1_FAIL", 1.0)])
-    with pytest.raises(FaultScheduleError, match="SIM_BARO_FREEZE is not modelled"):
+    with pytest.raises(FaultScheduleError, match="SIM_BAR3_FREEZE is not modelled"):
         Fault("gps", Trigger("time", 60), Trigger("time", 90),
-              params_start={"SIM_GPS1_ENABLE": 0, "SIM_BARO_FREEZE": 1})
+              params_start={"SIM_GPS1_ENABLE": 0, "SIM_BAR3_FREEZE": 1})
     with pytest.raises(FaultScheduleError, match="LOG_BITMASK is not modelled"):
         FaultSchedule.from_dict({"faults": [{"fault": "gps", "start": 60, "end": 90,
                                              "params_end": {"LOG_BITMASK": 0}}]})
 
 
-@pytest.mark.parametrize("option", [["--param", "SIM_BARO_DISABLE=1"],
+@pytest.mark.parametrize("option", [["--param", "SIM_BAR3_DISABLE=1"],
                                     ["--set", "120:SIM_IMUT_START=30"],
                                     ["--param", "SCHED_LOOP_RATE=50"],
                                     ["--param", "SIM_RATE_HZ=400"]])
@@ -147,21 +147,21 @@ def test_builders_read_params_only():
 
 def test_whole_set_carries_unmodelled_values_with_one_warning(tmp_path):
     parm = tmp_path / "vehicle.parm"
-    parm.write_text("SIM_BARO_DISABLE 1\nLOG_BITMASK 0\nWPNAV_SPEED 500\nSERIAL1_BAUD 57\n")
+    parm.write_text("SIM_BAR3_DISABLE 1\nLOG_BITMASK 0\nWPNAV_SPEED 500\nSERIAL1_BAUD 57\n")
     with pytest.warns(UnmodelledParamWarning) as rec:
         p = Params.from_parm(parm)
     assert len(rec) == 1
     msg = str(rec[0].message)
-    assert "vehicle.parm" in msg and "LOG_BITMASK=0" in msg and "SIM_BARO_DISABLE=1" in msg
+    assert "vehicle.parm" in msg and "LOG_BITMASK=0" in msg and "SIM_BAR3_DISABLE=1" in msg
     assert "WPNAV_SPEED" not in msg and "SERIAL1_BAUD" not in msg  # modelled / default value
-    assert p.unmodelled() == {"LOG_BITMASK": 0.0, "SIM_BARO_DISABLE": 1.0}
+    assert p.unmodelled() == {"LOG_BITMASK": 0.0, "SIM_BAR3_DISABLE": 1.0}
     assert p["WPNAV_SPEED"] == 500.0
     # carried through explicit updates, profiles and pickling; explicit ones stay refused
     assert p.updated(WPNAV_SPEED=700).unmodelled() == p.unmodelled()
     assert profile_params("paper", p).unmodelled() == p.unmodelled()
     assert Params(p) == p
     with pytest.raises(UnmodelledParamError):
-        p.updated(SIM_BARO_FREEZE=1)
+        p.updated(SIM_BAR3_FREEZE=1)
     # a whole set still validates what tlm knows of the parameters it carries
     with pytest.raises(ParamError, match="SIM_BARO_DISABLE = 2 is out of range"):
         Params.from_parm_text("SIM_BARO_DISABLE 2\n")
@@ -173,14 +173,14 @@ def test_whole_set_carries_unmodelled_values_with_one_warning(tmp_path):
 @pytest.mark.slow
 def test_fly_with_a_parm_file_warns_once_and_records_meta(tmp_path, capsys):
     parm = tmp_path / "v.parm"
-    parm.write_text("SIM_BARO_DISABLE 1\nLOG_BITMASK 0\n")
+    parm.write_text("SIM_BAR3_DISABLE 1\nLOG_BITMASK 0\n")
     out = tmp_path / "o"
     assert main(["fly", "--mission", "3", "--out", str(out), "--params", str(parm),
                  "--no-plot", "--format", "csv"]) == 0
     err = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
     assert len(err) == 1 and err[0].startswith("tlm: warning: ") and "LOG_BITMASK=0" in err[0]
     meta = json.loads((out / "meta.json").read_text())["meta"]
-    assert meta["unmodelled_params"] == {"LOG_BITMASK": 0.0, "SIM_BARO_DISABLE": 1.0}
+    assert meta["unmodelled_params"] == {"LOG_BITMASK": 0.0, "SIM_BAR3_DISABLE": 1.0}
 
 
 @pytest.mark.slow
@@ -208,10 +208,10 @@ def test_parameter_list_declares_every_parameter():
 
 
 def test_tlm_params_command(capsys):
-    assert main(["params", "WPNAV_SPEED", "SIM_BARO_DISABLE"]) == 0
+    assert main(["params", "WPNAV_SPEED", "SIM_BAR3_DISABLE"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].split() == ["NAME", "DEFAULT", "UNIT", "RANGE", "MODELLED", "DESCRIPTION"]
-    assert lines[1].split()[:2] == ["SIM_BARO_DISABLE", "0"] and " no " in lines[1]
+    assert lines[1].split()[:2] == ["SIM_BAR3_DISABLE", "0"] and " no " in lines[1]
     assert lines[2].split()[:7] == ["WPNAV_SPEED", "600", "cm/s", "10", "..", "2000", "yes"]
     assert main(["params"]) == 0
     assert len(capsys.readouterr().out.splitlines()) == len(Params()) + 1

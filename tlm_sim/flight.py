@@ -22,7 +22,7 @@ from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.battery import battery_monitor
 from tlm_sim.control.config import build_control_config
-from tlm_sim.control.events import ERR_CRASH_CHECK, log_mode
+from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
 from tlm_sim.control.log import log_control_10hz
 from tlm_sim.control.modes import vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
@@ -42,7 +42,7 @@ from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.baro import baro_sample, mag_sample
+from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read, mag_sample
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
@@ -173,7 +173,7 @@ def run_flight(
         next_loop += LOOP_DT_US
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
-                                                   rng)
+                                                   rng, events, ev_counts)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
@@ -195,7 +195,7 @@ def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
     imu_init(s, scfg, 0.0)
     gps_init(s, 0.0)
     rc_init(s, 0.0)
-    s[S.B_NEXT_US] = 0.0
+    baro_init(s)
     s[S.M_NEXT_US] = 0.0
     ekf_init(ekf, sel, ecfg)
     log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
@@ -220,11 +220,11 @@ def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
 
 
 @inline_jit
-def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
+def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_counts):
     """The main loop's sensor reads at t_us: IMU deltas (imu_ok[i]: IMU i's accel delivered
-    samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch
-    into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
-    compass) new this tick."""
+    samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch into gps when one is due, baro and
+    compass at 10 Hz (ERR 18 when the primary baro's health changes), the RC receiver. Returns
+    (GPS, primary baro, compass) new this tick."""
     for i in range(S.N_IMU):
         imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
         imu_ok[S.N_IMU + i] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_GYR_OK]
@@ -236,8 +236,9 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
     baro_new = False
     if t_us >= s[S.B_NEXT_US]:
         s[S.B_NEXT_US] += 100000.0
-        baro_sample(s, x, scfg, rng[S.RNG_BARO])
-        baro_new = True
+        baro_new, err = baro_read(s, x, scfg, rng, float(t_us))
+        if err >= 0:
+            log_err(events, ev_counts, t_us, ERR_BARO, err)
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += 100000.0

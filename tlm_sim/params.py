@@ -323,14 +323,17 @@ _add("SIM_VIB_MOT_HMNC", "", 0, 255, "motor vibration harmonics: bit k-1 adds ha
 _add("SIM_VIB_MOT_MASK", "", 0, 255,
      "extra motors ORed into the vibrating motor mask (for external simulators; tlm's quad "
      "vibrates on motors 1-4 always, higher bits name no motor and add nothing) (§2.3)", True)
-for _b in ("BARO", "BAR2", "BAR3"):
+for _b in ("BARO", "BAR2", "BAR3"):  # baros 1 and 2 are modelled (sitl-faults.md §3), 3 is not
     _add(f"SIM_{_b}_RND", "m", 0, 100, f"{_b} altitude noise amplitude, uniform (§2.5)",
-         modelled=_b == "BARO")
-    _add(f"SIM_{_b}_DRIFT", "m/s", -10, 10, f"{_b} altitude drift rate (§2.5)", modelled=False)
+         modelled=_b != "BAR3")
+    _add(f"SIM_{_b}_DRIFT", "m/s", -10, 10,
+         f"{_b} altitude drift rate; the accumulated offset stays when set back to 0 (§2.5)",
+         modelled=_b != "BAR3")
     _add(f"SIM_{_b}_GLITCH", "m", -10000, 10000, f"{_b} altitude offset (§2.5)",
-         modelled=_b == "BARO")
-    _flag([f"SIM_{_b}_DISABLE", f"SIM_{_b}_FREEZE"], f"{_b} disabled / frozen (§2.5)",
-          modelled=False)
+         modelled=_b != "BAR3")
+    _flag([f"SIM_{_b}_DISABLE", f"SIM_{_b}_FREEZE"],
+          f"{_b} disabled (no samples, unhealthy) / frozen at the last value (§2.5)",
+          modelled=_b != "BAR3")
     _add(f"SIM_{_b}_DELAY", "ms", 0, 1000, f"{_b} delay (§2.5)", True, modelled=False)
 _add("SIM_TEMP_START", "degC", -40, 100, "ambient temperature at start (§2.5)", modelled=False)
 _add("SIM_TEMP_BRD_OFF", "degC", -50, 100, "board temperature offset over ambient (§2.5)",

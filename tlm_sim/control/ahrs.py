@@ -47,6 +47,16 @@ def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
         # (gps_s12.bin: PSCN.PN / PSCE.PE are 0.000 from "stopped aiding" to "is using GPS")
         pos[0] = 0.0
         pos[1] = 0.0
+    if eo[EK.O_F_VERT_POS] == 0.0 and eo[EK.O_F_ATTITUDE] != 0.0:
+        # no valid height (EKF3's height timeout: no baro fused for 10 s): the AHRS call for
+        # the NED position relative to the origin fails as a whole and AC_PosControl's estimate
+        # is the origin, all three axes (baro_s44.bin: PSCN.PN, PSCE.PE, PSCD.PD and CTUN.Alt
+        # are 0 from +10.19 s until the baros return). Its targets are then held within the
+        # errors that ask for WPNAV_SPEED / WPNAV_SPEED_UP of it (PSCD.TPD -3.625 m), so the
+        # copter climbs at WPNAV_SPEED_UP and flies off towards its horizontal target.
+        pos[0] = 0.0
+        pos[1] = 0.0
+        pos[2] = 0.0
     for k in range(4):
         q[k] = eo[EK.O_QW + k]
     gb = _usable_imu(s, int(eo[EK.O_IMU]), S.I_GYR_OK)

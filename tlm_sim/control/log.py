@@ -25,7 +25,7 @@ def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
     if r >= 0:
         for k in range(4):
             bufs[L.K_RCOU][r, RCOU.C1 + k] = round(c[C.MIX_PWM + k])
-    _log_ctun(bufs, counts, t_us, c, eo, s)
+    _log_ctun(bufs, counts, t_us, c, eo, s, pos)
     for ax in range(3):
         _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
     _log_bat(bufs, counts, t_us, c)
@@ -88,8 +88,9 @@ def _log_att(bufs, counts, t_us, c, eo):
 
 
 @inline_jit
-def _log_ctun(bufs, counts, t_us, c, eo, s):
-    """CTUN: throttle, altitude target and estimates, climb rates."""
+def _log_ctun(bufs, counts, t_us, c, eo, s, pos):
+    """CTUN: throttle, altitude target and estimates (the position controller's: 0 while the
+    EKF has no valid height), climb rates."""
     r = L.new_row(bufs, counts, L.K_CTUN, t_us)
     if r >= 0:
         b = bufs[L.K_CTUN]
@@ -98,7 +99,7 @@ def _log_ctun(bufs, counts, t_us, c, eo, s):
         b[r, CTUN.ThO] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
         b[r, CTUN.ThH] = c[C.THR_HOVER]
         b[r, CTUN.DAlt] = -c[C.PZ_POS_T]
-        b[r, CTUN.Alt] = -eo[EK.O_PD]
+        b[r, CTUN.Alt] = -pos[2]
         b[r, CTUN.BAlt] = s[S.B_ALT]
         b[r, CTUN.DSAlt] = math.nan
         b[r, CTUN.SAlt] = 0.0

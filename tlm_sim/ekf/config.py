@@ -57,7 +57,10 @@ def _ekf3_constants(c: np.ndarray) -> None:
     """Timeouts and limits EKF3 hard-codes (no parameters, ardupilot-reference §3.8)."""
     c[L.C_POS_RETRY] = 7.0
     c[L.C_TILT_DRIFT] = 15.0
-    c[L.C_HGT_RETRY] = 5.0
+    # hgtRetryTimeMode0_ms: with GPS vertical velocity fused (EK3_SRC1_VELZ 3) EKF3 waits 10 s
+    # (5 s only without it) before a rejected height is reset, or a height that stopped
+    # arriving is declared invalid (baro_s44.bin: both baros off, CTUN.Alt 0 from +10.19 s)
+    c[L.C_HGT_RETRY] = 10.0
     c[L.C_USING_GPS_T] = 4.0
     c[L.C_CONSTPOS_DT] = 0.2
     c[L.C_GBIAS_LIM] = 0.5

@@ -212,7 +212,8 @@ C_MAG_N, C_MAG_E, C_MAG_D = _c.vector(("C_MAG_N", "C_MAG_E", "C_MAG_D"), "gauss"
 C_POS_RETRY = _c.add("C_POS_RETRY", 1, "s",
                      "GPS position/velocity timeout (EKF3 posRetryTimeNoVel)")
 C_TILT_DRIFT = _c.add("C_TILT_DRIFT", 1, "s", "time without aiding before constant-position mode")
-C_HGT_RETRY = _c.add("C_HGT_RETRY", 1, "s", "height innovation timeout before a reset to baro")
+C_HGT_RETRY = _c.add("C_HGT_RETRY", 1, "s",
+                     "height timeout: a rejected height is reset to baro, a missing one invalid")
 C_USING_GPS_T = _c.add("C_USING_GPS_T", 1, "s", "using_gps flag window")
 C_CONSTPOS_DT = _c.add("C_CONSTPOS_DT", 1, "s", "interval of constant-position pseudo-measurements")
 C_GBIAS_LIM = _c.add("C_GBIAS_LIM", 1, "rad/s", "gyro bias limit")

@@ -71,5 +71,9 @@ def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
         b[r, XKF4.SH] = math.sqrt(max(el[EK.HGT_TR], 0.0))
         b[r, XKF4.SM] = math.sqrt(max(el[EK.MAG_TR], 0.0))
         b[r, XKF4.FS] = el[EK.FAULT]
-        b[r, XKF4.TS] = 0.0 if el[EK.F_HORIZ_POS] != 0.0 else 1.0
+        # timeout bits: 1 position, 4 height (EKF3 hgtTimeout: no height fused for 10 s)
+        ts = 0.0 if el[EK.F_HORIZ_POS] != 0.0 else 1.0
+        if el[EK.F_ATTITUDE] != 0.0 and el[EK.F_VERT_POS] == 0.0:
+            ts += 4.0
+        b[r, XKF4.TS] = ts
         b[r, XKF4.PI] = primary

@@ -1,8 +1,14 @@
-"""Barometer and compass as the autopilot reads them (10 Hz each).
+"""Barometers and compass as the autopilot reads them (10 Hz each).
 
-Baro altitude is relative to the ground calibration (home), with SIM_BARO_RND uniform noise and
-SIM_BARO_GLITCH offset; pressure and temperature follow the 1976 standard atmosphere. The compass
-reports the earth field (NED, gauss) rotated into the body frame plus SIM_MAG_RND noise.
+Two independent barometers (SIM_BARO_COUNT 2; BARO 3 is not modelled), each with its own noise
+stream and SITL's fault pipeline (``AP_Baro_SITL::_timer``, sitl-faults.md §3.2): DISABLE stops
+its samples; else altitude = truth + accumulated DRIFT + RND uniform noise + GLITCH, replaced by
+the last value while FREEZE is set. Altitude is relative to the ground calibration (home);
+pressure and temperature follow the 1976 standard atmosphere. A disabled barometer is unhealthy
+(``BARO.H`` 0) from its first missed sample (baro_s44.bin: +0.09 s) until it delivers again. The
+primary is BARO_PRIMARY (0) while healthy, else the first healthy one (AP_Baro::update); the EKF
+fuses the primary. The compass reports the earth field (NED, gauss) rotated into the body frame
+plus SIM_MAG_RND noise.
 """
 
 
@@ -13,21 +19,70 @@ from tlm_sim.rng import uniform_pm1
 from tlm_sim.rotation import quat_to_dcm
 from tlm_sim.sensors import layout as S
 
+BARO_PERIOD_S = 0.1  # the autopilot's baro reads (10 Hz): the sample interval of DRIFT
+ERR_BARO = 18  # ERR subsystem BARO (AP_Logger LogErrorSubsystem)
+ERR_CODE_UNHEALTHY = 4  # LogErrorCode UNHEALTHY (0: resolved)
+BARO_NOISE_ROWS = (S.RNG_BARO, S.RNG_BARO2)  # noise stream of each instance
+
 
 @tick_jit
-def baro_sample(s, x, cfg, rng):
-    """Take a baro sample: altitude above home ground [m], pressure, temperature.
+def baro_sample(s, x, cfg, rng, i, t_us):
+    """Take baro instance i's sample at t_us: altitude above home ground [m], pressure,
+    temperature; returns False (and leaves the last values) while SIM_BARn_DISABLE is set.
 
-    Reads the sensors' view of the truth's height (SITL's sensor smoothing, ``X.SPD``).
+    Reads the sensors' view of the truth's height (SITL's sensor smoothing, ``X.SPD``); rng is
+    the instance's noise stream (drawn once per sample, also while frozen).
     """
+    b = S.BARO_BASE + i * S.BARO_STRIDE
+    if cfg[S.C_BARO_DISABLE + i] != 0.0:
+        s[b + S.BA_HEALTHY] = 0.0
+        return False
+    s[b + S.BA_DRIFT] += cfg[S.C_BARO_DRIFT + i] * BARO_PERIOD_S
     h = -x[X.SPD] - cfg[S.C_FRAME_HEIGHT]
-    alt = h + cfg[S.C_BARO_RND] * uniform_pm1(rng) + cfg[S.C_BARO_GLITCH]
-    s[S.B_ALT_PREV] = s[S.B_ALT]
-    s[S.B_ALT] = alt
+    alt = h + s[b + S.BA_DRIFT] + cfg[S.C_BARO_RND + i] * uniform_pm1(rng) \
+        + cfg[S.C_BARO_GLITCH + i]
+    if cfg[S.C_BARO_FREEZE + i] != 0.0:
+        alt = s[b + S.BA_ALT]  # the value stored before freezing
+    s[b + S.BA_ALT_PREV] = s[b + S.BA_ALT]
+    s[b + S.BA_ALT] = alt
+    s[b + S.BA_T_MS] = t_us // 1000
+    s[b + S.BA_HEALTHY] = 1.0
     p, t_k = pressure_temperature(cfg[S.C_HOME_ALT] + alt)
-    s[S.B_PRESS] = p
-    s[S.B_TEMP] = t_k - 273.15
-    return alt
+    s[b + S.BA_PRESS] = p
+    s[b + S.BA_TEMP] = t_k - 273.15
+    return True
+
+
+@tick_jit
+def baro_init(s):
+    """Power on: both barometers and the primary healthy, first read due at once."""
+    s[S.B_NEXT_US] = 0.0
+    s[S.B_PRIMARY] = 0.0
+    s[S.B_PRIMARY_OK] = 1.0
+    for i in range(S.N_BARO):
+        s[S.BARO_BASE + i * S.BARO_STRIDE + S.BA_HEALTHY] = 1.0
+
+
+@tick_jit
+def baro_read(s, x, cfg, rng, t_us):
+    """The autopilot's 10 Hz baro update at t_us: every instance samples, the primary is chosen
+    and its altitude put in B_ALT. Returns (whether the primary has a new sample for the EKF,
+    the ERR 18 code to log: 4 when the primary became unhealthy, 0 when it recovered, -1 none).
+    """
+    new0 = baro_sample(s, x, cfg, rng[BARO_NOISE_ROWS[0]], 0, t_us)
+    new1 = baro_sample(s, x, cfg, rng[BARO_NOISE_ROWS[1]], 1, t_us)
+    prim = 0
+    if s[S.BARO_BASE + S.BA_HEALTHY] == 0.0 and \
+            s[S.BARO_BASE + S.BARO_STRIDE + S.BA_HEALTHY] != 0.0:
+        prim = 1
+    s[S.B_PRIMARY] = prim
+    ok = s[S.BARO_BASE + prim * S.BARO_STRIDE + S.BA_HEALTHY]
+    s[S.B_ALT] = s[S.BARO_BASE + prim * S.BARO_STRIDE + S.BA_ALT]
+    code = -1
+    if ok != s[S.B_PRIMARY_OK]:
+        code = 0 if ok != 0.0 else ERR_CODE_UNHEALTHY
+        s[S.B_PRIMARY_OK] = ok
+    return (new1 if prim == 1 else new0), code
 
 
 @tick_jit

@@ -84,14 +84,23 @@ def _gps_config(c: np.ndarray, p: Params) -> None:
     c[S.C_GPS_NOISE] = p["SIM_GPS1_NOISE"]
 
 
+def _baro_config(c: np.ndarray, p: Params) -> None:
+    """Barometers 1 and 2 (SIM_BARO_*, SIM_BAR2_*): noise, glitch, drift, freeze, disable."""
+    for i, n in enumerate(("BARO", "BAR2")):
+        c[S.C_BARO_RND + i] = p[f"SIM_{n}_RND"]
+        c[S.C_BARO_GLITCH + i] = p[f"SIM_{n}_GLITCH"]
+        c[S.C_BARO_DRIFT + i] = p[f"SIM_{n}_DRIFT"]
+        c[S.C_BARO_FREEZE + i] = p[f"SIM_{n}_FREEZE"]
+        c[S.C_BARO_DISABLE + i] = p[f"SIM_{n}_DISABLE"]
+
+
 def build_sensor_config(p: Params) -> np.ndarray:
     """Sensor configuration of a flight from its parameters (SITL names and units -> SI)."""
     require_params(p, "build_sensor_config")
     c = np.zeros(S.N_SENSOR_CFG)
     _imu_config(c, p)
     _gps_config(c, p)
-    c[S.C_BARO_RND] = p["SIM_BARO_RND"]
-    c[S.C_BARO_GLITCH] = p["SIM_BARO_GLITCH"]
+    _baro_config(c, p)
     c[S.C_MAG_RND] = p["SIM_MAG_RND"] / 1000.0  # mG -> gauss
     c[S.C_MAG_EARTH : S.C_MAG_EARTH + 3] = earth_field(p)
     c[S.C_RC_FAIL] = p["SIM_RC_FAIL"]

@@ -10,6 +10,7 @@ body frame FRD, earth frame NED.
 from tlm_sim.slots import Layout
 
 N_IMU = 2
+N_BARO = 2  # SIM_BARO_COUNT 2: BARO 1 (SIM_BARO_*) and BARO 2 (SIM_BAR2_*); BARO 3 is not modelled
 
 # ---- per-IMU record (at IMU_BASE + i * IMU_STRIDE) -------------------------------------------
 IMU = Layout("imu", "one IMU instance")
@@ -45,6 +46,18 @@ I_GYR_PHASE = _i.add("I_GYR_PHASE", 4, "rad",
                      "motor vibration phase per motor, gyro (SITL's gyro_motor_phase)")
 IMU_STRIDE = IMU.close()
 
+# ---- per-barometer record (at BARO_BASE + i * BARO_STRIDE) ---------------------------------
+BARO = Layout("baro", "one barometer instance")
+_b = BARO
+BA_ALT = _b.add("BA_ALT", 1, "m", "last altitude above the ground calibration")
+BA_ALT_PREV = _b.add("BA_ALT_PREV", 1, "m", "the sample before (climb rate)")
+BA_PRESS = _b.add("BA_PRESS", 1, "Pa", "last pressure")
+BA_TEMP = _b.add("BA_TEMP", 1, "degC", "last temperature")
+BA_T_MS = _b.add("BA_T_MS", 1, "ms", "time of the last sample")
+BA_DRIFT = _b.add("BA_DRIFT", 1, "m", "accumulated SIM_BARn_DRIFT offset (stays when DRIFT is 0)")
+BA_HEALTHY = _b.add("BA_HEALTHY", 1, "", "1 while the instance delivers samples (BARO.H)")
+BARO_STRIDE = BARO.close()
+
 # ---- GPS record: a delay line of main-loop ticks ---------------------------------------------
 GPS_HIST_N = 64  # delay line length (main-loop ticks, 400 Hz -> 160 ms)
 G_ROW = 7  # one history row: t_s, pn, pe, pd, vn, ve, vd
@@ -74,15 +87,16 @@ IMU_BASE = _s.block("IMU", IMU, N_IMU)
 GPS_BASE = _s.block("GPS", GPS)
 MISC_BASE = _s.size
 B_NEXT_US = _s.add("B_NEXT_US", 1, "us", "next baro sample (10 Hz as the autopilot reads it)")
-B_ALT = _s.add("B_ALT", 1, "m", "last baro altitude above the ground calibration")
-B_ALT_PREV = _s.add("B_ALT_PREV", 1, "m", "previous baro altitude (climb rate)")
-B_PRESS = _s.add("B_PRESS", 1, "Pa", "last pressure")
-B_TEMP = _s.add("B_TEMP", 1, "degC", "last temperature")
+B_ALT = _s.add("B_ALT", 1, "m", "the primary baro's altitude (what the EKF fuses, CTUN.BAlt)")
+B_PRIMARY = _s.add("B_PRIMARY", 1, "",
+                   "primary baro: BARO_PRIMARY (0) if healthy, else the first healthy one")
+B_PRIMARY_OK = _s.add("B_PRIMARY_OK", 1, "", "1 while the primary baro is healthy (ERR 18)")
 M_NEXT_US = _s.add("M_NEXT_US", 1, "us", "next compass sample")
 M_FIELD = _s.add("M_FIELD", 3, "gauss", "last body field")
 RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
 RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
 RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
+BARO_BASE = _s.block("BARO", BARO, N_BARO)
 N_SENSOR_STATE = STATE.close()
 
 # ---- sensor configuration scfg (built once per flight from parameters) ------------------------
@@ -113,8 +127,11 @@ C_GPS_VDOP = _c.add("C_GPS_VDOP", 1, "", "reported VDop (TLM_GPS_VDOP)")
 C_GPS_ACC = _c.add("C_GPS_ACC", 1, "m", "reported horizontal/vertical accuracy (SIM_GPS1_ACC)")
 C_GPS_VERR = _c.add("C_GPS_VERR", 3, "m/s", "SIM_GPS1_VERR")
 C_GPS_NOISE = _c.add("C_GPS_NOISE", 1, "m", "SIM_GPS1_NOISE")
-C_BARO_RND = _c.add("C_BARO_RND", 1, "m", "SIM_BARO_RND")
-C_BARO_GLITCH = _c.add("C_BARO_GLITCH", 1, "m", "SIM_BARO_GLITCH")
+C_BARO_RND = _c.add("C_BARO_RND", N_BARO, "m", "SIM_BARO_RND, SIM_BAR2_RND")
+C_BARO_GLITCH = _c.add("C_BARO_GLITCH", N_BARO, "m", "SIM_BARO_GLITCH, SIM_BAR2_GLITCH")
+C_BARO_DRIFT = _c.add("C_BARO_DRIFT", N_BARO, "m/s", "SIM_BARO_DRIFT, SIM_BAR2_DRIFT")
+C_BARO_FREEZE = _c.add("C_BARO_FREEZE", N_BARO, "", "SIM_BARO_FREEZE, SIM_BAR2_FREEZE")
+C_BARO_DISABLE = _c.add("C_BARO_DISABLE", N_BARO, "", "SIM_BARO_DISABLE, SIM_BAR2_DISABLE")
 C_MAG_RND = _c.add("C_MAG_RND", 1, "gauss", "SIM_MAG_RND")
 C_MAG_EARTH = _c.add("C_MAG_EARTH", 3, "gauss", "earth field NED")
 C_RC_FAIL = _c.add("C_RC_FAIL", 1, "", "SIM_RC_FAIL")
@@ -160,4 +177,5 @@ RNG_ACC = NOISE.add("RNG_ACC", N_IMU, "", "accelerometer noise, one stream per I
 RNG_GPS = NOISE.add("RNG_GPS", 1, "", "GPS velocity noise")
 RNG_BARO = NOISE.add("RNG_BARO", 1, "", "barometer noise")
 RNG_MAG = NOISE.add("RNG_MAG", 1, "", "compass noise")
+RNG_BARO2 = NOISE.add("RNG_BARO2", 1, "", "barometer 2 noise (RNG_BARO is barometer 1's)")
 N_NOISE_STREAMS = NOISE.close()

@@ -95,7 +95,7 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
             for k in range(3):
                 b[r, VIBE.VibeX + k] = vibe(s, i, k)
             b[r, VIBE.Clip] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
-    for i in range(2):
+    for i in range(S.N_BARO):
         _log_baro(bufs, counts, t_us, s, home_alt, i)
     r = L.new_row(bufs, counts, L.K_MAG, t_us)
     if r >= 0:
@@ -114,18 +114,21 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
 
 @inline_jit
 def _log_baro(bufs, counts, t_us, s, home_alt, i):
-    """One BARO row (instance i; both instances log the one simulated barometer)."""
+    """One BARO row of instance i: its last sample (held while it delivers none), health."""
     r = L.new_row(bufs, counts, L.K_BARO, t_us)
     if r >= 0:
         b = bufs[L.K_BARO]
+        sb = S.BARO_BASE + i * S.BARO_STRIDE
+        alt = s[sb + S.BA_ALT]
         b[r, BARO.I] = i
-        b[r, BARO.Alt] = s[S.B_ALT]
-        b[r, BARO.AltAMSL] = home_alt + s[S.B_ALT]
-        b[r, BARO.Press] = s[S.B_PRESS]
-        b[r, BARO.Temp] = s[S.B_TEMP]
-        b[r, BARO.CRt] = (s[S.B_ALT] - s[S.B_ALT_PREV]) * 10.0
-        b[r, BARO.SMS] = t_us // 1000
+        b[r, BARO.Alt] = alt
+        b[r, BARO.AltAMSL] = home_alt + alt
+        b[r, BARO.Press] = s[sb + S.BA_PRESS]
+        b[r, BARO.Temp] = s[sb + S.BA_TEMP]
+        b[r, BARO.CRt] = (alt - s[sb + S.BA_ALT_PREV]) * 10.0
+        # the last sample's time: frozen while the instance delivers none
+        b[r, BARO.SMS] = t_us // 1000 if s[sb + S.BA_HEALTHY] != 0.0 else s[sb + S.BA_T_MS]
         b[r, BARO.Offset] = 0.0
         b[r, BARO.GndTemp] = 25.0
-        b[r, BARO.H] = 1.0
-        b[r, BARO.CPress] = s[S.B_PRESS]
+        b[r, BARO.H] = s[sb + S.BA_HEALTHY]
+        b[r, BARO.CPress] = s[sb + S.BA_PRESS]
