@@ -21,7 +21,7 @@ from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.config import build_control_config
-from tlm_sim.control.events import ERR_CRASH_CHECK, log_mode
+from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
 from tlm_sim.control.log import log_control_10hz
 from tlm_sim.control.modes import vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
@@ -41,11 +41,18 @@ from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.baro import baro_sample, mag_sample
+from tlm_sim.sensors.baro import baro_sample
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
 from tlm_sim.sensors.log import log_gps, log_imu, log_sensors_10hz
+from tlm_sim.sensors.mag import (
+    ERR_COMPASS,
+    ERR_COMPASS_RESOLVED,
+    ERR_COMPASS_UNHEALTHY,
+    mag_init,
+    mag_sample,
+)
 from tlm_sim.sensors.rc import rc_init, rc_update
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
@@ -170,7 +177,7 @@ def run_flight(
         next_loop += LOOP_DT_US
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
-                                                   rng)
+                                                   rng, events, ev_counts)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
@@ -192,7 +199,7 @@ def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
     gps_init(s, 0.0)
     rc_init(s, 0.0)
     s[S.B_NEXT_US] = 0.0
-    s[S.M_NEXT_US] = 0.0
+    mag_init(s)
     ekf_init(ekf, sel, ecfg)
     log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
@@ -216,10 +223,10 @@ def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
 
 
 @inline_jit
-def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
+def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_counts):
     """The main loop's sensor reads at t_us: IMU deltas (imu_ok per instance), the GPS epoch
-    into gps when one is due, baro and compass at 10 Hz, the RC receiver. Returns (GPS, baro,
-    compass) new this tick."""
+    into gps when one is due, baro and compass at 10 Hz (ERR COMPASS when the first compass's
+    health changes), the RC receiver. Returns (GPS, baro, compass tick) new this tick."""
     for i in range(S.N_IMU):
         imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
     gps_push_truth(s, x, t_us * 1e-6)
@@ -235,7 +242,10 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng):
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += 100000.0
-        mag_sample(s, x, scfg, rng[S.RNG_MAG])
+        dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
+        if dh != 0:
+            log_err(events, ev_counts, t_us, ERR_COMPASS,
+                    ERR_COMPASS_RESOLVED if dh > 0 else ERR_COMPASS_UNHEALTHY)
         mag_new = True
     rc_update(s, scfg, float(t_us))
     return gps_new, baro_new, mag_new
@@ -249,7 +259,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
     switched = ekf_update(
         ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
-        baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], armed,
+        baro_new, s[S.B_ALT], mag_new, s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
     )
     ekf_output_nav(ekf, sel, eo)
     if switched:
