@@ -17,6 +17,7 @@ from numba import njit
 
 from tlm_sim.ekf import layout as L
 from tlm_sim.ekf.lanes import ekf_output, ekf_update
+from tlm_sim.sensors.mag import healthy_compasses
 
 G = 9.80665
 DT = 0.0025  # main loop [s]
@@ -134,7 +135,7 @@ class Flight:
     baro_new: np.ndarray
     baro: np.ndarray
     mag_new: np.ndarray
-    mag: np.ndarray  # (n, 3)
+    mag: np.ndarray  # (n, N_MAG * MAG_STRIDE): the compass block (sensors.layout MAG records)
     armed: np.ndarray
     pos: np.ndarray  # truth at each tick (n, 3)
     vel: np.ndarray
@@ -188,7 +189,8 @@ def make_flight(
         from tlm_sim.params import Params, earth_field
 
         mag_earth = earth_field(Params())
-    mag = np.einsum("nji,j->ni", r_k[1:], mag_earth) + 0.005 * rng.uniform(-1, 1, (n, 3))
+    field = np.einsum("nji,j->ni", r_k[1:], mag_earth) + 0.005 * rng.uniform(-1, 1, (n, 3))
+    mag = np.array([healthy_compasses(f) for f in field])  # the compass block per tick
     return Flight(
         t_us=t_us,
         dang=dang,

@@ -16,7 +16,8 @@ from tlm_sim.slots import Layout
 #: (module, layout, the module's size constant)
 LAYOUTS = [
     (X, X.STATE, "N_STATE"),
-    (S, S.IMU, "IMU_STRIDE"), (S, S.GPS, "GPS_SIZE"), (S, S.STATE, "N_SENSOR_STATE"),
+    (S, S.IMU, "IMU_STRIDE"), (S, S.MAG, "MAG_STRIDE"), (S, S.GPS, "GPS_SIZE"),
+    (S, S.STATE, "N_SENSOR_STATE"),
     (S, S.CONFIG, "N_SENSOR_CFG"), (S, S.GPS_EPOCH, "N_GPS_EPOCH"),
     (L, L.ERROR_STATE, "NS"), (L, L.LANE, "N_EKF"), (L, L.SELECTOR, "N_SEL"),
     (L, L.CONFIG, "N_CFG"), (L, L.OUTPUT, "N_OUT"),
@@ -52,7 +53,8 @@ def test_describe_names_every_value_of_an_array():
     s = np.arange(S.N_SENSOR_STATE, dtype=float)
     d = S.STATE.describe(s)
     assert d["B_ALT"] == S.B_ALT
-    assert list(d["M_FIELD"]) == [S.M_FIELD, S.M_FIELD + 1, S.M_FIELD + 2]
+    assert list(d["M_BODY"]) == [S.M_BODY, S.M_BODY + 1, S.M_BODY + 2]
+    assert d["MAG"][2]["M_HEALTHY"] == S.MAG_BASE + 2 * S.MAG_STRIDE + S.M_HEALTHY
     imu1 = d["IMU"][1]
     assert imu1["I_CLIP"] == S.IMU_BASE + S.IMU_STRIDE + S.I_CLIP
     assert S.STATE.name_of(S.IMU_BASE + S.IMU_STRIDE + S.I_DVEL + 2) == "IMU[1].I_DVEL[2]"

@@ -31,9 +31,9 @@ from tlm_sim.profiles import profile_params
 from tlm_sim.sensors.config import build_sensor_config
 
 #: parameters the issue found accepted and ignored: each must now be refused
-ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
+ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG_DELAY", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
                  "SIM_BAR3_DRIFT", "SIM_BAR3_FREEZE", "SIM_BARO_DELAY",
-                 "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
+                 "SIM_GPS1_POS_X", "SIM_MAG1_DIA_X", "LOG_BITMASK",
                  "SIM_BAR3_RND", "DISARM_DELAY", "PSC_ACCZ_D")
 
 
@@ -117,8 +117,8 @@ def test_every_unmodelled_parameter_is_refused_explicitly():
 
 
 def test_unmodelled_parameters_are_refused_mid_flight_and_in_schedules():
-    with pytest.raises(UnmodelledParamError, match="SIM_MAG1_FAIL"):
-        FL.build_schedule(Params(), [(120.0, "SIM_MAG1_FAIL", 1.0)])
+    with pytest.raises(UnmodelledParamError, match="SIM_MAG_DELAY"):
+        FL.build_schedule(Params(), [(120.0, "SIM_MAG_DELAY", 20.0)])
     with pytest.raises(FaultScheduleError, match="SIM_BAR3_FREEZE is not modelled"):
         Fault("gps", Trigger("time", 60), Trigger("time", 90),
               params_start={"SIM_GPS1_ENABLE": 0, "SIM_BAR3_FREEZE": 1})

@@ -3,7 +3,8 @@
 :func:`fault_signature` measures one fault window the same way in a tlm ``FlightLog.tables`` and
 in the tables ``read_bin`` gives for a genuine SITL ``.bin``. It uses only messages and fields
 that both logs have: GPS, IMU, CTUN, XKF1, SIM (the simulator's true attitude and position),
-MODE, EV and ERR. SITL's SIM2, MSG and CMD are not used (tlm does not log them).
+MODE, EV and ERR; for the compass also MAG, XKF4 and XKFS. SITL's SIM2, MSG and CMD are not
+used (tlm does not log them).
 
 Conventions (all times are log TimeUS, microseconds since boot; results in SI units):
 
@@ -36,7 +37,7 @@ ARMED, DISARMED = 10, 11  # EV ids
 AUTO, RTL = 3, 6  # MODE ModeNum
 RSN_RADIO_FAILSAFE = 3  # ModeReason::RADIO_FAILSAFE
 ERR_RADIO, ERR_FS_RADIO = 2, 5  # ERR Subsys
-ERR_EKF_PRIMARY, ERR_THRUST_LOSS, ERR_VIBE_FS = 24, 25, 29  # ERR Subsys
+ERR_COMPASS, ERR_EKF_PRIMARY, ERR_THRUST_LOSS, ERR_VIBE_FS = 3, 24, 25, 29  # ERR Subsys
 
 #: margin at the window edges for in/out row fractions [s] (two 5 Hz GPS samples)
 EDGE_MARGIN_S = 0.5
@@ -51,7 +52,7 @@ EARLY_S = 3.0
 #: path length after the recovery over which a resumed mission is measured [s]
 RESUME_S = 30.0
 
-FAULT_TYPES = ("gps", "accel", "engine", "rc")
+FAULT_TYPES = ("gps", "accel", "engine", "rc", "compass")
 
 
 def _max(s: pd.Series) -> float:
@@ -264,6 +265,41 @@ def _rc(f: _Flight, t0: float, t1: float) -> dict[str, float]:
     }
 
 
+def _first_rel(t: np.ndarray, cond: np.ndarray, after: float, origin: float) -> float:
+    """Seconds from origin to the first time t > after where cond holds (NaN if none)."""
+    idx = np.flatnonzero(cond & (t > after))
+    return float((t[idx[0]] - origin) * 1e-6) if len(idx) else float("nan")
+
+
+def _compass(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+    """Compass 1 without data (SIM_MAG1_FAIL 1): its health, ERR 3, the EKF's compass change."""
+    mag = f.t["MAG"].sort_values("TimeUS", kind="stable")
+    m0 = mag[mag.I == 0]
+    tm, h0 = m0.TimeUS.to_numpy(float), m0.Health.to_numpy(float)
+    inside = time_window(mag, t0 + 1e6, t1)
+    err = f.err[f.err.Subsys == ERR_COMPASS].sort_values("TimeUS")
+    te, code = err.TimeUS.to_numpy(float), err.ECode.to_numpy(int)
+    xs = f.t["XKFS"].sort_values("TimeUS", kind="stable")
+    switched = xs[(xs.TimeUS > t0) & (xs.MI != 0)]
+    tp, ekf_err = f.ekf_error()
+    in_win = (tp >= t0) & (tp <= t1)
+    return {
+        "health0_lost_s": _first_rel(tm, h0 == 0, t0, t0),
+        "health0_back_s": _first_rel(tm, h0 == 1, t1, t0),
+        "mag0_frozen_std": float(inside[inside.I == 0][["MagX", "MagY", "MagZ"]].std().max()),
+        "mag_others_healthy_frac": float(inside[inside.I != 0].Health.mean()),
+        "err3_4_s": _first_rel(te, code == 4, t0, t0),
+        "err3_0_s": _first_rel(te, code == 0, t0, t0),
+        "switch_compass_s": float((switched.TimeUS.iloc[0] - t0) * 1e-6) if len(switched)
+        else float("nan"),
+        "switch_compass_to": float(switched.MI.iloc[0]) if len(switched) else float("nan"),
+        "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1),
+        "sm_max": _max(time_window(f.t["XKF4"], t0, t1).SM),
+        "ekf_err_max_m": float(ekf_err[in_win].max()) if in_win.any() else float("nan"),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    }
+
+
 def truth_timeline(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
     """The truth (SIM) as plotted next to a signature.
 
@@ -305,6 +341,12 @@ def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
           ``liftoff_1m_after_end_s``, ``above_10m_after_end_s``, ``auto_after_end`` (mode at
           10 m), ``path_after_10m_m`` (truth path in the 30 s after reaching 10 m: a resumed
           mission flies ~6 m/s).
+        * compass: ``health0_lost_s`` / ``health0_back_s`` (MAG I=0 Health 0 after the start,
+          1 after the end; seconds after the start), ``mag0_frozen_std`` (largest std of its
+          MagX/Y/Z from 1 s after the start), ``mag_others_healthy_frac``, ``err3_4_s`` /
+          ``err3_0_s``, ``switch_compass_s`` / ``switch_compass_to`` (first XKFS row with
+          MI != 0), ``err24_ekf_primary``, ``sm_max`` (XKF4.SM), ``ekf_err_max_m``,
+          ``auto_kept``.
         * rc: ``rtl_delay_s`` (first MODE RTL), ``rtl_reason`` (its Rsn), ERR counts
           ``err2_2_late_frame``, ``err5_1_failsafe`` (in the window), ``err5_0_cleared`` (2 s
           after the end), ``rtl_kept_after_end``, ``disarm_s``, ``final_home_dist_m`` (truth at
@@ -323,4 +365,6 @@ def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
         return _accel(f, t0, t1, fault)
     if kind == "engine":
         return _engine(f, t0, t1)
+    if kind == "compass":
+        return _compass(f, t0, t1)
     return _rc(f, t0, t1)

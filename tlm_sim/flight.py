@@ -42,11 +42,18 @@ from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read, mag_sample
+from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
 from tlm_sim.sensors.log import log_gps, log_imu, log_sensors_10hz
+from tlm_sim.sensors.mag import (
+    ERR_COMPASS,
+    ERR_COMPASS_RESOLVED,
+    ERR_COMPASS_UNHEALTHY,
+    mag_init,
+    mag_sample,
+)
 from tlm_sim.sensors.rc import rc_init, rc_update
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
@@ -196,7 +203,7 @@ def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
     gps_init(s, 0.0)
     rc_init(s, 0.0)
     baro_init(s)
-    s[S.M_NEXT_US] = 0.0
+    mag_init(s)
     ekf_init(ekf, sel, ecfg)
     log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
@@ -223,8 +230,8 @@ def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
 def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_counts):
     """The main loop's sensor reads at t_us: IMU deltas (imu_ok[i]: IMU i's accel delivered
     samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch into gps when one is due, baro and
-    compass at 10 Hz (ERR 18 when the primary baro's health changes), the RC receiver. Returns
-    (GPS, primary baro, compass) new this tick."""
+    compass at 10 Hz (ERR 18 when the primary baro's health changes, ERR 3 when the first
+    compass's does), the RC receiver. Returns (GPS, primary baro, compass tick) new this tick."""
     for i in range(S.N_IMU):
         imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
         imu_ok[S.N_IMU + i] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_GYR_OK]
@@ -242,7 +249,10 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += 100000.0
-        mag_sample(s, x, scfg, rng[S.RNG_MAG])
+        dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
+        if dh != 0:
+            log_err(events, ev_counts, t_us, ERR_COMPASS,
+                    ERR_COMPASS_RESOLVED if dh > 0 else ERR_COMPASS_UNHEALTHY)
         mag_new = True
     rc_update(s, scfg, float(t_us))
     return gps_new, baro_new, mag_new
@@ -256,7 +266,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
     switched = ekf_update(
         ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
-        baro_new, s[S.B_ALT], mag_new, s[S.M_FIELD:S.M_FIELD + 3], armed,
+        baro_new, s[S.B_ALT], mag_new, s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
     )
     ekf_output_nav(ekf, sel, eo)
     if switched:

@@ -342,16 +342,19 @@ _add("SIM_TEMP_TCONST", "s", 1, 10000, "board warm-up time constant (§2.5)", mo
 _add(["SIM_IMUT_START", "SIM_IMUT_END"], "degC", -40, 100, "IMU temperature start / end (§2.3)",
      modelled=False)
 _add("SIM_IMUT_TCONST", "s", 1, 10000, "IMU warm-up time constant (§2.3)", modelled=False)
-_add("SIM_MAG_RND", "mGauss", 0, 10000, "compass noise amplitude, uniform (§2.6)")
+_add("SIM_MAG_RND", "mGauss", 0, 10000,
+     "compass noise amplitude, uniform, one draw shared by the three compasses (§2.6)")
 _add([f"SIM_MAG_MOT_{a}" for a in _XYZ], "mGauss/A", -1000, 1000,
-     "motor current compass interference (§1.13)", modelled=False)
+     "motor interference: body field per ampere of battery current (§1.13)")
 _add("SIM_MAG_DELAY", "ms", 0, 1000, "compass delay (§2.6)", True, modelled=False)
 _add([f"SIM_MAG{_i}_FAIL" for _i in (1, 2, 3)], "", 0, 2,
-     "compass fault: 0 ok, 1 no data, 2 frozen (§2.6)", True, modelled=False)
+     "compass fault: 0 ok, 1 no data (unhealthy after 0.5 s), 2 frozen (last reading "
+     "repeated) (§2.6)", True)
 _add([f"SIM_MAG_ALY_{a}" for a in _XYZ], "mGauss", -10000, 10000,
-     "magnetic anomaly at ground level, NED (§1.13)", modelled=False)
-_add("SIM_MAG_ALY_HGT", "m", 0.001, 1000, "decay height of the magnetic anomaly (§1.13)",
-     modelled=False)
+     "magnetic anomaly at ground level, NED, scaled by (H / (h + H))^3 with the height h "
+     "(§1.13)")
+_add("SIM_MAG_ALY_HGT", "m", 0.001, 1000,
+     "H: height where the magnetic anomaly has fallen to 1/8 (§1.13)")
 _add("SIM_RC_FAIL", "", 0, 2,
      "RC fault: 0 none, 1 no pulses, 2 neutral sticks + throttle 950 (RC fault, §2.7)", True)
 _add("SIM_RC_CHANCOUNT", "", 1, 32, "simulated RC channels (§2.1)", True, modelled=False)

@@ -107,7 +107,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.imu:imu_take_deltas", (_F1, _i8, _f8, _F2, _F2), 0.1),
     Job("tlm_sim.sensors.baro:baro_read", (_F1, _F1, _F1, _U2, _f8), 0.1),
     Job("tlm_sim.sensors.baro:baro_init", (_F1,), 0.1),
-    Job("tlm_sim.sensors.baro:mag_sample", (_F1, _F1, _F1, _U1), 0.1),
+    Job("tlm_sim.sensors.mag:mag_sample", (_F1, _F1, _F1, _U1, _f8), 0.1),
 )
 
 #: the flight itself, compiled last in the calling process

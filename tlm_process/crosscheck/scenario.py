@@ -28,7 +28,7 @@ __all__ = ["SitlScenario", "reconstruct", "mission_from_cmd", "ARMED", "DISARMED
 ARMED, DISARMED = 10, 11
 #: Message types the cross-check reads from a SITL log.
 TYPES = ("GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1",
-         "POS", "BARO", "RCOU", "CMD", "PARM", "ORGN", "MSG")
+         "POS", "BARO", "RCOU", "CMD", "PARM", "ORGN", "MSG", "MAG", "XKF4", "XKFS")
 _NAV_WAYPOINT, _NAV_TAKEOFF = 16, 22
 
 

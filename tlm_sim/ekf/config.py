@@ -71,6 +71,9 @@ def _ekf3_constants(c: np.ndarray) -> None:
     c[L.C_BAD_IMU_ACC_NSE] = 5.0
     c[L.C_BAD_IMU_HOLD] = 10.0
     c[L.C_BAD_IMU_TIMEOUT] = 1.0
+    c[L.C_MAG_FAIL_T] = 10.0
+    c[L.C_MAG_SWITCH_T0] = 30.0
+    c[L.C_INFLIGHT_HGT] = 1.5
 
 
 def build_ekf_config(params: Params) -> np.ndarray:

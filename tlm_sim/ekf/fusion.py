@@ -366,14 +366,15 @@ def lane_fuse_mag(e, cfg, mag):
 
     Measurement model m_b = R^T m_e; with the earth-frame attitude error the Jacobian row of body
     axis k is (R[:, k] x m_e). All three axes are gated (EK3_MAG_I_GATE) and fused only if all
-    pass. Before alignment the sample is only stored (for the initial yaw).
+    pass. Before alignment the sample is only stored (for the initial yaw). Returns True when
+    the sample was fused.
     """
     e[MAG_LX] = mag[0]
     e[MAG_LY] = mag[1]
     e[MAG_LZ] = mag[2]
     e[MAG_HAVE] = 1.0
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
-        return
+        return False
     mn = cfg[C_MAG_N]
     me = cfg[C_MAG_E]
     md = cfg[C_MAG_D]
@@ -407,12 +408,13 @@ def lane_fuse_mag(e, cfg, mag):
     e[INNOV_MY] = y1
     e[INNOV_MZ] = y2
     if tr0 >= 1.0 or tr1 >= 1.0 or tr2 >= 1.0:
-        return
+        return False
     clear_dx(e)
     fuse_h3(e, ES_ATT, h00, h01, h02, y0, r)
     fuse_h3(e, ES_ATT, h10, h11, h12, y1, r)
     fuse_h3(e, ES_ATT, h20, h21, h22, y2, r)
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+    return True
 
 
 @tick_jit

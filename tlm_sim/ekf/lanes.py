@@ -6,7 +6,8 @@ Call order per 400 Hz main-loop tick (or use :func:`ekf_update`, which does exac
    its output towards its filter state (output observer, EK3_TAU_OUTPUT); covariance
    prediction runs when >= EKF3's 12 ms target of IMU data has accumulated (every 5 ticks);
    alignment, aiding-mode transitions, constant-position fusion and status flags.
-2. :func:`ekf_fuse_gps` / :func:`ekf_fuse_baro` / :func:`ekf_fuse_mag` when a new sample arrived.
+2. :func:`ekf_fuse_gps` / :func:`ekf_fuse_baro` when a new sample arrived; :func:`ekf_fuse_mag`
+   on every compass tick (each lane's compass choice, :mod:`tlm_sim.ekf.compass`).
 3. :func:`ekf_select_primary` -- lane scores, health and the ERR 24-style primary switch.
 
 Controllers read the primary lane, via :func:`ekf_output` or directly
@@ -18,6 +19,7 @@ from __future__ import annotations
 import math
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.ekf.compass import lane_read_mag
 from tlm_sim.ekf.core import (
     buffer_push,
     output_track,
@@ -31,7 +33,6 @@ from tlm_sim.ekf.fusion import (
     lane_fuse_baro,
     lane_fuse_constpos,
     lane_fuse_gps,
-    lane_fuse_mag,
     stop_aiding,
     update_flags,
 )
@@ -157,6 +158,7 @@ from tlm_sim.ekf.layout import (
     T_GPS_FUSED,
     T_HGT_PASS,
     T_LAST,
+    T_MAG_PASS,
     T_POS_PASS,
     T_VEL_PASS,
     TILT_BAD_T,
@@ -249,6 +251,7 @@ def _align(e, cfg, t):
     e[T_HGT_PASS] = t
     e[T_POS_PASS] = t
     e[T_VEL_PASS] = t
+    e[T_MAG_PASS] = t
     e[T_GPS_FUSED] = -1.0e9
     e[T_BAD_IMU] = -1.0e9
     e[BAD_IMU] = 0.0
@@ -425,10 +428,13 @@ def ekf_fuse_baro(ekf, cfg, t_us, alt):
 
 
 @tick_jit
-def ekf_fuse_mag(ekf, cfg, mag):
-    """New magnetometer sample: body-frame field mag[0:3] [gauss]."""
+def ekf_fuse_mag(ekf, cfg, t_us, mag, armed):
+    """Compass tick: mag is the sensors' compass block (``tlm_sim.sensors.layout`` MAG records:
+    body field [gauss], new sample, healthy, time); each lane fuses its own compass's new
+    sample and changes compass when that one fails (:func:`tlm_sim.ekf.compass.lane_read_mag`)."""
+    t = t_us * 1e-6
     for i in range(ekf.shape[0]):
-        lane_fuse_mag(ekf[i], cfg, mag)
+        lane_read_mag(ekf[i], cfg, t, mag, armed)
 
 
 @tick_jit
@@ -537,8 +543,9 @@ def ekf_update(
     t_us: time since boot [us]; dang/dvel[imu, 0:3]: IMU deltas of this tick (body FRD);
     imu_ok[imu] (accel) / imu_ok[N_IMU + imu] (gyro) delivered samples; gps_new + gps_pos[0:3]
     (NED from the origin, m) + gps_vel[0:3] (NED, m/s) + gps_fix (3-D fix); baro_new +
-    baro_alt (m above the origin, up); mag_new + mag[0:3] (body field, gauss); armed (vehicle
-    armed: enables lane switching, sets the constant-position noise).
+    baro_alt (m above the origin, up); mag_new (a compass tick) + mag (the compass block, see
+    :func:`ekf_fuse_mag`); armed (vehicle armed: enables lane switching, sets the
+    constant-position noise, resets the compass choice).
     Returns True when the primary lane changed on this tick (log ERR 24 then).
     """
     ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed)
@@ -547,7 +554,7 @@ def ekf_update(
     if baro_new:
         ekf_fuse_baro(ekf, cfg, t_us, baro_alt)
     if mag_new:
-        ekf_fuse_mag(ekf, cfg, mag)
+        ekf_fuse_mag(ekf, cfg, t_us, mag, armed)
     return ekf_select_primary(ekf, sel, cfg, t_us, armed)
 
 

@@ -85,6 +85,15 @@ ALIGN_DT = _l.add("ALIGN_DT", 1, "s", "summed time while aligning")
 MAG_HAVE = _l.add("MAG_HAVE", 1, "", "1 once a magnetometer sample was seen")
 MAG_LX, MAG_LY, MAG_LZ = _l.vector(("MAG_LX", "MAG_LY", "MAG_LZ"), "gauss",
                                    "last body-frame field")
+# compass selection (EKF3 magSelectIndex and its timers, tlm_sim.ekf.compass)
+MAG_IDX = _l.add("MAG_IDX", 1, "", "compass the lane reads (0-based; XKFS.MI)")
+T_MAG_READ = _l.add("T_MAG_READ", 1, "s",
+                    "last time the lane's compass delivered a sample (or the lane changed compass)")
+T_MAG_PASS = _l.add("T_MAG_PASS", 1, "s",
+                    "last magnetometer fusion inside the gate (or alignment, compass change)")
+IN_FLIGHT = _l.add("IN_FLIGHT", 1, "",
+                   "1 from C_INFLIGHT_HGT above the origin while armed until disarmed "
+                   "(EKF3's in-flight magnetometer fusion, XKFS.MAG_FUSION 2)")
 # timing / aiding
 T_LAST = _l.add("T_LAST", 1, "s", "time of the last prediction tick (-1 before the first)")
 T_ALIGNED = _l.add("T_ALIGNED", 1, "s", "time alignment completed")
@@ -231,6 +240,13 @@ C_BAD_IMU_HOLD = _c.add("C_BAD_IMU_HOLD", 1, "s", "bad-IMU response hold time")
 C_BAD_IMU_TIMEOUT = _c.add("C_BAD_IMU_TIMEOUT", 1, "s",
                            "continuous bad-IMU time before a height reset")
 C_TAU_OUTPUT = _c.add("C_TAU_OUTPUT", 1, "s", "EK3_TAU_OUTPUT: output observer time constant")
+C_MAG_FAIL_T = _c.add("C_MAG_FAIL_T", 1, "s",
+                      "EKF3 magFailTimeLimit: a lane changes compass after its compass has been "
+                      "unhealthy and silent, or its fusion rejected in flight, this long")
+C_MAG_SWITCH_T0 = _c.add("C_MAG_SWITCH_T0", 1, "s",
+                         "no compass change for rejected fusion this soon after alignment")
+C_INFLIGHT_HGT = _c.add("C_INFLIGHT_HGT", 1, "m",
+                        "height above the origin (armed) from which a lane counts as in flight")
 N_CFG = CONFIG.close()
 
 # ------------------------------------------------------------------ output vector --------------

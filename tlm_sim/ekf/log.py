@@ -1,5 +1,5 @@
-"""The EKF's log messages: XKF1 and XKF4 per lane, POS from the output block (10 Hz), and the
-ERR row of a primary-lane change. Columns by name (:mod:`tlm_sim.logger`)."""
+"""The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz), and
+the ERR row of a primary-lane change. Columns by name (:mod:`tlm_sim.logger`)."""
 
 import math
 
@@ -8,7 +8,7 @@ from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ekf import layout as EK
 from tlm_sim.geo import ne_to_latlon_scalar
 
-XKF1, XKF4, POS = L.XKF1_COLS, L.XKF4_COLS, L.POS_COLS
+XKF1, XKF4, XKFS, POS = L.XKF1_COLS, L.XKF4_COLS, L.XKFS_COLS, L.POS_COLS
 ERR_EKF_PRIMARY = 24  # ERR subsystem of a primary-lane change (ECode: the new lane)
 
 
@@ -24,10 +24,11 @@ def log_lane_switch(events, ev_counts, t_us, eo):
 
 @tick_jit
 def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home_lat, home_lon, home_alt):
-    """The EKF's 10 Hz rows: XKF1 and XKF4 for every lane, POS of the output (home: degrees,
-    m AMSL)."""
+    """The EKF's 10 Hz rows: XKF1, XKF4 and XKFS for every lane, POS of the output (home:
+    degrees, m AMSL)."""
     for ln in range(int(sel[EK.SEL_N_LANES])):
         _log_lane(bufs, counts, t_us, ekf[ln], ln, sel[EK.SEL_PRIMARY], home_alt)
+        _log_sources(bufs, counts, t_us, ekf[ln], ln)
     r = L.new_row(bufs, counts, L.K_POS, t_us)
     if r >= 0:
         b = bufs[L.K_POS]
@@ -77,3 +78,22 @@ def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
             ts += 4.0
         b[r, XKF4.TS] = ts
         b[r, XKF4.PI] = primary
+
+
+@inline_jit
+def _log_sources(bufs, counts, t_us, el, ln):
+    """XKFS row of lane ln: the compass it reads (MI), one baro, GPS and airspeed (index 0),
+    GPS good to align (once it has fused GPS), magnetometer fusion state."""
+    r = L.new_row(bufs, counts, L.K_XKFS, t_us)
+    if r >= 0:
+        b = bufs[L.K_XKFS]
+        b[r, XKFS.C] = ln
+        b[r, XKFS.MI] = el[EK.MAG_IDX]
+        b[r, XKFS.BI] = 0.0
+        b[r, XKFS.GI] = 0.0
+        b[r, XKFS.AI] = 0.0
+        b[r, XKFS.SS] = 0.0
+        aligned = el[EK.ALIGNED] != 0.0
+        b[r, XKFS.GPS_GTA] = 1.0 if aligned and el[EK.T_GPS_FUSED] > -1.0e8 else 0.0
+        b[r, XKFS.GPS_CHK_WAIT] = 0.0
+        b[r, XKFS.MAG_FUSION] = (2.0 if el[EK.IN_FLIGHT] != 0.0 else 1.0) if aligned else 0.0

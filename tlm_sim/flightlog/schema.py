@@ -519,6 +519,15 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         "roll-pitch error, origin offsets (m), fault/timeout/solution bit masks, GPS check "
         "status, primary lane index.",
     ),
+    _schema(
+        "XKFS", "QBBBBBBBBB",
+        "TimeUS,C,MI,BI,GI,AI,SS,GPS_GTA,GPS_CHK_WAIT,MAG_FUSION",
+        "s#--------", "F---------",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 lane sensor selection: compass, baro, GPS and airspeed index the lane "
+        "uses, source set, GPS good to align, waiting for GPS checks, magnetometer fusion (0 "
+        "none, 1 yaw on the ground, 2 in flight).",
+    ),
     # --- navigation / position control ----------------------------------------------------------
     _schema(
         "CTUN", "Qffffffefffhh",
@@ -604,7 +613,7 @@ SCHEMAS: dict[str, MessageSchema] = {s.name: s for s in _SCHEMA_LIST}
 #: Messages the numba simulator fills (float64 buffer [max_rows, len(columns)] each).
 LOGGED_MESSAGES: tuple[str, ...] = (
     "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
-    "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD",
+    "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
 )
 
 #: On-event messages (``rate_hz == 0``) that carry flight events.

@@ -10,7 +10,9 @@ ArduCopter 4.7-dev as the reference SITL logs show it (``shared/reference/sitl``
 ``MSG`` table.
 
 Each rule is one entry of :data:`ERR_TEXTS` or :data:`EV_TEXTS`: a subsystem/code (or event
-id) and a function of the flight's tables and the event's time that returns the lines.
+id) and a function of the flight's tables and the event's time that returns the lines. Texts
+that no ERR/EV row implies come from a logged column's changes (:data:`STATE_TEXTS`), e.g.
+``XKFS.MI`` -> "EKF3 IMU0 switching to compass 1".
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-__all__ = ["ERR_TEXTS", "EV_TEXTS", "event_texts", "ground_impacts"]
+__all__ = ["ERR_TEXTS", "EV_TEXTS", "STATE_TEXTS", "event_texts", "ground_impacts"]
 
 Tables = Mapping[str, pd.DataFrame]
 Render = Callable[[Tables, int, int], list[str]]
@@ -122,10 +124,32 @@ EV_TEXTS: dict[int, str] = {
 }
 
 
+def _compass_switches(tables: Tables) -> list[tuple[int, str]]:
+    """EKF3's text for each lane's change of compass: where a core's ``XKFS.MI`` changes (the
+    first 10 Hz row after the change; the core index C stands for EKF3's IMU index, the same
+    with the default EK3_IMU_MASK)."""
+    df = tables.get("XKFS")
+    if df is None or not len(df):
+        return []
+    out: list[tuple[int, str]] = []
+    for core, rows in df.groupby("C", sort=True):
+        mi = rows["MI"].to_numpy()
+        t_us = rows["TimeUS"].to_numpy()
+        for i in np.flatnonzero(mi[1:] != mi[:-1]) + 1:
+            out.append((int(t_us[i]), f"EKF3 IMU{int(core)} switching to compass {int(mi[i])}"))
+    return out
+
+
+#: Texts from the changes of a logged value: functions of the flight's tables returning
+#: ``(TimeUS, text)`` lines.
+STATE_TEXTS: tuple[Callable[[Tables], list[tuple[int, str]]], ...] = (
+    ground_impacts, _compass_switches)
+
+
 def event_texts(tables: Tables) -> list[tuple[int, str]]:
-    """``(TimeUS, text)`` MSG lines for the ERR and EV events of a flight's tables and its
-    ground impacts (:func:`ground_impacts`), in time order (the order of the events at equal
-    times)."""
+    """``(TimeUS, text)`` MSG lines for the ERR and EV events of a flight's tables and for the
+    changes of its logged state (:data:`STATE_TEXTS`: ground impacts, compass switches), in
+    time order (the order of the events at equal times)."""
     out: list[tuple[int, str]] = []
     err = tables.get("ERR")
     if err is not None:
@@ -139,5 +163,6 @@ def event_texts(tables: Tables) -> list[tuple[int, str]]:
             text = EV_TEXTS.get(int(ev_id))
             if text is not None:
                 out.append((int(t), text))
-    out += ground_impacts(tables)
+    for rule in STATE_TEXTS:
+        out += rule(tables)
     return sorted(out, key=lambda line: line[0])

@@ -1,4 +1,4 @@
-"""Barometers and compass as the autopilot reads them (10 Hz each).
+"""Barometers as the autopilot reads them (10 Hz).
 
 Two independent barometers (SIM_BARO_COUNT 2; BARO 3 is not modelled), each with its own noise
 stream and SITL's fault pipeline (``AP_Baro_SITL::_timer``, sitl-faults.md §3.2): DISABLE stops
@@ -7,8 +7,7 @@ the last value while FREEZE is set. Altitude is relative to the ground calibrati
 pressure and temperature follow the 1976 standard atmosphere. A disabled barometer is unhealthy
 (``BARO.H`` 0) from its first missed sample (baro_s44.bin: +0.09 s) until it delivers again. The
 primary is BARO_PRIMARY (0) while healthy, else the first healthy one (AP_Baro::update); the EKF
-fuses the primary. The compass reports the earth field (NED, gauss) rotated into the body frame
-plus SIM_MAG_RND noise.
+fuses the primary. The compasses are in :mod:`tlm_sim.sensors.mag`.
 """
 
 
@@ -16,7 +15,6 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import pressure_temperature
 from tlm_sim.rng import uniform_pm1
-from tlm_sim.rotation import quat_to_dcm
 from tlm_sim.sensors import layout as S
 
 BARO_PERIOD_S = 0.1  # the autopilot's baro reads (10 Hz): the sample interval of DRIFT
@@ -83,21 +81,3 @@ def baro_read(s, x, cfg, rng, t_us):
         code = 0 if ok != 0.0 else ERR_CODE_UNHEALTHY
         s[S.B_PRIMARY_OK] = ok
     return (new1 if prim == 1 else new0), code
-
-
-@tick_jit
-def mag_sample(s, x, cfg, rng):
-    """Take a compass sample: earth field rotated into the body frame [gauss] (+ noise)."""
-    qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]
-    mn = cfg[S.C_MAG_EARTH]
-    me = cfg[S.C_MAG_EARTH + 1]
-    md = cfg[S.C_MAG_EARTH + 2]
-    # R^T m with R the body->NED rotation of q
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_dcm(qw, qx, qy, qz)
-    s[S.M_FIELD] = r00 * mn + r10 * me + r20 * md
-    s[S.M_FIELD + 1] = r01 * mn + r11 * me + r21 * md
-    s[S.M_FIELD + 2] = r02 * mn + r12 * me + r22 * md
-    rnd = cfg[S.C_MAG_RND]
-    if rnd != 0.0:
-        for k in range(3):
-            s[S.M_FIELD + k] += rnd * uniform_pm1(rng)

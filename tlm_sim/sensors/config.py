@@ -94,6 +94,19 @@ def _baro_config(c: np.ndarray, p: Params) -> None:
         c[S.C_BARO_DISABLE + i] = p[f"SIM_{n}_DISABLE"]
 
 
+def _mag_config(c: np.ndarray, p: Params) -> None:
+    """The compasses: noise, earth field, anomaly, motor interference, per-compass faults
+    (mGauss -> gauss)."""
+    c[S.C_MAG_RND] = p["SIM_MAG_RND"] / 1000.0
+    c[S.C_MAG_EARTH : S.C_MAG_EARTH + 3] = earth_field(p)
+    for k, ax in enumerate("XYZ"):
+        c[S.C_MAG_ALY + k] = p[f"SIM_MAG_ALY_{ax}"] / 1000.0
+        c[S.C_MAG_MOT + k] = p[f"SIM_MAG_MOT_{ax}"] / 1000.0
+    c[S.C_MAG_ALY_HGT] = p["SIM_MAG_ALY_HGT"]
+    for i in range(S.N_MAG):
+        c[S.C_MAG_FAIL + i] = p[f"SIM_MAG{i + 1}_FAIL"]
+
+
 def build_sensor_config(p: Params) -> np.ndarray:
     """Sensor configuration of a flight from its parameters (SITL names and units -> SI)."""
     require_params(p, "build_sensor_config")
@@ -101,8 +114,7 @@ def build_sensor_config(p: Params) -> np.ndarray:
     _imu_config(c, p)
     _gps_config(c, p)
     _baro_config(c, p)
-    c[S.C_MAG_RND] = p["SIM_MAG_RND"] / 1000.0  # mG -> gauss
-    c[S.C_MAG_EARTH : S.C_MAG_EARTH + 3] = earth_field(p)
+    _mag_config(c, p)
     c[S.C_RC_FAIL] = p["SIM_RC_FAIL"]
     c[S.C_HOME_ALT] = p["SIM_OPOS_ALT"]
     c[S.C_FRAME_HEIGHT] = p["TLM_FRAME_HEIGHT"]

@@ -3,7 +3,8 @@
 
 The sensor state holds, per IMU instance, the accumulators handed to the EKF each main-loop tick,
 the autopilot's 20 Hz low-pass filter states, the VIBE metric filters and the clip counters; plus
-the GPS delay line, baro, compass and RC receiver state. Units: SI (m, m/s, m/s^2, rad, rad/s),
+the GPS delay line, baro, the three compasses (one record each: what the EKF reads) and RC
+receiver state. Units: SI (m, m/s, m/s^2, rad, rad/s),
 body frame FRD, earth frame NED.
 """
 
@@ -11,6 +12,7 @@ from tlm_sim.slots import Layout
 
 N_IMU = 2
 N_BARO = 2  # SIM_BARO_COUNT 2: BARO 1 (SIM_BARO_*) and BARO 2 (SIM_BAR2_*); BARO 3 is not modelled
+N_MAG = 3  # compasses, as SITL's copter has them
 
 # ---- per-IMU record (at IMU_BASE + i * IMU_STRIDE) -------------------------------------------
 IMU = Layout("imu", "one IMU instance")
@@ -58,6 +60,16 @@ BA_DRIFT = _b.add("BA_DRIFT", 1, "m", "accumulated SIM_BARn_DRIFT offset (stays 
 BA_HEALTHY = _b.add("BA_HEALTHY", 1, "", "1 while the instance delivers samples (BARO.H)")
 BARO_STRIDE = BARO.close()
 
+# ---- per-compass record (at MAG_BASE + i * MAG_STRIDE): what the EKF reads of compass i -----
+MAG = Layout("mag", "one compass instance")
+M_FIELD = MAG.add("M_FIELD", 3, "gauss",
+                  "body field as the compass delivers it (held while it delivers nothing)")
+M_NEW = MAG.add("M_NEW", 1, "", "1 if the compass delivered a sample on the latest compass tick")
+M_HEALTHY = MAG.add("M_HEALTHY", 1, "",
+                    "1 while its last sample is under 0.5 s old (AP_Compass health, MAG.Health)")
+M_T_US = MAG.add("M_T_US", 1, "us", "time of its last delivered sample (MAG.S)")
+MAG_STRIDE = MAG.close()
+
 # ---- GPS record: a delay line of main-loop ticks ---------------------------------------------
 GPS_HIST_N = 64  # delay line length (main-loop ticks, 400 Hz -> 160 ms)
 G_ROW = 7  # one history row: t_s, pn, pe, pd, vn, ve, vd
@@ -92,7 +104,10 @@ B_PRIMARY = _s.add("B_PRIMARY", 1, "",
                    "primary baro: BARO_PRIMARY (0) if healthy, else the first healthy one")
 B_PRIMARY_OK = _s.add("B_PRIMARY_OK", 1, "", "1 while the primary baro is healthy (ERR 18)")
 M_NEXT_US = _s.add("M_NEXT_US", 1, "us", "next compass sample")
-M_FIELD = _s.add("M_FIELD", 3, "gauss", "last body field")
+M_BODY = _s.add("M_BODY", 3, "gauss",
+                 "body field of the latest compass tick before the per-compass faults (earth "
+                 "field + anomaly rotated, + motor interference + SIM_MAG_RND noise)")
+MAG_BASE = _s.block("MAG", MAG, N_MAG)
 RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
 RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
 RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
@@ -134,6 +149,13 @@ C_BARO_FREEZE = _c.add("C_BARO_FREEZE", N_BARO, "", "SIM_BARO_FREEZE, SIM_BAR2_F
 C_BARO_DISABLE = _c.add("C_BARO_DISABLE", N_BARO, "", "SIM_BARO_DISABLE, SIM_BAR2_DISABLE")
 C_MAG_RND = _c.add("C_MAG_RND", 1, "gauss", "SIM_MAG_RND")
 C_MAG_EARTH = _c.add("C_MAG_EARTH", 3, "gauss", "earth field NED")
+C_MAG_FAIL = _c.add("C_MAG_FAIL", N_MAG, "",
+                    "SIM_MAG1_FAIL..SIM_MAG3_FAIL: 0 ok, 1 no data, 2 frozen (last reading)")
+C_MAG_ALY = _c.add("C_MAG_ALY", 3, "gauss", "SIM_MAG_ALY_X/Y/Z: ground-level anomaly, NED")
+C_MAG_ALY_HGT = _c.add("C_MAG_ALY_HGT", 1, "m",
+                       "SIM_MAG_ALY_HGT: height where the anomaly has fallen to 1/8")
+C_MAG_MOT = _c.add("C_MAG_MOT", 3, "gauss/A",
+                   "SIM_MAG_MOT_X/Y/Z: body field per ampere of battery current")
 C_RC_FAIL = _c.add("C_RC_FAIL", 1, "", "SIM_RC_FAIL")
 C_HOME_ALT = _c.add("C_HOME_ALT", 1, "m", "SIM_OPOS_ALT (AMSL)")
 C_VIB_MOT_MAX = _c.add("C_VIB_MOT_MAX", 1, "Hz", "SIM_VIB_MOT_MAX")
@@ -176,6 +198,7 @@ RNG_GYRO = NOISE.add("RNG_GYRO", N_IMU, "", "gyro noise, one stream per IMU")
 RNG_ACC = NOISE.add("RNG_ACC", N_IMU, "", "accelerometer noise, one stream per IMU")
 RNG_GPS = NOISE.add("RNG_GPS", 1, "", "GPS velocity noise")
 RNG_BARO = NOISE.add("RNG_BARO", 1, "", "barometer noise")
-RNG_MAG = NOISE.add("RNG_MAG", 1, "", "compass noise")
+RNG_MAG = NOISE.add("RNG_MAG", 1, "",
+                    "compass noise (SIM_MAG_RND: one draw shared by the three compasses, as SITL)")
 RNG_BARO2 = NOISE.add("RNG_BARO2", 1, "", "barometer 2 noise (RNG_BARO is barometer 1's)")
 N_NOISE_STREAMS = NOISE.close()

@@ -86,7 +86,7 @@ def log_imu(bufs, counts, t_us, s, scfg):
 
 @tick_jit
 def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
-    """The sensors' 10 Hz rows: VIBE (per IMU), BARO (two instances), MAG, RCIN."""
+    """The sensors' 10 Hz rows: VIBE (per IMU), BARO (two instances), MAG (three), RCIN."""
     for i in range(S.N_IMU):
         r = L.new_row(bufs, counts, L.K_VIBE, t_us)
         if r >= 0:
@@ -97,14 +97,8 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
             b[r, VIBE.Clip] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
     for i in range(S.N_BARO):
         _log_baro(bufs, counts, t_us, s, home_alt, i)
-    r = L.new_row(bufs, counts, L.K_MAG, t_us)
-    if r >= 0:
-        b = bufs[L.K_MAG]
-        b[r, MAG.I] = 0.0
-        for k in range(3):
-            b[r, MAG.MagX + k] = round(s[S.M_FIELD + k] * 1000.0)
-        b[r, MAG.Health] = 1.0
-        b[r, MAG.S] = t_us // 1000
+    for i in range(S.N_MAG):
+        _log_mag(bufs, counts, t_us, s, i)
     r = L.new_row(bufs, counts, L.K_RCIN, t_us)
     if r >= 0:
         b = bufs[L.K_RCIN]
@@ -132,3 +126,18 @@ def _log_baro(bufs, counts, t_us, s, home_alt, i):
         b[r, BARO.GndTemp] = 25.0
         b[r, BARO.H] = s[sb + S.BA_HEALTHY]
         b[r, BARO.CPress] = s[sb + S.BA_PRESS]
+
+
+@inline_jit
+def _log_mag(bufs, counts, t_us, s, i):
+    """One MAG row (compass i): its reading [mGauss] (held while it delivers nothing), health,
+    the time of its last sample [us]."""
+    r = L.new_row(bufs, counts, L.K_MAG, t_us)
+    if r >= 0:
+        b = bufs[L.K_MAG]
+        m = S.MAG_BASE + i * S.MAG_STRIDE
+        b[r, MAG.I] = i
+        for k in range(3):
+            b[r, MAG.MagX + k] = round(s[m + S.M_FIELD + k] * 1000.0)
+        b[r, MAG.Health] = s[m + S.M_HEALTHY]
+        b[r, MAG.S] = s[m + S.M_T_US]
