@@ -444,10 +444,11 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     Relative errors of the non-primary lanes accumulate score_i - score_primary when positive
     or below -max(EK3_ERR_THRESH, 0.05), clamped to +-1; the primary's score enters them
     C_SCORE_LAG after it changed (EKF3's cores fuse a few IMU samples apart, so a sample that
-    changes every lane's score shows in the other lanes first). Once the primary has been healthy for
-    10 s (latched) and while armed, the primary switches to the healthy lane with the lowest
-    relative error that was not primary in the last 10 s when the primary is unhealthy, or its
-    score exceeds 1 (and the candidate's is lower), or the candidate's relative error <= -0.5.
+    changes every lane's score shows in the other lanes first). Once the primary has been
+    healthy for 10 s (latched) and while armed, the primary switches to the healthy lane with
+    the lowest relative error that was not primary in the last 10 s when the primary is
+    unhealthy, or its score exceeds 1 (and the candidate's is lower), or the candidate's
+    relative error <= -0.5.
     If the primary's IMU stops delivering samples it switches at once (our addition).
     Returns True when the primary changed on this call.
     """

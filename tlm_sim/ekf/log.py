@@ -1,5 +1,6 @@
 """The EKF's log messages: XKF1 and XKF4 per lane, POS from the output block (10 Hz), and the
-ERR rows of a primary-lane change and of ArduCopter's GPS glitch check. Columns by name (:mod:`tlm_sim.logger`)."""
+ERR rows of a primary-lane change and of ArduCopter's GPS glitch check. Columns by name
+(:mod:`tlm_sim.logger`)."""
 
 import math
 
