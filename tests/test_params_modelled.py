@@ -31,7 +31,7 @@ from tlm_sim.profiles import profile_params
 from tlm_sim.sensors.config import build_sensor_config
 
 #: parameters the issue found accepted and ignored: each must now be refused
-ISSUE_IGNORED = ("SIM_BARO_DISABLE", "SIM_MAG1_FAIL", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
+ISSUE_IGNORED = ("SIM_BARO_DISABLE", "SIM_MAG1_FAIL",
                  "SIM_GYR_FAIL_MSK", "SIM_ACC_FAIL_MSK", "SIM_BARO_DRIFT", "SIM_BARO_FREEZE",
                  "SIM_BAR2_DISABLE", "SIM_GPS1_POS_X", "SIM_MAG_ALY_X", "LOG_BITMASK",
                  "SIM_BAR2_RND", "DISARM_DELAY", "FS_THR_VALUE", "PSC_ACCZ_D")
@@ -112,8 +112,8 @@ def test_every_unmodelled_parameter_is_refused_explicitly():
             Params({name: p[name]})
     with pytest.raises(UnmodelledParamError, match="SIM_BARO_DISABLE"):
         p.updated(SIM_BARO_DISABLE=1)
-    with pytest.raises(UnmodelledParamError, match="SIM_GPS1_GLTCH_X"):  # via its old name
-        Params({"SIM_GPS_GLITCH_X": 0.001})
+    with pytest.raises(UnmodelledParamError, match="SIM_GPS1_POS_X"):  # via its old name
+        Params({"SIM_GPS_POS_X": 0.1})
 
 
 def test_unmodelled_parameters_are_refused_mid_flight_and_in_schedules():
