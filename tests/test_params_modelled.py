@@ -31,9 +31,8 @@ from tlm_sim.profiles import profile_params
 from tlm_sim.sensors.config import build_sensor_config
 
 #: parameters the issue found accepted and ignored: each must now be refused
-ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG_DELAY", "SIM_GPS1_GLTCH_X", "SIM_GPS1_JAM",
-                 "SIM_BAR3_DRIFT", "SIM_BAR3_FREEZE", "SIM_BARO_DELAY",
-                 "SIM_GPS1_POS_X", "SIM_MAG1_DIA_X", "LOG_BITMASK",
+ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG_DELAY", "SIM_BAR3_DRIFT", "SIM_BAR3_FREEZE",
+                 "SIM_BARO_DELAY", "SIM_GPS1_POS_X", "SIM_MAG1_DIA_X", "LOG_BITMASK",
                  "SIM_BAR3_RND", "DISARM_DELAY", "PSC_ACCZ_D")
 
 
@@ -112,8 +111,8 @@ def test_every_unmodelled_parameter_is_refused_explicitly():
             Params({name: p[name]})
     with pytest.raises(UnmodelledParamError, match="SIM_BAR3_DISABLE"):
         p.updated(SIM_BAR3_DISABLE=1)
-    with pytest.raises(UnmodelledParamError, match="SIM_GPS1_GLTCH_X"):  # via its old name
-        Params({"SIM_GPS_GLITCH_X": 0.001})
+    with pytest.raises(UnmodelledParamError, match="SIM_GPS1_POS_X"):  # via its old name
+        Params({"SIM_GPS_POS_X": 0.1})
 
 
 def test_unmodelled_parameters_are_refused_mid_flight_and_in_schedules():

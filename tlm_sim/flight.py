@@ -32,8 +32,14 @@ from tlm_sim.dynamics.frame import build_frame
 from tlm_sim.dynamics.log import log_dynamics_10hz
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
-from tlm_sim.ekf.lanes import ekf_init, ekf_output, ekf_output_nav, ekf_update
-from tlm_sim.ekf.log import log_ekf_10hz, log_lane_switch
+from tlm_sim.ekf.lanes import (
+    ekf_gps_accuracy,
+    ekf_init,
+    ekf_output,
+    ekf_output_nav,
+    ekf_update,
+)
+from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
@@ -164,7 +170,7 @@ def run_flight(
     pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    _boot(s, scfg, ekf, sel, ecfg, events, ev_counts)
+    _boot(s, scfg, ekf, sel, ecfg, events, ev_counts, home[0])
     k_sched = 0
     t_us = 0
     next_loop = 0
@@ -183,6 +189,8 @@ def run_flight(
                                                    rng, events, ev_counts)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
+        if tick % 40 == 0:  # ArduCopter's 10 Hz GPS glitch check
+            gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
@@ -197,10 +205,10 @@ def run_flight(
 
 
 @inline_jit
-def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts):
+def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts, home_lat):
     """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
-    gps_init(s, 0.0)
+    gps_init(s, 0.0, home_lat)
     rc_init(s, 0.0)
     baro_init(s)
     mag_init(s)
@@ -263,6 +271,8 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
               armed, events, ev_counts):
     """The EKF's main-loop update with this tick's sensor data, the per-tick part of its output
     block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
+    if gps_new and gps[S.GE_FIX_3D] > 0.5:
+        ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
     switched = ekf_update(
         ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
@@ -296,13 +306,13 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
 
 
 def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a (9, 9)
+    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a (9, >= 9)
     block whose rows are imu_ok, the GPS epoch (sensors.layout GE_*), motor PWM, and the
     controllers' inputs of control.ahrs (position, velocity, attitude, gyro, NED acceleration,
     the EKF status for the failsafe checks, control.failsafe NAV_*); the EKF output block
     (ekf.layout O_*)."""
-    return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)), np.zeros((9, 9)),
-            np.zeros(EK.N_OUT))
+    return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)),
+            np.zeros((9, max(9, S.N_GPS_EPOCH))), np.zeros(EK.N_OUT))
 
 
 def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

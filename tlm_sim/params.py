@@ -270,9 +270,8 @@ _add("SIM_GPS1_NOISE", "m", 0, 100, "amplitude of a slow sine on GPS altitude (�
 _add("SIM_GPS1_DRFTALT", "m", 0, 1000, "amplitude of a very slow GPS altitude drift (§2.2)",
      modelled=False)
 _add(["SIM_GPS1_GLTCH_X", "SIM_GPS1_GLTCH_Y"], "deg", -10, 10,
-     "GPS glitch offset added to lat (X) / lon (Y), in degrees (§2.2)", modelled=False)
-_add("SIM_GPS1_GLTCH_Z", "m", -10000, 10000, "GPS glitch offset added to altitude (§2.2)",
-     modelled=False)
+     "GPS glitch offset added to lat (X) / lon (Y), in degrees, after the lag (§2.2)")
+_add("SIM_GPS1_GLTCH_Z", "m", -10000, 10000, "GPS glitch offset added to altitude (§2.2)")
 _add([f"SIM_GPS1_VERR_{a}" for a in _XYZ], "m/s", -100, 100,
      "GPS NED velocity error amplitude, uniform (§2.2)")
 _add("SIM_GPS1_LCKTIME", "s", 0, 3600, "time before GPS 1 first lock (§2.2)", modelled=False)
@@ -280,7 +279,7 @@ _add("SIM_GPS1_BYTELOS", "%", 0, 100, "GPS 1 serial byte loss (§2.1)", modelled
 _add([f"SIM_GPS1_POS_{a}" for a in _XYZ], "m", -10, 10, "GPS 1 antenna offset, body FRD (§2.2)",
      modelled=False)
 _add("SIM_GPS1_ALT_OFS", "m", -10000, 10000, "GPS 1 altitude offset (§2.2)", modelled=False)
-_flag("SIM_GPS1_JAM", "GPS 1 jamming simulation (§2.2)", modelled=False)
+_flag("SIM_GPS1_JAM", "GPS 1 jamming simulation (§2.2; sitl-faults.md §5.3)")
 for _i in (1, 2, 3):
     _add(f"SIM_ACC{_i}_RND", "m/s/s", 0, 100,
          f"IMU {_i} accel vibration amplitude, only with SIM_VIB_* (§2.3)", modelled=_i < 3)

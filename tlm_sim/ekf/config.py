@@ -56,6 +56,7 @@ def _noise_and_gates(c: np.ndarray, p: Params) -> None:
 def _ekf3_constants(c: np.ndarray) -> None:
     """Timeouts and limits EKF3 hard-codes (no parameters, ardupilot-reference §3.8)."""
     c[L.C_POS_RETRY] = 7.0
+    c[L.C_POS_RETRY_VEL] = 10.0
     c[L.C_TILT_DRIFT] = 15.0
     # hgtRetryTimeMode0_ms: with GPS vertical velocity fused (EK3_SRC1_VELZ 3) EKF3 waits 10 s
     # (5 s only without it) before a rejected height is reset, or a height that stopped
@@ -67,6 +68,12 @@ def _ekf3_constants(c: np.ndarray) -> None:
     c[L.C_ALIGN_TIME] = 0.5
     c[L.C_LANE_INIT_T] = 1.0
     c[L.C_SELECT_T] = 10.0
+    # EKF3's cores fuse a measurement at their own prediction steps, a few IMU samples
+    # apart; tlm's lanes fuse on the same tick. The relative errors see the primary's new
+    # score this much later than the other lanes' (tlm model choice, from gps_glitch_s46:
+    # XKF3.RErr dips by ~0.3-1 at each GPS sample while the scores fall, and the lane
+    # switches at the second rejected sample)
+    c[L.C_SCORE_LAG] = 3 * c[L.C_DT]
     c[L.C_ONGROUND_NSE] = 0.5
     c[L.C_BAD_IMU_ACC_NSE] = 5.0
     c[L.C_BAD_IMU_HOLD] = 10.0

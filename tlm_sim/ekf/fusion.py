@@ -53,6 +53,7 @@ from tlm_sim.ekf.layout import (
     C_ONGROUND_NSE,
     C_POS_GATE,
     C_POS_RETRY,
+    C_POS_RETRY_VEL,
     C_POSNE_NSE,
     C_USING_GPS_T,
     C_VEL_GATE,
@@ -71,6 +72,11 @@ from tlm_sim.ekf.layout import (
     F_VERT_POS,
     F_VERT_VEL,
     FAULT,
+    GPS_GLITCHING,
+    GPS_HACC_F,
+    GPS_INNOV_FAIL,
+    GPS_SACC_F,
+    GPS_SPD_FAIL,
     HGT_RESET_COUNT,
     HGT_TR,
     IMU_OK,
@@ -109,12 +115,17 @@ from tlm_sim.ekf.layout import (
     R20,
     R21,
     R22,
+    SACC_LPF,
+    SACC_PEAK,
     T_BAD_IMU,
     T_BARO_LAST,
     T_CONSTPOS,
     T_GOOD_IMU,
+    T_GPS_ACC,
     T_GPS_FUSED,
     T_HGT_PASS,
+    T_INNOV_HIGH,
+    T_INNOV_PASS,
     T_POS_PASS,
     T_VEL_PASS,
     VD,
@@ -164,6 +175,86 @@ def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
     e[T_POS_PASS] = t
     e[T_VEL_PASS] = t
     e[T_GPS_FUSED] = t
+
+
+@tick_jit
+def reset_pos_to_gps(e, cfg, t, pn, pe, k):
+    """EKF3's GPS position reset after a position timeout while GPS velocity still passes.
+
+    The horizontal position (filter state and output history alike) jumps to the GPS sample
+    describing ``k`` ticks ago; its variance becomes the GPS position noise; the test ratios
+    are cleared (velocity is left alone)."""
+    dn = pn - filter_get(e, k, 0)
+    de = pe - filter_get(e, k, 1)
+    shift_output(e, 0, dn)
+    shift_output(e, 1, de)
+    reset_block(e, ES_POS, 2, gps_pos_var(e, cfg))
+    e[POS_RESET_COUNT] += 1.0
+    e[POS_RESET_DN] = dn
+    e[POS_RESET_DE] = de
+    e[POS_TR] = 0.0
+    e[VEL_TR] = 0.0
+    e[T_POS_PASS] = t
+    e[T_GPS_FUSED] = t
+
+
+@tick_jit
+def gps_pos_var(e, cfg):
+    """Horizontal GPS position variance: the reported accuracy's envelope, at least the
+    EK3_POSNE_M_NSE noise (EKF3 caps the accuracy at 100 m)."""
+    return max(e[GPS_HACC_F], cfg[C_POSNE_NSE]) ** 2
+
+
+@tick_jit
+def lane_gps_accuracy(e, cfg, t, hacc, sacc):
+    """A 3-D-fix GPS sample's reported accuracies: hacc [m] horizontal, sacc [m/s] speed.
+
+    EKF3 readGpsData: decaying peak-hold envelopes (alpha = 0.0002 per ms since the previous
+    sample, tau 5 s) limited to [EK3_*_M_NSE, 100 m] and [.., 50 m/s]: the measurement noise
+    of the position and velocity fusion. calcGpsGoodForFlight's speed-accuracy test: sacc
+    low-passed (0.2 per sample), peak-held with a 10 s decay; fails above 1.5 m/s, passes
+    again below 1.0 m/s.
+    """
+    dt = t - e[T_GPS_ACC] if e[T_GPS_ACC] > 0.0 else 0.0
+    e[T_GPS_ACC] = t
+    a = min(max(0.2 * dt, 0.0), 1.0)
+    e[GPS_HACC_F] = max(min(max(e[GPS_HACC_F] * (1.0 - a), hacc), 100.0), cfg[C_POSNE_NSE])
+    e[GPS_SACC_F] = max(min(max(e[GPS_SACC_F] * (1.0 - a), sacc), 50.0), cfg[C_VELNE_NSE])
+    e[SACC_LPF] = min(max(0.2 * sacc + 0.8 * e[SACC_LPF], 0.0), 10.0)
+    e[SACC_PEAK] = max(e[SACC_LPF], (1.0 - min(dt / 10.0, 1.0)) * e[SACC_PEAK])
+    if e[SACC_PEAK] > 1.5:
+        e[GPS_SPD_FAIL] = 1.0
+    elif e[SACC_PEAK] < 1.0:
+        e[GPS_SPD_FAIL] = 0.0
+
+
+@tick_jit
+def gps_glitch_check(e, t):
+    """EKF3's GPS innovation consistency test and gps_glitching flag (every tick).
+
+    While aiding with GPS: the test fails when the velocity and position test ratios have not
+    both been below 1 for 1 s, and passes again after 10 s in which neither exceeded 0.7.
+    gps_glitching = (innovation test or speed-accuracy test failing) while aiding with GPS.
+    Outside GPS aiding the test is reset (passing). While the bad-IMU response fuses GPS
+    without gates the ratios count as passing (tlm model choice: SITL's accelerometer-failure
+    flight accel_s13 reports no GPS glitch while tlm's ratios exceed 1 there).
+    """
+    if e[AID_MODE] != AID_ABSOLUTE or e[T_INNOV_PASS] <= 0.0:
+        e[T_INNOV_PASS] = t
+        e[T_INNOV_HIGH] = t
+        e[GPS_INNOV_FAIL] = 0.0
+        e[GPS_GLITCHING] = 0.0
+        return
+    if (e[VEL_TR] < 1.0 and e[POS_TR] < 1.0) or e[BAD_IMU] != 0.0:
+        e[T_INNOV_PASS] = t
+    if e[VEL_TR] > 0.7 or e[POS_TR] > 0.7:
+        e[T_INNOV_HIGH] = t
+    if t - e[T_INNOV_PASS] > 1.0:
+        e[GPS_INNOV_FAIL] = 1.0
+    elif t - e[T_INNOV_HIGH] > 10.0:
+        e[GPS_INNOV_FAIL] = 0.0
+    fail = e[GPS_INNOV_FAIL] != 0.0 or e[GPS_SPD_FAIL] != 0.0
+    e[GPS_GLITCHING] = 1.0 if fail else 0.0
 
 
 @tick_jit
@@ -260,9 +351,13 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
 
     In aiding mode NONE (before the first fix, or after constant-position mode started) the
     sample starts absolute aiding with a reset to GPS. Otherwise velocity (N, E, D) and position
-    (N, E) are gated separately and fused sequentially; when position or velocity has not passed
-    for C_POS_RETRY seconds, or the horizontal position variance exceeds EK3_GLITCH_RAD^2, the
-    lane is reset to GPS instead. While the bad-IMU response is active the gates are bypassed.
+    (N, E) are gated separately and fused sequentially. Measurement noise: the reported
+    accuracies' envelopes (:func:`lane_gps_accuracy`) with the EK3_*_M_NSE floors; the
+    horizontal velocity *gate* uses EK3_VELNE_M_NSE alone, as EKF3's data checks do. When
+    velocity has not passed for C_POS_RETRY seconds, or the horizontal position variance
+    exceeds EK3_GLITCH_RAD^2, position and velocity are reset to GPS; when only the position
+    has not passed for C_POS_RETRY_VEL seconds (velocity still passing: a GPS glitch), the
+    position alone is reset to GPS. While the bad-IMU response is active the gates are bypassed.
     """
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
         return
@@ -273,8 +368,9 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
         update_flags(e, cfg, t)
         return
     r_vne = cfg[C_VELNE_NSE] ** 2
+    r_vne_fuse = max(e[GPS_SACC_F], cfg[C_VELNE_NSE]) ** 2
     r_vd = cfg[C_VELD_NSE] ** 2
-    r_p = cfg[C_POSNE_NSE] ** 2
+    r_p = gps_pos_var(e, cfg)
     bad = _bad_imu_check(e, cfg, t, vel[2], k, r_vd)
     yvn = vel[0] - filter_get(e, k, 3)
     yve = vel[1] - filter_get(e, k, 4)
@@ -296,11 +392,14 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     e[INNOV_VD] = yvd
     e[INNOV_PN] = ypn
     e[INNOV_PE] = ype
-    retry = cfg[C_POS_RETRY]
-    timed_out = (t - e[T_POS_PASS] > retry) or (t - e[T_VEL_PASS] > retry)
+    vel_out = t - e[T_VEL_PASS] > cfg[C_POS_RETRY]
     pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
-    if timed_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
+    if vel_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
         reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        update_flags(e, cfg, t)
+        return
+    if t - e[T_POS_PASS] > cfg[C_POS_RETRY_VEL]:
+        reset_pos_to_gps(e, cfg, t, pos[0], pos[1], k)
         update_flags(e, cfg, t)
         return
     fuse_vel = vel_tr < 1.0 or bad
@@ -309,8 +408,8 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
         return
     clear_dx(e)
     if fuse_vel:
-        fuse_index(e, ES_VEL + 0, yvn, r_vne)
-        fuse_index(e, ES_VEL + 1, yve, r_vne)
+        fuse_index(e, ES_VEL + 0, yvn, r_vne_fuse)
+        fuse_index(e, ES_VEL + 1, yve, r_vne_fuse)
         fuse_index(e, ES_VEL + 2, yvd, r_vd)
         e[T_VEL_PASS] = t
     if fuse_pos:
@@ -464,3 +563,4 @@ def update_flags(e, cfg, t):
     e[F_VERT_POS] = 1.0 if aligned and t - e[T_HGT_PASS] <= cfg[C_HGT_RETRY] else 0.0
     e[F_CONST_POS] = 1.0 if aligned and e[AID_MODE] == AID_NONE else 0.0
     e[F_USING_GPS] = 1.0 if absolute and t - e[T_GPS_FUSED] <= cfg[C_USING_GPS_T] else 0.0
+    gps_glitch_check(e, t)

@@ -33,6 +33,7 @@ from tlm_sim.ekf.fusion import (
     lane_fuse_baro,
     lane_fuse_constpos,
     lane_fuse_gps,
+    lane_gps_accuracy,
     stop_aiding,
     update_flags,
 )
@@ -67,6 +68,7 @@ from tlm_sim.ekf.layout import (
     C_LANE_INIT_T,
     C_MAG_E,
     C_MAG_N,
+    C_SCORE_LAG,
     C_SELECT_T,
     C_TARGET_DT,
     C_TAU_OUTPUT,
@@ -143,6 +145,7 @@ from tlm_sim.ekf.layout import (
     R21,
     R22,
     SCORE,
+    SCORE_PREV,
     SEL_CHANGES,
     SEL_HEALTHY_SINCE,
     SEL_N_LANES,
@@ -160,6 +163,7 @@ from tlm_sim.ekf.layout import (
     T_LAST,
     T_MAG_PASS,
     T_POS_PASS,
+    T_SCORE,
     T_VEL_PASS,
     TILT_BAD_T,
     TILT_RESET_COUNT,
@@ -420,6 +424,16 @@ def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
 
 
 @tick_jit
+def ekf_gps_accuracy(ekf, cfg, t_us, hacc, sacc):
+    """A new 3-D-fix GPS sample's reported accuracies (call before :func:`ekf_update` fuses
+    it): hacc horizontal [m], sacc speed [m/s]. Without calls the fusion uses the EK3_*_M_NSE
+    noises and the speed-accuracy test passes."""
+    t = t_us * 1e-6
+    for i in range(ekf.shape[0]):
+        lane_gps_accuracy(ekf[i], cfg, t, hacc, sacc)
+
+
+@tick_jit
 def ekf_fuse_baro(ekf, cfg, t_us, alt):
     """New baro sample: altitude above the origin [m, up]."""
     t = t_us * 1e-6
@@ -461,10 +475,13 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     """Update lane scores/health and switch the primary lane as EKF3 does (section 3.4).
 
     Relative errors of the non-primary lanes accumulate score_i - score_primary when positive
-    or below -max(EK3_ERR_THRESH, 0.05), clamped to +-1. Once the primary has been healthy for
-    10 s (latched) and while armed, the primary switches to the healthy lane with the lowest
-    relative error that was not primary in the last 10 s when the primary is unhealthy, or its
-    score exceeds 1 (and the candidate's is lower), or the candidate's relative error <= -0.5.
+    or below -max(EK3_ERR_THRESH, 0.05), clamped to +-1; the primary's score enters them
+    C_SCORE_LAG after it changed (EKF3's cores fuse a few IMU samples apart, so a sample that
+    changes every lane's score shows in the other lanes first). Once the primary has been
+    healthy for 10 s (latched) and while armed, the primary switches to the healthy lane with
+    the lowest relative error that was not primary in the last 10 s when the primary is
+    unhealthy, or its score exceeds 1 (and the candidate's is lower), or the candidate's
+    relative error <= -0.5.
     If the primary's IMU stops delivering samples it switches at once (our addition).
     Returns True when the primary changed on this call.
     """
@@ -472,15 +489,20 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     n = ekf.shape[0]
     for i in range(n):
         e = ekf[i]
-        e[SCORE] = lane_score(e)
+        score = lane_score(e)
+        if score != e[SCORE]:
+            e[SCORE_PREV] = e[SCORE]
+            e[T_SCORE] = t
+            e[SCORE] = score
         e[HEALTHY] = 1.0 if lane_healthy(e, cfg, t) else 0.0
     p = int(sel[SEL_PRIMARY])
     sp = ekf[p, SCORE]
+    sp_seen = ekf[p, SCORE_PREV] if t - ekf[p, T_SCORE] < cfg[C_SCORE_LAG] - 1e-9 else sp
     thr = max(cfg[C_ERR_THRESH], 0.05)
     for i in range(n):
         if i == p:
             continue
-        d = ekf[i, SCORE] - sp
+        d = ekf[i, SCORE] - sp_seen
         if d > 0.0 or d < -thr:
             sel[SEL_REL_ERR + i] = min(max(sel[SEL_REL_ERR + i] + d, -1.0), 1.0)
     healthy_p = ekf[p, HEALTHY] != 0.0

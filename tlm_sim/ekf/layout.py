@@ -128,6 +128,8 @@ F_USING_GPS = _l.add("F_USING_GPS", 1, "", "GPS position fused within the last 4
 FAULT = _l.add("FAULT", 1, "", "1 after a numerical fault (NaN); lane then unhealthy")
 HEALTHY = _l.add("HEALTHY", 1, "", "lane health as the selector sees it")
 SCORE = _l.add("SCORE", 1, "", "error score max(0.5 (vel + pos), hgt)")
+SCORE_PREV = _l.add("SCORE_PREV", 1, "", "error score before its latest change")
+T_SCORE = _l.add("T_SCORE", 1, "s", "time of the latest error score change")
 IMU_OK = _l.add("IMU_OK", 1, "", "1 while this lane's IMU delivers samples")
 # resets (for controllers that must absorb jumps), counters and last deltas
 POS_RESET_COUNT = _l.add("POS_RESET_COUNT", 1, "", "position resets so far")
@@ -155,6 +157,25 @@ T_GOOD_IMU = _l.add("T_GOOD_IMU", 1, "s",
 TILT_BAD_T = _l.add("TILT_BAD_T", 1, "s",
                     "time the lane has been static with a large tilt error")
 TILT_RESET_COUNT = _l.add("TILT_RESET_COUNT", 1, "", "stationary tilt re-alignments so far")
+# GPS quality (EKF3 readGpsData / calcGpsGoodForFlight): the reported accuracies' decaying
+# envelopes (measurement noise of the fusion), the speed-accuracy test and the innovation
+# consistency test whose failure is EKF3's gps_glitching flag
+GPS_HACC_F = _l.add("GPS_HACC_F", 1, "m",
+                    "reported horizontal accuracy, decaying peak hold (tau 5 s), 0 before any")
+GPS_SACC_F = _l.add("GPS_SACC_F", 1, "m/s",
+                    "reported speed accuracy, decaying peak hold (tau 5 s), 0 before any")
+T_GPS_ACC = _l.add("T_GPS_ACC", 1, "s", "time of the last GPS accuracy sample (0: none)")
+SACC_LPF = _l.add("SACC_LPF", 1, "m/s", "speed accuracy low-passed (0.2 per sample)")
+SACC_PEAK = _l.add("SACC_PEAK", 1, "m/s", "SACC_LPF peak hold decaying with tau 10 s")
+GPS_SPD_FAIL = _l.add("GPS_SPD_FAIL", 1, "", "1 while the GPS speed-accuracy test fails")
+T_INNOV_PASS = _l.add("T_INNOV_PASS", 1, "s",
+                      "last time GPS velocity and position test ratios were both < 1")
+T_INNOV_HIGH = _l.add("T_INNOV_HIGH", 1, "s",
+                      "last time a GPS velocity or position test ratio exceeded 0.7")
+GPS_INNOV_FAIL = _l.add("GPS_INNOV_FAIL", 1, "",
+                        "1 while the GPS innovation consistency test fails")
+GPS_GLITCHING = _l.add("GPS_GLITCHING", 1, "",
+                       "EKF3's gps_glitching flag: a GPS test fails while aiding with GPS")
 # output tracking error: filter state minus output state (pn, pe, pd, vn, ve, vd), EKF3's
 # output-observer error. The lane's VN..PD hold the *output* (what controllers and logs read);
 # measurement corrections change the filter state only, and the output follows with the time
@@ -191,6 +212,8 @@ SEL_HEALTHY_SINCE = _s.add("SEL_HEALTHY_SINCE", 1, "s",
 SEL_REL_ERR = _s.add("SEL_REL_ERR", MAX_LANES, "", "relative error per lane")
 SEL_T_PRIMARY = _s.add("SEL_T_PRIMARY", MAX_LANES, "s",
                        "time each lane last stopped being primary")
+SEL_GPS_GLITCH = _s.add("SEL_GPS_GLITCH", 1, "",
+                        "gps_glitching of the primary as ArduCopter's 10 Hz check last saw it")
 N_SEL = SELECTOR.close()
 
 # ------------------------------------------------------------------ configuration --------------
@@ -220,6 +243,8 @@ C_MAG_N, C_MAG_E, C_MAG_D = _c.vector(("C_MAG_N", "C_MAG_E", "C_MAG_D"), "gauss"
                                       "earth magnetic field NED")
 C_POS_RETRY = _c.add("C_POS_RETRY", 1, "s",
                      "GPS position/velocity timeout (EKF3 posRetryTimeNoVel)")
+C_POS_RETRY_VEL = _c.add("C_POS_RETRY_VEL", 1, "s",
+                         "GPS position timeout while GPS velocity passes (posRetryTimeUseVel)")
 C_TILT_DRIFT = _c.add("C_TILT_DRIFT", 1, "s", "time without aiding before constant-position mode")
 C_HGT_RETRY = _c.add("C_HGT_RETRY", 1, "s",
                      "height timeout: a rejected height is reset to baro, a missing one invalid")
@@ -229,6 +254,8 @@ C_GBIAS_LIM = _c.add("C_GBIAS_LIM", 1, "rad/s", "gyro bias limit")
 C_ABIAS_LIM = _c.add("C_ABIAS_LIM", 1, "m/s^2", "EK3_ACC_BIAS_LIM")
 C_ALIGN_TIME = _c.add("C_ALIGN_TIME", 1, "s", "accel averaging time for tilt alignment")
 C_LANE_INIT_T = _c.add("C_LANE_INIT_T", 1, "s", "lane unhealthy for this long after alignment")
+C_SCORE_LAG = _c.add("C_SCORE_LAG", 1, "s",
+                     "how much later the primary's fusion shows in the relative errors")
 C_SELECT_T = _c.add("C_SELECT_T", 1, "s",
                     "primary healthy this long before selection runs; min time between uses")
 C_ONGROUND_NSE = _c.add("C_ONGROUND_NSE", 1, "m", "constant-position noise while disarmed")

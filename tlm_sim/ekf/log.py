@@ -1,5 +1,6 @@
 """The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz), and
-the ERR row of a primary-lane change. Columns by name (:mod:`tlm_sim.logger`)."""
+the ERR rows of a primary-lane change and of ArduCopter's GPS glitch check. Columns by name
+(:mod:`tlm_sim.logger`)."""
 
 import math
 
@@ -10,6 +11,8 @@ from tlm_sim.geo import ne_to_latlon_scalar
 
 XKF1, XKF4, XKFS, POS = L.XKF1_COLS, L.XKF4_COLS, L.XKFS_COLS, L.POS_COLS
 ERR_EKF_PRIMARY = 24  # ERR subsystem of a primary-lane change (ECode: the new lane)
+ERR_GPS = 11  # ERR subsystem GPS: ECode 2 GPS_GLITCH, 0 resolved
+ERR_GPS_GLITCH = 2
 
 
 @tick_jit
@@ -20,6 +23,21 @@ def log_lane_switch(events, ev_counts, t_us, eo):
     if r >= 0:
         events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_EKF_PRIMARY
         events[L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
+
+
+@tick_jit
+def gps_glitch_check(events, ev_counts, t_us, ekf, sel):
+    """ArduCopter's gpsglitch_check (10 Hz): an edge of the primary lane's gps_glitching flag
+    logs ERR GPS 2 ("GPS Glitch or Compass error") or 0 ("Glitch cleared"). No mode change:
+    Copter has no GPS failsafe of its own."""
+    g = ekf[int(sel[EK.SEL_PRIMARY]), EK.GPS_GLITCHING]
+    if g == sel[EK.SEL_GPS_GLITCH]:
+        return
+    sel[EK.SEL_GPS_GLITCH] = g
+    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    if r >= 0:
+        events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_GPS
+        events[L.E_ERR][r, L.ERR_COLS.ECode] = ERR_GPS_GLITCH if g != 0.0 else 0
 
 
 @tick_jit

@@ -71,7 +71,8 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
 
 
 def _gps_config(c: np.ndarray, p: Params) -> None:
-    """GPS 1: enable, rate, lag, satellites, reported accuracy and dilution, errors."""
+    """GPS 1: enable, rate, lag, satellites, reported accuracy and dilution, errors, glitch
+    offsets and jamming."""
     c[S.C_GPS_ENABLE] = p["SIM_GPS1_ENABLE"]
     c[S.C_GPS_PERIOD_US] = round(1e6 / max(p["SIM_GPS1_HZ"], 1.0))
     c[S.C_GPS_LAG_S] = p["SIM_GPS1_LAG_MS"] / 1000.0
@@ -82,6 +83,9 @@ def _gps_config(c: np.ndarray, p: Params) -> None:
     for k, ax in enumerate("XYZ"):
         c[S.C_GPS_VERR + k] = p[f"SIM_GPS1_VERR_{ax}"]
     c[S.C_GPS_NOISE] = p["SIM_GPS1_NOISE"]
+    for k, ax in enumerate("XYZ"):
+        c[S.C_GPS_GLITCH + k] = p[f"SIM_GPS1_GLTCH_{ax}"]
+    c[S.C_GPS_JAM] = p["SIM_GPS1_JAM"]
 
 
 def _baro_config(c: np.ndarray, p: Params) -> None:

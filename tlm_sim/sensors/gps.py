@@ -3,12 +3,17 @@
 The receiver reports the true (delayed) position and velocity; while SIM_GPS1_ENABLE is 0 it keeps
 streaming the true position with fix type "no fix" (Status 1) and 3 satellites, as SITL's first GPS
 does. Status 6 (RTK fixed) and NSats = SIM_GPS1_NUMSATS while locked; HDop is constant.
+
+Faults in SITL's order (``GPS::update``, sitl-faults.md §5.2), after the lag: the glitch offsets
+SIM_GPS1_GLTCH_X/Y (degrees of latitude/longitude, converted with the flat-earth scale at home)
+and _Z (m of altitude), then the jamming model (SIM_GPS1_JAM, §5.3, :func:`gps_jam`).
 """
 
 import math
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
+from tlm_sim.geo import M_PER_DEG_LAT
 from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
@@ -16,13 +21,85 @@ GPS_STATUS_NO_FIX = 1
 GPS_STATUS_RTK_FIXED = 6
 
 
+# SITL's jamming model: how often each jammed quantity changes [Hz]
+JAM_SATS_HZ = 3.0
+JAM_VZ_HZ = 0.5
+JAM_VEL_HZ = 0.8
+JAM_POS_HZ = 1.1
+JAM_ACC_HZ = 3.0
+
+
 @tick_jit
-def gps_init(s, t_us):
-    """Clear the delay line; the first epoch is due at t_us."""
+def gps_init(s, t_us, home_lat=0.0):
+    """Clear the delay line and the jamming state; the first epoch is due at t_us.
+
+    home_lat [deg]: the flat-earth longitude scale of the glitch and jamming offsets."""
     g = S.GPS_BASE
     for k in range(S.GPS_SIZE):
         s[g + k] = 0.0
     s[g + S.G_NEXT_US] = t_us
+    s[g + S.G_LON_SCALE] = max(math.cos(math.radians(home_lat)), 0.01)
+
+
+@tick_jit
+def _rand16(rng):
+    """A uniform integer 0..65535 (SITL's get_random16)."""
+    return min(int((uniform_pm1(rng) + 1.0) * 32768.0), 65535)
+
+
+@tick_jit
+def _jam_fires(s, key, now_ms, hz, rng):
+    """One of the jamming model's random events: fires (and records now_ms in slot key) when
+    the time since its last firing exceeds 2 |U(-1, 1)| / hz, a fresh draw every epoch."""
+    if (now_ms - s[key]) * 0.001 > 2.0 * abs(uniform_pm1(rng)) / hz:
+        s[key] = now_ms
+        return True
+    return False
+
+
+@tick_jit
+def gps_jam(s, t_us, out, lock, rng):
+    """SITL's jamming model on one epoch (sitl-faults.md §5.3); returns the lock flag.
+
+    A jamming episode starts when the previous jammed epoch is more than 1 s old: the current
+    (delayed, glitched) position is latched. For 1 s + U{0..4999} ms (a fresh draw each epoch)
+    there is no signal (0 satellites, no lock); afterwards five random events change the
+    satellites and lock (3 Hz: 2..16, lock with probability 1/2 from 4), the vertical velocity
+    (0.5 Hz, 400 U m/s), the horizontal velocity (0.8 Hz), the latched position (1.1 Hz, a
+    random walk of 200 U m north and 200 U metre-equivalents of longitude) and the accuracies
+    (3 Hz: 300 |U| m, 50 |U| m/s); on epochs where an event does not fire that quantity keeps
+    its normal value. The position is always the latched one; the altitude is never jammed.
+    """
+    g = S.GPS_BASE
+    now_ms = math.floor(t_us * 1e-3)
+    if now_ms - s[g + S.G_JAM_LAST_MS] > 1000.0:
+        s[g + S.G_JAM_START_MS] = now_ms
+        s[g + S.G_JAM_PN] = out[S.GE_PN]
+        s[g + S.G_JAM_PE] = out[S.GE_PE]
+    s[g + S.G_JAM_LAST_MS] = now_ms
+    if now_ms - s[g + S.G_JAM_START_MS] < 1000 + _rand16(rng) % 5000:
+        out[S.GE_NSATS] = 0.0
+        lock = False
+    else:
+        if _jam_fires(s, g + S.G_JAM_T_SATS, now_ms, JAM_SATS_HZ, rng):
+            n = 2 + _rand16(rng) % 15
+            out[S.GE_NSATS] = n
+            lock = n >= 4 and _rand16(rng) % 2 != 0
+        if _jam_fires(s, g + S.G_JAM_T_VZ, now_ms, JAM_VZ_HZ, rng):
+            out[S.GE_VD] = 400.0 * uniform_pm1(rng)
+        if _jam_fires(s, g + S.G_JAM_T_VEL, now_ms, JAM_VEL_HZ, rng):
+            out[S.GE_VN] = 400.0 * uniform_pm1(rng)
+            out[S.GE_VE] = 400.0 * uniform_pm1(rng)
+        if _jam_fires(s, g + S.G_JAM_T_POS, now_ms, JAM_POS_HZ, rng):
+            s[g + S.G_JAM_PN] += 200.0 * uniform_pm1(rng)
+            s[g + S.G_JAM_PE] += 200.0 * uniform_pm1(rng) * s[g + S.G_LON_SCALE]
+        if _jam_fires(s, g + S.G_JAM_T_ACC, now_ms, JAM_ACC_HZ, rng):
+            out[S.GE_VACC] = 300.0 * abs(uniform_pm1(rng))
+            out[S.GE_HACC] = 300.0 * abs(uniform_pm1(rng))
+            out[S.GE_SACC] = 50.0 * abs(uniform_pm1(rng))
+    out[S.GE_PN] = s[g + S.G_JAM_PN]
+    out[S.GE_PE] = s[g + S.G_JAM_PE]
+    return lock
 
 
 @tick_jit
@@ -55,8 +132,10 @@ def gps_due(s, t_us):
 @tick_jit
 def gps_measure(s, cfg, t_us, out, rng):
     """Produce one GPS epoch at t_us into out[N_GPS_EPOCH] (sensors.layout GE_*: position and
-    velocity NED from home ground [m, m/s], status, satellites, 3-D fix). Position and velocity
-    are the truth interpolated at t - lag."""
+    velocity NED from home ground [m, m/s], status, satellites, 3-D fix, reported accuracies).
+    Position and velocity are the truth interpolated at t - lag; then the glitch offsets and
+    the jamming model (module docstring). The u-blox message reports the satellites drawn
+    while locked, 3 without lock."""
     g = S.GPS_BASE
     s[g + S.G_NEXT_US] += cfg[S.C_GPS_PERIOD_US]
     t_want = t_us * 1e-6 - cfg[S.C_GPS_LAG_S]
@@ -82,11 +161,17 @@ def gps_measure(s, cfg, t_us, out, rng):
     for k in range(3):
         if cfg[S.C_GPS_VERR + k] != 0.0:
             out[S.GE_VN + k] += cfg[S.C_GPS_VERR + k] * uniform_pm1(rng)
-    if cfg[S.C_GPS_ENABLE] != 0.0:
-        out[S.GE_STATUS] = GPS_STATUS_RTK_FIXED
-        out[S.GE_NSATS] = cfg[S.C_GPS_NUMSATS]
-        out[S.GE_FIX_3D] = 1.0
-    else:
-        out[S.GE_STATUS] = GPS_STATUS_NO_FIX
+    lock = cfg[S.C_GPS_ENABLE] != 0.0
+    out[S.GE_NSATS] = cfg[S.C_GPS_NUMSATS]
+    out[S.GE_HACC] = cfg[S.C_GPS_ACC]
+    out[S.GE_VACC] = cfg[S.C_GPS_ACC]
+    out[S.GE_SACC] = math.sqrt(cfg[S.C_GPS_VERR] ** 2 + cfg[S.C_GPS_VERR + 1] ** 2)
+    out[S.GE_PN] += cfg[S.C_GPS_GLITCH] * M_PER_DEG_LAT
+    out[S.GE_PE] += cfg[S.C_GPS_GLITCH + 1] * M_PER_DEG_LAT * s[g + S.G_LON_SCALE]
+    out[S.GE_PD] -= cfg[S.C_GPS_GLITCH + 2]
+    if cfg[S.C_GPS_JAM] != 0.0:
+        lock = gps_jam(s, t_us, out, lock, rng)
+    out[S.GE_STATUS] = GPS_STATUS_RTK_FIXED if lock else GPS_STATUS_NO_FIX
+    out[S.GE_FIX_3D] = 1.0 if lock else 0.0
+    if not lock:
         out[S.GE_NSATS] = 3.0
-        out[S.GE_FIX_3D] = 0.0

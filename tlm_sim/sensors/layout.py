@@ -79,6 +79,17 @@ G_COUNT = GPS.add("G_COUNT", 1, "", "rows filled")
 G_NEXT_US = GPS.add("G_NEXT_US", 1, "us", "time of the next GPS epoch")
 G_HIST = GPS.add("G_HIST", GPS_HIST_N * G_ROW, "s, m, m/s",
                  "history rows (t_s, pn, pe, pd, vn, ve, vd) x GPS_HIST_N")
+G_LON_SCALE = GPS.add("G_LON_SCALE", 1, "",
+                      "cos(home latitude): metres east per metre-equivalent of longitude")
+G_JAM_LAST_MS = GPS.add("G_JAM_LAST_MS", 1, "ms", "time of the last jammed epoch (SIM_GPS1_JAM)")
+G_JAM_START_MS = GPS.add("G_JAM_START_MS", 1, "ms", "start of the current jamming episode")
+G_JAM_PN, G_JAM_PE = GPS.vector(("G_JAM_PN", "G_JAM_PE"), "m",
+                                "latched (random-walk) jammed position north, east")
+G_JAM_T_SATS = GPS.add("G_JAM_T_SATS", 1, "ms", "last change of the jammed satellites/lock")
+G_JAM_T_VZ = GPS.add("G_JAM_T_VZ", 1, "ms", "last change of the jammed vertical velocity")
+G_JAM_T_VEL = GPS.add("G_JAM_T_VEL", 1, "ms", "last change of the jammed horizontal velocity")
+G_JAM_T_POS = GPS.add("G_JAM_T_POS", 1, "ms", "last step of the jammed position walk")
+G_JAM_T_ACC = GPS.add("G_JAM_T_ACC", 1, "ms", "last change of the jammed accuracies")
 GPS_SIZE = GPS.close()
 
 # ---- one GPS epoch: what gps_measure produces, the EKF fuses and the GPS log writes ----------
@@ -90,6 +101,9 @@ GE_VN, GE_VE, GE_VD = _ge.vector(("GE_VN", "GE_VE", "GE_VD"), "m/s", "velocity N
 GE_STATUS = _ge.add("GE_STATUS", 1, "", "fix status as GPS.Status logs it")
 GE_NSATS = _ge.add("GE_NSATS", 1, "", "satellites in use")
 GE_FIX_3D = _ge.add("GE_FIX_3D", 1, "", "1 with a 3-D fix (the EKF may fuse the epoch)")
+GE_HACC, GE_VACC = _ge.vector(("GE_HACC", "GE_VACC"), "m",
+                              "reported horizontal / vertical accuracy")
+GE_SACC = _ge.add("GE_SACC", 1, "m/s", "reported speed accuracy")
 N_GPS_EPOCH = GPS_EPOCH.close()
 
 # ---- the sensor state s ----------------------------------------------------------------------
@@ -142,6 +156,9 @@ C_GPS_VDOP = _c.add("C_GPS_VDOP", 1, "", "reported VDop (TLM_GPS_VDOP)")
 C_GPS_ACC = _c.add("C_GPS_ACC", 1, "m", "reported horizontal/vertical accuracy (SIM_GPS1_ACC)")
 C_GPS_VERR = _c.add("C_GPS_VERR", 3, "m/s", "SIM_GPS1_VERR")
 C_GPS_NOISE = _c.add("C_GPS_NOISE", 1, "m", "SIM_GPS1_NOISE")
+C_GPS_GLITCH = _c.add("C_GPS_GLITCH", 3, "deg, deg, m",
+                      "SIM_GPS1_GLTCH_X/Y/Z: latitude, longitude and altitude offsets")
+C_GPS_JAM = _c.add("C_GPS_JAM", 1, "", "SIM_GPS1_JAM: 1 runs SITL's jamming model")
 C_BARO_RND = _c.add("C_BARO_RND", N_BARO, "m", "SIM_BARO_RND, SIM_BAR2_RND")
 C_BARO_GLITCH = _c.add("C_BARO_GLITCH", N_BARO, "m", "SIM_BARO_GLITCH, SIM_BAR2_GLITCH")
 C_BARO_DRIFT = _c.add("C_BARO_DRIFT", N_BARO, "m/s", "SIM_BARO_DRIFT, SIM_BAR2_DRIFT")
@@ -196,7 +213,7 @@ N_SENSOR_CFG = CONFIG.close()
 NOISE = Layout("noise", "sensor noise streams (rows of the rng array)")
 RNG_GYRO = NOISE.add("RNG_GYRO", N_IMU, "", "gyro noise, one stream per IMU")
 RNG_ACC = NOISE.add("RNG_ACC", N_IMU, "", "accelerometer noise, one stream per IMU")
-RNG_GPS = NOISE.add("RNG_GPS", 1, "", "GPS velocity noise")
+RNG_GPS = NOISE.add("RNG_GPS", 1, "", "GPS velocity noise and the jamming model's draws")
 RNG_BARO = NOISE.add("RNG_BARO", 1, "", "barometer noise")
 RNG_MAG = NOISE.add("RNG_MAG", 1, "",
                     "compass noise (SIM_MAG_RND: one draw shared by the three compasses, as SITL)")

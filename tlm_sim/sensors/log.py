@@ -39,21 +39,22 @@ def log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_tim
         b[r, GPS.VZ] = gps[S.GE_VD]
         b[r, GPS.Yaw] = 0.0
         b[r, GPS.U] = 1.0
-    _log_gpa(bufs, counts, t_us, scfg, ms, last_ms)
+    _log_gpa(bufs, counts, t_us, gps, scfg, ms, last_ms)
     return ms
 
 
 @inline_jit
-def _log_gpa(bufs, counts, t_us, scfg, ms, last_ms):
-    """The GPA row of a GPS epoch at ms of week (last_ms: the previous epoch's, 0 for none)."""
+def _log_gpa(bufs, counts, t_us, gps, scfg, ms, last_ms):
+    """The GPA row of a GPS epoch gps at ms of week (last_ms: the previous epoch's, 0 for
+    none): the accuracies the receiver reports."""
     r = L.new_row(bufs, counts, L.K_GPA, t_us)
     if r >= 0:
         b = bufs[L.K_GPA]
         b[r, GPA.I] = 0.0
         b[r, GPA.VDop] = scfg[S.C_GPS_VDOP]
-        b[r, GPA.HAcc] = scfg[S.C_GPS_ACC]
-        b[r, GPA.VAcc] = scfg[S.C_GPS_ACC]
-        b[r, GPA.SAcc] = 0.0
+        b[r, GPA.HAcc] = gps[S.GE_HACC]
+        b[r, GPA.VAcc] = gps[S.GE_VACC]
+        b[r, GPA.SAcc] = gps[S.GE_SACC]
         b[r, GPA.YAcc] = 0.0
         b[r, GPA.VV] = 1.0
         b[r, GPA.SMS] = t_us // 1000
