@@ -158,3 +158,14 @@ def test_process_and_evaluate_flights_of_new_faults(tmp_path, capsys):
     r = json.loads(rj.read_text())["GPS"]["J48"]
     assert r["classes"] == ["Normal", *sorted(types, key=lambda t: FAULT_TYPES[t].label)]
     assert all(t in out for t in types)
+
+
+def test_ingest_reads_records_of_every_type_by_type_or_label():
+    from tlm_process.pipeline.ingest import parse_records
+
+    recs = [{"type": t.name, "start_time_us": 1e6 * t.label, "end_time_us": 1e6 * t.label + 5e5}
+            for t in FAULT_TYPES.values()]
+    recs += [{"label": 7, "start_time_us": 9e7, "end_time_us": 9.1e7}]
+    out = parse_records(recs)
+    assert [r.label for r in out] == [t.label for t in FAULT_TYPES.values()] + [7]
+    assert out[-1].type == "compass"
