@@ -133,3 +133,21 @@ def test_crosscheck_writes_checks_signatures_and_the_flight(tmp_path, capsys):
     parm = flown["PARM"]
     mul = parm[parm.Name == "SIM_ENGINE_MUL"].Value.to_numpy()
     assert np.any(np.isclose(mul, 0.5))
+
+
+def test_a_log_tlm_cannot_fly_is_a_one_line_error(tmp_path, capsys):
+    """A parameter value tlm does not simulate (normal_x_s50's FRAME_TYPE 1 until the X frame
+    is modelled) is a ScenarioError, which the command reports in one line (exit 2)."""
+    from tlm_process.crosscheck.scenario import ScenarioError
+    from tlm_sim.params import Params, ParamError
+
+    src = reference_path("normal_x_s50.bin")
+    try:
+        Params({"FRAME_TYPE": 1})
+    except ParamError:
+        with pytest.raises(ScenarioError, match="FRAME_TYPE"):
+            reconstruct(src)
+        assert main(["crosscheck", str(src)]) == 2
+        assert "FRAME_TYPE" in capsys.readouterr().err
+    else:
+        assert reconstruct(src).params["FRAME_TYPE"] == 1

@@ -16,6 +16,7 @@ import tempfile
 from pathlib import Path
 
 from tlm_process.crosscheck.compare import crosscheck, plot, to_json
+from tlm_process.crosscheck.scenario import ScenarioError
 
 LOGS = ("normal_s11", "gps_s12", "accel_s13", "engine_s14", "rc_s15", "combined_s21",
         "normal_wind_s41", "gyro_s42", "compass_s43", "baro_s44", "battery_s45",
@@ -105,39 +106,49 @@ def main() -> None:
     out = Path(args.out)
     img = out / "img"
     img.mkdir(parents=True, exist_ok=True)
+
     results = {}
+    skipped: dict[str, str] = {}
     for name in LOGS:
-        r = crosscheck(Path(args.reference) / f"{name}.bin")
+        try:
+            r = crosscheck(Path(args.reference) / f"{name}.bin")
+        except (ScenarioError, FileNotFoundError) as exc:
+            skipped[name] = str(exc)
+            print(f"{name}: not flown: {exc}")
+            continue
         tmp = Path(tempfile.mkdtemp())
         for f in plot(r, tmp)[:2]:
             shutil.copy(f, img / f"crosscheck_{name}_{f.name}")
         results[name] = to_json(r)
         print(f"{name}: trajectory RMS {results[name]['trajectory_rms_m']:.2f} m")
+
     def ok(x: bool) -> str:
         return "pass" if x else "**FAIL**"
 
     checks = ["## Checks (issue 19)", "", "| log | flight time diff | trajectory RMS (m) | "
               "signature metrics within 35 % | notes |", "|---|---|---|---|---|"]
-    for n in LOGS:
+    logs = [n for n in LOGS if n in results]
+    for n in logs:
         c = results[n]["checks"]
         checks.append(
             f"| {n} | {100 * c['flight_time']['value']:.2f} % {ok(c['flight_time']['pass'])} | "
             f"{c['trajectory_rms']['value']:.2f} {ok(c['trajectory_rms']['pass'])} | "
             f"{c['signatures']['value']} {ok(c['signatures']['pass'])} | "
             f"{'; '.join(results[n]['scenario'].get('notes') or ()) or '-'} |")
+    checks += [f"| {n} | not flown: {why} | | | |" for n, why in skipped.items()]
     checks += ["", "## Metrics", ""]
-    lines = ["| metric | " + " | ".join(LOGS) + " |", "|---|" + "---|" * len(LOGS)]
-    first = results[LOGS[0]]
+    lines = ["| metric | " + " | ".join(logs) + " |", "|---|" + "---|" * len(logs)]
+    first = results[logs[0]]
     for k, v in first.items():
         if k in ("faults", "scenario", "checks"):
             continue
         if isinstance(v, dict):
-            cells = [f"{_v(results[n][k]['tlm'])} / {_v(results[n][k]['sitl'])}" for n in LOGS]
+            cells = [f"{_v(results[n][k]['tlm'])} / {_v(results[n][k]['sitl'])}" for n in logs]
             lines.append(f"| {k} (tlm / SITL) | " + " | ".join(cells) + " |")
         else:
-            lines.append(f"| {k} | " + " | ".join(_v(results[n][k]) for n in LOGS) + " |")
+            lines.append(f"| {k} | " + " | ".join(_v(results[n][k]) for n in logs) + " |")
     faults = ["", "## Fault signatures (tlm / SITL)", ""]
-    for name in LOGS:
+    for name in logs:
         for f in results[name]["faults"]:
             faults += [f"### {name}: {f['type']}", "",
                        "| signature | tlm | SITL | rel. diff | within 35 % |",
@@ -147,7 +158,7 @@ def main() -> None:
                        f" | {ok(x['pass'])} |" for x in f.get("rows") or ()]
             faults.append("")
     plots = ["", "## Overlays", ""]
-    for name in LOGS:
+    for name in logs:
         plots += [f"### {name}", "", f"![](img/crosscheck_{name}_trajectory.png) "
                   f"![](img/crosscheck_{name}_profiles.png)", ""]
     (out / "crosscheck.md").write_text(HEADER + "\n".join(checks + lines + faults + plots)

@@ -298,7 +298,8 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         sidecar: its JSON sidecar; None looks for ``<log>.json`` beside the log.
         seed: tlm's seed (default: the sidecar's, else 0).
     Raises:
-        ScenarioError: the log never armed, has no mission or no home.
+        ScenarioError: the log never armed, has no mission or no home, or sets a parameter to
+            a value tlm does not simulate (e.g. FRAME_TYPE 1 before the X frame is modelled).
     """
     from tlm_sim import Mission
     from tlm_sim.flightlog import read_bin
@@ -312,7 +313,13 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10)")
     side_path = Path(sidecar) if sidecar else bin_path.with_suffix(".json")
     doc = json.loads(side_path.read_text()) if side_path.is_file() else None
-    params = Params.from_values(_initial_params(t["PARM"]), source=f"{bin_path.name} (PARM)")
+    from tlm_sim.params import ParamError
+
+    try:
+        params = Params.from_values(_initial_params(t["PARM"]),
+                                    source=f"{bin_path.name} (PARM)")
+    except ParamError as exc:
+        raise ScenarioError(f"tlm cannot fly this log's parameters: {exc}") from None
     tlm_arm_s = float(params["TLM_ARM_TIME"])
     sitl_arm_us = float(armed.iloc[0])
 
