@@ -139,7 +139,7 @@ def test_a_log_tlm_cannot_fly_is_a_one_line_error(tmp_path, capsys):
     """A parameter value tlm does not simulate (normal_x_s50's FRAME_TYPE 1 until the X frame
     is modelled) is a ScenarioError, which the command reports in one line (exit 2)."""
     from tlm_process.crosscheck.scenario import ScenarioError
-    from tlm_sim.params import Params, ParamError
+    from tlm_sim.params import ParamError, Params
 
     src = reference_path("normal_x_s50.bin")
     try:
