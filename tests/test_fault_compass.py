@@ -66,14 +66,15 @@ def test_compass_signature_matches_sitl():
     ref, ref_fault = _sitl()
     log = _tlm()
     a, b = fault_signature(log.tables, log.faults[0]), fault_signature(ref, ref_fault)
-    for k in ("health0_lost_s", "err3_4_s", "switch_compass_s"):
+    for k in ("mag0_health_drop_s", "err3_4_s", "switch_compass_s"):
         assert abs(a[k] - b[k]) <= TOL * b[k], (k, a[k], b[k])
     # the end: back within a compass period or two of the fault end (+30.8 s) in both
-    for k in ("health0_back_s", "err3_0_s"):
+    for k in ("mag0_health_restore_s", "err3_0_s"):
         assert abs(a[k] - b[k]) <= 0.2, (k, a[k], b[k])
     assert a["switch_compass_to"] == b["switch_compass_to"] == 1.0
-    assert a["mag0_frozen_std"] == b["mag0_frozen_std"] == 0.0  # records go on, values held
-    assert a["mag_others_healthy_frac"] == b["mag_others_healthy_frac"] == 1.0
+    assert a["mag0_std_in"] == b["mag0_std_in"] == 0.0  # records go on, values held
+    for k in ("mag1_healthy_frac_in", "mag2_healthy_frac_in"):
+        assert a[k] == b[k] == 1.0
     assert a["err24_ekf_primary"] == b["err24_ekf_primary"] == 0.0
     assert a["sm_max"] <= 0.05 and b["sm_max"] <= 0.05
     assert a["ekf_err_max_m"] < 0.3 and b["ekf_err_max_m"] < 0.3

@@ -116,7 +116,7 @@ def test_reference_rc_signature():
 def test_unknown_fault_type_and_empty_window_are_refused():
     tables, _ = _reference("rc_s15")
     with pytest.raises(ValueError, match="unknown fault type"):
-        fault_signature(tables, {"type": "baro", "start_time_us": 1e8, "end_time_us": 2e8})
+        fault_signature(tables, {"type": "warp", "start_time_us": 1e8, "end_time_us": 2e8})
     with pytest.raises(ValueError, match="end_time_us"):
         fault_signature(tables, {"type": "rc", "start_time_us": 2e8, "end_time_us": 1e8})
 

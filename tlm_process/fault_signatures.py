@@ -3,8 +3,7 @@
 :func:`fault_signature` measures one fault window the same way in a tlm ``FlightLog.tables`` and
 in the tables ``read_bin`` gives for a genuine SITL ``.bin``. It uses only messages and fields
 that both logs have: GPS, IMU, CTUN, XKF1, SIM (the simulator's true attitude and position),
-MODE, EV and ERR; for the compass also MAG, XKF4 and XKFS. SITL's SIM2, MSG and CMD are not
-used (tlm does not log them).
+MODE, EV and ERR. SITL's SIM2, MSG and CMD are not used (tlm does not log them).
 
 Conventions (all times are log TimeUS, microseconds since boot; results in SI units):
 
@@ -24,7 +23,7 @@ metrics: a parameter change reaches the next sensor sample, not the same microse
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -37,7 +36,7 @@ ARMED, DISARMED = 10, 11  # EV ids
 AUTO, RTL = 3, 6  # MODE ModeNum
 RSN_RADIO_FAILSAFE = 3  # ModeReason::RADIO_FAILSAFE
 ERR_RADIO, ERR_FS_RADIO = 2, 5  # ERR Subsys
-ERR_COMPASS, ERR_EKF_PRIMARY, ERR_THRUST_LOSS, ERR_VIBE_FS = 3, 24, 25, 29  # ERR Subsys
+ERR_EKF_PRIMARY, ERR_THRUST_LOSS, ERR_VIBE_FS = 24, 25, 29  # ERR Subsys
 
 #: margin at the window edges for in/out row fractions [s] (two 5 Hz GPS samples)
 EDGE_MARGIN_S = 0.5
@@ -52,7 +51,20 @@ EARLY_S = 3.0
 #: path length after the recovery over which a resumed mission is measured [s]
 RESUME_S = 30.0
 
-FAULT_TYPES = ("gps", "accel", "engine", "rc", "compass")
+#: Types :func:`fault_signature` measures: the paper's four and the rest of SITL's catalogue
+#: (``tlm_sim.faults.FAULT_TYPES``, labels 5-13).
+FAULT_TYPES = ("gps", "accel", "engine", "rc", "gyro", "baro", "compass", "gps_glitch",
+               "motor_partial", "vibration", "battery", "gps_jam", "accel_samples")
+#: ERR subsystems of the catalogue (ArduCopter's LogErrorSubsystem)
+ERR_COMPASS, ERR_FS_BATT, ERR_GPS, ERR_BARO = 3, 6, 11, 18
+#: ERR codes: 0 resolved, 1 failsafe, 2 GPS glitch, 4 unhealthy
+CODE_RESOLVED, CODE_FAILSAFE, CODE_GLITCH, CODE_UNHEALTHY = 0, 1, 2, 4
+#: seconds before a fault over which "before" baselines are measured
+BEFORE_S = 20.0
+#: seconds after a fault's end over which recoveries (lane switches, glitch, descent) are seen
+AFTER_S = 60.0
+#: height difference from the start height within which the vehicle counts as back [m]
+BACK_M = 1.5
 
 
 def _max(s: pd.Series) -> float:
@@ -131,7 +143,42 @@ class _Flight:
         te = np.interp(tp, self.sim_t, self.e)
         return tp, np.hypot(x.PN.to_numpy(float) - tn, x.PE.to_numpy(float) - te)
 
+    def vertical_speed(self) -> np.ndarray:
+        """True climb rate [m/s, up positive] at each SIM row (backward difference over
+        SPEED_BASE_S)."""
+        dt = np.median(np.diff(self.sim_t)) if len(self.sim_t) > 1 else 1e5
+        k = max(1, int(round(SPEED_BASE_S * 1e6 / dt)))
+        v = np.full(len(self.sim_t), np.nan)
+        v[k:] = (self.h[k:] - self.h[:-k]) / ((self.sim_t[k:] - self.sim_t[:-k]) * 1e-6)
+        return v
+
+    def route_distance(self, route: np.ndarray | None, t0: float, t1: float) -> float:
+        """Largest horizontal distance [m] of the truth in [t0, t1] from the polyline through
+        ``route`` (lat, lon rows: the mission's waypoints); NaN without a route."""
+        m = self.sel(t0, t1)
+        if route is None or len(route) < 2 or not m.any():
+            return float("nan")
+        rn, re_ = latlon_to_ne(route[:, 0], route[:, 1], *self.home)
+        a = np.column_stack([rn, re_])
+        p = np.column_stack([self.n[m], self.e[m]])
+        seg = a[1:] - a[:-1]
+        best = np.full(len(p), np.inf)
+        for k in range(len(seg)):
+            ll = float(seg[k] @ seg[k])
+            u = np.clip(((p - a[k]) @ seg[k]) / ll, 0.0, 1.0) if ll > 0 else np.zeros(len(p))
+            d = np.hypot(*(p - a[k] - u[:, None] * seg[k]).T)
+            best = np.minimum(best, d)
+        return float(best.max())
+
     # --- events ------------------------------------------------------------------------------
+    def first_err(self, subsys: int, code: int | None, t0: float, t1: float = np.inf) -> float:
+        """TimeUS of the first ERR row of ``subsys`` (and ``code``) in [t0, t1], NaN if none."""
+        e = self.err[(self.err.Subsys == subsys) & (self.err.TimeUS >= t0)
+                     & (self.err.TimeUS <= t1)]
+        if code is not None:
+            e = e[e.ECode == code]
+        return float(e.TimeUS.min()) if len(e) else float("nan")
+
     def mode_at(self, t: float) -> int:
         i = np.searchsorted(self.mode_t, t, side="right") - 1
         return int(self.mode[i]) if i >= 0 else -1
@@ -265,39 +312,307 @@ def _rc(f: _Flight, t0: float, t1: float) -> dict[str, float]:
     }
 
 
-def _first_rel(t: np.ndarray, cond: np.ndarray, after: float, origin: float) -> float:
-    """Seconds from origin to the first time t > after where cond holds (NaN if none)."""
-    idx = np.flatnonzero(cond & (t > after))
-    return float((t[idx[0]] - origin) * 1e-6) if len(idx) else float("nan")
+# --- the rest of SITL's catalogue (labels 5-13) ----------------------------------------------
 
 
-def _compass(f: _Flight, t0: float, t1: float) -> dict[str, float]:
-    """Compass 1 without data (SIM_MAG1_FAIL 1): its health, ERR 3, the EKF's compass change."""
-    mag = f.t["MAG"].sort_values("TimeUS", kind="stable")
-    m0 = mag[mag.I == 0]
-    tm, h0 = m0.TimeUS.to_numpy(float), m0.Health.to_numpy(float)
-    inside = time_window(mag, t0 + 1e6, t1)
-    err = f.err[f.err.Subsys == ERR_COMPASS].sort_values("TimeUS")
-    te, code = err.TimeUS.to_numpy(float), err.ECode.to_numpy(int)
-    xs = f.t["XKFS"].sort_values("TimeUS", kind="stable")
-    switched = xs[(xs.TimeUS > t0) & (xs.MI != 0)]
-    tp, ekf_err = f.ekf_error()
-    in_win = (tp >= t0) & (tp <= t1)
+def _rel_s(t_us: float, ref_us: float) -> float:
+    """Seconds of ``t_us`` after ``ref_us`` (NaN stays NaN)."""
+    return (t_us - ref_us) * 1e-6
+
+
+def _instances(fault: Mapping[str, Any], names: Sequence[str], default: Sequence[int]
+               ) -> list[int]:
+    """Sensor instances a fault sets: instance k where ``params_start[names[k]]`` is non-zero."""
+    ps = fault.get("params_start") or {}
+    out = [k for k, n in enumerate(names) if ps.get(n)]
+    return out or list(default)
+
+
+def _mask_instances(fault: Mapping[str, Any], name: str, default: int = 1) -> list[int]:
+    """Instances of the bits of a mask parameter (``SIM_GYR_FAIL_MSK`` 1 -> [0])."""
+    v = int((fault.get("params_start") or {}).get(name, default))
+    return [k for k in range(8) if v >> k & 1] or [0]
+
+
+def _flag_times(d: pd.DataFrame, col: str, t0: float, t1: float) -> tuple[float, float]:
+    """(first row in [t0, t1] where ``col`` is 0, first row after it where it is 1 again)
+    as TimeUS, NaN where none."""
+    inst = d.sort_values("TimeUS")
+    down = inst[(inst.TimeUS >= t0) & (inst.TimeUS <= t1) & (inst[col] == 0)].TimeUS
+    if not len(down):
+        return float("nan"), float("nan")
+    up = inst[(inst.TimeUS > down.iloc[0]) & (inst[col] != 0)].TimeUS
+    return float(down.iloc[0]), float(up.iloc[0]) if len(up) else float("nan")
+
+
+def _std3(d: pd.DataFrame, cols: Sequence[str]) -> float:
+    """Largest standard deviation of ``cols`` (NaN for fewer than two rows)."""
+    return float(max(d[c].std() for c in cols)) if len(d) > 1 else float("nan")
+
+
+def _mean(s: pd.Series) -> float:
+    return float(s.mean()) if len(s) else float("nan")
+
+
+def _lane_changes(f: _Flight, t0: float, t1: float) -> float:
+    """Changes of the EKF primary core (``XKF4.PI`` of core 0) in [t0, t1]."""
+    x = f.t.get("XKF4")
+    if x is None or "PI" not in x:
+        return float("nan")
+    x = x[x.C == 0].sort_values("TimeUS") if "C" in x else x.sort_values("TimeUS")
+    pi = x[x.TimeUS <= t1].PI.to_numpy(int)
+    t = x[x.TimeUS <= t1].TimeUS.to_numpy(float)
+    ch = np.flatnonzero(np.diff(pi) != 0) + 1
+    return float(np.sum(t[ch] >= t0))
+
+
+def _ekf_max(f: _Flight, t0: float, t1: float) -> float:
+    tp, err = f.ekf_error()
+    w = (tp >= t0) & (tp <= t1)
+    return float(err[w].max()) if w.any() else float("nan")
+
+
+def _sample_loss(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any], mask: str,
+                 flag: str, cols: Sequence[str]) -> dict[str, float]:
+    """Gyro (``GH``, GyrX/Y/Z) or accelerometer (``AH``, AccX/Y/Z) sample loss."""
+    imu = f.t["IMU"]
+    m = EDGE_MARGIN_S * 1e6
+    lost = _mask_instances(fault, mask)
+    out: dict[str, float] = {}
+    for i in lost:
+        d = imu[imu.I == i]
+        down, up = _flag_times(d, flag, t0, t1)
+        out[f"imu{i}_{flag.lower()}_drop_s"] = _rel_s(down, t0)
+        out[f"imu{i}_{flag.lower()}_restore_s"] = _rel_s(up, t0)
+        out[f"imu{i}_std_in"] = _std3(time_window(d, t0 + m, t1), cols)
+        out[f"imu{i}_std_before"] = _std3(time_window(d, t0 - BEFORE_S * 1e6, t0), cols)
+    for i in sorted(set(imu.I.unique().astype(int)) - set(lost)):
+        d = time_window(imu[imu.I == i], t0, t1)
+        out[f"imu{i}_healthy_frac_in"] = float((d[flag] != 0).mean()) if len(d) else \
+            float("nan")
+    sel = f.sel(t0, t1)
+    out.update({
+        "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1 + AFTER_S * 1e6),
+        "lane_changes": _lane_changes(f, t0, t1 + AFTER_S * 1e6),
+        "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "roll_max_deg": float(np.abs(f.roll[sel]).max()) if sel.any() else float("nan"),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    })
+    return out
+
+
+def _baro(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any],
+          route: np.ndarray | None) -> dict[str, float]:
+    baro = f.t["BARO"]
+    lost = _instances(fault, ("SIM_BARO_DISABLE", "SIM_BAR2_DISABLE"), (0, 1))
+    downs, ups = [], []
+    for i in lost:
+        down, up = _flag_times(baro[baro.I == i], "H", t0, t1)
+        downs.append(down)
+        ups.append(up)
+    ctun = f.t["CTUN"]
+    inv = ctun[(ctun.TimeUS >= t0) & (ctun.TimeUS <= t1) & (ctun.Alt.abs() < 1e-3)].TimeUS
+    sel = f.sel(t0, t1)
+    h0 = float(f.h[sel][0]) if sel.any() else float("nan")
+    vz = f.vertical_speed()
+    after = f.sel(t1, t1 + AFTER_S * 1e6)
+    back = f.first_time(np.abs(f.h - h0) <= BACK_M, t1 + 1e6)
     return {
-        "health0_lost_s": _first_rel(tm, h0 == 0, t0, t0),
-        "health0_back_s": _first_rel(tm, h0 == 1, t1, t0),
-        "mag0_frozen_std": float(inside[inside.I == 0][["MagX", "MagY", "MagZ"]].std().max()),
-        "mag_others_healthy_frac": float(inside[inside.I != 0].Health.mean()),
-        "err3_4_s": _first_rel(te, code == 4, t0, t0),
-        "err3_0_s": _first_rel(te, code == 0, t0, t0),
-        "switch_compass_s": float((switched.TimeUS.iloc[0] - t0) * 1e-6) if len(switched)
-        else float("nan"),
-        "switch_compass_to": float(switched.MI.iloc[0]) if len(switched) else float("nan"),
+        "baro_h_drop_s": _rel_s(min(downs), t0),
+        "baro_h_restore_s": _rel_s(max(ups), t0),
+        "err18_4_s": _rel_s(f.first_err(ERR_BARO, CODE_UNHEALTHY, t0, t1), t0),
+        "err18_0_s": _rel_s(f.first_err(ERR_BARO, CODE_RESOLVED, t0), t0),
+        "alt_invalid_s": _rel_s(float(inv.iloc[0]) if len(inv) else float("nan"), t0),
+        "climb_m": float(f.h[sel].max() - h0) if sel.any() else float("nan"),
+        "climb_rate_max_ms": float(np.nanmax(vz[sel])) if sel.any() else float("nan"),
+        "thr_mean_before": _mean(time_window(ctun, t0 - BEFORE_S * 1e6, t0).ThO),
+        "thr_mean_in": _mean(time_window(ctun, t0, t1).ThO),
+        "descent_rate_max_ms": float(-np.nanmin(vz[after])) if after.any() else float("nan"),
+        "back_after_end_s": _rel_s(back, t1),
+        "route_dev_max_m": f.route_distance(route, t0, t1 + 5e6),
+        "auto_kept": f.mode_kept(AUTO, t0, t1 + AFTER_S * 1e6),
+    }
+
+
+def _compass(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]) -> dict[str, float]:
+    mag = f.t["MAG"]
+    m = EDGE_MARGIN_S * 1e6
+    lost = _instances(fault, ("SIM_MAG1_FAIL", "SIM_MAG2_FAIL", "SIM_MAG3_FAIL"), (0,))
+    out: dict[str, float] = {}
+    for i in lost:
+        d = mag[mag.I == i]
+        down, up = _flag_times(d, "Health", t0, t1)
+        out[f"mag{i}_health_drop_s"] = _rel_s(down, t0)
+        out[f"mag{i}_health_restore_s"] = _rel_s(up, t0)
+        out[f"mag{i}_std_in"] = _std3(time_window(d, down + m if np.isfinite(down) else t0 + m,
+                                                  t1), ("MagX", "MagY", "MagZ"))
+    for i in sorted(set(mag.I.unique().astype(int)) - set(lost)):
+        d = time_window(mag[mag.I == i], t0, t1)
+        out[f"mag{i}_healthy_frac_in"] = float((d.Health != 0).mean()) if len(d) else \
+            float("nan")
+    out.update({
+        "err3_4_s": _rel_s(f.first_err(ERR_COMPASS, CODE_UNHEALTHY, t0, t1), t0),
+        "err3_0_s": _rel_s(f.first_err(ERR_COMPASS, CODE_RESOLVED, t0), t0),
         "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1),
-        "sm_max": _max(time_window(f.t["XKF4"], t0, t1).SM),
-        "ekf_err_max_m": float(ekf_err[in_win].max()) if in_win.any() else float("nan"),
+        "lane_changes": _lane_changes(f, t0, t1 + AFTER_S * 1e6),
+        "sm_max": _max(time_window(f.t["XKF4"], t0, t1).SM) if "XKF4" in f.t else float("nan"),
+        "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    })
+    out.update(_compass_switch(f, t0, lost))
+    return out
+
+
+def _compass_switch(f: _Flight, t0: float, lost: Sequence[int]) -> dict[str, float]:
+    """When the EKF cores leave a failed compass: the first ``XKFS`` row after ``t0`` whose
+    compass index ``MI`` is none of ``lost`` (s after t0), and that index (NaN when the log
+    has no XKFS or no switch)."""
+    xs = f.t.get("XKFS")
+    if xs is None or not len(xs):
+        return {"switch_compass_s": float("nan"), "switch_compass_to": float("nan")}
+    xs = xs.sort_values("TimeUS", kind="stable")
+    moved = xs[(xs.TimeUS > t0) & ~xs.MI.isin(list(lost))]
+    if not len(moved):
+        return {"switch_compass_s": float("nan"), "switch_compass_to": float("nan")}
+    return {"switch_compass_s": _rel_s(float(moved.TimeUS.iloc[0]), t0),
+            "switch_compass_to": float(moved.MI.iloc[0])}
+
+
+def _gps_truth_offset(f: _Flight, t0: float, t1: float) -> tuple[float, float]:
+    """Mean (north, east) [m] of the logged GPS position minus the truth in [t0, t1]."""
+    gps = f.t["GPS"]
+    gps = gps[gps.I == 0] if "I" in gps else gps
+    g = time_window(gps[gps.Status >= 3], t0, t1)
+    if not len(g):
+        return float("nan"), float("nan")
+    n, e = latlon_to_ne(g.Lat.to_numpy(float), g.Lng.to_numpy(float), *f.home)
+    tg = g.TimeUS.to_numpy(float)
+    return (float(np.mean(np.asarray(n) - np.interp(tg, f.sim_t, f.n))),
+            float(np.mean(np.asarray(e) - np.interp(tg, f.sim_t, f.e))))
+
+
+def _gps_glitch(f: _Flight, t0: float, t1: float, route: np.ndarray | None
+                ) -> dict[str, float]:
+    on, on_end = t0 + 1e6, t1 + AFTER_S * 1e6
+    dn, de = _gps_truth_offset(f, on, t1)
+    g2 = f.first_err(ERR_GPS, CODE_GLITCH, t0, t1)
+    g2_end = f.first_err(ERR_GPS, CODE_GLITCH, t1, on_end)
+    return {
+        "gps_offset_n_m": dn,
+        "gps_offset_e_m": de,
+        "gps_offset_m": float(np.hypot(dn, de)),
+        "err24_first_s": _rel_s(f.first_err(ERR_EKF_PRIMARY, None, t0, t1), t0),
+        "err11_2_s": _rel_s(g2, t0),
+        "err11_0_s": _rel_s(f.first_err(ERR_GPS, CODE_RESOLVED, g2 if np.isfinite(g2) else t0,
+                                        t1), t0),
+        "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "route_dev_max_m": f.route_distance(route, t0, t1),
+        "err11_2_after_end_s": _rel_s(g2_end, t1),
+        "err11_0_after_end_s": _rel_s(f.first_err(
+            ERR_GPS, CODE_RESOLVED, g2_end if np.isfinite(g2_end) else t1, on_end), t1),
+        "ekf_err_max_after_end_m": _ekf_max(f, t1, t1 + RESUME_S * 1e6),
+        "lane_changes": _lane_changes(f, t0, t1 + RESUME_S * 1e6),
         "auto_kept": f.mode_kept(AUTO, t0, t1),
     }
+
+
+def _motor_partial(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]
+                   ) -> dict[str, float]:
+    ground = f.first_time(f.h <= GROUND_H_M, t0, t1)
+    fall_end = ground + 1e6 if np.isfinite(ground) else t1
+    gps = time_window(f.t["GPS"], t0, fall_end)
+    mask = int((fault.get("params_start") or {}).get("SIM_ENGINE_FAIL", 1))
+    rcou = time_window(f.t["RCOU"], t0, t1)
+    motors = [f"C{k + 1}" for k in range(4) if mask >> k & 1] or ["C1"]
+    up1 = f.first_time(f.h > 1.0, t1)
+    up10 = f.first_time(f.h > 10.0, t1)
+    sel = f.sel(t0, ground if np.isfinite(ground) else t1)
+    return {
+        "thr_mean_in": _mean(time_window(f.t["CTUN"], t0, t1).ThO),
+        "rcou_failed_mean": float(rcou[motors].to_numpy(float).mean()) if len(rcou)
+        else float("nan"),
+        "err25_s": _rel_s(f.first_err(ERR_THRUST_LOSS, None, t0, t1), t0),
+        "ground_s": _rel_s(ground, t0),
+        "impact_speed_ms": _max(gps.VZ),
+        "roll_max_deg": float(np.abs(f.roll[sel]).max()) if sel.any() else float("nan"),
+        "armed_kept": 1.0 - f.disarmed_in(t0, t1),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "liftoff_1m_after_end_s": _rel_s(up1, t1),
+        "above_10m_after_end_s": _rel_s(up10, t1),
+    }
+
+
+def _vibration(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+    vibe = f.t["VIBE"]
+    out: dict[str, float] = {}
+    for i in sorted(vibe.IMU.unique().astype(int)):
+        d = vibe[vibe.IMU == i]
+        w = time_window(d, t0, t1)
+        axes = w[["VibeX", "VibeY", "VibeZ"]].to_numpy(float)
+        out[f"vibe{i}_mean"] = float(axes.mean()) if len(w) else float("nan")
+        out[f"vibe{i}_max"] = float(axes.max()) if len(w) else float("nan")
+        b = time_window(d, t0 - BEFORE_S * 1e6, t0)
+        out[f"vibe{i}_before_max"] = float(b[["VibeX", "VibeY", "VibeZ"]].to_numpy(float).max()
+                                           ) if len(b) else float("nan")
+        out[f"clip{i}_in"] = float(w.Clip.max() - w.Clip.min()) if len(w) else float("nan")
+    imu = f.t["IMU"]
+    imu0 = imu[imu.I == 0]
+    ctun = f.t["CTUN"]
+    out.update({
+        "accz_std_before": float(time_window(imu0, t0 - BEFORE_S * 1e6, t0).AccZ.std()),
+        "accz_std_in": float(time_window(imu0, t0, t1).AccZ.std()),
+        "thr_mean_in": _mean(time_window(ctun, t0, t1).ThO),
+        "err29_vibe_fs": f.err_count(ERR_VIBE_FS, t0, t1),
+        "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    })
+    return out
+
+
+def _battery(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+    bat = f.t["BAT"]
+    ctun = f.t["CTUN"]
+    on = t0 + EARLY_S * 1e6
+    return {
+        "volt_before": _mean(time_window(bat, t0 - BEFORE_S * 1e6, t0).Volt),
+        "volt_in": _mean(time_window(bat, t0 + 1e6, t1).Volt),
+        "volt_after": _mean(time_window(bat, t1 + 5e6, t1 + 25e6).Volt),
+        "thr_before": _mean(time_window(ctun, t0 - BEFORE_S * 1e6, t0).ThO),
+        "thr_in": _mean(time_window(ctun, on, t1).ThO),
+        "thr_after": _mean(time_window(ctun, t1 + 5e6, t1 + 25e6).ThO),
+        "err6_1_s": _rel_s(f.first_err(ERR_FS_BATT, CODE_FAILSAFE, t0, t1), t0),
+        "err6_0_after_end": f.err_count(ERR_FS_BATT, t1, t1 + AFTER_S * 1e6, CODE_RESOLVED),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    }
+
+
+def _gps_jam(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+    gps = f.t["GPS"]
+    gps = gps[gps.I == 0] if "I" in gps else gps
+    m = EDGE_MARGIN_S * 1e6
+    inside = time_window(gps, t0 + m, t1)
+    armed = time_window(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
+    outside = armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + 10e6)]
+    return {
+        "fix_frac_in": float((inside.Status >= 3).mean()) if len(inside) else float("nan"),
+        "fix_frac_out": float((outside.Status >= 3).mean()) if len(outside) else float("nan"),
+        "nsats_min_in": float(inside.NSats.min()) if len(inside) else float("nan"),
+        "nsats_max_in": _max(inside.NSats),
+        "hdop_max_in": _max(inside.HDop),
+        "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "auto_kept": f.mode_kept(AUTO, t0, t1),
+    }
+
+
+def route_from_tables(tables: Mapping[str, pd.DataFrame]) -> np.ndarray | None:
+    """The mission's waypoints (lat, lon rows) from a log's CMD messages (the last upload's
+    NAV_WAYPOINT items), None without CMD."""
+    cmd = tables.get("CMD")
+    if cmd is None or not len(cmd):
+        return None
+    last = cmd.sort_values("TimeUS").drop_duplicates("CNum", keep="last").sort_values("CNum")
+    wp = last[(last.CId == 16) & (last.CNum > 0)]
+    return wp[["Lat", "Lng"]].to_numpy(float) if len(wp) > 1 else None
 
 
 def truth_timeline(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
@@ -312,19 +627,24 @@ def truth_timeline(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
                          "pitch_deg": f.pitch, "speed_ms": f.ground_speed()})
 
 
-def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
-                    ) -> dict[str, float]:
+def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any],
+                    route: Any = None) -> dict[str, float]:
     """Measure one fault's signature in a flight log.
 
     Args:
         tables: log tables by message name (tlm ``FlightLog.tables`` or ``read_bin`` output).
-        fault: at least ``type`` ("gps", "accel", "engine" or "rc"), ``start_time_us`` and
-            ``end_time_us`` (log TimeUS); for "accel", ``params_start`` (e.g.
-            ``{"SIM_ACCEL1_FAIL": 1}``) selects the failed IMUs and their stuck value (default:
-            IMU 0 and 1 reading 1 m/s^2).
+        fault: at least ``type`` (one of :data:`FAULT_TYPES`), ``start_time_us`` and
+            ``end_time_us`` (log TimeUS); ``params_start`` (e.g. ``{"SIM_ACCEL1_FAIL": 1}``)
+            selects the failed instances where a type has several (accel: IMU stuck values,
+            default IMU 0 and 1 reading 1 m/s^2; gyro / accel_samples: the mask's bits,
+            default IMU 0; baro: SIM_BARO_DISABLE / SIM_BAR2_DISABLE, default both; compass:
+            SIM_MAGn_FAIL, default compass 0; motor_partial: SIM_ENGINE_FAIL, default motor 1).
+        route: the mission's waypoints as (lat, lon) rows for the route deviation of baro and
+            gps_glitch; None takes them from the log's CMD messages (NaN without).
 
     Returns:
-        Metric name -> value (see the module docstring for units and conventions):
+        Metric name -> value (see the module docstring for units and conventions; ``*_s``
+        seconds after the start, ``*_after_end_s`` after the end):
 
         * gps: ``nofix_frac_in/out`` (GPS rows with Status < 3), ``nsats_max_in``,
           ``nsats_min_out``, ``ekf_err_max_m`` and ``ekf_err_at_end_m`` (primary XKF1 vs truth),
@@ -341,16 +661,53 @@ def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
           ``liftoff_1m_after_end_s``, ``above_10m_after_end_s``, ``auto_after_end`` (mode at
           10 m), ``path_after_10m_m`` (truth path in the 30 s after reaching 10 m: a resumed
           mission flies ~6 m/s).
-        * compass: ``health0_lost_s`` / ``health0_back_s`` (MAG I=0 Health 0 after the start,
-          1 after the end; seconds after the start), ``mag0_frozen_std`` (largest std of its
-          MagX/Y/Z from 1 s after the start), ``mag_others_healthy_frac``, ``err3_4_s`` /
-          ``err3_0_s``, ``switch_compass_s`` / ``switch_compass_to`` (first XKFS row with
-          MI != 0), ``err24_ekf_primary``, ``sm_max`` (XKF4.SM), ``ekf_err_max_m``,
-          ``auto_kept``.
         * rc: ``rtl_delay_s`` (first MODE RTL), ``rtl_reason`` (its Rsn), ERR counts
           ``err2_2_late_frame``, ``err5_1_failsafe`` (in the window), ``err5_0_cleared`` (2 s
           after the end), ``rtl_kept_after_end``, ``disarm_s``, ``final_home_dist_m`` (truth at
           disarming).
+        * gyro (accel_samples the same with ``ah``/AccX-Z): per masked IMU i
+          ``imu<i>_gh_drop_s`` / ``imu<i>_gh_restore_s`` (first IMU row with GH 0 in the
+          window, first with GH 1 after it), ``imu<i>_std_in`` / ``imu<i>_std_before`` (largest
+          gyro-axis standard deviation in the window after the edge margin / the 20 s before:
+          0 when frozen); per other IMU ``imu<i>_healthy_frac_in``; ``err24_ekf_primary`` and
+          ``lane_changes`` (XKF4.PI changes of core 0) from the start to 60 s after the end,
+          ``ekf_err_max_m``, ``roll_max_deg``, ``auto_kept``.
+        * baro: ``baro_h_drop_s`` (first BARO.H 0 of the disabled baros),
+          ``baro_h_restore_s`` (the last of them back to 1), ``err18_4_s``, ``err18_0_s``,
+          ``alt_invalid_s`` (first CTUN.Alt 0.00: EKF3's height relative to the origin is
+          invalid), ``climb_m`` (max true height in the window minus the start height),
+          ``climb_rate_max_ms`` (true, over 0.5 s), ``thr_mean_before`` (20 s) /
+          ``thr_mean_in`` (CTUN.ThO), ``descent_rate_max_ms`` (60 s after the end),
+          ``back_after_end_s`` (back within 1.5 m of the start height, from 1 s after the
+          end), ``route_dev_max_m`` (truth from the mission line, to 5 s after the end),
+          ``auto_kept`` (to 60 s after the end).
+        * compass: per failed compass i ``mag<i>_health_drop_s`` / ``mag<i>_health_restore_s``
+          (MAG.Health), ``mag<i>_std_in`` (largest MagX/Y/Z standard deviation after the drop:
+          0 when no data or frozen); per other compass ``mag<i>_healthy_frac_in``;
+          ``err3_4_s``, ``err3_0_s``, ``lane_changes``, ``ekf_err_max_m``, ``auto_kept``.
+        * gps_glitch: ``gps_offset_n_m`` / ``gps_offset_e_m`` / ``gps_offset_m`` (mean logged
+          GPS minus truth with a fix, from 1 s after the start), ``err24_first_s`` (first lane
+          switch), ``err11_2_s`` ("GPS Glitch or Compass error"), ``err11_0_s`` ("Glitch
+          cleared", after it), ``ekf_err_max_m``, ``route_dev_max_m`` (truth from the mission
+          line in the window), ``err11_2_after_end_s`` / ``err11_0_after_end_s`` (the same
+          after the clear, within 60 s), ``ekf_err_max_after_end_m`` (30 s),
+          ``lane_changes`` (start to 30 s after the end), ``auto_kept``.
+        * motor_partial: ``thr_mean_in`` (CTUN.ThO), ``rcou_failed_mean`` (RCOU of the
+          SIM_ENGINE_FAIL motors), ``err25_s`` (first thrust loss), ``ground_s``,
+          ``impact_speed_ms`` (max GPS.VZ to 1 s after the ground), ``roll_max_deg`` (before
+          the ground), ``armed_kept``, ``auto_kept``, ``liftoff_1m_after_end_s``,
+          ``above_10m_after_end_s``.
+        * vibration: per IMU i ``vibe<i>_mean`` / ``vibe<i>_max`` (VIBE X, Y, Z in the window),
+          ``vibe<i>_before_max`` (20 s before), ``clip<i>_in`` (clipping count added in the
+          window); ``accz_std_before`` / ``accz_std_in`` (IMU 0 AccZ at 25 Hz),
+          ``thr_mean_in``, ``err29_vibe_fs``, ``ekf_err_max_m``, ``auto_kept``.
+        * battery: ``volt_before`` / ``volt_in`` (from 1 s in) / ``volt_after`` (5-25 s after)
+          (BAT.Volt), ``thr_before`` (20 s) / ``thr_in`` (from 3 s in) / ``thr_after`` (5-25 s
+          after) (CTUN.ThO), ``err6_1_s`` (battery failsafe), ``err6_0_after_end`` (count, 60 s),
+          ``auto_kept``.
+        * gps_jam: ``fix_frac_in`` / ``fix_frac_out`` (GPS rows with Status >= 3; out: armed,
+          before the start or 10 s after the end), ``nsats_min_in``, ``nsats_max_in``,
+          ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
     """
     kind = fault["type"]
     if kind not in FAULT_TYPES:
@@ -359,12 +716,24 @@ def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
     if not t1 > t0:
         raise ValueError(f"fault window must have end_time_us > start_time_us, got {t0}..{t1}")
     f = _Flight(tables)
-    if kind == "gps":
-        return _gps(f, t0, t1)
-    if kind == "accel":
-        return _accel(f, t0, t1, fault)
-    if kind == "engine":
-        return _engine(f, t0, t1)
-    if kind == "compass":
-        return _compass(f, t0, t1)
-    return _rc(f, t0, t1)
+    if route is None and kind in ("baro", "gps_glitch"):
+        route = route_from_tables(tables)
+    route = None if route is None else np.asarray(route, dtype=float)[:, :2]
+    measure = {
+        "gps": lambda: _gps(f, t0, t1),
+        "accel": lambda: _accel(f, t0, t1, fault),
+        "engine": lambda: _engine(f, t0, t1),
+        "rc": lambda: _rc(f, t0, t1),
+        "gyro": lambda: _sample_loss(f, t0, t1, fault, "SIM_GYR_FAIL_MSK", "GH",
+                                     ("GyrX", "GyrY", "GyrZ")),
+        "accel_samples": lambda: _sample_loss(f, t0, t1, fault, "SIM_ACC_FAIL_MSK", "AH",
+                                              ("AccX", "AccY", "AccZ")),
+        "baro": lambda: _baro(f, t0, t1, fault, route),
+        "compass": lambda: _compass(f, t0, t1, fault),
+        "gps_glitch": lambda: _gps_glitch(f, t0, t1, route),
+        "motor_partial": lambda: _motor_partial(f, t0, t1, fault),
+        "vibration": lambda: _vibration(f, t0, t1),
+        "battery": lambda: _battery(f, t0, t1),
+        "gps_jam": lambda: _gps_jam(f, t0, t1),
+    }
+    return measure[kind]()

@@ -1,8 +1,9 @@
 """``tlm crosscheck SITL.bin``: fly a SITL log's scenario in tlm and report how far apart they are
 (:mod:`tlm_process.crosscheck`).
 
-Writes ``DIR/report.md`` with overlay plots (trajectory, altitude and speed, IMU spectrum) and
-``R.json``; ``--max-flight-time-diff`` and ``--max-trajectory-rms`` turn it into a regression
+Writes ``DIR/report.md`` with overlay plots (trajectory, altitude and speed, IMU spectrum), the
+re-flown flight as ``DIR/tlm_flight.bin`` (ArduPilot DataFlash) and ``R.json``;
+``--max-flight-time-diff`` and ``--max-trajectory-rms`` turn it into a regression
 gate (exit code 1 when exceeded).
 """
 
@@ -34,7 +35,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     c.add_argument("--sidecar", help="fault sidecar JSON (default: LOG.json beside the log)")
     c.add_argument("--seed", type=int, help="tlm seed (default: the sidecar's, else 0)")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
-    c.add_argument("--out", metavar="DIR", help="write report.md and overlay PNGs here")
+    c.add_argument("--out", metavar="DIR",
+                   help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "
+                        "here")
     c.add_argument("--max-flight-time-diff", type=float, default=None, metavar="FRAC",
                    help=f"fail when armed flight time differs by more than FRAC "
                         f"(issue target {DEFAULT_MAX_FLIGHT_TIME_DIFF})")
@@ -60,15 +63,25 @@ def run(args: argparse.Namespace) -> int:
     print(text.split("\n| metric")[0])
     ft = r["flight_time_s"]
     print(f"flight time: tlm {ft['tlm']:.1f} s, SITL {ft['sitl']:.1f} s")
+    for note in r["scenario"].get("notes") or ():
+        print(f"note: {note}")
     for f in r["faults"]:
         keys = list(f["sitl"])[:3]
-        print(f"fault {f['type']}: " + ", ".join(
-            f"{k} tlm {cell(f['tlm'].get(k))} / SITL {cell(f['sitl'].get(k))}" for k in keys))
+        print(f"fault {f['type']}: {f.get('passed', 0)}/{f.get('compared', 0)} signature "
+              "metrics within 35 %; " + ", ".join(
+                  f"{k} tlm {cell(f['tlm'].get(k))} / SITL {cell(f['sitl'].get(k))}"
+                  for k in keys))
+    c = r["checks"]
+    print(f"checks: flight time {'pass' if c['flight_time']['pass'] else 'FAIL'}, trajectory "
+          f"RMS {'pass' if c['trajectory_rms']['pass'] else 'FAIL'}, signatures "
+          f"{c['signatures']['value']}")
     if args.out:
         out = prepare_out(args.out)
         plot(r, out)
         (out / "report.md").write_text(text)
-        print(f"written            {out}/report.md (+ trajectory.png, profiles.png, imu_psd.png)")
+        r["_log"].write_bin(out / "tlm_flight.bin")
+        print(f"written            {out}/report.md (+ trajectory.png, profiles.png, imu_psd.png, "
+              "tlm_flight.bin)")
     if args.json:
         Path(args.json).write_text(json.dumps(to_json(r), indent=1) + "\n")
     bad = gate(r, args.max_flight_time_diff, args.max_trajectory_rms)

@@ -229,11 +229,13 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
     for m in details_of:
         r = res[m]
         lines.append("")
-        lines.append(format_confusion(r["confusion"], title=f"{t} {m}: confusion matrix "
-                                                             "(rows true, columns predicted)"))
+        lines.append(format_confusion(r["confusion"], list(r["per_class"]),
+                                      title=f"{t} {m}: confusion matrix "
+                                            "(rows true, columns predicted)"))
         lines.append(format_per_class(r, title=f"{t} {m}: per class"))
         if "transfer" in r:
             lines.append(format_confusion(r["transfer"]["confusion"],
+                                          list(r["transfer"]["per_class"]),
                                           title=f"{t} {m}: confusion on the transfer logs"))
             lines.append(format_per_class(r["transfer"],
                                           title=f"{t} {m}: per class on the transfer logs"))

@@ -24,7 +24,8 @@ __all__ = ["add_parser", "build_config", "run"]
 DESCRIPTION = """\
 Fly many Monte Carlo flights and write them as one labelled data set: missions (the four
 built-in shapes and random Algorithm 1 missions, fresh altitude profiles), no-fault,
-single-fault and paper-style flights (GPS, accel, engine, RC in one flight), fault start times
+single-fault, paper-style (GPS, accel, engine, RC in one flight) and sequence flights (several
+of SITL's other faults, --faults), fault magnitudes, fault start times
 and holds (scaled by lambda), wind and sensor noise, all drawn from --seed. Flight i is the
 same whatever --flights, executor or worker count; re-running the command continues an
 interrupted data set.
@@ -42,14 +43,19 @@ writes:
   DS/bin/flight-00000042.bin         with --bin: ArduPilot DataFlash logs
   DS/GPS.parquet/flights-00000000-00000099.parquet   with --compact: 100 flights per file
 
-defaults: kinds none=0.2,single=0.4,paper=0.4; missions builtin=0.5,random=0.5; wind
+defaults: --faults paper (kinds none=0.2,single=0.4,paper=0.4, the paper's four fault
+types); missions builtin=0.5,random=0.5; wind
 SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/2_RND
 0-0.5 deg/s, SIM_BARO/BAR2_RND 0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: none of these).
---config FILE (.json/.yaml) sets any scenario setting (docs/generate.md); flags override it.
+--config FILE (.json/.yaml) sets any scenario setting (docs/generate.md), e.g. the magnitude
+ranges of the new faults (magnitudes: {gps_glitch: {offset_m: [20, 60]}, battery: {volt:
+[9.9, 10.4]}, ...}); flags override it.
 
 examples:
   tlm generate --flights 1000 --out ds --seed 1
   tlm generate --flights 200 --out ds-paper --kinds paper=1 --profile paper --lambda 1.5
+  tlm generate --flights 1000 --out ds-all --faults all        # every fault type
+  tlm generate --flights 300 --out ds-b --faults battery,motor_partial,vibration
   tlm generate --flights 5000 --out ds --scheduler tcp://127.0.0.1:8786   # via an SSH tunnel
   tlm fly --from-manifest ds --flight 123 --out flight123    # one flight again, alone
 """
@@ -120,6 +126,14 @@ def build_config(args: argparse.Namespace) -> Any:
     from tlm_process.generate.scenario import ScenarioConfig
 
     d: dict[str, Any] = _config_file(args.config) if args.config else {}
+    if getattr(args, "faults", None):  # the flag's preset beats the file's keys it sets
+        from tlm_process.generate.errors import GenerateError
+        from tlm_process.generate.scenario import fault_preset
+
+        try:
+            d = {**{k: v for k, v in d.items() if k != "faults"}, **fault_preset(args.faults)}
+        except GenerateError as exc:
+            raise UsageError(f"--faults: {exc}") from None
     if args.kinds:
         d["kinds"] = _shares(args.kinds, "--kinds")
     if args.missions:
@@ -172,9 +186,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     lam.add_argument("--target-fault-ratio", type=float, metavar="G",
                      help="choose lambda = G / alpha, alpha measured on pilot flights, so about "
                           "a share G of the rows is in fault windows")
-    sc.add_argument("--kinds", metavar="none=A,single=B,paper=C",
-                    help="shares of no-fault, single-fault and paper-style (all four faults) "
-                         "flights")
+    sc.add_argument("--faults", metavar="paper|all|new|single|TYPE,TYPE,...",
+                    help="which fault types are drawn: paper (default: the paper's four, "
+                         "labels 1-4), all (every type: single faults, the paper sequence and "
+                         "sequences of new faults), new (labels 5-13), single (single faults "
+                         "of every type), or a list of types (single faults and sequences of "
+                         "them); --kinds overrides the mix it sets")
+    sc.add_argument("--kinds", metavar="none=A,single=B,paper=C,sequence=D",
+                    help="shares of no-fault, single-fault, paper-style (all four faults) "
+                         "and sequence (several faults of sequence_types) flights")
     sc.add_argument("--missions", metavar="builtin=A,random=B",
                     help="shares of built-in shapes and random Algorithm 1 missions")
     sc.add_argument("--profile", choices=("current", "paper"),

@@ -4,7 +4,10 @@
 ``crosscheck(bin, sidecar)`` rebuilds the scenario (``scenario.reconstruct``), flies it, and
 compares (``metrics.crosscheck_metrics``); ``format_report`` and ``plot`` make ``report.md``
 and its overlay plots (trajectory, altitude and speed, IMU spectrum), ``to_json`` the JSON
-document, and ``gate`` the threshold violations of a regression gate.
+document, and ``gate`` the threshold violations of a regression gate. ``checks`` are issue
+19's targets for every reference flight: flight time within 10 %, trajectory RMS outside the
+fault windows within 5 m, each fault-signature metric within 35 % of SITL's
+(``metrics.signature_rows``).
 """
 
 from __future__ import annotations
@@ -13,12 +16,25 @@ import math
 from pathlib import Path
 from typing import Any
 
-__all__ = ["DEFAULT_MAX_FLIGHT_TIME_DIFF", "DEFAULT_MAX_TRAJECTORY_RMS_M", "crosscheck",
-           "format_report", "gate", "cell", "plot", "to_json"]
+__all__ = ["DEFAULT_MAX_FLIGHT_TIME_DIFF", "DEFAULT_MAX_TRAJECTORY_RMS_M",
+           "CHECK_MAX_FLIGHT_TIME_DIFF", "CHECK_MAX_TRAJECTORY_RMS_M", "checks", "crosscheck",
+           "format_report", "gate", "cell", "plot", "signature_rows", "to_json"]
 
 #: Issue 8's targets: flight time within 10 %, trajectory RMS <= 3 m (normal and combined).
 DEFAULT_MAX_FLIGHT_TIME_DIFF = 0.10
 DEFAULT_MAX_TRAJECTORY_RMS_M = 3.0
+#: Issue 19's targets on every reference flight (the report's pass/fail lines).
+CHECK_MAX_FLIGHT_TIME_DIFF = 0.10
+CHECK_MAX_TRAJECTORY_RMS_M = 5.0
+
+
+def signature_rows(tlm: dict[str, float], sitl: dict[str, float],
+                   rel_tol: float | None = None) -> list[dict[str, Any]]:
+    """:func:`tlm_process.crosscheck.metrics.signature_rows` (imported when first used)."""
+    from tlm_process.crosscheck import metrics
+
+    return metrics.signature_rows(tlm, sitl, metrics.SIGNATURE_REL_TOL if rel_tol is None
+                                  else rel_tol)
 
 
 def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
@@ -29,8 +45,12 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
     from tlm_sim import fly
 
     sc = reconstruct(bin_path, sidecar, seed)
-    log = fly(sc.mission, faults=sc.schedule, params=sc.params, seed=sc.seed)
-    r = crosscheck_metrics(log.tables, sc.tables, sc.mission.home, log.faults, sc.faults)
+    log = fly(sc.mission, faults=sc.fly_faults, params=sc.params, seed=sc.seed)
+    route = sc.mission.waypoints[:, :2]
+    r = crosscheck_metrics(log.tables, sc.tables, sc.mission.home,
+                           sc.tlm_fault_records(log.faults), sc.faults, route)
+    r["checks"] = checks(r)
+    r["_log"] = log
     r["scenario"] = {
         "log": str(bin_path), "name": sc.name, "source": sc.source, "seed": sc.seed,
         "waypoints": int(sc.mission.n_waypoints), "params_from_log": sc.params.changed(),
@@ -38,8 +58,33 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
         "faults": [{k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")}
                    for f in sc.faults],
         "sitl_arm_s": sc.sitl_arm_us * 1e-6, "tlm_arm_s": sc.tlm_arm_s,
+        "flown_as": "schedule" if sc.schedule is not None else (
+            "parameter changes" if sc.changes else "no faults"),
+        "notes": list(sc.notes),
     }
     return r
+
+
+def checks(r: dict[str, Any]) -> dict[str, Any]:
+    """Issue 19's pass/fail per reference flight: ``flight_time`` (relative difference,
+    limit 10 %), ``trajectory_rms`` (m outside the fault windows, limit 5 m) and
+    ``signatures`` (metrics within 35 %, counted over every fault), each ``{value, limit,
+    pass}``; ``pass`` for all three."""
+    ft = r["flight_time_s"]
+    rel = abs(ft["tlm"] - ft["sitl"]) / ft["sitl"] if ft["sitl"] else math.nan
+    rms = r["trajectory_rms_m"]
+    passed = sum(f.get("passed", 0) for f in r["faults"])
+    compared = sum(f.get("compared", 0) for f in r["faults"])
+    out = {
+        "flight_time": {"value": rel, "limit": CHECK_MAX_FLIGHT_TIME_DIFF,
+                        "pass": bool(rel <= CHECK_MAX_FLIGHT_TIME_DIFF)},
+        "trajectory_rms": {"value": rms, "limit": CHECK_MAX_TRAJECTORY_RMS_M,
+                           "pass": bool(rms <= CHECK_MAX_TRAJECTORY_RMS_M)},
+        "signatures": {"value": f"{passed}/{compared}", "limit": 0.35,
+                       "pass": passed == compared},
+    }
+    out["pass"] = all(v["pass"] for v in out.values())
+    return out
 
 
 def gate(r: dict[str, Any], max_ft: float | None, max_rms: float | None) -> list[str]:
@@ -61,6 +106,14 @@ def cell(v: Any) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
+def _pct(v: Any) -> str:
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.0f} %"
+
+
+def _verdict(ok: bool) -> str:
+    return "pass" if ok else "**FAIL**"
+
+
 def format_report(r: dict[str, Any]) -> str:
     """Markdown report of one cross-check."""
     sc = r["scenario"]
@@ -79,11 +132,28 @@ def format_report(r: dict[str, Any]) -> str:
             d = (v["tlm"] - v["sitl"]) if all(isinstance(x, float | int) for x in v.values()) \
                 else None
             lines.append(f"| {k} | {cell(v['tlm'])} | {cell(v['sitl'])} | {cell(d)} |")
+    if "checks" in r:
+        lines += ["", "## Checks (issue 19)", "", "| check | value | limit | result |",
+                  "|---|---|---|---|"]
+        c = r["checks"]
+        lines += [
+            f"| flight time | {100 * c['flight_time']['value']:.2f} % | 10 % | "
+            f"{_verdict(c['flight_time']['pass'])} |",
+            f"| trajectory RMS outside the fault windows | {c['trajectory_rms']['value']:.2f} m "
+            f"| 5 m | {_verdict(c['trajectory_rms']['pass'])} |",
+            f"| signature metrics within 35 % | {c['signatures']['value']} | all | "
+            f"{_verdict(c['signatures']['pass'])} |"]
+    for note in sc.get("notes") or ():
+        lines += ["", f"Note: {note}."]
     for f in r["faults"]:
-        lines += ["", f"## Fault: {f['type']} (label {f['label']})", "",
-                  "| signature | tlm | SITL |", "|---|---|---|"]
-        for k in f["sitl"]:
-            lines.append(f"| {k} | {cell(f['tlm'].get(k))} | {cell(f['sitl'].get(k))} |")
+        lines += ["", f"## Fault: {f['type']} (label {f['label']})", ""]
+        rows = f.get("rows") or signature_rows(f["tlm"], f["sitl"])
+        if not rows:
+            lines.append("No signature for this fault type (flown as its parameter changes).")
+            continue
+        lines += ["| signature | tlm | SITL | rel. diff | within 35 % |", "|---|---|---|---|---|"]
+        lines += [f"| {x['metric']} | {cell(x['tlm'])} | {cell(x['sitl'])} | "
+                  f"{_pct(x['rel_diff'])} | {_verdict(x['pass'])} |" for x in rows]
     lines += ["", "![trajectory](trajectory.png)", "", "![profiles](profiles.png)", "",
               "![IMU spectrum](imu_psd.png)", ""]
     return "\n".join(lines)
@@ -144,4 +214,4 @@ def to_json(r: dict[str, Any]) -> dict[str, Any]:
             return [clean(x) for x in v]
         return v
 
-    return clean({k: v for k, v in r.items() if k != "_series"})
+    return clean({k: v for k, v in r.items() if not k.startswith("_")})

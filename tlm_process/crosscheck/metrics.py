@@ -23,8 +23,17 @@ Metrics (``crosscheck_metrics``), each ``{"tlm": x, "sitl": y}`` unless noted:
 * ``rate_err_roll/pitch/yaw``: RMS of RATE.xDes - x in cruise [deg/s].
 * ``gps_status_ok``: share of armed GPS rows with Status >= 3; ``gps_nsats`` / ``gps_hdop``:
   medians with a fix.
-* ``faults``: one entry per fault: type, label and ``tlm_process.fault_signatures`` metrics for
-  both sides.
+* ``faults``: one entry per fault: type, label, ``tlm_process.fault_signatures`` metrics for
+  both sides (``tlm``, ``sitl``; empty for a type it does not measure) and ``rows``
+  (:func:`signature_rows`: each metric's relative difference and pass/fail), ``passed`` /
+  ``compared``.
+
+Signature pass/fail (:func:`signature_rows`): a metric passes when tlm is within
+:data:`SIGNATURE_REL_TOL` (35 %, issue 19) of SITL's value, or within an absolute floor for
+values near zero (:data:`SIGNATURE_FLOORS`, by the metric's unit suffix: 0.25 s, 1 m,
+0.25 m/s, 2 deg, 0.02 for fractions, 0.001 for standard deviations, else 0.01); flags
+(``*_kept``, ``auto_after_end``, ``rtl_reason``, NSats) must be equal; ERR counts compare
+presence (both > 0 or both 0); both NaN (neither log has the event) passes, one NaN fails.
 """
 
 from __future__ import annotations
@@ -39,12 +48,54 @@ from scipy.spatial import cKDTree
 
 from tlm_process.reference import time_window
 
-__all__ = ["crosscheck_metrics", "armed_span_us", "true_ne", "PSD_BANDS"]
+__all__ = ["crosscheck_metrics", "armed_span_us", "true_ne", "PSD_BANDS", "signature_rows",
+           "SIGNATURE_REL_TOL", "SIGNATURE_FLOORS"]
 
 ARMED, DISARMED, AUTO = 10, 11, 3
 PSD_BANDS = ((0.0, 2.0), (2.0, 6.0), (6.0, 12.5))
 #: Seconds after a fault's end left out of ``trajectory_rms_settled_m``.
 RECOVERY_S = 30.0
+#: A signature metric passes within this fraction of SITL's value (issue 19: 35 %).
+SIGNATURE_REL_TOL = 0.35
+#: ... or within this absolute difference, by the metric name's suffix (first match).
+SIGNATURE_FLOORS: tuple[tuple[str, float], ...] = (
+    ("_ms", 0.25), ("_s", 0.25), ("_m", 1.0), ("_deg", 2.0), ("_before", 0.001),
+    ("_std_in", 0.001), ("frac_in", 0.02), ("frac_out", 0.02), ("", 0.01))
+#: Metrics that must be equal (besides ``*_kept``).
+SIGNATURE_EXACT = frozenset({"rtl_reason", "auto_after_end", "nsats_max_in", "nsats_min_out"})
+
+
+def _is_count(metric: str) -> bool:
+    return metric.startswith("err") and not metric.endswith("_s")
+
+
+def _floor(metric: str) -> float:
+    if "std" in metric:
+        return 0.001
+    return next(v for suffix, v in SIGNATURE_FLOORS if metric.endswith(suffix))
+
+
+def signature_rows(tlm: Mapping[str, float], sitl: Mapping[str, float],
+                   rel_tol: float = SIGNATURE_REL_TOL) -> list[dict[str, Any]]:
+    """One row per SITL signature metric: ``metric``, ``tlm``, ``sitl``, ``rel_diff``
+    (|tlm - SITL| / |SITL|, NaN where SITL is 0 or either is NaN) and ``pass`` (see the module
+    docstring)."""
+    rows = []
+    for k, b in sitl.items():
+        a = tlm.get(k, float("nan"))
+        a, b = float(a), float(b)
+        nan_a, nan_b = np.isnan(a), np.isnan(b)
+        rel = abs(a - b) / abs(b) if not (nan_a or nan_b) and b != 0 else float("nan")
+        if nan_a or nan_b:
+            ok = nan_a and nan_b
+        elif _is_count(k):
+            ok = (a > 0) == (b > 0)
+        elif k.endswith("_kept") or k in SIGNATURE_EXACT:
+            ok = a == b
+        else:
+            ok = abs(a - b) <= max(rel_tol * abs(b), _floor(k))
+        rows.append({"metric": k, "tlm": a, "sitl": b, "rel_diff": rel, "pass": bool(ok)})
+    return rows
 
 
 def armed_span_us(tables: Mapping[str, pd.DataFrame]) -> tuple[float, float]:
@@ -140,15 +191,40 @@ def _on_grid(t_rel: np.ndarray, v: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return np.interp(grid, t_rel, v, left=np.nan, right=np.nan)
 
 
+def _fault_entry(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.DataFrame],
+                 ft: Mapping[str, Any], fs: Mapping[str, Any], tlm_end: float, sitl_end: float,
+                 route: Any) -> dict[str, Any]:
+    """One fault's signatures on both sides and their comparison (a fault held to the end of
+    the log is measured to the end of the armed flight)."""
+    from tlm_process.fault_signatures import FAULT_TYPES, fault_signature
+
+    entry: dict[str, Any] = {"type": fs.get("type"), "label": fs.get("label"),
+                             "tlm": {}, "sitl": {}}
+    if fs.get("type") in FAULT_TYPES:
+        def until(f: Mapping[str, Any], end: float) -> dict[str, Any]:
+            e = f.get("end_time_us")
+            return dict(f, end_time_us=end if e is None or e <= f["start_time_us"] else e)
+
+        entry["tlm"] = fault_signature(tlm, dict(until(ft, tlm_end), type=fs["type"]), route)
+        entry["sitl"] = fault_signature(sitl, until(fs, sitl_end), route)
+    rows = signature_rows(entry["tlm"], entry["sitl"])
+    entry["rows"] = rows
+    entry["passed"] = sum(r["pass"] for r in rows)
+    entry["compared"] = len(rows)
+    return entry
+
+
 def crosscheck_metrics(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.DataFrame],
                        home: Sequence[float], tlm_faults: Sequence[Mapping[str, Any]],
-                       sitl_faults: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+                       sitl_faults: Sequence[Mapping[str, Any]],
+                       route: Any = None) -> dict[str, Any]:
     """Compare two flights of one scenario; see the module docstring for the metrics.
+
+    ``route``: the mission's waypoints as (lat, lon) rows (route deviation of the baro and
+    GPS glitch signatures; None: each log's CMD messages).
 
     Returns a JSON-able dict (and, under ``_series``, arrays for the plots).
     """
-    from tlm_process.fault_signatures import fault_signature
-
     ts, ss = armed_span_us(tlm), armed_span_us(sitl)
     tw, sw = _windows(tlm_faults, ts[1]), _windows(sitl_faults, ss[1])
     a, b = _side(tlm, home, tw), _side(sitl, home, sw)
@@ -184,13 +260,8 @@ def crosscheck_metrics(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.Da
               "gps_status_ok", "gps_nsats", "gps_hdop",
               *[f"imu_acc_psd_{lo:g}_{hi:g}hz" for lo, hi in PSD_BANDS]):
         r[k] = {"tlm": a.get(k, float("nan")), "sitl": b.get(k, float("nan"))}
-    faults = []
-    for ft, fs in zip(tlm_faults, sitl_faults, strict=False):
-        faults.append({
-            "type": fs.get("type"), "label": fs.get("label"),
-            "tlm": fault_signature(tlm, ft), "sitl": fault_signature(sitl, fs),
-        })
-    r["faults"] = faults
+    r["faults"] = [_fault_entry(tlm, sitl, ft, fs, ts[1], ss[1], route)
+                   for ft, fs in zip(tlm_faults, sitl_faults, strict=False)]
     r["_series"] = {
         "tlm_ne": a["truth"][:, 1:3], "sitl_ne": b["truth"][:, 1:3], "grid": grid,
         "alt": (alt_a, alt_b), "spd": (spd_a, spd_b), "psd": (a.get("psd"), b.get("psd")),

@@ -28,7 +28,7 @@ __all__ = ["SitlScenario", "reconstruct", "mission_from_cmd", "ARMED", "DISARMED
 ARMED, DISARMED = 10, 11
 #: Message types the cross-check reads from a SITL log.
 TYPES = ("GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1",
-         "POS", "BARO", "RCOU", "CMD", "PARM", "ORGN", "MSG", "MAG", "XKF4", "XKFS")
+         "XKF4", "XKFS", "POS", "BARO", "MAG", "BAT", "RCOU", "CMD", "PARM", "ORGN", "MSG")
 _NAV_WAYPOINT, _NAV_TAKEOFF = 16, 22
 
 
@@ -49,11 +49,15 @@ class SitlScenario:
             ``params.unmodelled()`` what of that tlm does not model).
         faults: fault records on SITL's time line (type, label, start/end_time_us,
             params_start/params_end).
-        schedule: the same faults as a ``FaultSchedule`` on tlm's time line, or None.
+        schedule: the same faults as a ``FaultSchedule`` on tlm's time line, or None (no
+            faults, or flown as raw ``changes``).
+        changes: the faults as raw ``(time_s, name, value)`` parameter changes on tlm's time
+            line when a fault's type is not in ``FAULT_TYPES`` (else None).
         sitl_arm_us: SITL's arming time (EV 10) [us].
         tlm_arm_s: tlm's arming time [s].
         seed: seed for tlm's flight (the sidecar's, else 0).
         source: where mission and faults came from ("sidecar" or "log").
+        notes: what could not be flown as SITL did (unknown types, unmodelled parameters).
     """
 
     name: str
@@ -67,10 +71,29 @@ class SitlScenario:
     seed: int = 0
     source: str = "log"
     notes: list[str] = field(default_factory=list)
+    changes: list[tuple[float, str, float]] | None = None
 
     def to_tlm_us(self, sitl_us: float) -> float:
         """A SITL log time [us] on tlm's time line (same offset from arming)."""
         return sitl_us - self.sitl_arm_us + self.tlm_arm_s * 1e6
+
+    @property
+    def fly_faults(self) -> Any:
+        """What ``tlm_sim.fly(faults=...)`` takes: the schedule, the raw changes, or None."""
+        return self.schedule if self.schedule is not None else self.changes
+
+    def tlm_fault_records(self, flown_records: list[dict[str, Any]] | None = None
+                          ) -> list[dict[str, Any]]:
+        """The faults on tlm's time line: the flight's own Eq. 4 records when it flew the
+        schedule, else the SITL records with their windows moved (``to_tlm_us``)."""
+        if self.schedule is not None and flown_records is not None:
+            return list(flown_records)
+        out = []
+        for f in self.faults:
+            end = f.get("end_time_us")
+            out.append(dict(f, start_time_us=self.to_tlm_us(float(f["start_time_us"])),
+                            end_time_us=None if end is None else self.to_tlm_us(float(end))))
+        return out
 
 
 def _home_from_log(t: dict[str, pd.DataFrame]) -> tuple[float, float, float]:
@@ -122,22 +145,137 @@ def _initial_params(parm: pd.DataFrame) -> dict[str, float]:
 
 
 def _faults_from_log(parm: pd.DataFrame) -> list[dict[str, Any]]:
+    """Detected faults (``FAULT_TYPES``) and, from the SIM_* changes none of them explains,
+    faults of type ``unknown`` (see the module docstring), in start order."""
     from tlm_sim.faults import FAULT_TYPES
     from tlm_sim.faults.detect import faults_from_param_changes
     from tlm_sim.flightlog.binreader import param_changes_from_parm
 
+    changes = param_changes_from_parm(parm, exclude=())
     out = []
-    for f in faults_from_param_changes(param_changes_from_parm(parm, exclude=())):
+    for f in faults_from_param_changes(changes):
         ft = FAULT_TYPES[f["type"]]
         out.append(dict(f, params_start=dict(ft.params_start), params_end=dict(ft.params_end)))
+    out += unknown_faults(changes, out)
+    return sorted(out, key=lambda f: f["start_time_us"])
+
+
+def _explained(t: float, name: str, faults: list[dict[str, Any]]) -> bool:
+    for f in faults:
+        names = set(f.get("params_start") or {}) | set(f.get("params_end") or {})
+        end = f["end_time_us"] if f.get("end_time_us") is not None else np.inf
+        if name in names and f["start_time_us"] <= t <= end:
+            return True
+    return False
+
+
+def unknown_faults(changes: pd.DataFrame, known: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Faults of type ``unknown`` from the SIM_* parameter changes that no ``known`` fault
+    explains (a change of one of its parameters inside its window).
+
+    A group starts when such a parameter leaves its log-start value (``Old`` of its first
+    change) and ends when every parameter of the group is back at its log-start value; each
+    group is one record with ``params_start`` (the first value of each parameter),
+    ``params_end`` (the last) and ``changes`` (every ``(TimeUS, name, value)``, to replay).
+    """
+    out: list[dict[str, Any]] = []
+    base: dict[str, float] = {}
+    away: set[str] = set()
+    rec: dict[str, Any] | None = None
+    for t, name, value, old in zip(changes["TimeUS"], changes["Name"], changes["Value"],
+                                   changes["Old"], strict=True):
+        name, value = str(name), float(value)
+        if not name.startswith("SIM_") or _explained(float(t), name, known):
+            continue
+        base.setdefault(name, float(old))
+        if rec is None:
+            rec = {"type": "unknown", "label": None, "start_time_us": int(t),
+                   "end_time_us": None, "params_start": {}, "params_end": {},
+                   "changes": [], "source": "PARM"}
+            out.append(rec)
+        rec["params_start"].setdefault(name, value)
+        rec["params_end"][name] = value
+        rec["changes"].append((int(t), name, value))
+        if np.isclose(value, base[name], rtol=1e-6, atol=1e-9):
+            away.discard(name)
+        else:
+            away.add(name)
+        if not away:
+            rec["end_time_us"] = int(t)
+            rec = None
+    for r in out:  # a parameter that never left its value does not start a fault
+        r["params_start"] = {k: v for k, v in r["params_start"].items()
+                             if k in r["params_end"]}
     return out
 
 
-def _schedule(faults: list[dict[str, Any]], to_tlm_s) -> Any:
+def _raw_changes(f: dict[str, Any]) -> list[tuple[float, str, float]]:
+    """(SITL TimeUS, name, value) of one fault: its recorded ``changes``, else params_start at
+    its start and params_end at its end."""
+    if f.get("changes"):
+        return [(float(t), str(n), float(v)) for t, n, v in f["changes"]]
+    out = [(float(f["start_time_us"]), k, float(v))
+           for k, v in (f.get("params_start") or {}).items()]
+    if f.get("end_time_us") is not None:
+        out += [(float(f["end_time_us"]), k, float(v))
+                for k, v in (f.get("params_end") or {}).items()]
+    return out
+
+
+def _flyable(name: str) -> str | None:
+    """Why tlm cannot fly parameter ``name`` (None if it can)."""
+    from tlm_sim.params import ALIASES, Params, is_modelled
+
+    canonical = ALIASES[name].target if name in ALIASES else name
+    if canonical not in Params.defaults():
+        return "unknown to tlm"
+    return None if is_modelled(canonical) else "not modelled by tlm"
+
+
+def _plan(faults: list[dict[str, Any]], to_tlm_s) -> tuple[Any, Any, list[str]]:
+    """(schedule, raw changes, notes) that fly ``faults`` on tlm's time line (module
+    docstring): the schedule when every type is known, else the raw changes; parameters tlm
+    cannot fly are left out of both and named in the notes."""
+    from tlm_sim.faults import FAULT_TYPES, FaultScheduleError
+
+    notes: list[str] = []
+    skip: set[str] = set()
+    for f in faults:
+        for _, name, _ in _raw_changes(f):
+            why = _flyable(name)
+            if why is not None and name not in skip:
+                skip.add(name)
+                notes.append(f"{f.get('type')} fault: {name} is {why}; flown without it")
+    if all(f.get("type") in FAULT_TYPES for f in faults):
+        try:
+            return _schedule(faults, to_tlm_s, skip), None, notes
+        except FaultScheduleError as exc:
+            notes.append(f"flown as raw parameter changes: {exc}")
+    else:
+        odd = sorted({str(f.get("type")) for f in faults if f.get("type") not in FAULT_TYPES})
+        notes.append(f"fault type {', '.join(odd)} unknown to tlm: flown as raw parameter "
+                     "changes")
+    changes = sorted(((round(to_tlm_s(t), 3), n, v) for f in faults
+                      for t, n, v in _raw_changes(f) if n not in skip), key=lambda c: c[0])
+    return None, changes or None, notes
+
+
+def _schedule(faults: list[dict[str, Any]], to_tlm_s, skip: set[str] = frozenset()) -> Any:
+    """The faults as a FaultSchedule, without the parameters in ``skip``
+    (FaultScheduleError when a fault is left with none: it is then flown as raw changes)."""
     from tlm_sim.faults import FaultSchedule
 
     if not faults:
         return None
+    if skip:
+        faults = [dict(f, params_start={k: v for k, v in (f.get("params_start") or {}).items()
+                                        if k not in skip},
+                       params_end={k: v for k, v in (f.get("params_end") or {}).items()
+                                   if k not in skip}) for f in faults]
+        if any(not f["params_start"] for f in faults):
+            from tlm_sim.faults import FaultScheduleError
+
+            raise FaultScheduleError("a fault has no parameter tlm can fly")
     items = []
     for f in faults:
         item: dict[str, Any] = {"fault": f["type"], "start": round(to_tlm_s(f["start_time_us"]), 3)}
@@ -160,7 +298,8 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         sidecar: its JSON sidecar; None looks for ``<log>.json`` beside the log.
         seed: tlm's seed (default: the sidecar's, else 0).
     Raises:
-        ScenarioError: the log never armed, has no mission or no home.
+        ScenarioError: the log never armed, has no mission or no home, or sets a parameter to
+            a value tlm does not simulate (e.g. FRAME_TYPE 1 before the X frame is modelled).
     """
     from tlm_sim import Mission
     from tlm_sim.flightlog import read_bin
@@ -174,7 +313,13 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10)")
     side_path = Path(sidecar) if sidecar else bin_path.with_suffix(".json")
     doc = json.loads(side_path.read_text()) if side_path.is_file() else None
-    params = Params.from_values(_initial_params(t["PARM"]), source=f"{bin_path.name} (PARM)")
+    from tlm_sim.params import ParamError
+
+    try:
+        params = Params.from_values(_initial_params(t["PARM"]),
+                                    source=f"{bin_path.name} (PARM)")
+    except ParamError as exc:
+        raise ScenarioError(f"tlm cannot fly this log's parameters: {exc}") from None
     tlm_arm_s = float(params["TLM_ARM_TIME"])
     sitl_arm_us = float(armed.iloc[0])
 
@@ -190,8 +335,9 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         mission = mission_from_cmd(t["CMD"], _home_from_log(t), bin_path.stem)
         faults = _faults_from_log(t["PARM"])
         source = "log"
+    schedule, changes, notes = _plan(faults, to_tlm_s)
     return SitlScenario(
         name=bin_path.stem, tables=t, mission=mission, params=params, faults=faults,
-        schedule=_schedule(faults, to_tlm_s), sitl_arm_us=sitl_arm_us, tlm_arm_s=tlm_arm_s,
-        seed=0 if seed is None else int(seed), source=source,
+        schedule=schedule, sitl_arm_us=sitl_arm_us, tlm_arm_s=tlm_arm_s,
+        seed=0 if seed is None else int(seed), source=source, notes=notes, changes=changes,
     )

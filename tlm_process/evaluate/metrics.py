@@ -34,6 +34,8 @@ from typing import Any
 
 import numpy as np
 
+from tlm_process.labels import PAPER_CLASS_NAMES
+
 __all__ = [
     "CLASS_NAMES",
     "classification_metrics",
@@ -45,19 +47,31 @@ __all__ = [
     "plot_confusion",
 ]
 
-#: Class names of labels 0-4 as the paper's Tables 12-18 write them.
-CLASS_NAMES: tuple[str, ...] = ("Normal", "GPS", "Acc", "Engine", "RC")
+#: Class names of labels 0-4 as the paper's Tables 12-18 write them (other labels:
+#: ``tlm_process.labels.class_name``, the fault type's name).
+CLASS_NAMES: tuple[str, ...] = PAPER_CLASS_NAMES
 
 #: Printed for an undefined value (Weka's "?"; the paper's "NaN").
 UNDEFINED = "?"
 
 
-def confusion_matrix(y_true: Any, y_pred: Any, n_classes: int = len(CLASS_NAMES)) -> np.ndarray:
-    """``C[true, predicted]`` counts for integer labels ``0 .. n_classes - 1``."""
+def confusion_matrix(y_true: Any, y_pred: Any, n_classes: int = len(CLASS_NAMES),
+                     labels: Sequence[int] | None = None) -> np.ndarray:
+    """``C[true, predicted]`` counts for integer labels ``0 .. n_classes - 1``, or with
+    ``labels`` for those labels (row/column i is ``labels[i]``; e.g. ``[0, 5, 9]``)."""
     t = np.asarray(y_true, dtype=np.int64)
     p = np.asarray(y_pred, dtype=np.int64)
     if t.shape != p.shape:
         raise ValueError(f"y_true and y_pred differ in shape: {t.shape} vs {p.shape}")
+    if labels is not None:
+        lab = np.asarray(labels, dtype=np.int64)
+        index = np.full(int(max(lab.max(), t.max(initial=0), p.max(initial=0))) + 1, -1)
+        index[lab] = np.arange(len(lab))
+        if (t < 0).any() or (p < 0).any():
+            raise ValueError(f"labels must be among {list(lab)}")
+        t, p, n_classes = index[t], index[p], len(lab)
+        if (t < 0).any() or (p < 0).any():
+            raise ValueError(f"labels must be among {lab.tolist()}")
     bad = (t < 0) | (t >= n_classes) | (p < 0) | (p >= n_classes)
     if bad.any():
         raise ValueError(f"labels must be in 0..{n_classes - 1}")
@@ -77,9 +91,11 @@ def classification_metrics(cm: Any,
     ``correct_pct``, ``incorrect_pct``, ``weighted_tp_rate``, ``weighted_fp_rate``,
     ``weighted_precision``, ``weighted_recall``, ``weighted_f1``, ``macro_f1``,
     ``undefined_precision`` (class names never predicted but present), ``per_class``
-    (name -> support, predicted, tp_rate, fp_rate, precision, recall, f1), ``confusion``."""
+    (name -> support, predicted, tp_rate, fp_rate, precision, recall, f1, in the matrix's
+    order), ``classes`` (the class names), ``confusion``."""
     c = np.asarray(cm, dtype=np.float64)
     k = c.shape[0]
+    class_names = list(class_names)
     if c.shape != (k, k) or len(class_names) != k:
         raise ValueError(f"confusion matrix must be {len(class_names)}x{len(class_names)}")
     n = c.sum()
@@ -132,6 +148,7 @@ def classification_metrics(cm: Any,
         "undefined_precision": [class_names[i] for i in range(k)
                                 if support[i] > 0 and predicted[i] == 0],
         "per_class": per,
+        "classes": class_names,
         "confusion": c.astype(np.int64).tolist(),
     }
 
@@ -214,9 +231,10 @@ def format_per_class(metrics: Mapping[str, Any], title: str = "") -> str:
     """Per-class F1, precision and recall in the layout of Tables 15-18 (the paper heads
     precision "Accuracy")."""
     lines = [title] if title else []
-    lines.append(f"{'':8s}{'F1-Score':>10s}{'Precision':>11s}{'Recall':>9s}{'Support':>9s}")
+    w = max(8, *(len(n) + 1 for n in metrics["per_class"]))
+    lines.append(f"{'':{w}s}{'F1-Score':>10s}{'Precision':>11s}{'Recall':>9s}{'Support':>9s}")
     for name, d in metrics["per_class"].items():
-        lines.append(f"{name:8s}{format_cell(d['f1'], 4):>10s}"
+        lines.append(f"{name:{w}s}{format_cell(d['f1'], 4):>10s}"
                      f"{format_cell(d['precision'], 4):>11s}"
                      f"{format_cell(d['recall'], 4):>9s}{d['support']:>9d}")
     return "\n".join(lines)
@@ -233,14 +251,16 @@ def plot_confusion(cm: Any, path: str | Path, title: str = "",
 
     c = np.asarray(cm, dtype=np.float64)
     share = c / np.maximum(c.sum(axis=1, keepdims=True), 1)
-    fig, ax = plt.subplots(figsize=(5.6, 4.6), layout="constrained")
-    im = ax.imshow(share, cmap="Blues", vmin=0, vmax=1)
     k = len(class_names)
+    side = max(1.0, k / 5)
+    fig, ax = plt.subplots(figsize=(5.6 * side, 4.6 * side), layout="constrained")
+    im = ax.imshow(share, cmap="Blues", vmin=0, vmax=1)
     for i in range(k):
         for j in range(k):
             ax.text(j, i, f"{int(c[i, j])}", ha="center", va="center", fontsize=8,
                     color="white" if share[i, j] > 0.6 else "black")
-    ax.set_xticks(range(k), class_names)
+    ax.set_xticks(range(k), class_names, rotation=45 if k > 5 else 0,
+                  ha="right" if k > 5 else "center")
     ax.set_yticks(range(k), class_names)
     ax.set_xlabel("predicted")
     ax.set_ylabel("true")

@@ -25,7 +25,6 @@ from sklearn.exceptions import ConvergenceWarning
 
 from tlm_process.evaluate.data import EvalDataset, EvaluateError
 from tlm_process.evaluate.metrics import (
-    CLASS_NAMES,
     classification_metrics,
     confusion_matrix,
     plot_confusion,
@@ -40,6 +39,7 @@ from tlm_process.evaluate.temporal import (
     window_features,
     window_spec_for,
 )
+from tlm_process.labels import class_labels, class_names
 
 __all__ = ["evaluate", "resolve_models", "window_spec"]
 
@@ -148,13 +148,15 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                            n_jobs=n_jobs, progress=lambda s, t=t: say(f"[{t}]   {s}"),
                            cnn_epochs=cnn_epochs)
             counts, cm, last, fit_s = _fit_folds(tab, name, make, say)
-            r = classification_metrics(cm)
+            r = classification_metrics(cm, class_names(tab.labels))
+            r["labels"] = list(tab.labels)
             r["split"] = split
             r.update(counts)
             if tab.yt is not None:  # transfer rows
                 last = _fit_all(tab, name, make) if len(tab.folds) > 1 else last
                 r["transfer"] = classification_metrics(
-                    confusion_matrix(tab.yt, last.predict(tab.xt(name))))
+                    confusion_matrix(tab.yt, last.predict(tab.xt(name)), labels=tab.labels),
+                    class_names(tab.labels))
             results[t][name] = r
             say(_model_line(t, name, r, fit_s))
             if out is not None:
@@ -167,7 +169,9 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
 @dataclass
 class _Table:
     """One table's rows as every model needs them: labels, flights, features per row and
-    per time window (window models), folds, and the transfer rows (``xt`` None without)."""
+    per time window (window models), folds, and the transfer rows (``xt`` None without).
+    ``labels``: the classes of its confusion matrices (``tlm_process.labels.class_labels`` of
+    the table's and the transfer rows' labels)."""
 
     name: str
     n_rows: int
@@ -182,6 +186,7 @@ class _Table:
     yt: np.ndarray | None = None
     xt_rows: np.ndarray | None = None
     xt_win: dict[str, np.ndarray] = field(default_factory=dict)
+    labels: list[int] = field(default_factory=list)
 
     @classmethod
     def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
@@ -207,6 +212,7 @@ class _Table:
             tab.yt = xt["label"].to_numpy(np.int64)
             tab.xt_rows = xt[feats].to_numpy(np.float64)
             tab.xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
+        tab.labels = class_labels(tab.y, tab.yt if tab.yt is not None else [])
         return tab
 
     def x(self, model: str) -> np.ndarray:
@@ -233,7 +239,7 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
     Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
     fit time [s])."""
     X, y, groups, t = tab.x(name), tab.y, tab.groups, tab.name
-    cm = np.zeros((len(CLASS_NAMES),) * 2, dtype=np.int64)
+    cm = np.zeros((len(tab.labels),) * 2, dtype=np.int64)
     fit_s = pred_s = 0.0
     n_train = n_test = n_fit = 0
     last = None
@@ -253,11 +259,11 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
         n_train += len(fold.train)
         n_fit += len(fit_rows)
         n_test += len(fold.test)
-        fold_cm = confusion_matrix(y[fold.test], pred)
+        fold_cm = confusion_matrix(y[fold.test], pred, labels=tab.labels)
         cm += fold_cm
         last = est
         if len(tab.folds) > 1:
-            fm = classification_metrics(fold_cm)
+            fm = classification_metrics(fold_cm, class_names(tab.labels))
             per_fold.append({"fold": fold.name, "n_test": len(fold.test),
                              "accuracy": fm["accuracy"], "macro_f1": fm["macro_f1"]})
             say(f"[{t}]   {name} {fold.name}: accuracy {100 * fm['accuracy']:.2f}%, "
@@ -296,12 +302,14 @@ def _plot_model(out: Path, t: str, name: str, split: str, r: dict[str, Any], cm:
     ``_training.png``)."""
     plot_confusion(cm, out / f"{t}_{name}_confusion.png",
                    f"{t}: {name} ({split} split), accuracy "
-                   f"{100 * r['accuracy']:.2f}%, macro-F1 {r['macro_f1']:.3f}")
+                   f"{100 * r['accuracy']:.2f}%, macro-F1 {r['macro_f1']:.3f}",
+                   class_names=r["classes"])
     if "transfer" in r:
         tr = r["transfer"]
         plot_confusion(tr["confusion"], out / f"{t}_{name}_transfer_confusion.png",
                        f"{t}: {name} on the transfer logs, accuracy "
-                       f"{100 * tr['accuracy']:.2f}%, macro-F1 {tr['macro_f1']:.3f}")
+                       f"{100 * tr['accuracy']:.2f}%, macro-F1 {tr['macro_f1']:.3f}",
+                       class_names=tr["classes"])
     if hasattr(model, "plot_history"):
         model.plot_history(out / f"{t}_{name}_training.png",
                            f"{t}: {name} training accuracy and loss (paper Figs. "

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import ks_2samp
 
-from tlm_process.evaluate.metrics import CLASS_NAMES
+from tlm_process.labels import class_labels, class_name
 
 __all__ = ["feature_shift", "format_shift"]
 
@@ -53,7 +53,8 @@ def feature_shift(ds_tables: Mapping[str, pd.DataFrame],
             continue
         a_all = _raw(scaler, t, ds_tables[t], scaled)
         b_all = _raw(scaler, t, xt, scaled)
-        for label, cname in enumerate(CLASS_NAMES):
+        labels = class_labels(ds_tables[t]["label"].to_numpy(), xt["label"].to_numpy())
+        for label, cname in ((k, class_name(k)) for k in labels):
             a_sel = (ds_tables[t]["label"] == label).to_numpy()
             b_sel = (xt["label"] == label).to_numpy()
             for f in features[t]:

@@ -7,8 +7,10 @@ per stream), so it is the same flight whatever the number of flights, the execut
 worker count. One stream per aspect keeps them apart: changing the mission mix does not move
 any fault time. Streams:
 
-0. **kind**: ``none`` (no fault), ``single`` (one fault) or ``paper`` (all four faults in one
-   flight, the paper's §3.2 / §4.3 sequence), by :attr:`ScenarioConfig.kinds` shares.
+0. **kind**: ``none`` (no fault), ``single`` (one fault), ``paper`` (all four faults in one
+   flight, the paper's §3.2 / §4.3 sequence) or ``sequence`` (several faults of
+   :attr:`ScenarioConfig.sequence_types` one after the other), by
+   :attr:`ScenarioConfig.kinds` shares.
 1. **mission**: a built-in shape (1-4, uniform) or a random Algorithm 1 mission around
    :attr:`ScenarioConfig.home` (:func:`tlm_sim.mission.random_loop` + ``make_mission``: six raw
    points on a jittered loop, ~90 interpolated waypoints), by :attr:`ScenarioConfig.missions`
@@ -23,6 +25,9 @@ any fault time. Streams:
      ``shuffle=False``) and then RC (its failsafe sends the copter home, so it comes last);
      the first starts U(``gap_s``) s after AUTO, each later one U(``gap_s``) s after the
      previous one ends;
+   * ``sequence``: a whole number of faults uniform in ``sequence_len``, distinct types drawn
+     from ``sequence_types`` by their ``fault_weights`` (all equal where every weight is 0), in
+     a random order, RC last if drawn; timed as ``paper``;
 
    every hold is U(``hold_s``) s times λ (``lam``, Eq. 5's window factor). A fault whose
    boundary would come after the longest the flight can last is dropped with those after it.
@@ -30,6 +35,17 @@ any fault time. Streams:
    (wind speed, direction and turbulence, sensor noise amplitudes; rounded to 0.001).
 4. **flight seed**: the seed of all the flight's own noise draws (IMU, GPS, baro, compass,
    gusts), 0 .. 2**31 - 1.
+5. **magnitudes**: each fault's parameters, for the types with knobs in
+   :data:`MAGNITUDE_KNOBS` (GPS glitch offset, partial motor multiplier, battery voltage,
+   vibration amplitude, which baro / compass / IMU fails, ...), drawn from
+   :attr:`ScenarioConfig.magnitudes` (uniform in a range, or one of a list), fault by fault.
+   The paper's four types have no knobs, so their flights draw nothing here and fly the
+   type's parameters (the default data set is the same flight for flight as before the
+   catalogue: same seed, same flights).
+
+:func:`fault_preset` names the usual choices of fault types (``--faults`` of ``tlm
+generate``, or ``faults:`` in a configuration): ``paper`` (the default: the paper's four
+types), ``all``, ``new``, ``single``, or a list of types.
 
 A :class:`Scenario` holds the outcome as plain data (a mission recipe, the fault schedule's
 file form, parameter overrides, the flight seed, the profile), so a flight can be re-flown
@@ -64,6 +80,11 @@ from tlm_sim.profiles import PROFILES, profile_params
 
 __all__ = [
     "KINDS",
+    "MAGNITUDE_KNOBS",
+    "NEW_TYPES",
+    "PAPER_TYPES",
+    "fault_params",
+    "fault_preset",
     "MISSION_SOURCES",
     "FlightSpec",
     "Scenario",
@@ -72,14 +93,36 @@ __all__ = [
     "sample_scenario",
 ]
 
-#: Flight kinds, in the order their shares are drawn.
-KINDS: tuple[str, ...] = ("none", "single", "paper")
+#: Flight kinds, in the order their shares are drawn (appending keeps older draws).
+KINDS: tuple[str, ...] = ("none", "single", "paper", "sequence")
 #: Mission sources, in the order their shares are drawn.
 MISSION_SOURCES: tuple[str, ...] = ("builtin", "random")
 #: Faults of a paper-style flight before the RC fault (shuffled unless ``shuffle=False``).
 PAPER_FIRST: tuple[str, ...] = ("gps", "accel", "engine")
 
-_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED = range(5)
+_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE = range(6)
+
+#: The paper's four fault types (labels 1-4).
+PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
+#: The rest of SITL's catalogue (labels 5-13).
+NEW_TYPES: tuple[str, ...] = tuple(t for t in FAULT_TYPES if t not in PAPER_TYPES)
+
+#: What can be drawn per fault type: knob -> ("range", (low, high)) drawn uniformly, or
+#: ("choice", allowed values) drawn with equal chances from the configured list; the default
+#: of each knob is given second. Units: offset_m metres (horizontal, direction uniform),
+#: mul the SIM_ENGINE_MUL multiplier, volt volts, amplitude m/s/s (SIM_ACCn_RND), instance
+#: 1-based sensor number ("both" for both baros / IMUs), mode SIM_MAGn_FAIL (1 no data, 2
+#: frozen).
+MAGNITUDE_KNOBS: dict[str, dict[str, tuple[str, Any, Any]]] = {
+    "gyro": {"instance": ("choice", (1, 2, "both"), [1])},
+    "accel_samples": {"instance": ("choice", (1, 2, "both"), [1])},
+    "baro": {"instance": ("choice", (1, 2, "both"), ["both"])},
+    "compass": {"instance": ("choice", (1, 2, 3), [1]), "mode": ("choice", (1, 2), [1])},
+    "gps_glitch": {"offset_m": ("range", (0.0, 1000.0), (20.0, 60.0))},
+    "motor_partial": {"mul": ("range", (0.0, 1.0), (0.4, 0.8))},
+    "vibration": {"amplitude": ("range", (0.0, 50.0), (2.0, 6.0))},
+    "battery": {"volt": ("range", (0.0, 30.0), (9.9, 10.4))},
+}
 
 #: Default draws of the environment (uniform, per flight): wind as ArduPilot's SITL takes it
 #: and sensor noise amplitudes on top of the simulator's built-in noise.
@@ -144,6 +187,10 @@ class ScenarioConfig:
         ranges: parameter name -> (low, high), drawn uniformly per flight.
         params: parameter overrides for every flight (ArduPilot names).
         profile: ``current`` or ``paper`` (see :mod:`tlm_sim.profiles`).
+        sequence_types: fault types of ``sequence`` flights (default: labels 5-13).
+        sequence_len: (low, high) number of faults of a ``sequence`` flight.
+        magnitudes: fault type -> knob -> range or list of choices (see
+            :data:`MAGNITUDE_KNOBS`; missing knobs keep their defaults).
     """
 
     kinds: Mapping[str, float] = field(
@@ -165,6 +212,9 @@ class ScenarioConfig:
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=lambda: dict(DEFAULT_RANGES))
     params: Mapping[str, float] = field(default_factory=dict)
     profile: str = "current"
+    sequence_types: tuple[str, ...] = NEW_TYPES
+    sequence_len: tuple[int, int] = (2, 4)
+    magnitudes: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -222,6 +272,23 @@ class ScenarioConfig:
             raise GenerateError(f"parameters: {exc}") from None
         set_(self, "ranges", ranges)
         set_(self, "params", {k: float(params[k]) for k in sorted(params)})
+        set_(self, "sequence_types", _types(self.sequence_types, "sequence_types"))
+        lo, hi = _range(self.sequence_len, "sequence_len", 1.0)
+        if lo != int(lo) or hi != int(hi):
+            raise GenerateError(f"sequence_len must be whole numbers, got {self.sequence_len}")
+        if self.kinds.get("sequence", 0.0) > 0 and int(lo) > len(self.sequence_types):
+            raise GenerateError(f"sequence_len starts at {int(lo)} but sequence_types has "
+                                f"{len(self.sequence_types)} types")
+        set_(self, "sequence_len", (int(lo), int(hi)))
+        set_(self, "magnitudes", _magnitudes(self.magnitudes))
+        drawn = set()
+        if self.kinds["single"] > 0:
+            drawn |= {t for t, w in self.fault_weights.items() if w > 0}
+        if self.kinds["sequence"] > 0:
+            drawn |= set(self.sequence_types)
+        if self.kinds["paper"] > 0:
+            drawn |= set(PAPER_TYPES)
+        _check_modelled(drawn)
 
     def with_lambda(self, lam: float) -> ScenarioConfig:
         """The same configuration with λ = ``lam``."""
@@ -229,28 +296,193 @@ class ScenarioConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON form (:meth:`from_dict` reads it back to an equal configuration)."""
-        out: dict[str, Any] = {}
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, tuple):
-                v = list(v)
-            elif isinstance(v, Mapping):
-                v = {k: list(x) if isinstance(x, tuple) else x for k, x in v.items()}
-            out[f.name] = v
-        return out
+        def plain(v: Any) -> Any:
+            if isinstance(v, tuple | list):
+                return [plain(x) for x in v]
+            if isinstance(v, Mapping):
+                return {k: plain(x) for k, x in v.items()}
+            return v
+
+        return {f.name: plain(getattr(self, f.name)) for f in fields(self)}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> ScenarioConfig:
-        """A configuration from :meth:`to_dict`'s form (or any subset of its keys)."""
+        """A configuration from :meth:`to_dict`'s form (or any subset of its keys). A key
+        ``faults`` names a :func:`fault_preset`; the other keys override what it sets."""
         if not isinstance(d, Mapping):
             raise GenerateError(f"a scenario configuration must be a mapping, got "
                                 f"{type(d).__name__}")
+        if "faults" in d:
+            rest = {k: v for k, v in d.items() if k != "faults"}
+            d = {**fault_preset(d["faults"]), **rest}
         names = {f.name for f in fields(cls)}
         unknown = [k for k in d if k not in names]
         if unknown:
             raise GenerateError(f"unknown scenario setting {unknown[0]!r}; known: "
                                 f"{', '.join(sorted(names))}")
         return cls(**dict(d))
+
+
+def _types(v: Any, what: str) -> tuple[str, ...]:
+    """Validated fault type names (in FAULT_TYPES order, no repeats), at least one."""
+    items = [v] if isinstance(v, str) else v
+    try:
+        names = [str(x).strip().lower() for x in items]
+    except TypeError:
+        raise GenerateError(f"{what} must be a list of fault types, got {v!r}") from None
+    bad = [n for n in names if n not in FAULT_TYPES]
+    if bad:
+        raise GenerateError(f"{what}: unknown fault type {bad[0]!r}; choose from "
+                            f"{', '.join(FAULT_TYPES)}")
+    if not names:
+        raise GenerateError(f"{what} must name at least one fault type")
+    return tuple(t for t in FAULT_TYPES if t in names)
+
+
+def _check_modelled(types: set[str]) -> None:
+    """GenerateError naming the first type (label order) whose parameters tlm does not model
+    (its flights could not fly)."""
+    from tlm_sim.params import is_modelled
+
+    for t in FAULT_TYPES:
+        if t in types:
+            missing = [p for p in FAULT_TYPES[t].params_start if not is_modelled(p)]
+            if missing:
+                raise GenerateError(f"fault type {t}: tlm does not model {', '.join(missing)} "
+                                    "yet; leave it out (--faults TYPE,TYPE,... or "
+                                    "fault_weights / sequence_types)")
+
+
+def fault_preset(name: Any) -> dict[str, Any]:
+    """The settings of a named choice of fault types (``tlm generate --faults``):
+
+    * ``paper``: the paper's four types in single-fault and paper-style flights (20 % none,
+      40 % single, 40 % paper): the defaults;
+    * ``all``: single faults of every type (labels 1-13), the paper sequence and sequences
+      of the new types (20 % none, 40 % single, 20 % paper, 20 % sequence);
+    * ``new``: the new types only (labels 5-13): 20 % none, 40 % single, 40 % sequence;
+    * ``single``: single faults of every type (20 % none, 80 % single);
+    * a list of types (``"gps_glitch,battery"`` or a list): single faults and sequences of
+      those types (20 % none, 40 % single, 40 % sequence; sequences need two or more).
+    """
+    if not isinstance(name, str | list | tuple):
+        raise GenerateError(f"faults must be paper, all, new, single or a list of types, got "
+                            f"{name!r}")
+    key = name.strip().lower() if isinstance(name, str) else None
+    every = {t: 1.0 for t in FAULT_TYPES}
+    if key == "paper":
+        return {"kinds": {"none": 0.2, "single": 0.4, "paper": 0.4},
+                "fault_weights": {t: 1.0 for t in PAPER_TYPES}}
+    if key == "all":
+        return {"kinds": {"none": 0.2, "single": 0.4, "paper": 0.2, "sequence": 0.2},
+                "fault_weights": every, "sequence_types": list(NEW_TYPES)}
+    if key == "new":
+        return {"kinds": {"none": 0.2, "single": 0.4, "sequence": 0.4},
+                "fault_weights": {t: 1.0 for t in NEW_TYPES}, "sequence_types": list(NEW_TYPES)}
+    if key == "single":
+        return {"kinds": {"none": 0.2, "single": 0.8}, "fault_weights": every}
+    types = _types([x for x in name.split(",") if x.strip()] if isinstance(name, str)
+                   else name, "faults")
+    kinds = {"none": 0.2, "single": 0.4, "sequence": 0.4} if len(types) > 1 else {
+        "none": 0.2, "single": 0.8}
+    return {"kinds": kinds, "fault_weights": {t: 1.0 for t in types},
+            "sequence_types": list(types), "sequence_len": [min(2, len(types)),
+                                                            min(4, len(types))]}
+
+
+def _magnitudes(d: Any) -> dict[str, dict[str, Any]]:
+    """Every knob of :data:`MAGNITUDE_KNOBS`: the configured value (validated) or its
+    default; ranges as (low, high), choices as lists."""
+    if not isinstance(d, Mapping):
+        raise GenerateError(f"magnitudes must be a mapping fault type -> knob -> value, got "
+                            f"{type(d).__name__}")
+    unknown = [t for t in d if t not in MAGNITUDE_KNOBS]
+    if unknown:
+        raise GenerateError(f"magnitudes: no knobs for {unknown[0]!r}; types with knobs: "
+                            f"{', '.join(MAGNITUDE_KNOBS)}")
+    out: dict[str, dict[str, Any]] = {}
+    for t, knobs in MAGNITUDE_KNOBS.items():
+        given = d.get(t) or {}
+        if not isinstance(given, Mapping):
+            raise GenerateError(f"magnitudes of {t} must be a mapping knob -> value")
+        bad = [k for k in given if k not in knobs]
+        if bad:
+            raise GenerateError(f"magnitudes of {t}: unknown knob {bad[0]!r}; known: "
+                                f"{', '.join(knobs)}")
+        out[t] = {}
+        for k, (how, limits, default) in knobs.items():
+            v = given.get(k, default)
+            what = f"magnitudes {t}.{k}"
+            if how == "range":
+                if isinstance(v, int | float) and not isinstance(v, bool):
+                    v = (v, v)
+                lo, hi = _range(v, what, -math.inf)
+                if lo < limits[0] or hi > limits[1]:
+                    raise GenerateError(f"{what} must lie in [{limits[0]:g}, {limits[1]:g}], "
+                                        f"got ({lo:g}, {hi:g})")
+                out[t][k] = (lo, hi)
+            else:
+                vals = [v] if isinstance(v, str | int) else list(v)
+                vals = [x.lower() if isinstance(x, str) else x for x in vals]
+                if not vals or any(x not in limits for x in vals):
+                    raise GenerateError(f"{what} must be one or more of "
+                                        f"{', '.join(map(str, limits))}, got {v!r}")
+                out[t][k] = vals
+    return out
+
+
+def fault_params(ftype: str, knobs: Mapping[str, Any], lat_deg: float
+                 ) -> tuple[dict[str, float], dict[str, float]] | None:
+    """(params_start, params_end) of a fault of ``ftype`` with drawn knob values, None for a
+    type without knobs (it flies its type's parameters)."""
+    from tlm_sim.params import Params
+
+    if ftype not in MAGNITUDE_KNOBS:
+        return None
+    if ftype in ("gyro", "accel_samples"):
+        inst = knobs["instance"]
+        mask = 3 if inst == "both" else 1 << (int(inst) - 1)
+        name = "SIM_GYR_FAIL_MSK" if ftype == "gyro" else "SIM_ACC_FAIL_MSK"
+        start = {name: float(mask)}
+    elif ftype == "baro":
+        inst = knobs["instance"]
+        names = {1: ["SIM_BARO_DISABLE"], 2: ["SIM_BAR2_DISABLE"],
+                 "both": ["SIM_BARO_DISABLE", "SIM_BAR2_DISABLE"]}[inst]
+        start = {n: 1.0 for n in names}
+    elif ftype == "compass":
+        start = {f"SIM_MAG{int(knobs['instance'])}_FAIL": float(knobs["mode"])}
+    elif ftype == "gps_glitch":
+        dn = knobs["offset_m"] * math.cos(math.radians(knobs["bearing_deg"]))
+        de = knobs["offset_m"] * math.sin(math.radians(knobs["bearing_deg"]))
+        start = {"SIM_GPS1_GLTCH_X": round(dn / 111319.49, 7),
+                 "SIM_GPS1_GLTCH_Y": round(de / (111319.49 * math.cos(math.radians(lat_deg))),
+                                           7)}
+    elif ftype == "motor_partial":
+        start = {"SIM_ENGINE_MUL": knobs["mul"]}
+    elif ftype == "vibration":
+        start = {"SIM_ACC1_RND": knobs["amplitude"], "SIM_ACC2_RND": knobs["amplitude"],
+                 "SIM_VIB_MOT_MAX": 350.0}
+    else:  # battery
+        start = {"SIM_BATT_VOLTAGE": knobs["volt"]}
+    ends = FAULT_TYPES[ftype].params_end
+    defaults = Params.defaults()
+    return start, {n: float(ends[n]) if n in ends else float(defaults[n]) for n in start}
+
+
+def _draw_magnitudes(rng: np.random.Generator, ftype: str, cfg: ScenarioConfig
+                     ) -> dict[str, Any]:
+    """One draw of every knob of ``ftype`` (in :data:`MAGNITUDE_KNOBS` order; ranges rounded
+    to 3 decimals)."""
+    out: dict[str, Any] = {}
+    for k, (how, _, _) in MAGNITUDE_KNOBS[ftype].items():
+        v = cfg.magnitudes[ftype][k]
+        if how == "range":
+            out[k] = round(float(rng.uniform(*v)), 3)
+        else:
+            out[k] = v[int(rng.integers(len(v)))]
+    if ftype == "gps_glitch":
+        out["bearing_deg"] = round(float(rng.uniform(0.0, 360.0)), 1)
+    return out
 
 
 class FlightSpec(NamedTuple):
@@ -399,15 +631,31 @@ def _draw_faults(rng: np.random.Generator, kind: str, cfg: ScenarioConfig) -> li
         start = round(t + float(rng.uniform(*cfg.single_start_s)), 1)
         hold = round(float(rng.uniform(*cfg.hold_s)) * cfg.lam, 1)
         return [(ftype, start, round(start + max(hold, 0.1), 1))]
-    order = [PAPER_FIRST[i] for i in rng.permutation(len(PAPER_FIRST))] if cfg.shuffle else list(
-        PAPER_FIRST)
+    if kind == "sequence":
+        order = _draw_sequence(rng, cfg)
+    else:
+        order = [PAPER_FIRST[i] for i in rng.permutation(len(PAPER_FIRST))] if cfg.shuffle \
+            else list(PAPER_FIRST)
+        order.append("rc")
     out = []
-    for ftype in [*order, "rc"]:
+    for ftype in order:
         start = round(t + float(rng.uniform(*cfg.gap_s)), 1)
         hold = round(float(rng.uniform(*cfg.hold_s)) * cfg.lam, 1)
         t = round(start + max(hold, 0.1), 1)
         out.append((ftype, start, t))
     return out
+
+
+def _draw_sequence(rng: np.random.Generator, cfg: ScenarioConfig) -> list[str]:
+    """Distinct fault types of a ``sequence`` flight in flying order (RC last if drawn)."""
+    types = list(cfg.sequence_types)
+    w = np.array([cfg.fault_weights.get(t, 0.0) for t in types], dtype=np.float64)
+    if w.sum() <= 0:
+        w = np.ones(len(types))
+    lo, hi = cfg.sequence_len
+    n = min(int(rng.integers(lo, hi + 1)), len(types), int(np.count_nonzero(w)))
+    picked = [types[i] for i in rng.choice(len(types), size=n, replace=False, p=w / w.sum())]
+    return [t for t in picked if t != "rc"] + [t for t in picked if t == "rc"]
 
 
 def _draw_mission(rng: np.random.Generator, cfg: ScenarioConfig) -> dict[str, Any]:
@@ -445,7 +693,17 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     # drop faults that could not happen: past the longest the flight can last (whole seconds)
     limit = math.floor(max_duration_s(mission, profile_params(cfg.profile, params)))
     kept = drawn[:next((k for k, d in enumerate(drawn) if d[2] > limit), len(drawn))]
-    faults = [Fault(t, Trigger("time", s), Trigger("time", e)) for t, s, e in kept]
+    mag = _stream(run_seed, flight, _S_MAGNITUDE)
+    faults = []
+    for t, s, e in kept:
+        p = fault_params(t, _draw_magnitudes(mag, t, cfg), mission.home[0]) \
+            if t in MAGNITUDE_KNOBS else None
+        try:
+            faults.append(Fault(t, Trigger("time", s), Trigger("time", e),
+                                params_start=p[0] if p else None,
+                                params_end=p[1] if p else None))
+        except FaultScheduleError as exc:
+            raise GenerateError(f"flight {flight}: {exc}") from None
     schedule = FaultSchedule(tuple(faults))
     return Scenario(flight=flight, seed=seed, kind=kind, mission=recipe,
                     faults=schedule.to_dict(), params=params, profile=cfg.profile,

@@ -19,12 +19,12 @@ Kinds of input (:func:`detect_kind` decides from the path):
 * a plain folder holding any of the above (``*.bin`` with sidecars, flight folders,
   datasets) is expanded one level.
 
-A fault record (:class:`FaultRecord`) needs ``type`` (``gps``/``accel``/``engine``/``rc``) or
-``label`` (1-4), and a start and an end given as log times (``start_time_us`` /
-``end_time_us``, microseconds since boot, as tlm and the SITL sidecars write) and/or as
-positions (``start_lat``, ``start_lon``, ``start_alt`` ... with the altitude in metres above
-home, as the paper recorded them). A record without any end (or ``"end_by": "flight end"``)
-is held until the log ends.
+A fault record (:class:`FaultRecord`) needs ``type`` (``gps``/``accel``/``engine``/``rc`` or
+any other ``tlm_sim.faults.FAULT_TYPES`` name) or ``label`` (1-13), and a start and an end
+given as log times (``start_time_us`` / ``end_time_us``, microseconds since boot, as tlm and
+the SITL sidecars write) and/or as positions (``start_lat``, ``start_lon``, ``start_alt`` ...
+with the altitude in metres above home, as the paper recorded them). A record without any end
+(or ``"end_by": "flight end"``) is held until the log ends.
 
 Adding an input kind: write ``_read_<kind>(path) -> list[Flight]``, teach
 :func:`detect_kind` to recognise it and add it to ``_READERS``.
@@ -173,7 +173,8 @@ def _record(d: Any, index: int, source: str) -> FaultRecord:
         name = d.get("type", d.get("fault"))
         label = d.get("label")
         if name is None and label is None:
-            raise IngestError(f"{where}: needs 'type' (gps, accel, engine, rc) or 'label' (1-4)")
+            raise IngestError(f"{where}: needs 'type' (gps, accel, engine, rc, ...: "
+                              "tlm_sim.faults.FAULT_TYPES) or 'label' (1-13)")
         if name is not None:
             ftype = FAULT_TYPES.get(str(name).strip().lower())
             if ftype is None:
@@ -185,7 +186,8 @@ def _record(d: Any, index: int, source: str) -> FaultRecord:
         else:
             lab = _number(label)
             if lab is None or lab not in _LABEL_TO_TYPE:
-                raise IngestError(f"{where}: label {label!r} is not a fault label 1-4")
+                raise IngestError(f"{where}: label {label!r} is not a fault label "
+                                  f"({min(_LABEL_TO_TYPE)}-{max(_LABEL_TO_TYPE)})")
             ftype = FAULT_TYPES[_LABEL_TO_TYPE[int(lab)]]
         where = f"fault {index} ({ftype.name})"
         t0 = _time_us(d, "start_time_us", where)

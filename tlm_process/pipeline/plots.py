@@ -20,16 +20,20 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tlm_process.labels import label_colour, long_name
 from tlm_process.pipeline.anchoring import FaultWindow
 from tlm_process.pipeline.ingest import FaultRecord
-from tlm_process.pipeline.stretching import CLASS_COLUMNS, class_counts
+from tlm_process.pipeline.stretching import class_counts
+from tlm_sim.faults.types import FAULT_TYPES
 from tlm_sim.geo import latlon_to_ne
 
 __all__ = ["LABEL_COLOURS", "plot_fault_traces", "plot_label_shares", "plot_trajectory"]
 
-#: Colour per label (0 normal ... 4 RC).
-LABEL_COLOURS = ("0.6", "tab:blue", "tab:orange", "tab:red", "tab:purple")
-LABEL_NAMES = ("normal", "GPS", "accelerometer", "engine", "RC")
+_LABELS = range(max(t.label for t in FAULT_TYPES.values()) + 1)
+#: Colour per label (0 normal ... 4 RC, then SITL's other faults: ``labels.label_colour``).
+LABEL_COLOURS = tuple(label_colour(k) for k in _LABELS)
+#: Name per label in the plots (``labels.long_name``).
+LABEL_NAMES = tuple(long_name(k) for k in _LABELS)
 
 
 def _plt():
@@ -44,7 +48,7 @@ def _plt():
 def _shade(ax, windows: Sequence[FaultWindow], t_max_s: float) -> None:
     for w in windows:
         end = min(w.end_us * 1e-6, t_max_s)
-        ax.axvspan(w.start_us * 1e-6, end, color=LABEL_COLOURS[w.label], alpha=0.18, lw=0)
+        ax.axvspan(w.start_us * 1e-6, end, color=label_colour(w.label), alpha=0.18, lw=0)
 
 
 def plot_trajectory(tables: Mapping[str, pd.DataFrame], windows: Sequence[FaultWindow],
@@ -61,16 +65,16 @@ def plot_trajectory(tables: Mapping[str, pd.DataFrame], windows: Sequence[FaultW
     t = gps["TimeUS"].to_numpy(np.float64) * 1e-6
     lab = gps["label"].to_numpy()
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 5.5), width_ratios=(1.1, 1))
-    ax.plot(e, n, "-", color=LABEL_COLOURS[0], lw=1.0, label="normal", zorder=1)
+    ax.plot(e, n, "-", color=label_colour(0), lw=1.0, label="normal", zorder=1)
     seen = set()
     for w in windows:
         m = lab == w.label
         m &= (t * 1e6 >= w.start_us) & (t * 1e6 < w.end_us)
         if not m.any():
             continue
-        kw = {"label": LABEL_NAMES[w.label]} if w.label not in seen else {}
+        kw = {"label": long_name(w.label)} if w.label not in seen else {}
         seen.add(w.label)
-        ax.plot(e[m], n[m], ".", ms=3, color=LABEL_COLOURS[w.label], zorder=2, **kw)
+        ax.plot(e[m], n[m], ".", ms=3, color=label_colour(w.label), zorder=2, **kw)
     letters = iter(string.ascii_uppercase)
     for w in windows:
         for edge_us in (w.start_us, w.end_us):
@@ -79,7 +83,7 @@ def plot_trajectory(tables: Mapping[str, pd.DataFrame], windows: Sequence[FaultW
                 continue
             j = min(int(np.searchsorted(t * 1e6, edge_us)), len(t) - 1)
             ax.annotate(letter, (e[j], n[j]), xytext=(4, 4), textcoords="offset points",
-                        fontsize=10, fontweight="bold", color=LABEL_COLOURS[w.label])
+                        fontsize=10, fontweight="bold", color=label_colour(w.label))
     first = True
     for r in records:
         for pos in (r.start_pos, r.end_pos):
@@ -146,10 +150,10 @@ def plot_fault_traces(tables: Mapping[str, pd.DataFrame], window: FaultWindow,
     else:
         _panel(axes[3], tables.get("RATE"), ["R", "P"], t0, t1, "body rate [deg/s]")
     for ax in axes:
-        ax.axvspan(w0, w1, color=LABEL_COLOURS[window.label], alpha=0.2, lw=0)
+        ax.axvspan(w0, w1, color=label_colour(window.label), alpha=0.2, lw=0)
     axes[-1].set_xlabel("time since boot [s]")
     axes[-1].set_xlim(t0, t1)
-    fig.suptitle(title or f"{window.name}: {LABEL_NAMES[window.label]} fault "
+    fig.suptitle(title or f"{window.name}: {long_name(window.label)} fault "
                  f"(label {window.label}), window shaded")
     fig.tight_layout()
     out = Path(path)
@@ -165,18 +169,23 @@ def plot_label_shares(counts: pd.DataFrame | Mapping[str, pd.DataFrame],
     plt = _plt()
     if not isinstance(counts, pd.DataFrame):
         counts = class_counts(counts)
+    from tlm_process.labels import class_column
+
     names = list(counts.index)
-    vals = counts[list(CLASS_COLUMNS[:5])].to_numpy(float)
+    label_of = {class_column(k): k for k in range(256)}
+    cols = [c for c in counts.columns if c != "Total"]
+    labels = [label_of[c] for c in cols]
+    vals = counts[cols].to_numpy(float)
     share = 100 * vals / np.maximum(vals.sum(axis=1, keepdims=True), 1)
     fig, ax = plt.subplots(figsize=(10, 1.0 + 0.7 * len(names)))
     left = np.zeros(len(names))
-    for k in range(5):
-        ax.barh(names, share[:, k], left=left, color=LABEL_COLOURS[k],
-                label=f"{k} {LABEL_NAMES[k]}", edgecolor="white", lw=0.5)
+    for k, lab in enumerate(labels):
+        ax.barh(names, share[:, k], left=left, color=label_colour(lab),
+                label=f"{lab} {long_name(lab)}", edgecolor="white", lw=0.5)
         for i, v in enumerate(share[:, k]):
             if v >= 3:
                 ax.text(left[i] + v / 2, i, f"{v:.1f}%", ha="center", va="center", fontsize=8,
-                        color="white" if k else "black")
+                        color="white" if lab else "black")
         left += share[:, k]
     ax.set_yticks(range(len(names)),
                   [f"{n}\n{int(t):,} rows" for n, t in zip(names, vals.sum(axis=1),
@@ -185,7 +194,7 @@ def plot_label_shares(counts: pd.DataFrame | Mapping[str, pd.DataFrame],
     ax.set_xlim(0, 100)
     ax.set_xlabel("share of rows [%]")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.35 if len(names) < 3 else -0.15),
-              ncol=5, fontsize=8, frameon=False)
+              ncol=min(len(labels), 7), fontsize=8, frameon=False)
     ax.set_title(title or "share of each label")
     fig.tight_layout()
     out = Path(path)

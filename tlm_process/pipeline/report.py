@@ -2,7 +2,8 @@
 
 report.json keys: ``format`` ("tlm.process"), ``tables``, ``features`` (table -> feature
 columns), ``non_feature_columns``, ``dropped_columns`` (table -> column -> reason),
-``counts`` (table -> label "0".."4" and "total" -> rows), ``counts_by_split``, ``fault_share``
+``counts`` (table -> label "0".."4", and each other label present, and "total" -> rows),
+``counts_by_split``, ``fault_share``
 (α per table), ``split`` (train/test flight ids), ``scaling``, ``options`` (anchoring, phase,
 instance), ``flights`` (per flight: source, windows, rows per fault, anchoring disagreement)
 and, when a target γ is given, ``stretching`` (λ per table).
@@ -38,12 +39,15 @@ def stretching_report(alpha: Mapping[str, float], gamma: float) -> dict[str, Any
 
 
 def counts_dict(counts: pd.DataFrame) -> dict[str, dict[str, int]]:
-    """``{table: {"0": n, ..., "4": n, "total": n}}`` from a class_counts table."""
+    """``{table: {"0": n, ..., "4": n, "total": n}}`` from a class_counts table (one key per
+    class column: the label as text)."""
+    from tlm_process.labels import class_column
+
+    label_of = {class_column(k): k for k in range(256)}
     out = {}
     for name, row in counts.iterrows():
-        vals = row.to_numpy()
-        d = {str(k): int(vals[k]) for k in range(5)}
-        d["total"] = int(vals[5])
+        d = {str(label_of[c]): int(row[c]) for c in counts.columns if c != "Total"}
+        d["total"] = int(row["Total"])
         out[str(name)] = d
     return out
 

@@ -43,7 +43,8 @@ __all__ = [
 
 Model = Literal["paper", "added"]
 
-#: Column headings of the paper's Tables 7 and 8, by label 0..4, then the total.
+#: Column headings of the paper's Tables 7 and 8, by label 0..4, then the total (a data set
+#: with other labels gets a column per label present: ``tlm_process.labels.class_column``).
 CLASS_COLUMNS: tuple[str, ...] = ("Normal", "GPS Fail", "Accelerometer Fail", "Engine Fail",
                                   "RC Fail", "Total")
 
@@ -70,22 +71,32 @@ PAPER_TABLE_8 = _paper_table({
 
 def class_counts(tables: Mapping[str, pd.DataFrame], label: str = "label") -> pd.DataFrame:
     """Rows per class per table, as the paper's Tables 7/8: index = table names, columns
-    :data:`CLASS_COLUMNS` (labels 0..4 and the total)."""
-    rows = {}
+    one per class (:func:`tlm_process.labels.class_labels` of every table's labels: the
+    paper's :data:`CLASS_COLUMNS` for labels 0-4, else normal and each label present, headed
+    :func:`tlm_process.labels.class_column`) and ``Total``."""
+    from tlm_process.labels import class_column, class_labels
+
+    arrays = {}
     for name, df in tables.items():
         if label not in df.columns:
             raise PipelineError(f"{name} has no {label!r} column: label the rows first")
-        counts = np.bincount(df[label].to_numpy(np.int64), minlength=5)
-        if len(counts) > 5:
-            raise PipelineError(f"{name}: labels above 4 (Table 6 has 0-4)")
-        rows[name] = [*counts.tolist(), int(counts.sum())]
-    return pd.DataFrame.from_dict(rows, orient="index", columns=list(CLASS_COLUMNS))
+        arrays[name] = df[label].to_numpy(np.int64)
+        if len(arrays[name]) and arrays[name].min() < 0:
+            raise PipelineError(f"{name}: negative labels (0 is normal, faults 1-13)")
+    labels = class_labels(*arrays.values())
+    rows = {}
+    for name, y in arrays.items():
+        counts = np.bincount(y, minlength=max(labels) + 1)
+        rows[name] = [*(int(counts[k]) for k in labels), int(counts.sum())]
+    return pd.DataFrame.from_dict(rows, orient="index",
+                                  columns=[*(class_column(k) for k in labels), "Total"])
 
 
 def fault_share(counts: pd.DataFrame | pd.Series) -> pd.Series | float:
     """α of Eq. 5: fault rows / all rows, per table (a DataFrame from :func:`class_counts`) or
     for one row (a Series). NaN for an empty table."""
-    faults = counts[list(CLASS_COLUMNS[1:5])]
+    faults = counts.drop([CLASS_COLUMNS[0], "Total"], axis=1 if isinstance(
+        counts, pd.DataFrame) else 0)
     total = counts["Total"]
     if isinstance(counts, pd.Series):
         return float(faults.sum() / total) if total else math.nan
@@ -151,13 +162,14 @@ def stretch_schedule(schedule: FaultSchedule, lam: float, **kwargs: object) -> F
 def format_counts(counts: pd.DataFrame, title: str = "") -> str:
     """Table 7-style text: rows per class and table, plus the fault share α per table."""
     alpha = fault_share(counts)
-    widths = [max(len(c), 7) + 2 for c in CLASS_COLUMNS]
+    columns = list(counts.columns)
+    widths = [max(len(c), 7) + 2 for c in columns]
     lines = [title] if title else []
-    lines.append(f"{'':6}" + "".join(f"{c:>{w}}" for c, w in zip(CLASS_COLUMNS, widths,
+    lines.append(f"{'':6}" + "".join(f"{c:>{w}}" for c, w in zip(columns, widths,
                                                                   strict=True))
                  + f"{'faults':>9}")
     for name, row in counts.iterrows():
-        cells = "".join(f"{int(row[c]):>{w},}" for c, w in zip(CLASS_COLUMNS, widths,
+        cells = "".join(f"{int(row[c]):>{w},}" for c, w in zip(columns, widths,
                                                                strict=True))
         a = alpha[name]
         share = "" if math.isnan(a) else f"{100 * a:8.2f}%"
