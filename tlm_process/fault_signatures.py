@@ -1,9 +1,10 @@
-"""Fault signatures: what a GPS, accelerometer, engine or RC fault does to a flight, as numbers.
+"""Fault signatures: what each fault type does to a flight, as numbers.
 
 :func:`fault_signature` measures one fault window the same way in a tlm ``FlightLog.tables`` and
 in the tables ``read_bin`` gives for a genuine SITL ``.bin``. It uses only messages and fields
 that both logs have: GPS, IMU, CTUN, XKF1, SIM (the simulator's true attitude and position),
-MODE, EV and ERR. SITL's SIM2, MSG and CMD are not used (tlm does not log them).
+MODE, EV and ERR, and for the catalogue's faults BARO, MAG, XKF4, XKFS, VIBE, BAT, RCOU and
+the mission's CMD (route deviation). SITL's SIM2 and MSG are not used.
 
 Conventions (all times are log TimeUS, microseconds since boot; results in SI units):
 
@@ -19,6 +20,74 @@ Conventions (all times are log TimeUS, microseconds since boot; results in SI un
 
 The window edges get a margin of :data:`EDGE_MARGIN_S` for "fraction of rows inside/outside"
 metrics: a parameter change reaches the next sensor sample, not the same microsecond.
+
+Metrics by fault type
+---------------------
+
+* gps: ``nofix_frac_in/out`` (GPS rows with Status < 3), ``nsats_max_in``,
+  ``nsats_min_out``, ``ekf_err_max_m`` and ``ekf_err_at_end_m`` (primary XKF1 vs truth),
+  ``ekf_recovered_after_end_s`` (back within 5 m), ``speed_max_ms``, ``roll_max_deg``,
+  ``pitch_max_deg``, ``baro_alt_range_m`` (CTUN.BAlt), ``auto_kept``,
+  ``path_after_end_m`` (truth path in the 30 s after the end).
+* accel: ``imu<i>_stuck_frac_in/out`` (rows with AccX = AccY = AccZ = the fail value),
+  ``climb_3s_m``, ``climb_max_m``, ``drop_max_m`` (relative to the height at the start),
+  ``thr_max_3s`` (CTUN.ThO), ``roll_max_deg``, ``pitch_max_deg``, ERR counts
+  ``err24_ekf_primary``, ``err29_vibe_fs``, ``err25_thrust_loss``, ``auto_kept``,
+  ``settle_roll_max_deg`` (10-20 s after the end).
+* engine: ``ground_s`` (truth height <= 0.5 m), ``impact_speed_ms`` (max GPS.VZ),
+  ``roll_max_3s_deg``, ``armed_kept``, ``auto_kept``, ``err25_thrust_loss``,
+  ``liftoff_1m_after_end_s``, ``above_10m_after_end_s``, ``auto_after_end`` (mode at
+  10 m), ``path_after_10m_m`` (truth path in the 30 s after reaching 10 m: a resumed
+  mission flies ~6 m/s).
+* rc: ``rtl_delay_s`` (first MODE RTL), ``rtl_reason`` (its Rsn), ERR counts
+  ``err2_2_late_frame``, ``err5_1_failsafe`` (in the window), ``err5_0_cleared`` (2 s
+  after the end), ``rtl_kept_after_end``, ``disarm_s``, ``final_home_dist_m`` (truth at
+  disarming).
+* gyro (accel_samples the same with ``ah``/AccX-Z): per masked IMU i
+  ``imu<i>_gh_drop_s`` / ``imu<i>_gh_restore_s`` (first IMU row with GH 0 in the
+  window, first with GH 1 after it), ``imu<i>_std_in`` / ``imu<i>_std_before`` (largest
+  gyro-axis standard deviation in the window after the edge margin / the 20 s before:
+  0 when frozen); per other IMU ``imu<i>_healthy_frac_in``; ``err24_ekf_primary`` and
+  ``lane_changes`` (XKF4.PI changes of core 0) from the start to 60 s after the end,
+  ``ekf_err_max_m``, ``roll_max_deg``, ``auto_kept``.
+* baro: ``baro_h_drop_s`` (first BARO.H 0 of the disabled baros),
+  ``baro_h_restore_s`` (the last of them back to 1), ``err18_4_s``, ``err18_0_s``,
+  ``alt_invalid_s`` (first CTUN.Alt 0.00: EKF3's height relative to the origin is
+  invalid), ``climb_m`` (max true height in the window minus the start height),
+  ``climb_rate_max_ms`` (true, over 0.5 s), ``thr_mean_before`` (20 s) /
+  ``thr_mean_in`` (CTUN.ThO), ``descent_rate_max_ms`` (60 s after the end),
+  ``back_after_end_s`` (back within 1.5 m of the start height, from 1 s after the
+  end), ``route_dev_max_m`` (truth from the mission line, to 5 s after the end),
+  ``auto_kept`` (to 60 s after the end).
+* compass: per failed compass i ``mag<i>_health_drop_s`` / ``mag<i>_health_restore_s``
+  (MAG.Health), ``mag<i>_std_in`` (largest MagX/Y/Z standard deviation after the drop:
+  0 when no data or frozen); per other compass ``mag<i>_healthy_frac_in``;
+  ``err3_4_s``, ``err3_0_s``, ``err24_ekf_primary``, ``lane_changes``, ``sm_max``
+  (XKF4.SM), ``ekf_err_max_m``, ``auto_kept``, ``switch_compass_s`` /
+  ``switch_compass_to`` (first XKFS row whose compass index MI is not a failed one).
+* gps_glitch: ``gps_offset_n_m`` / ``gps_offset_e_m`` / ``gps_offset_m`` (mean logged
+  GPS minus truth with a fix, from 1 s after the start), ``err24_first_s`` (first lane
+  switch), ``err11_2_s`` ("GPS Glitch or Compass error"), ``err11_0_s`` ("Glitch
+  cleared", after it), ``ekf_err_max_m``, ``route_dev_max_m`` (truth from the mission
+  line in the window), ``err11_2_after_end_s`` / ``err11_0_after_end_s`` (the same
+  after the clear, within 60 s), ``ekf_err_max_after_end_m`` (30 s),
+  ``lane_changes`` (start to 30 s after the end), ``auto_kept``.
+* motor_partial: ``thr_mean_in`` (CTUN.ThO), ``rcou_failed_mean`` (RCOU of the
+  SIM_ENGINE_FAIL motors), ``err25_s`` (first thrust loss), ``ground_s``,
+  ``impact_speed_ms`` (max GPS.VZ to 1 s after the ground), ``roll_max_deg`` (before
+  the ground), ``armed_kept``, ``auto_kept``, ``liftoff_1m_after_end_s``,
+  ``above_10m_after_end_s``.
+* vibration: per IMU i ``vibe<i>_mean`` / ``vibe<i>_max`` (VIBE X, Y, Z in the window),
+  ``vibe<i>_before_max`` (20 s before), ``clip<i>_in`` (clipping count added in the
+  window); ``accz_std_before`` / ``accz_std_in`` (IMU 0 AccZ at 25 Hz),
+  ``thr_mean_in``, ``err29_vibe_fs``, ``ekf_err_max_m``, ``auto_kept``.
+* battery: ``volt_before`` / ``volt_in`` (from 1 s in) / ``volt_after`` (5-25 s after)
+  (BAT.Volt), ``thr_before`` (20 s) / ``thr_in`` (from 3 s in) / ``thr_after`` (5-25 s
+  after) (CTUN.ThO), ``err6_1_s`` (battery failsafe), ``err6_0_after_end`` (count, 60 s),
+  ``auto_kept``.
+* gps_jam: ``fix_frac_in`` / ``fix_frac_out`` (GPS rows with Status >= 3; out: armed,
+  before the start or 10 s after the end), ``nsats_min_in``, ``nsats_max_in``,
+  ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
 """
 
 from __future__ import annotations
@@ -643,71 +712,9 @@ def fault_signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
             gps_glitch; None takes them from the log's CMD messages (NaN without).
 
     Returns:
-        Metric name -> value (see the module docstring for units and conventions; ``*_s``
-        seconds after the start, ``*_after_end_s`` after the end):
-
-        * gps: ``nofix_frac_in/out`` (GPS rows with Status < 3), ``nsats_max_in``,
-          ``nsats_min_out``, ``ekf_err_max_m`` and ``ekf_err_at_end_m`` (primary XKF1 vs truth),
-          ``ekf_recovered_after_end_s`` (back within 5 m), ``speed_max_ms``, ``roll_max_deg``,
-          ``pitch_max_deg``, ``baro_alt_range_m`` (CTUN.BAlt), ``auto_kept``,
-          ``path_after_end_m`` (truth path in the 30 s after the end).
-        * accel: ``imu<i>_stuck_frac_in/out`` (rows with AccX = AccY = AccZ = the fail value),
-          ``climb_3s_m``, ``climb_max_m``, ``drop_max_m`` (relative to the height at the start),
-          ``thr_max_3s`` (CTUN.ThO), ``roll_max_deg``, ``pitch_max_deg``, ERR counts
-          ``err24_ekf_primary``, ``err29_vibe_fs``, ``err25_thrust_loss``, ``auto_kept``,
-          ``settle_roll_max_deg`` (10-20 s after the end).
-        * engine: ``ground_s`` (truth height <= 0.5 m), ``impact_speed_ms`` (max GPS.VZ),
-          ``roll_max_3s_deg``, ``armed_kept``, ``auto_kept``, ``err25_thrust_loss``,
-          ``liftoff_1m_after_end_s``, ``above_10m_after_end_s``, ``auto_after_end`` (mode at
-          10 m), ``path_after_10m_m`` (truth path in the 30 s after reaching 10 m: a resumed
-          mission flies ~6 m/s).
-        * rc: ``rtl_delay_s`` (first MODE RTL), ``rtl_reason`` (its Rsn), ERR counts
-          ``err2_2_late_frame``, ``err5_1_failsafe`` (in the window), ``err5_0_cleared`` (2 s
-          after the end), ``rtl_kept_after_end``, ``disarm_s``, ``final_home_dist_m`` (truth at
-          disarming).
-        * gyro (accel_samples the same with ``ah``/AccX-Z): per masked IMU i
-          ``imu<i>_gh_drop_s`` / ``imu<i>_gh_restore_s`` (first IMU row with GH 0 in the
-          window, first with GH 1 after it), ``imu<i>_std_in`` / ``imu<i>_std_before`` (largest
-          gyro-axis standard deviation in the window after the edge margin / the 20 s before:
-          0 when frozen); per other IMU ``imu<i>_healthy_frac_in``; ``err24_ekf_primary`` and
-          ``lane_changes`` (XKF4.PI changes of core 0) from the start to 60 s after the end,
-          ``ekf_err_max_m``, ``roll_max_deg``, ``auto_kept``.
-        * baro: ``baro_h_drop_s`` (first BARO.H 0 of the disabled baros),
-          ``baro_h_restore_s`` (the last of them back to 1), ``err18_4_s``, ``err18_0_s``,
-          ``alt_invalid_s`` (first CTUN.Alt 0.00: EKF3's height relative to the origin is
-          invalid), ``climb_m`` (max true height in the window minus the start height),
-          ``climb_rate_max_ms`` (true, over 0.5 s), ``thr_mean_before`` (20 s) /
-          ``thr_mean_in`` (CTUN.ThO), ``descent_rate_max_ms`` (60 s after the end),
-          ``back_after_end_s`` (back within 1.5 m of the start height, from 1 s after the
-          end), ``route_dev_max_m`` (truth from the mission line, to 5 s after the end),
-          ``auto_kept`` (to 60 s after the end).
-        * compass: per failed compass i ``mag<i>_health_drop_s`` / ``mag<i>_health_restore_s``
-          (MAG.Health), ``mag<i>_std_in`` (largest MagX/Y/Z standard deviation after the drop:
-          0 when no data or frozen); per other compass ``mag<i>_healthy_frac_in``;
-          ``err3_4_s``, ``err3_0_s``, ``lane_changes``, ``ekf_err_max_m``, ``auto_kept``.
-        * gps_glitch: ``gps_offset_n_m`` / ``gps_offset_e_m`` / ``gps_offset_m`` (mean logged
-          GPS minus truth with a fix, from 1 s after the start), ``err24_first_s`` (first lane
-          switch), ``err11_2_s`` ("GPS Glitch or Compass error"), ``err11_0_s`` ("Glitch
-          cleared", after it), ``ekf_err_max_m``, ``route_dev_max_m`` (truth from the mission
-          line in the window), ``err11_2_after_end_s`` / ``err11_0_after_end_s`` (the same
-          after the clear, within 60 s), ``ekf_err_max_after_end_m`` (30 s),
-          ``lane_changes`` (start to 30 s after the end), ``auto_kept``.
-        * motor_partial: ``thr_mean_in`` (CTUN.ThO), ``rcou_failed_mean`` (RCOU of the
-          SIM_ENGINE_FAIL motors), ``err25_s`` (first thrust loss), ``ground_s``,
-          ``impact_speed_ms`` (max GPS.VZ to 1 s after the ground), ``roll_max_deg`` (before
-          the ground), ``armed_kept``, ``auto_kept``, ``liftoff_1m_after_end_s``,
-          ``above_10m_after_end_s``.
-        * vibration: per IMU i ``vibe<i>_mean`` / ``vibe<i>_max`` (VIBE X, Y, Z in the window),
-          ``vibe<i>_before_max`` (20 s before), ``clip<i>_in`` (clipping count added in the
-          window); ``accz_std_before`` / ``accz_std_in`` (IMU 0 AccZ at 25 Hz),
-          ``thr_mean_in``, ``err29_vibe_fs``, ``ekf_err_max_m``, ``auto_kept``.
-        * battery: ``volt_before`` / ``volt_in`` (from 1 s in) / ``volt_after`` (5-25 s after)
-          (BAT.Volt), ``thr_before`` (20 s) / ``thr_in`` (from 3 s in) / ``thr_after`` (5-25 s
-          after) (CTUN.ThO), ``err6_1_s`` (battery failsafe), ``err6_0_after_end`` (count, 60 s),
-          ``auto_kept``.
-        * gps_jam: ``fix_frac_in`` / ``fix_frac_out`` (GPS rows with Status >= 3; out: armed,
-          before the start or 10 s after the end), ``nsats_min_in``, ``nsats_max_in``,
-          ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
+        Metric name -> value; the metrics of each type are listed in the module docstring
+        ("Metrics by fault type"); ``*_s`` are seconds after the start, ``*_after_end_s``
+        after the end.
     """
     kind = fault["type"]
     if kind not in FAULT_TYPES:
