@@ -19,15 +19,14 @@ import pytest
 
 from tests.conftest import REFERENCE, reference_path
 from tlm_process.fault_signatures import FAULT_TYPES as SIGNATURE_TYPES
-from tlm_process.fault_signatures import fault_signature, route_from_tables
+from tlm_process.fault_signatures import SIGNATURE_MESSAGES, fault_signature, route_from_tables
 from tlm_sim.faults import FAULT_TYPES
 
 #: reference flight of each new fault type (README "Second set")
 REFS = {"gyro": "gyro_s42", "compass": "compass_s43", "baro": "baro_s44",
         "battery": "battery_s45", "gps_glitch": "gps_glitch_s46",
         "motor_partial": "motor_partial_s47", "vibration": "vibration_s48"}
-TYPES = ["GPS", "IMU", "CTUN", "XKF1", "XKF4", "SIM", "MODE", "EV", "ERR", "BARO", "MAG", "BAT",
-         "RCOU", "VIBE", "CMD"]
+TYPES = list(SIGNATURE_MESSAGES)
 
 
 @lru_cache(maxsize=8)
@@ -71,6 +70,11 @@ def test_reference_compass_signature():
     assert s["err3_4_s"] == pytest.approx(0.53, abs=0.01)
     assert s["err3_0_s"] == pytest.approx(30.83, abs=0.01)
     assert s["lane_changes"] == 0 and s["ekf_err_max_m"] < 0.2 and s["auto_kept"] == 1.0
+    # both cores to compass 1: MSG "EKF3 IMUn switching to compass 1" at +10.04 s, the next
+    # 10 Hz XKFS row
+    assert s["switch_compass_s"] == pytest.approx(10.1, abs=0.1)
+    assert s["switch_compass_to"] == 1.0 and s["err24_ekf_primary"] == 0
+    assert s["sm_max"] <= 0.02
 
 
 def test_reference_baro_signature():

@@ -120,6 +120,9 @@ EARLY_S = 3.0
 #: path length after the recovery over which a resumed mission is measured [s]
 RESUME_S = 30.0
 
+#: The log messages :func:`fault_signature` reads (``read_bin(path, SIGNATURE_MESSAGES)``).
+SIGNATURE_MESSAGES = ("GPS", "IMU", "CTUN", "XKF1", "XKF4", "XKFS", "SIM", "MODE", "EV", "ERR",
+                      "BARO", "MAG", "BAT", "RCOU", "VIBE", "CMD")
 #: Types :func:`fault_signature` measures: the paper's four and the rest of SITL's catalogue
 #: (``tlm_sim.faults.FAULT_TYPES``, labels 5-13).
 FAULT_TYPES = ("gps", "accel", "engine", "rc", "gyro", "baro", "compass", "gps_glitch",

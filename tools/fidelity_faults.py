@@ -24,7 +24,7 @@ from typing import Any
 
 import pandas as pd
 
-from tlm_process.fault_signatures import fault_signature, truth_timeline
+from tlm_process.fault_signatures import SIGNATURE_MESSAGES, fault_signature, truth_timeline
 
 SINGLE = ("gps_s12", "accel_s13", "engine_s14", "rc_s15")
 COMBINED = "combined_s21"
@@ -32,8 +32,7 @@ COMBINED = "combined_s21"
 CATALOGUE = ("gyro_s42", "compass_s43", "baro_s44", "battery_s45", "gps_glitch_s46",
              "motor_partial_s47", "vibration_s48")
 #: messages fault_signature reads (and that both SITL and tlm log)
-TYPES = ["GPS", "IMU", "CTUN", "XKF1", "XKF4", "SIM", "MODE", "EV", "ERR", "BARO", "MAG", "BAT",
-         "RCOU", "VIBE", "CMD"]
+TYPES = list(SIGNATURE_MESSAGES)
 #: "close" for the note column: within this fraction of SITL's value, or the unit's floor below
 REL_CLOSE = 0.25
 #: absolute floor of "close" by metric-name suffix (s, m, deg, m/s); flags/fractions: 0.02
