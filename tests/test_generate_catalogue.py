@@ -1,5 +1,5 @@
 """``tlm generate`` draws every fault type: ``--faults`` presets, ``sequence`` flights,
-magnitudes drawn from user ranges; the default data set is unchanged."""
+magnitudes drawn from user ranges; ``--faults paper`` draws what the default drew before."""
 
 from __future__ import annotations
 
@@ -24,17 +24,27 @@ from tlm_sim.faults import FAULT_TYPES, Fault, Trigger
 from tlm_sim.geo import HOME_CMAC
 from tlm_sim.params import is_modelled
 
-#: types whose parameters tlm models today (all of them once issue 19's helpers are merged)
+#: types whose parameters tlm models (every type: test_every_fault_type_is_modelled)
 FLYABLE = tuple(t for t, ft in FAULT_TYPES.items()
                 if all(is_modelled(p) for p in ft.params_start))
-FLYABLE_NEW = tuple(t for t in FLYABLE if t in NEW_TYPES)
 
 
-def test_default_draws_only_the_papers_four_types_with_their_parameters():
+def test_every_fault_type_is_modelled():
+    assert FLYABLE == tuple(FAULT_TYPES)
+
+
+def test_default_draws_every_type():
     cfg = ScenarioConfig()
+    assert ScenarioConfig.from_dict({"faults": "all"}) == cfg
+    assert {t for t, w in cfg.fault_weights.items() if w > 0} == set(FAULT_TYPES)
+    seen = {t for i in range(300) for t in sample_scenario(5, i, cfg).fault_types}
+    assert seen == set(FAULT_TYPES)
+
+
+def test_paper_preset_draws_only_the_papers_four_types_with_their_parameters():
+    cfg = ScenarioConfig.from_dict({"faults": "paper"})
     assert cfg.kinds["sequence"] == 0.0
     assert {t for t, w in cfg.fault_weights.items() if w > 0} == set(PAPER_TYPES)
-    assert ScenarioConfig.from_dict({"faults": "paper"}) == cfg
     for i in range(60):
         s = sample_scenario(5, i, cfg)
         assert s.kind in ("none", "single", "paper")
@@ -172,11 +182,15 @@ def test_bad_magnitudes_are_one_line_errors(bad, needle):
         ScenarioConfig(magnitudes=bad)
 
 
-def test_unmodelled_types_are_refused_up_front():
-    missing = [t for t in FAULT_TYPES if t not in FLYABLE]
-    if not missing:
-        pytest.skip("every fault type is modelled")
-    with pytest.raises(GenerateError, match=f"fault type {missing[0]}: tlm does not model"):
+def test_unmodelled_types_are_refused_up_front(monkeypatch):
+    """A type whose parameters tlm does not model (as SIM_GYR_FAIL_MSK once was) is refused
+    when the settings are read, not when a flight draws it."""
+    import tlm_sim.params
+
+    real = tlm_sim.params.is_modelled
+    monkeypatch.setattr(tlm_sim.params, "is_modelled",
+                        lambda name: name != "SIM_GYR_FAIL_MSK" and real(name))
+    with pytest.raises(GenerateError, match="fault type gyro: tlm does not model"):
         ScenarioConfig.from_dict({"faults": "all"})
 
 
@@ -192,9 +206,7 @@ def test_generate_writes_labels_of_new_fault_types(tmp_path):
 
     from tlm_process.generate import GenerateOptions, generate
 
-    types = [t for t in ("motor_partial", "battery", "vibration") if t in FLYABLE_NEW]
-    if len(types) < 2:
-        pytest.skip("needs two modelled new fault types")
+    types = ["motor_partial", "battery", "vibration"]
     cfg = ScenarioConfig.from_dict({"faults": types, "kinds": {"sequence": 1.0},
                                     "missions": {"builtin": 1.0}, "ranges": {}})
     rep = generate(GenerateOptions(out=tmp_path / "ds", flights=2, seed=3, config=cfg,

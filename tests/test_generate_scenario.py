@@ -11,6 +11,7 @@ import pytest
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.scenario import (
     DEFAULT_RANGES,
+    NEW_TYPES,
     Scenario,
     ScenarioConfig,
     mission_from_recipe,
@@ -58,6 +59,9 @@ def test_kinds_shares_and_fault_structure():
             assert len(types) == 1
             start = s.faults["faults"][0]["start"]
             assert 20 + 15 <= start <= 20 + 240
+        elif s.kind == "sequence":
+            assert 2 <= len(types) <= 4 and len(set(types)) == len(types)
+            assert set(types) <= set(NEW_TYPES)
         else:
             assert sorted(types) == ["accel", "engine", "gps", "rc"] and types[-1] == "rc"
             orders.add(tuple(types))

@@ -43,8 +43,9 @@ writes:
   DS/bin/flight-00000042.bin         with --bin: ArduPilot DataFlash logs
   DS/GPS.parquet/flights-00000000-00000099.parquet   with --compact: 100 flights per file
 
-defaults: --faults paper (kinds none=0.2,single=0.4,paper=0.4, the paper's four fault
-types); missions builtin=0.5,random=0.5; wind
+defaults: --faults all (kinds none=0.2,single=0.4,paper=0.2,sequence=0.2: single faults
+of every type 1-13, the paper sequence, sequences of the new types); missions
+builtin=0.5,random=0.5; wind
 SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/2_RND
 0-0.5 deg/s, SIM_BARO/BAR2_RND 0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: none of these).
 --config FILE (.json/.yaml) sets any scenario setting (docs/generate.md), e.g. the magnitude

@@ -114,7 +114,7 @@ NEW_TYPES: tuple[str, ...] = tuple(t for t in FAULT_TYPES if t not in PAPER_TYPE
 #: 1-based sensor number ("both" for both baros / IMUs), mode SIM_MAGn_FAIL (1 no data, 2
 #: frozen).
 MAGNITUDE_KNOBS: dict[str, dict[str, tuple[str, Any, Any]]] = {
-    "gyro": {"instance": ("choice", (1, 2, "both"), [1])},
+    "gyro": {"instance": ("choice", (1, 2), [1])},  # both gyros masked: refused (no flight)
     "accel_samples": {"instance": ("choice", (1, 2, "both"), [1])},
     "baro": {"instance": ("choice", (1, 2, "both"), ["both"])},
     "compass": {"instance": ("choice", (1, 2, 3), [1]), "mode": ("choice", (1, 2), [1])},
@@ -133,6 +133,7 @@ DEFAULT_RANGES: dict[str, tuple[float, float]] = {
     "SIM_GYR1_RND": (0.0, 0.5),  # deg/s at full throttle
     "SIM_GYR2_RND": (0.0, 0.5),
     "SIM_BARO_RND": (0.0, 0.2),  # m
+    "SIM_BAR2_RND": (0.0, 0.2),  # m (the second barometer has its own noise)
     "SIM_MAG_RND": (0.0, 20.0),  # mGauss
 }
 
@@ -194,7 +195,7 @@ class ScenarioConfig:
     """
 
     kinds: Mapping[str, float] = field(
-        default_factory=lambda: {"none": 0.2, "single": 0.4, "paper": 0.4})
+        default_factory=lambda: {"none": 0.2, "single": 0.4, "paper": 0.2, "sequence": 0.2})
     missions: Mapping[str, float] = field(
         default_factory=lambda: {"builtin": 0.5, "random": 0.5})
     home: tuple[float, float, float] = HOME_CMAC
@@ -202,7 +203,7 @@ class ScenarioConfig:
     alt_range: tuple[float, float] = (15.0, 25.0)
     builtin_altitudes: str = "redraw"
     fault_weights: Mapping[str, float] = field(
-        default_factory=lambda: {"gps": 1.0, "accel": 1.0, "engine": 1.0, "rc": 1.0})
+        default_factory=lambda: {t: 1.0 for t in FAULT_TYPES})
     auto_start_s: float = 20.0
     gap_s: tuple[float, float] = (15.0, 25.0)
     hold_s: tuple[float, float] = (20.0, 40.0)
@@ -357,9 +358,9 @@ def fault_preset(name: Any) -> dict[str, Any]:
     """The settings of a named choice of fault types (``tlm generate --faults``):
 
     * ``paper``: the paper's four types in single-fault and paper-style flights (20 % none,
-      40 % single, 40 % paper): the defaults;
+      40 % single, 40 % paper);
     * ``all``: single faults of every type (labels 1-13), the paper sequence and sequences
-      of the new types (20 % none, 40 % single, 20 % paper, 20 % sequence);
+      of the new types (20 % none, 40 % single, 20 % paper, 20 % sequence): the defaults;
     * ``new``: the new types only (labels 5-13): 20 % none, 40 % single, 40 % sequence;
     * ``single``: single faults of every type (20 % none, 80 % single);
     * a list of types (``"gps_glitch,battery"`` or a list): single faults and sequences of
