@@ -55,7 +55,9 @@ def _shape_axis(c, angle_i, rate_i, cmd, tc, accel_max, dt, wrap):
     want = sqrt_ctrl(err, 1.0 / tc, accel_max, dt)
     r = c[rate_i]
     dv = accel_max * dt
-    if want > r + dv:
+    if dv <= 0.0:
+        pass  # no acceleration limit
+    elif want > r + dv:
         want = r + dv
     elif want < r - dv:
         want = r - dv
@@ -155,13 +157,20 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         e2 = wrap_pi(2.0 * math.atan2(hz, hw))
     # a heading error beyond what saturates the yaw-rate loop drags the target along
     hmax = g[C.G_YAW_ERR_MAX]
-    if e2 > hmax:
-        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - hmax))
-        e2 = hmax
-    elif e2 < -hmax:
-        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 + hmax))
-        e2 = -hmax
-    # feed-forward: target euler rates -> body rates (at the target attitude)
+    if e2 > hmax or e2 < -hmax:
+        lim = hmax if e2 > 0.0 else -hmax
+        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - lim))
+        e2 = lim
+        # the error rotation to the moved target: the tilt, then e2 about the thrust axis
+        hc = math.cos(0.5 * e2)
+        hs = math.sin(0.5 * e2)
+        ew = ch * hc
+        ex = sh * (ax * hc + ay * hs)
+        ey = sh * (ay * hc - ax * hs)
+        ez = ch * hs
+    # feed-forward: target euler rates -> angular velocity in the target frame (at the target
+    # attitude), then rotated into the body frame by the error rotation (AC_AttitudeControl's
+    # rotation_target_to_body: it matters when the copter is far off its target)
     # (full-angle sines/cosines from the half angles above)
     sin_r = 2.0 * sr * cr
     cos_r = cr * cr - sr * sr
@@ -170,13 +179,22 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     dr = c[C.ATT_ROLL_RATE_T]
     dp = c[C.ATT_PITCH_RATE_T]
     dy = c[C.ATT_YAW_RATE_T]
-    ff0 = dr - sin_p * dy
-    ff1 = cos_r * dp + sin_r * cos_p * dy
-    ff2 = -sin_r * dp + cos_r * cos_p * dy
-    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt)
-    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt)
-    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt)
+    ff0, ff1, ff2 = _rotate(ew, ex, ey, ez, dr - sin_p * dy, cos_r * dp + sin_r * cos_p * dy,
+                            -sin_r * dp + cos_r * cos_p * dy)
+    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
+    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
+    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
     _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+
+
+@inline_jit
+def _rotate(qw, qx, qy, qz, vx, vy, vz):
+    """The vector v rotated by the unit quaternion q (q v q*)."""
+    tx = 2.0 * (qy * vz - qz * vy)
+    ty = 2.0 * (qz * vx - qx * vz)
+    tz = 2.0 * (qx * vy - qy * vx)
+    return (vx + qw * tx + qy * tz - qz * ty, vy + qw * ty + qz * tx - qx * tz,
+            vz + qw * tz + qx * ty - qy * tx)
 
 
 @inline_jit
@@ -190,7 +208,8 @@ def _shape_yaw(c, g, tc, dt):
     yrate = min(max(yrate, -smax), smax)
     yr0 = c[C.ATT_YAW_RATE_T]
     dv = g[C.G_ACCEL_MAX + 2] * dt
-    yrate = min(max(yrate, yr0 - dv), yr0 + dv)
+    if dv > 0.0:
+        yrate = min(max(yrate, yr0 - dv), yr0 + dv)
     c[C.ATT_YAW_RATE_T] = yrate
     c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
 
