@@ -157,9 +157,15 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         e2 = wrap_pi(2.0 * math.atan2(hz, hw))
     # a heading error beyond what saturates the yaw-rate loop drags the target along
     hmax = g[C.G_YAW_ERR_MAX]
+    dy = c[C.ATT_YAW_RATE_T]
+    dy_axis = 0.0
     if e2 > hmax or e2 < -hmax:
         lim = hmax if e2 > 0.0 else -hmax
         c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - lim))
+        # the heading rate the limit takes back stays in the feed-forward, but about the
+        # thrust axis (AC_AttitudeControl's thrust vector + heading target: the heading
+        # turns about the thrust axis, the thrust direction does not move with it)
+        dy_axis = min(max((e2 - lim) / dt, min(dy, 0.0)), max(dy, 0.0))
         e2 = lim
         # the error rotation to the moved target: the tilt, then e2 about the thrust axis
         hc = math.cos(0.5 * e2)
@@ -178,9 +184,9 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     cos_p = cp * cp - sp * sp
     dr = c[C.ATT_ROLL_RATE_T]
     dp = c[C.ATT_PITCH_RATE_T]
-    dy = c[C.ATT_YAW_RATE_T]
-    ff0, ff1, ff2 = _rotate(ew, ex, ey, ez, dr - sin_p * dy, cos_r * dp + sin_r * cos_p * dy,
-                            -sin_r * dp + cos_r * cos_p * dy)
+    dye = dy - dy_axis  # the part that turns the euler heading target
+    ff0, ff1, ff2 = _rotate(ew, ex, ey, ez, dr - sin_p * dye, cos_r * dp + sin_r * cos_p * dye,
+                            -sin_r * dp + cos_r * cos_p * dye + dy_axis)
     r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
     r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
     r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
