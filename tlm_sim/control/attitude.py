@@ -174,23 +174,29 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         ex = sh * (ax * hc + ay * hs)
         ey = sh * (ay * hc - ax * hs)
         ez = ch * hs
-    # feed-forward: target euler rates -> angular velocity in the target frame (at the target
-    # attitude), then rotated into the body frame by the error rotation (AC_AttitudeControl's
-    # rotation_target_to_body: it matters when the copter is far off its target)
-    # (full-angle sines/cosines from the half angles above)
+    ff0, ff1, ff2 = _feed_forward(c, sr, cr, sp, cp, dy - dy_axis, dy_axis, ew, ex, ey, ez)
+    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
+    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
+    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
+    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+
+
+@inline_jit
+def _feed_forward(c, sr, cr, sp, cp, dye, dy_axis, ew, ex, ey, ez):
+    """Rate feed-forward in the body frame [rad/s]: the target's euler rates (roll, pitch and
+    the heading rate dye that turns the euler heading target) as an angular velocity in the
+    target frame, plus dy_axis about the target's thrust axis, rotated into the body frame by
+    the error rotation (ew, ex, ey, ez) (AC_AttitudeControl's rotation_target_to_body: it
+    matters when the copter is far off its target). sr, cr, sp, cp: sines and cosines of half
+    the target roll and pitch."""
     sin_r = 2.0 * sr * cr
     cos_r = cr * cr - sr * sr
     sin_p = 2.0 * sp * cp
     cos_p = cp * cp - sp * sp
     dr = c[C.ATT_ROLL_RATE_T]
     dp = c[C.ATT_PITCH_RATE_T]
-    dye = dy - dy_axis  # the part that turns the euler heading target
-    ff0, ff1, ff2 = _rotate(ew, ex, ey, ez, dr - sin_p * dye, cos_r * dp + sin_r * cos_p * dye,
-                            -sin_r * dp + cos_r * cos_p * dye + dy_axis)
-    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
-    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
-    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
-    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+    return _rotate(ew, ex, ey, ez, dr - sin_p * dye, cos_r * dp + sin_r * cos_p * dye,
+                   -sin_r * dp + cos_r * cos_p * dye + dy_axis)
 
 
 @inline_jit
