@@ -55,7 +55,9 @@ def _shape_axis(c, angle_i, rate_i, cmd, tc, accel_max, dt, wrap):
     want = sqrt_ctrl(err, 1.0 / tc, accel_max, dt)
     r = c[rate_i]
     dv = accel_max * dt
-    if want > r + dv:
+    if dv <= 0.0:
+        pass  # no acceleration limit
+    elif want > r + dv:
         want = r + dv
     elif want < r - dv:
         want = r - dv
@@ -155,28 +157,56 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         e2 = wrap_pi(2.0 * math.atan2(hz, hw))
     # a heading error beyond what saturates the yaw-rate loop drags the target along
     hmax = g[C.G_YAW_ERR_MAX]
-    if e2 > hmax:
-        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - hmax))
-        e2 = hmax
-    elif e2 < -hmax:
-        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 + hmax))
-        e2 = -hmax
-    # feed-forward: target euler rates -> body rates (at the target attitude)
-    # (full-angle sines/cosines from the half angles above)
+    dy = c[C.ATT_YAW_RATE_T]
+    dy_axis = 0.0
+    if e2 > hmax or e2 < -hmax:
+        lim = hmax if e2 > 0.0 else -hmax
+        c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - lim))
+        # the heading rate the limit takes back stays in the feed-forward, but about the
+        # thrust axis (AC_AttitudeControl's thrust vector + heading target: the heading
+        # turns about the thrust axis, the thrust direction does not move with it)
+        dy_axis = min(max((e2 - lim) / dt, min(dy, 0.0)), max(dy, 0.0))
+        e2 = lim
+        # the error rotation to the moved target: the tilt, then e2 about the thrust axis
+        hc = math.cos(0.5 * e2)
+        hs = math.sin(0.5 * e2)
+        ew = ch * hc
+        ex = sh * (ax * hc + ay * hs)
+        ey = sh * (ay * hc - ax * hs)
+        ez = ch * hs
+    ff0, ff1, ff2 = _feed_forward(c, sr, cr, sp, cp, dy - dy_axis, dy_axis, ew, ex, ey, ez)
+    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
+    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
+    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
+    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+
+
+@inline_jit
+def _feed_forward(c, sr, cr, sp, cp, dye, dy_axis, ew, ex, ey, ez):
+    """Rate feed-forward in the body frame [rad/s]: the target's euler rates (roll, pitch and
+    the heading rate dye that turns the euler heading target) as an angular velocity in the
+    target frame, plus dy_axis about the target's thrust axis, rotated into the body frame by
+    the error rotation (ew, ex, ey, ez) (AC_AttitudeControl's rotation_target_to_body: it
+    matters when the copter is far off its target). sr, cr, sp, cp: sines and cosines of half
+    the target roll and pitch."""
     sin_r = 2.0 * sr * cr
     cos_r = cr * cr - sr * sr
     sin_p = 2.0 * sp * cp
     cos_p = cp * cp - sp * sp
     dr = c[C.ATT_ROLL_RATE_T]
     dp = c[C.ATT_PITCH_RATE_T]
-    dy = c[C.ATT_YAW_RATE_T]
-    ff0 = dr - sin_p * dy
-    ff1 = cos_r * dp + sin_r * cos_p * dy
-    ff2 = -sin_r * dp + cos_r * cos_p * dy
-    r0 = sqrt_ctrl(e0, g[C.G_ANG_P], 0.5 * g[C.G_ACCEL_MAX], dt)
-    r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], 0.5 * g[C.G_ACCEL_MAX + 1], dt)
-    r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], 0.5 * g[C.G_ACCEL_MAX + 2], dt)
-    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+    return _rotate(ew, ex, ey, ez, dr - sin_p * dye, cos_r * dp + sin_r * cos_p * dye,
+                   -sin_r * dp + cos_r * cos_p * dye + dy_axis)
+
+
+@inline_jit
+def _rotate(qw, qx, qy, qz, vx, vy, vz):
+    """The vector v rotated by the unit quaternion q (q v q*)."""
+    tx = 2.0 * (qy * vz - qz * vy)
+    ty = 2.0 * (qz * vx - qx * vz)
+    tz = 2.0 * (qx * vy - qy * vx)
+    return (vx + qw * tx + qy * tz - qz * ty, vy + qw * ty + qz * tx - qx * tz,
+            vz + qw * tz + qx * ty - qy * tx)
 
 
 @inline_jit
@@ -190,7 +220,8 @@ def _shape_yaw(c, g, tc, dt):
     yrate = min(max(yrate, -smax), smax)
     yr0 = c[C.ATT_YAW_RATE_T]
     dv = g[C.G_ACCEL_MAX + 2] * dt
-    yrate = min(max(yrate, yr0 - dv), yr0 + dv)
+    if dv > 0.0:
+        yrate = min(max(yrate, yr0 - dv), yr0 + dv)
     c[C.ATT_YAW_RATE_T] = yrate
     c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
 

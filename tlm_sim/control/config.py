@@ -36,10 +36,14 @@ def _attitude(g: np.ndarray, p: Params, dt: float) -> None:
         g[C.G_RAT_FLTE + k] = lpf_alpha(p[f"ATC_RAT_{ax}_FLTE"], dt)
         g[C.G_RAT_FLTD + k] = lpf_alpha(p[f"ATC_RAT_{ax}_FLTD"], dt)
         g[C.G_ANG_P + k] = p[f"ATC_ANG_{ax}_P"]
-    # ATC_ACCEL_*_MAX [cdeg/s^2], constrained as the attitude controller does
+    # ATC_ACCEL_*_MAX [cdeg/s^2]: the input shaping uses them as they are; the angle
+    # controller's square-root law uses half of them, constrained to 40..720 deg/s^2 (roll,
+    # pitch) or 10..120 deg/s^2 (yaw) (AC_AttitudeControl's *_CONTROLLER_MIN/MAX_RADSS). With
+    # the defaults 1100/1100/270 deg/s^2: 550/550/120.
     for k, (ax, lo, hi) in enumerate((("R", 40.0, 720.0), ("P", 40.0, 720.0), ("Y", 10.0, 120.0))):
-        deg = p[f"ATC_ACCEL_{ax}_MAX"] / 100.0
-        g[C.G_ACCEL_MAX + k] = math.radians(min(max(deg, lo), hi) if deg > 0 else hi)
+        deg = max(p[f"ATC_ACCEL_{ax}_MAX"] / 100.0, 0.0)
+        g[C.G_ACCEL_MAX + k] = math.radians(deg)
+        g[C.G_ANG_ACCEL + k] = math.radians(min(max(0.5 * deg, lo), hi)) if deg > 0 else 0.0
     g[C.G_INPUT_TC] = max(p["ATC_INPUT_TC"], 0.05)
     g[C.G_SLEW_YAW] = math.radians(p["ATC_SLEW_YAW"] / 100.0)
     g[C.G_ANGLE_MAX] = math.radians(p["ANGLE_MAX"] / 100.0)

@@ -191,7 +191,11 @@ G_RAT_FLTT = _g.add("G_RAT_FLTT", 3, "", "target filter alphas at the loop rate"
 G_RAT_FLTE = _g.add("G_RAT_FLTE", 3, "", "error filter alphas at the loop rate")
 G_RAT_FLTD = _g.add("G_RAT_FLTD", 3, "", "derivative filter alphas at the loop rate")
 G_ANG_P = _g.add("G_ANG_P", 3, "1/s", "angle P per axis")
-G_ACCEL_MAX = _g.add("G_ACCEL_MAX", 3, "rad/s^2", "attitude accel limits per axis")
+G_ACCEL_MAX = _g.add("G_ACCEL_MAX", 3, "rad/s^2",
+                     "ATC_ACCEL_R/P/Y_MAX: input-shaping accel limits per axis (0 = none)")
+G_ANG_ACCEL = _g.add("G_ANG_ACCEL", 3, "rad/s^2",
+                     "angle controller's square-root accel limit per axis: half ATC_ACCEL_*_MAX "
+                     "within 40..720 (roll, pitch) or 10..120 deg/s^2 (yaw); 0 = linear P")
 G_INPUT_TC = _g.add("G_INPUT_TC", 1, "s", "ATC_INPUT_TC")
 G_SLEW_YAW = _g.add("G_SLEW_YAW", 1, "rad/s", "ATC_SLEW_YAW")
 G_ANGLE_MAX = _g.add("G_ANGLE_MAX", 1, "rad", "ANGLE_MAX")

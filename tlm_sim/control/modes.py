@@ -87,17 +87,6 @@ def _heading_vector(q):
 
 
 @tick_jit
-def _heading(q):
-    """Cosine and sine of the heading, and cos(tilt) = cos(roll) cos(pitch), of a body->NED
-    quaternion (the heading vector is the body x axis projected on the horizontal plane)."""
-    x, y = q[1], q[2]
-    hx, hy, norm = _heading_vector(q)
-    if norm < 1e-9:
-        return 1.0, 0.0, 1.0 - 2.0 * (x * x + y * y)
-    return hx / norm, hy / norm, 1.0 - 2.0 * (x * x + y * y)
-
-
-@tick_jit
 def _yaw(q):
     """Heading [rad] of a body->NED quaternion (0 when the body x axis points straight down or
     up); only where needed: an atan2 every tick cost about 1.5 % of the loop."""
@@ -173,7 +162,7 @@ def vehicle_step(
     """
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
-    cos_yaw, sin_yaw, cos_tilt = _heading(q)
+    cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])  # cos(roll) cos(pitch)
     _estimates_update(c, g, pos, acc_ned, dt)
     if c[C.ARMED] == 0.0:
         _disarmed_step(c, g, t_us, t_s, q, events, ev_counts)
@@ -194,7 +183,7 @@ def vehicle_step(
     if sub == C.SUB_LAND and _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events,
                                            ev_counts):
         return
-    thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_yaw, sin_yaw, cos_tilt,
+    thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_tilt,
                        yaw_cmd, yaw_rate_ff, v_batt)
     _hover_learning(c, g, dt, sub, thr, vel, q)
     _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts)
@@ -501,14 +490,21 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
 
 
 @inline_jit
-def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_yaw, sin_yaw, cos_tilt, yaw_cmd,
+def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_tilt, yaw_cmd,
                  yaw_rate_ff, v_batt):
-    """Position (xy, z), attitude and rate controllers and the mixer; returns the throttle."""
+    """Position (xy, z), attitude and rate controllers and the mixer; returns the throttle.
+
+    The horizontal controller's acceleration becomes a thrust direction: roll and pitch about
+    the attitude target's heading (ATT_YAW_T), not the vehicle's, as AC_PosControl's thrust
+    vector with the heading (input_thrust_vector_heading) makes it. The two are the same in
+    normal flight; after a motor failure has yawed the copter far from its target heading
+    (motor_partial_s47: 45 deg), leaning in the vehicle's frame would tilt the thrust the
+    wrong way."""
     if c[C.LAND_NOGPS] != 0.0 and sub == C.SUB_LAND:
         c[C.ATT_ROLL_CMD] = 0.0  # no position control: level, drift with the wind
         c[C.ATT_PITCH_CMD] = 0.0
     else:
-        xy_update(c, g, pos, vel, cos_yaw, sin_yaw)
+        xy_update(c, g, pos, vel, math.cos(c[C.ATT_YAW_T]), math.sin(c[C.ATT_YAW_T]))
     c[C.ATT_YAW_CMD] = yaw_cmd
     c[C.YAW_RATE_CMD] = yaw_rate_ff
     thr = z_update(c, g, pos[2], vel[2], acc_up, c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0)

@@ -125,9 +125,10 @@ def _limit_accel_xy(c, an, ae, accel_max):
 def xy_update(c, g, pos, vel, cy, sy):
     """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD.
 
-    cy, sy: cosine and sine of the vehicle heading. The acceleration is limited to the lean
-    angle min(ANGLE_MAX, max(ALTHOLD_LEAN, 10 deg)), keeping the part across the desired
-    velocity first; while limited, the velocity integrator does not grow along the limit.
+    cy, sy: cosine and sine of the heading the lean angles are about (the attitude target's).
+    The acceleration is limited to the lean angle min(ANGLE_MAX, max(ALTHOLD_LEAN, 10 deg)),
+    keeping the part across the desired velocity first; while limited, the velocity integrator
+    does not grow along the limit.
     """
     dt = g[C.G_DT]
     lean = max(c[C.ALTHOLD_LEAN], LEAN_LIMIT_MIN)
