@@ -245,6 +245,34 @@ def test_sparse_h_update_matches_filterpy(seed, n):
     np.testing.assert_allclose(_get_p(e), kf.P, rtol=0, atol=1e-9)
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), j=st.integers(0, NS - 1))
+def test_bad_imu_response_does_not_learn_the_accel_bias(seed, j):
+    """EKF3 zeroes the delta-velocity-bias Kalman gains of its fusions while ``badIMUdata``:
+    the bias does not move, P -= K H P with those gain rows zero, then made symmetric. Without
+    the response the update is the ordinary one (the bias moves)."""
+    rng = np.random.default_rng(seed)
+    p = _random_spd(rng, NS, 0.3)
+    innov, r = float(rng.normal()), float(rng.uniform(0.01, 1.0))
+    e = _lane()
+    _set_p(e, p)
+    e[L.BAD_IMU] = 1.0
+    clear_dx(e)
+    fuse_index(e, j, innov, r)
+    k = p[:, j] / (p[j, j] + r)
+    k[L.ES_BA:] = 0.0
+    khp = np.outer(k, p[j, :])
+    expect = p - 0.5 * (khp + khp.T)
+    np.testing.assert_allclose(e[L.SCR_DX : L.SCR_DX + NS], k * innov, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(_get_p(e), expect, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(_get_p(e)[L.ES_BA:, L.ES_BA:], p[L.ES_BA:, L.ES_BA:])
+    e[L.BAD_IMU] = 0.0
+    _set_p(e, p)
+    clear_dx(e)
+    fuse_index(e, j, innov, r)
+    assert np.abs(e[L.SCR_DX + L.ES_BA : L.SCR_DX + NS]).max() > 0.0
+
+
 # ----------------------------------------------------------------------------- alignment
 
 
@@ -402,6 +430,8 @@ def test_both_accels_failed_bad_imu_response_bounds_the_error():
     vel_err = np.linalg.norm(out[:, L.O_VN : L.O_VN + 3] - flight.vel, axis=1)
     assert np.median(vel_err[t > 55.0]) < 4.0  # saw-tooth: vD reset to GPS at 5 Hz
     assert out[-1, L.O_F_HORIZ_POS] == 1.0
+    # no accel-bias learning while the response is active (EKF3: gains zero while badIMUdata)
+    assert np.abs(ekf[:, L.BAX : L.BAX + 3]).max() < 0.05
 
 
 def test_a_stopped_imu_is_replaced_by_the_first_healthy_one_without_a_lane_switch():

@@ -28,7 +28,8 @@ __all__ = ["SitlScenario", "reconstruct", "mission_from_cmd", "ARMED", "DISARMED
 ARMED, DISARMED = 10, 11
 #: Message types the cross-check reads from a SITL log.
 TYPES = ("GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1",
-         "XKF4", "XKFS", "POS", "BARO", "MAG", "BAT", "RCOU", "CMD", "PARM", "ORGN", "MSG")
+         "XKF4", "XKFS", "POS", "BARO", "MAG", "BAT", "RCOU", "CMD", "PARM", "ORGN", "MSG",
+         "PSCN", "PSCE")
 _NAV_WAYPOINT, _NAV_TAKEOFF = 16, 22
 
 

@@ -38,6 +38,7 @@ from tlm_sim.ekf.layout import (
     ACC_DVD,
     ACC_DVE,
     ACC_DVN,
+    BAD_IMU,
     BAX,
     BAY,
     BAZ,
@@ -49,6 +50,7 @@ from tlm_sim.ekf.layout import (
     BUF_HEAD,
     BUF_OFS,
     BUF_ROW,
+    ES_BA,
     NBUF,
     NS,
     OUT_EPN,
@@ -351,17 +353,42 @@ def clear_dx(e):
 
 
 @tick_jit
-def _update_with_column(e, s, y):
-    """P -= c c^T / s and dx += c y / s, with c = P h^T in SCR_C (upper triangle, mirrored)."""
-    inv = 1.0 / s
+def _update_bias_inhibited(e, inv, y):
+    """The update of :func:`_update_with_column` with the accel-bias gains K[ES_BA:] = 0."""
+    for a in range(ES_BA):
+        e[SCR_DX + a] += e[SCR_C + a] * inv * y
     for a in range(NS):
-        ka = e[SCR_C + a] * inv
-        e[SCR_DX + a] += ka * y
+        ka = e[SCR_C + a] * inv if a < ES_BA else 0.0
         ra = P0 + a * NS
         for b in range(a, NS):
-            v = e[ra + b] - ka * e[SCR_C + b]
+            kb = e[SCR_C + b] * inv if b < ES_BA else 0.0
+            v = e[ra + b] - 0.5 * (ka * e[SCR_C + b] + kb * e[SCR_C + a])
             e[ra + b] = v
             e[P0 + b * NS + a] = v
+
+
+@tick_jit
+def _update_with_column(e, s, y):
+    """P -= c c^T / s and dx += c y / s, with c = P h^T in SCR_C (upper triangle, mirrored).
+
+    While the lane's bad-IMU response is active (``BAD_IMU``) the accel-bias gains are zero, as
+    EKF3 zeroes the delta-velocity-bias Kalman gains of every fusion while ``badIMUdata``: the
+    measurement does not move the bias, and P -= K (P h)^T with those gain rows zero, made
+    symmetric (EKF3's ForceSymmetry averages P[i][j] and P[j][i]), halves the usual reduction of
+    the bias cross-covariances and leaves the bias block as it is.
+    """
+    inv = 1.0 / s
+    if e[BAD_IMU] != 0.0:
+        _update_bias_inhibited(e, inv, y)
+    else:
+        for a in range(NS):
+            ka = e[SCR_C + a] * inv
+            e[SCR_DX + a] += ka * y
+            ra = P0 + a * NS
+            for b in range(a, NS):
+                v = e[ra + b] - ka * e[SCR_C + b]
+                e[ra + b] = v
+                e[P0 + b * NS + a] = v
     # guard the diagonal against round-off
     for a in range(NS):
         d = P0 + a * (NS + 1)
