@@ -341,13 +341,19 @@ class _Flight:
         return float(len(e))
 
 
-def _gps(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+def _gps_rows(f: _Flight, t0: float, t1: float, after_us: float
+              ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """GPS 1 rows inside the window (from the edge margin on) and the armed rows outside it
+    (before ``t0`` or more than ``after_us`` after ``t1``)."""
     gps = f.t["GPS"]
     gps = gps[gps.I == 0] if "I" in gps else gps
-    m = EDGE_MARGIN_S * 1e6
-    inside = time_window(gps, t0 + m, t1)
+    inside = time_window(gps, t0 + EDGE_MARGIN_S * 1e6, t1)
     armed = time_window(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
-    outside = armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + m)]
+    return inside, armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + after_us)]
+
+
+def _gps(f: _Flight, t0: float, t1: float) -> dict[str, float]:
+    inside, outside = _gps_rows(f, t0, t1, EDGE_MARGIN_S * 1e6)
     tp, err = f.ekf_error()
     w = (tp >= t0) & (tp <= t1)
     after = np.flatnonzero((tp > t1) & (err < EKF_RECOVERED_M))
@@ -729,12 +735,7 @@ def _battery(f: _Flight, t0: float, t1: float) -> dict[str, float]:
 
 
 def _gps_jam(f: _Flight, t0: float, t1: float) -> dict[str, float]:
-    gps = f.t["GPS"]
-    gps = gps[gps.I == 0] if "I" in gps else gps
-    m = EDGE_MARGIN_S * 1e6
-    inside = time_window(gps, t0 + m, t1)
-    armed = time_window(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
-    outside = armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + 10e6)]
+    inside, outside = _gps_rows(f, t0, t1, 10e6)
     return {
         "fix_frac_in": float((inside.Status >= 3).mean()) if len(inside) else float("nan"),
         "fix_frac_out": float((outside.Status >= 3).mean()) if len(outside) else float("nan"),
