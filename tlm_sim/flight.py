@@ -136,7 +136,10 @@ def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
 def _motor_pwm(c, scfg, pwm):
     """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs,
     ``1000 + (pwm - 1000) * mul`` truncated to whole microseconds as SITL's uint16 servo value
-    (sitl-faults.md §6.1; RCOU keeps the commanded value)."""
+    (sitl-faults.md §6.1; RCOU keeps the commanded value). Returns the motors' mean output
+    0..1 over those with a PWM (SITL's throttle for the IMU noise). run_flight calls it only
+    when its inputs change (the autopilot's step, a scheduled parameter change), not every
+    physics tick."""
     mask = int(scfg[S.C_ENGINE_MASK])
     mul = scfg[S.C_ENGINE_MUL]
     for i in range(4):
@@ -144,6 +147,13 @@ def _motor_pwm(c, scfg, pwm):
         if (mask >> i) & 1:
             p = 1000.0 + float(int((p - 1000.0) * mul))
         pwm[i] = p
+    thr_sum = 0.0
+    n_on = 0
+    for i in range(4):
+        if pwm[i] > 0.0:
+            thr_sum += (pwm[i] - 1000.0) / 1000.0
+            n_on += 1
+    return thr_sum / n_on if n_on > 0 else 0.0
 
 
 @loop_jit
@@ -177,10 +187,14 @@ def run_flight(
     tick = 0
     last_gps_ms = 0.0
     stop_at = -1
+    throttle = _motor_pwm(c, scfg, pwm)
     while t_us < t_end_us:
-        k_sched = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
-                                  applied)
-        t_us = _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng)
+        k_next = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
+                                 applied)
+        if k_next != k_sched:  # a parameter changed: the engine fault may act on the PWM
+            k_sched = k_next
+            throttle = _motor_pwm(c, scfg, pwm)
+        t_us = _physics_tick(x, frame, scfg, s, pwm, throttle, t_us, rng, wind_rng)
         if t_us < next_loop:
             continue
         next_loop += LOOP_DT_US
@@ -195,6 +209,7 @@ def run_flight(
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
+        throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, eo, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
@@ -217,19 +232,12 @@ def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts, home_lat):
 
 
 @inline_jit
-def _physics_tick(x, frame, scfg, c, s, pwm, t_us, rng, wind_rng):
-    """One 1200 Hz physics step at t_us: the motors driven by the autopilot's PWM (as the
-    engine fault alters it), the rigid body, the IMU sampling it; returns the new time [us]."""
-    _motor_pwm(c, scfg, pwm)
+def _physics_tick(x, frame, scfg, s, pwm, throttle, t_us, rng, wind_rng):
+    """One 1200 Hz physics step at t_us: the motors driven by pwm (the autopilot's PWM as the
+    engine fault alters it, :func:`_motor_pwm`; throttle: their mean output), the rigid body,
+    the IMU sampling it; returns the new time [us]."""
     physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
     t_us += PHYSICS_DT_US
-    thr_sum = 0.0
-    n_on = 0
-    for i in range(4):
-        if pwm[i] > 0.0:
-            thr_sum += (pwm[i] - 1000.0) / 1000.0
-            n_on += 1
-    throttle = thr_sum / n_on if n_on > 0 else 0.0
     imu_sample(s, x, scfg, float(t_us), throttle, pwm, rng)
     return t_us
 

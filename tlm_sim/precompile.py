@@ -88,33 +88,43 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
         (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _f8, _F1, _EVENTS,
          _I1),
-        13.5),
+        10.7),
     Job("tlm_sim.ekf.lanes:ekf_update",
-        (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 7.9),
-    Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.9),
+        (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 10.8),
+    Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 3.8),
     Job("tlm_sim.control.log:log_control_10hz",
-        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.5),
-    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _f8, _f8, _f8), 0.9),
-    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
-    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.6),
-    Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 1.3),
-    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _F1, _U2), 0.6),
-    Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.6),
-    Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.5),
-    Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.3),
-    Job("tlm_sim.sensors.gps:gps_measure", (_F1, _F1, _f8, _F1, _U1), 0.2),
-    Job("tlm_sim.flight:_apply_schedule", (_F2, _i8, _i8, _f8, _F1, _F1, _F1, _F1, _F1), 0.2),
-    Job("tlm_sim.sensors.imu:imu_take_deltas", (_F1, _i8, _f8, _F2, _F2), 0.1),
-    Job("tlm_sim.sensors.baro:baro_read", (_F1, _F1, _F1, _U2, _f8), 0.1),
+        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.0),
+    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _f8, _f8, _f8), 1.0),
+    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.5),
+    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _f8, _f8, _f8), 0.4),
+    Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 0.2),
+    Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _F1, _U2), 1.4),
+    Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.5),
+    Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.4),
+    Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.2),
+    Job("tlm_sim.sensors.gps:gps_measure", (_F1, _F1, _f8, _F1, _U1), 0.6),
+    Job("tlm_sim.flight:_apply_schedule", (_F2, _i8, _i8, _f8, _F1, _F1, _F1, _F1, _F1), 0.1),
+    Job("tlm_sim.sensors.imu:imu_take_deltas", (_F1, _i8, _f8, _F2, _F2), 0.2),
+    Job("tlm_sim.sensors.baro:baro_read", (_F1, _F1, _F1, _U2, _f8), 0.3),
     Job("tlm_sim.sensors.baro:baro_init", (_F1,), 0.1),
-    Job("tlm_sim.sensors.mag:mag_sample", (_F1, _F1, _F1, _U1, _f8), 0.1),
+    Job("tlm_sim.sensors.mag:mag_sample", (_F1, _F1, _F1, _U1, _f8), 0.5),
+    # issue 19's main-loop callees: compiled by run_flight itself they made its serial tail
+    # 6.6 s instead of 4.0 s
+    Job("tlm_sim.control.battery:battery_monitor", (_F1, _F1, _i8, _f8, _f8, _EVENTS, _I1),
+        0.5),
+    Job("tlm_sim.control.ahrs:ahrs_update", (_F1,) * 8, 0.3),
+    Job("tlm_sim.ekf.lanes:ekf_gps_accuracy", (_F2, _F1, _f8, _f8, _f8), 0.2),
+    Job("tlm_sim.ekf.lanes:ekf_output", (_F2, _F1, _F1), 0.3),  # with ekf_output_nav
+    Job("tlm_sim.ekf.log:gps_glitch_check", (_EVENTS, _I1, _i8, _F2, _F1), 0.1),
+    Job("tlm_sim.ekf.log:log_lane_switch", (_EVENTS, _I1, _i8, _F1), 0.1),
+    Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
+    Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
 )
 
-#: the flight itself, compiled last in the calling process
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1), 2.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1), 4.0)
 
 
 @dataclass

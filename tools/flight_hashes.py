@@ -9,7 +9,9 @@ recording the hashes before it and comparing after every step::
 The flights: a normal flight, the paper's fault sequence (GPS, accel, engine, RC), an engine
 crash (SIM_ENGINE_MUL 0 from 150 s, held to the end) and an RC failsafe (SIM_RC_FAIL 1 from
 120 s, held), all on built-in mission 1 with seed 0 unless ``--seed`` says otherwise.
-``--only NAME`` flies one of them.
+``--only NAME`` flies one of them. ``--catalogue`` adds one flight per other fault type of
+:data:`~tlm_sim.faults.types.FAULT_TYPES` (``fault_<type>``: the fault from 120 s to 160 s, so
+that its onset, its clearing and the recovery are hashed), for changes to fault code paths.
 """
 
 from __future__ import annotations
@@ -37,6 +39,16 @@ def _flights(seed: int) -> dict[str, Callable[[], FlightLog]]:
                                     seed=seed),
         "rc_failsafe": lambda: fly(1, FaultSchedule((Fault("rc", 120.0, None),)), seed=seed),
     }
+
+
+def _catalogue(seed: int) -> dict[str, Callable[[], FlightLog]]:
+    """``fault_<type>`` -> a function flying mission 1 with that fault from 120 s to 160 s."""
+    from tlm_sim.faults.types import FAULT_TYPES
+
+    def one(kind: str) -> Callable[[], FlightLog]:
+        return lambda: fly(1, FaultSchedule((Fault(kind, 120.0, 160.0),)), seed=seed)
+
+    return {f"fault_{k}": one(k) for k in FAULT_TYPES if k not in ("engine", "rc")}
 
 
 def _sha1_json(obj: Any) -> str:
@@ -67,9 +79,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--only", action="append", metavar="NAME",
                     help="fly only this flight (repeatable)")
+    ap.add_argument("--catalogue", action="store_true",
+                    help="also fly every other fault type (fault_<type>, 120-160 s)")
     a = ap.parse_args(argv)
     flights = _flights(a.seed)
-    names = a.only or list(flights)
+    names = list(flights)
+    if a.catalogue or any(n.startswith("fault_") for n in a.only or ()):
+        cat = _catalogue(a.seed)
+        flights |= cat
+        names += list(cat) if a.catalogue else []
+    names = a.only or names
     got = {n: flight_hashes(flights[n]()) for n in names}
     if not a.check:
         json.dump(got, sys.stdout, indent=1, sort_keys=True)

@@ -328,6 +328,8 @@ def lane_imu_sources(imu, imu_ok, n_imu):
     keeps the lane's bias states, which model what every tlm IMU shares (the common gyro drift;
     SIM_GYRn_BIAS and SIM_ACCn_BIAS differences between IMUs are not transferred)."""
     g0 = n_imu if imu_ok.shape[0] >= 2 * n_imu else 0
+    if imu_ok[imu] != 0 and imu_ok[g0 + imu] != 0:
+        return imu, imu  # the usual case: its own IMU delivers both
     ai = imu if imu_ok[imu] != 0 else -1
     gi = imu if imu_ok[g0 + imu] != 0 else -1
     for j in range(n_imu):
