@@ -38,8 +38,14 @@ PARM), flown in tlm with the sidecar's seed, and aligned at arming. Definitions 
 `tlm_process/crosscheck/metrics.py`. Targets of the cross-check issue: flight time within 10 %
 and trajectory RMS <= 3 m on the normal and combined flights. The combined flight is chaotic
 (where its later faults catch the copter moves with tiny changes): with the sidecar's seed its
-RMS below is 3.03 m, over seeds 0-5 it is 2.64-2.99 m (mean 2.82 m), so `tests/test_crosscheck.py`
-gates the mean over six seeds.
+RMS varies with the seed, so `tests/test_crosscheck.py` gates the mean over seeds 0-5 (<= 3 m)
+and the worst (<= 4.5 m).
+
+Wind (normal_wind_s41: SIM_WIND_SPD 5, SIM_WIND_DIR 45, SIM_WIND_TURB 1) shows in the cruise
+attitude rows (`att_*`): SITL's roll and pitch standard deviations grow from 2.5 / 2.5 deg calm
+(normal_s11) to 3.7 / 6.6 deg, the pitch mean from -6.4 to -8.4 deg; tlm flying SITL's wind
+model gives the same within a few per cent (`test_wind_cruise_attitude_agrees_with_sitl`: std
+within 30 %, pitch mean within 2 deg).
 
 ## GPS loss: what ArduCopter does, and tlm with it
 
