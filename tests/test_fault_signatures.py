@@ -16,11 +16,11 @@ import pandas as pd
 import pytest
 
 from tests.conftest import REFERENCE, reference_path
-from tlm_process.fault_signatures import fault_signature, truth_timeline
+from tlm_process.fault_signatures import SIGNATURE_MESSAGES, fault_signature, truth_timeline
 from tools.fidelity_faults import accel_timeline
 
 SINGLE = {"gps": "gps_s12", "accel": "accel_s13", "engine": "engine_s14", "rc": "rc_s15"}
-TYPES = ["GPS", "IMU", "CTUN", "XKF1", "SIM", "MODE", "EV", "ERR", "PSCN", "PSCE"]
+TYPES = list(SIGNATURE_MESSAGES)
 RC_FS_TIMEOUT_S = 1.0  # copter.parm's RC_FS_TIMEOUT
 
 

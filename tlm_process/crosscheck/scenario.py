@@ -23,13 +23,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_process.fault_signatures import SIGNATURE_MESSAGES
+
 __all__ = ["SitlScenario", "reconstruct", "mission_from_cmd", "ARMED", "DISARMED"]
 
 ARMED, DISARMED = 10, 11
 #: Message types the cross-check reads from a SITL log.
-TYPES = ("GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1",
-         "XKF4", "XKFS", "POS", "BARO", "MAG", "BAT", "RCOU", "CMD", "PARM", "ORGN", "MSG",
-         "PSCN", "PSCE")
+TYPES = tuple(dict.fromkeys((
+    "GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1", "POS",
+    "CMD", "PARM", "ORGN", "MSG", *SIGNATURE_MESSAGES)))  # + what the fault signatures read
 _NAV_WAYPOINT, _NAV_TAKEOFF = 16, 22
 
 
