@@ -135,19 +135,31 @@ def test_crosscheck_writes_checks_signatures_and_the_flight(tmp_path, capsys):
     assert np.any(np.isclose(mul, 0.5))
 
 
-def test_a_log_tlm_cannot_fly_is_a_one_line_error(tmp_path, capsys):
-    """A parameter value tlm does not simulate (normal_x_s50's FRAME_TYPE 1 until the X frame
-    is modelled) is a ScenarioError, which the command reports in one line (exit 2)."""
+def test_the_frame_comes_from_the_log_and_a_frame_tlm_cannot_fly_is_a_one_line_error(
+        tmp_path, capsys):
+    """normal_x_s50 flies the X frame (PARM FRAME_TYPE 1, SITL model "x"). A sidecar naming a
+    SITL model tlm has no frame for, or one that disagrees with the log's FRAME_CLASS /
+    FRAME_TYPE (SITL would fly a mismatched mixer), is a ScenarioError, which the command
+    reports in one line (exit 2)."""
+    import json
+    import shutil
+
     from tlm_process.crosscheck.scenario import ScenarioError
-    from tlm_sim.params import ParamError, Params
 
     src = reference_path("normal_x_s50.bin")
-    try:
-        Params({"FRAME_TYPE": 1})
-    except ParamError:
-        with pytest.raises(ScenarioError, match="FRAME_TYPE"):
-            reconstruct(src)
-        assert main(["crosscheck", str(src)]) == 2
-        assert "FRAME_TYPE" in capsys.readouterr().err
-    else:
-        assert reconstruct(src).params["FRAME_TYPE"] == 1
+    sc = reconstruct(src)
+    assert (sc.params["FRAME_CLASS"], sc.params["FRAME_TYPE"]) == (1, 1)
+    doc = json.loads(src.with_suffix(".json").read_text())
+    for model, match in (("octa-quad", "not a frame tlm simulates"), ("+", "mismatched mixer")):
+        doc["sitl"]["model"] = model
+        side = tmp_path / f"{model}.json"
+        side.write_text(json.dumps(doc))
+        with pytest.raises(ScenarioError, match=match):
+            reconstruct(src, side)
+    # the command: a copy of the log with the mismatched sidecar beside it
+    log = tmp_path / "normal_x_s50.bin"
+    shutil.copy(src, log)
+    shutil.copy(tmp_path / "+.json", log.with_suffix(".json"))
+    assert main(["crosscheck", str(log), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "mismatched mixer" in err and len(err.strip().splitlines()) == 1

@@ -482,7 +482,7 @@ def test_battery_voltage_parameter_change_and_dead_battery(frame: np.ndarray) ->
     assert x[X.AD] > 0.2 * G  # thrust scales with (11/12.6)^2
     f[F.F_BATT_VOLT] = 1.0  # below 10 % of max voltage: motors stop
     run_ticks(x, hover_pwm(f), f, DT, 0.0, 2, RNG)
-    assert np.all(x[X.T1 : X.T4 + 1] == 0.0)
+    assert np.all(x[X.T1 : X.T1 + 4] == 0.0)
     assert x[X.BATT_I] == 0.0
 
 

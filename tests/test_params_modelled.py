@@ -86,9 +86,10 @@ def test_every_modelled_parameter_acts():
 
 
 def test_pinned_parameters_refuse_any_other_value():
-    """SCHED_LOOP_RATE, SIM_RATE_HZ, FRAME_CLASS and FRAME_TYPE hold the one value tlm
-    simulates; the flight loop's tick lengths derive from the first two."""
-    assert set(PINNED) == {"SCHED_LOOP_RATE", "SIM_RATE_HZ", "FRAME_CLASS", "FRAME_TYPE"}
+    """SCHED_LOOP_RATE and SIM_RATE_HZ hold the one value tlm simulates; the flight loop's
+    tick lengths derive from them. (FRAME_CLASS / FRAME_TYPE pick a frame of tlm_sim.frames:
+    tests/test_frames.py.)"""
+    assert set(PINNED) == {"SCHED_LOOP_RATE", "SIM_RATE_HZ"}
     for name in PINNED:
         assert Params()[name] == PARAM_INFO[name].min
         with pytest.raises(ParamError, match=f"{name} = .* is not supported"):

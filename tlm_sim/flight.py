@@ -43,6 +43,7 @@ from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
@@ -142,14 +143,14 @@ def _motor_pwm(c, scfg, pwm):
     physics tick."""
     mask = int(scfg[S.C_ENGINE_MASK])
     mul = scfg[S.C_ENGINE_MUL]
-    for i in range(4):
+    for i in range(MAX_MOTORS):
         p = c[C.MIX_PWM + i]
-        if (mask >> i) & 1:
+        if (mask >> i) & 1 and p > 0.0:  # (an output without a motor stays at 0)
             p = 1000.0 + float(int((p - 1000.0) * mul))
         pwm[i] = p
     thr_sum = 0.0
     n_on = 0
-    for i in range(4):
+    for i in range(MAX_MOTORS):
         if pwm[i] > 0.0:
             thr_sum += (pwm[i] - 1000.0) / 1000.0
             n_on += 1
@@ -337,6 +338,10 @@ def _as_change(ch: Any) -> tuple[int, float, str, float]:
     return TRIG_TIME, float(t_s), str(name), float(value)
 
 
+#: parameters read once at boot (ArduPilot needs a reboot): a scheduled change is refused
+BOOT_ONLY_PARAMS: frozenset[str] = frozenset({"FRAME_CLASS", "FRAME_TYPE"})
+
+
 def build_schedule(
     params: Params,
     changes: Sequence[Any],
@@ -364,6 +369,9 @@ def build_schedule(
         kind, at, name, value = items[i]
         if not math.isfinite(at) or at < 0:
             raise ValueError(f"parameter change time must be a finite time >= 0 s, got {at}")
+        if name in BOOT_ONLY_PARAMS and value != current[name]:
+            raise ValueError(f"{name} cannot change in flight: ArduPilot reads it at boot "
+                             f"(the frame is built once); set it in the flight's parameters")
         current = current.updated({name: value})
         after = _configs(current)
         trigger = round(at * 1e6) if kind == TRIG_TIME else at

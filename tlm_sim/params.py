@@ -43,6 +43,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from tlm_sim.frames import FrameError, frame_for
 from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
@@ -506,8 +507,10 @@ _flag("FS_CRASH_CHECK", "crash check disarms (§3.6)")
 _flag("FS_VIBE_ENABLE", "vibration failsafe (§3.6)")
 _add([f"FLTMODE{_i}" for _i in range(1, 7)], "", 0, 28, "flight mode of switch slot (§2.1)", True,
      modelled=False)
-_add("FRAME_CLASS", "", 1, 1, "frame class; tlm models only 1 = quad (§1.2)", True)
-_add("FRAME_TYPE", "", 0, 0, "frame type; tlm models only 0 = plus (§1.2)", True)
+_add("FRAME_CLASS", "", 1, 3,
+     "frame class: 1 quad, 2 hexa, 3 octa (tlm_sim.frames; sitl-faults.md §6.3)", True)
+_add("FRAME_TYPE", "", 0, 1,
+     "frame type: 0 plus, 1 X (octa: plus only; tlm_sim.frames, sitl-faults.md §6.3)", True)
 _add("SCHED_LOOP_RATE", "Hz", 400, 400, "main loop rate (§4.1); tlm runs it at 400 Hz only",
      True)
 _add("GPS_HDOP_GOOD", "", 100, 900, "HDOP x 100 below which GPS is good enough to arm", True,
@@ -792,6 +795,10 @@ def _check_consistency(values: Mapping[str, float]) -> None:
             f"(tlm simulates 2 IMUs, bits 0 and 1): SITL's firmware then waits for a gyro sample "
             f"forever and the simulation freezes, so there is no flight to simulate; keep bit 0 "
             f"or bit 1 clear")
+    try:
+        frame_for(values["FRAME_CLASS"], values["FRAME_TYPE"])
+    except FrameError as exc:
+        raise ParamError(str(exc)) from None
     for lo, hi in _STRICTLY_LESS:
         if not values[lo] < values[hi]:
             raise ParamError(

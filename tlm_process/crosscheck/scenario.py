@@ -16,6 +16,7 @@ Faults are moved to tlm's time line by keeping their offset from arming.
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,49 @@ def _initial_params(parm: pd.DataFrame) -> dict[str, float]:
         if n in defaults and not np.isclose(defaults[n], v, rtol=1e-6, atol=1e-9):
             out[n] = float(v)
     return out
+
+
+def _frame_params(t: Mapping[str, pd.DataFrame], doc: Mapping[str, Any] | None,
+                  name: str) -> dict[str, float]:
+    """FRAME_CLASS / FRAME_TYPE of the flight: the log's PARM where it has them, else the frame
+    the SITL model name (sidecar ``sitl.model`` or ``frame``) or the firmware's ``Frame:``
+    MSG names. SITL flies its model's motors with the autopilot's mixer of FRAME_CLASS /
+    FRAME_TYPE; tlm flies one frame for both, so a log whose model and parameters name
+    different frames is refused (ScenarioError)."""
+    from tlm_sim.frames import FRAMES, FrameError, frame_for, frame_for_model
+
+    parm = t["PARM"]
+    logged = {n: float(parm[parm.Name == n].Value.iloc[0])
+              for n in ("FRAME_CLASS", "FRAME_TYPE") if (parm.Name == n).any()}
+    model = None
+    sitl = (doc or {}).get("sitl") or {}
+    label = sitl.get("model") or (doc or {}).get("frame")
+    if label:
+        try:
+            model = frame_for_model(str(label))
+        except FrameError as exc:
+            raise ScenarioError(f"{name}: {exc}") from None
+    else:
+        msg = t.get("MSG")
+        texts = [] if msg is None else [str(m) for m in msg.Message if str(m).startswith("Frame: ")]
+        labels = {f.label: f for f in FRAMES.values()}
+        if texts and texts[0][len("Frame: "):] in labels:
+            model = labels[texts[0][len("Frame: "):]]
+    if model is None:
+        return {}
+    if len(logged) == 2:
+        try:
+            autopilot = frame_for(logged["FRAME_CLASS"], logged["FRAME_TYPE"])
+        except FrameError:
+            return {}  # Params refuses it with its own message
+        if autopilot != model:
+            raise ScenarioError(
+                f"{name}: SITL flew model {model.name!r} with the autopilot's {autopilot.label} "
+                f"mixer (FRAME_CLASS {logged['FRAME_CLASS']:g}, FRAME_TYPE "
+                f"{logged['FRAME_TYPE']:g}); tlm flies one frame for both, so it cannot fly "
+                f"a mismatched mixer")
+        return {}
+    return {"FRAME_CLASS": float(model.frame_class), "FRAME_TYPE": float(model.frame_type)}
 
 
 def _faults_from_log(parm: pd.DataFrame) -> list[dict[str, Any]]:
@@ -302,7 +346,8 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         seed: tlm's seed (default: the sidecar's, else 0).
     Raises:
         ScenarioError: the log never armed, has no mission or no home, or sets a parameter to
-            a value tlm does not simulate (e.g. FRAME_TYPE 1 before the X frame is modelled).
+            a value tlm does not simulate (e.g. FRAME_CLASS 4), or its SITL model and its
+            FRAME_CLASS / FRAME_TYPE name different frames.
     """
     from tlm_sim import Mission
     from tlm_sim.flightlog import read_bin
@@ -318,9 +363,10 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
     doc = json.loads(side_path.read_text()) if side_path.is_file() else None
     from tlm_sim.params import ParamError
 
+    initial = _initial_params(t["PARM"])
+    initial.update(_frame_params(t, doc, bin_path.name))
     try:
-        params = Params.from_values(_initial_params(t["PARM"]),
-                                    source=f"{bin_path.name} (PARM)")
+        params = Params.from_values(initial, source=f"{bin_path.name} (PARM)")
     except ParamError as exc:
         raise ScenarioError(f"tlm cannot fly this log's parameters: {exc}") from None
     tlm_arm_s = float(params["TLM_ARM_TIME"])

@@ -12,6 +12,7 @@ import numpy as np
 
 from tlm_sim.control import layout as C
 from tlm_sim.dynamics.atmosphere import RHO0, air_density, air_density_gradient
+from tlm_sim.frames import frame_for
 from tlm_sim.params import Params, require_params
 
 _AXES = ("RLL", "PIT", "YAW")
@@ -91,7 +92,8 @@ def _navigation(g: np.ndarray, p: Params) -> None:
 
 
 def _motors(g: np.ndarray, p: Params) -> None:
-    """Thrust curve, spin and PWM range, voltage and air density compensation (MOT_*)."""
+    """Motor matrix of the frame, thrust curve, spin and PWM range, voltage and air density
+    compensation (MOT_*)."""
     g[C.G_MOT_EXPO] = p["MOT_THST_EXPO"]
     g[C.G_MOT_HOVER] = p["MOT_THST_HOVER"]
     g[C.G_MOT_SPIN_ARM] = p["MOT_SPIN_ARM"]
@@ -102,6 +104,11 @@ def _motors(g: np.ndarray, p: Params) -> None:
     g[C.G_MOT_BAT_MAX] = p["MOT_BAT_VOLT_MAX"]
     g[C.G_MOT_BAT_MIN] = p["MOT_BAT_VOLT_MIN"]
     g[C.G_MOT_YAW_HEADROOM] = p["MOT_YAW_HEADROOM"] / 1000.0
+    layout = frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"])
+    g[C.G_N_MOTORS] = layout.n_motors
+    for slot, factors in zip((C.G_MIX_ROLL, C.G_MIX_PITCH, C.G_MIX_YAW), layout.mixer_factors(),
+                             strict=True):
+        g[slot:slot + layout.n_motors] = factors
     g[C.G_HOVER_LEARN] = p["MOT_HOVER_LEARN"]
     g[C.G_BATT_SAG_HOVER] = p["TLM_BATT_SAG_HOV"]
     g[C.G_BATT_RES0] = p["TLM_BATT_SAG_HOV"] / p["TLM_REF_CURR"]

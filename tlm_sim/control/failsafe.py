@@ -44,6 +44,7 @@ import math
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.rotation import quat_to_euler
 
 # nav vector (filled by the flight loop from the primary EKF lane)
@@ -234,7 +235,7 @@ def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
     """
     if c[C.THRUST_BOOST] != 0.0:
         top = 0.0
-        for i in range(4):
+        for i in range(MAX_MOTORS):  # (motors beyond the frame's count stay at 0)
             top = max(top, c[C.MIX_THRUST + i])
         if top < THRUST_BOOST_OFF:
             c[C.THRUST_BOOST] = 0.0

@@ -5,6 +5,7 @@ Controller internals use SI units (m, m/s, m/s^2, rad, rad/s), earth frame NED, 
 configuration values are converted from ArduPilot's parameter units when the array is built.
 """
 
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.slots import Layout
 
 # ---------------------------------------------------------------- controller state c ----------
@@ -54,9 +55,10 @@ THR_OUT = _c.add("THR_OUT", 1, "", "throttle demand 0..1 to the mixer")
 THR_HOVER = _c.add("THR_HOVER", 1, "", "learned hover throttle (MOT_THST_HOVER)")
 THR_OUT_BOOSTED = _c.add("THR_OUT_BOOSTED", 1, "", "throttle after angle boost")
 # mixer outputs and limit flags
-MIX_THRUST = _c.add("MIX_THRUST", 4, "", "per-motor thrust fraction 0..1")
-MIX_ACT = _c.add("MIX_ACT", 4, "", "per-motor actuator 0..1")
-MIX_PWM = _c.add("MIX_PWM", 4, "us", "per-motor commanded PWM")
+MIX_THRUST = _c.add("MIX_THRUST", MAX_MOTORS, "",
+                    "per-motor thrust fraction 0..1 (motors 1..G_N_MOTORS; the rest 0)")
+MIX_ACT = _c.add("MIX_ACT", MAX_MOTORS, "", "per-motor actuator 0..1")
+MIX_PWM = _c.add("MIX_PWM", MAX_MOTORS, "us", "per-motor commanded PWM (SERVOn, RCOU Cn)")
 LIM_RP = _c.add("LIM_RP", 1, "", "roll/pitch saturated (1/0)")
 LIM_YAW = _c.add("LIM_YAW", 1, "", "yaw saturated (1/0)")
 LIM_THR_LO = _c.add("LIM_THR_LO", 1, "", "throttle at its lower limit (1/0)")
@@ -238,6 +240,11 @@ G_MOT_PWM_MAX = _g.add("G_MOT_PWM_MAX", 1, "us", "MOT_PWM_MAX")
 G_MOT_BAT_MAX = _g.add("G_MOT_BAT_MAX", 1, "V", "MOT_BAT_VOLT_MAX")
 G_MOT_BAT_MIN = _g.add("G_MOT_BAT_MIN", 1, "V", "MOT_BAT_VOLT_MIN")
 G_MOT_YAW_HEADROOM = _g.add("G_MOT_YAW_HEADROOM", 1, "", "fraction")
+G_N_MOTORS = _g.add("G_N_MOTORS", 1, "", "motors of the frame (FRAME_CLASS / FRAME_TYPE)")
+G_MIX_ROLL = _g.add("G_MIX_ROLL", MAX_MOTORS, "",
+                    "mixer roll factor per motor, largest magnitude 0.5 (tlm_sim.frames)")
+G_MIX_PITCH = _g.add("G_MIX_PITCH", MAX_MOTORS, "", "mixer pitch factor per motor")
+G_MIX_YAW = _g.add("G_MIX_YAW", MAX_MOTORS, "", "mixer yaw factor per motor (+0.5 CCW)")
 G_FS_THR_ENABLE = _g.add("G_FS_THR_ENABLE", 1, "", "FS_THR_ENABLE")
 G_RC_FS_TIMEOUT = _g.add("G_RC_FS_TIMEOUT", 1, "s", "RC_FS_TIMEOUT")
 G_ARM_TIME = _g.add("G_ARM_TIME", 1, "s", "simulated time at which the vehicle arms")

@@ -9,6 +9,7 @@ from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
 from tlm_sim.control.battery import resting_voltage
 from tlm_sim.ekf import layout as EK
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.sensors import layout as S
 
 RATE, ATT, RCOU, CTUN, PSC = L.RATE_COLS, L.ATT_COLS, L.RCOU_COLS, L.CTUN_COLS, L.PSCN_COLS
@@ -23,7 +24,7 @@ def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
     _log_att(bufs, counts, t_us, c, eo)
     r = L.new_row(bufs, counts, L.K_RCOU, t_us)
     if r >= 0:
-        for k in range(4):
+        for k in range(MAX_MOTORS):  # outputs beyond the frame's motors read 0, as in SITL
             bufs[L.K_RCOU][r, RCOU.C1 + k] = round(c[C.MIX_PWM + k])
     _log_ctun(bufs, counts, t_us, c, eo, s, pos)
     for ax in range(3):

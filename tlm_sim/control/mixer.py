@@ -1,4 +1,7 @@
-"""Quad "+" motor mixer with thrust linearisation (AP_MotorsMatrix structure, our implementation).
+"""Multicopter motor mixer with thrust linearisation (AP_MotorsMatrix structure, our
+implementation). The frame's motor matrix (roll, pitch and yaw factor per motor, largest
+magnitude 0.5) is configuration: G_N_MOTORS and G_MIX_ROLL/PITCH/YAW, from
+:mod:`tlm_sim.frames` by FRAME_CLASS / FRAME_TYPE.
 
 Roll/pitch/yaw demands (+-1 motor units) and throttle (0..1 thrust fraction) are compensated for
 battery voltage (1/lift_max, from the battery monitor's resting-voltage estimate) and air density
@@ -12,11 +15,6 @@ import math
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
-
-# plus frame mixer factors (motor 1..4): roll, pitch, yaw (ArduPilot normalisation to 0.5)
-ROLL_FAC = (-0.5, 0.5, 0.0, 0.0)
-PITCH_FAC = (0.0, 0.0, 0.5, -0.5)
-YAW_FAC = (0.5, 0.5, -0.5, -0.5)
 
 
 @tick_jit
@@ -69,8 +67,11 @@ def resting_voltage_estimate(c, g, v_batt):
     hover = c[C.THR_HOVER]
     if sag == 0.0 or hover <= 0.0:
         return v
-    t = 0.25 * (c[C.MIX_THRUST] + c[C.MIX_THRUST + 1] + c[C.MIX_THRUST + 2] + c[C.MIX_THRUST + 3])
-    return v + sag * t / hover
+    n = int(g[C.G_N_MOTORS])
+    t = 0.0
+    for i in range(n):
+        t += c[C.MIX_THRUST + i]
+    return v + sag * (t / n) / hover
 
 
 @tick_jit
@@ -88,11 +89,12 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     lim_yaw = 0.0
     lim_lo = 0.0
     lim_hi = 0.0
+    n = int(g[C.G_N_MOTORS])
     # roll/pitch first
     rp_hi = -1e9
     rp_lo = 1e9
-    for i in range(4):
-        v = roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]
+    for i in range(n):
+        v = roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]
         rp_hi = max(rp_hi, v)
         rp_lo = min(rp_lo, v)
     rp_scale = 1.0
@@ -103,11 +105,11 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     thr_best = 0.5 * (1.0 - (rp_hi + rp_lo) * rp_scale)
     thr_best = min(max(thr_best, 0.0), 1.0)
     yaw_allowed = 1.0
-    for i in range(4):
-        rp = (roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale
-        if YAW_FAC[i] != 0.0:
-            room_hi = (1.0 - (thr_best + rp)) / abs(YAW_FAC[i])
-            room_lo = (thr_best + rp) / abs(YAW_FAC[i])
+    for i in range(n):
+        rp = (roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
+        if g[C.G_MIX_YAW + i] != 0.0:
+            room_hi = (1.0 - (thr_best + rp)) / abs(g[C.G_MIX_YAW + i])
+            room_lo = (thr_best + rp) / abs(g[C.G_MIX_YAW + i])
             yaw_allowed = min(yaw_allowed, min(room_hi, room_lo))
     yaw_allowed = max(yaw_allowed, g[C.G_MOT_YAW_HEADROOM])
     if abs(yaw) > yaw_allowed:
@@ -115,8 +117,9 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
         lim_yaw = 1.0
     hi = -1e9
     lo = 1e9
-    for i in range(4):
-        v = (roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale + yaw * YAW_FAC[i]
+    for i in range(n):
+        v = ((roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
+             + yaw * g[C.G_MIX_YAW + i])
         hi = max(hi, v)
         lo = min(lo, v)
     scale = 1.0
@@ -138,8 +141,9 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
         lim_lo = 1.0
     if thr >= 1.0:
         lim_hi = 1.0
-    for i in range(4):
-        v = t + ((roll * ROLL_FAC[i] + pitch * PITCH_FAC[i]) * rp_scale + yaw * YAW_FAC[i]) * scale
+    for i in range(n):
+        v = t + ((roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
+                 + yaw * g[C.G_MIX_YAW + i]) * scale
         v = min(max(v, 0.0), 1.0)
         c[C.MIX_THRUST + i] = v
         a = thrust_to_actuator(g, v, ratio, lift)
@@ -166,7 +170,7 @@ def pwm_out(g, actuator):
 @tick_jit
 def output_idle(c, g, spin):
     """All motors at a fixed actuator value (0 = stopped, MOT_SPIN_ARM = ground idle)."""
-    for i in range(4):
+    for i in range(int(g[C.G_N_MOTORS])):
         c[C.MIX_THRUST + i] = 0.0
         c[C.MIX_ACT + i] = spin
         c[C.MIX_PWM + i] = pwm_out(g, spin)

@@ -35,12 +35,12 @@ from tlm_sim.dynamics.frame import (
     F_IYY,
     F_IZZ,
     F_MASS,
+    F_N_MOTORS,
     F_ROT_DAMP,
     F_SHOVE,
     F_SHOVE_TIME,
     F_TWIST,
     F_TWIST_TIME,
-    N_MOTORS,
 )
 from tlm_sim.dynamics.kinematics import step_translation
 from tlm_sim.dynamics.motors import motor_forces
@@ -139,7 +139,7 @@ def set_airborne(x: np.ndarray, frame: np.ndarray, height_m: float, command: flo
     x[X.PD] = -frame[F_FRAME_HEIGHT] - height_m
     x[X.ON_GROUND] = 0.0
     x[X.TIME_LAST_AIRBORNE] = -1.0e9
-    for i in range(N_MOTORS):
+    for i in range(int(frame[F_N_MOTORS])):
         x[X.M1 + i] = command
     x[X.RHO_ANCHOR] = 0.0
     update_air_density(x, frame)

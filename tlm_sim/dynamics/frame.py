@@ -9,7 +9,10 @@ the motor table and the environment parameters the physics reads (wind, battery,
 altitude). Entries marked *live* may be rewritten by the flight loop while flying (a fault
 schedule changing ``SIM_WIND_*`` or ``SIM_BATT_VOLTAGE``); the rest are constants.
 
-Motor table of the plus frame (ArduPilot numbering 1..4 -> array index 0..3), body FRD:
+The motor table comes from :mod:`tlm_sim.frames` (the frame of ``FRAME_CLASS`` /
+``FRAME_TYPE``): ``F_N_MOTORS`` motors, ArduPilot numbering 1..n -> array index 0..n-1, each
+with its arm position ``TLM_DIAG (cos theta, sin theta)`` [m, body FRD] and yaw factor (+1
+counter-clockwise propeller, -1 clockwise). The "+" quad (FRAME_TYPE 0):
 
 ===== ======== ======================= ===== ==========
 motor servo    position (unit of diag) spin  yaw factor
@@ -19,6 +22,9 @@ motor servo    position (unit of diag) spin  yaw factor
 3     SERVO3   (+1, 0) front arm       CW    -1
 4     SERVO4   (-1, 0) back arm        CW    -1
 ===== ======== ======================= ===== ==========
+
+The X quad (FRAME_TYPE 1) has motor 1 front-right (45 deg, CCW), 2 back-left (-135 deg, CCW),
+3 front-left (-45 deg, CW), 4 back-right (135 deg, CW).
 """
 
 from __future__ import annotations
@@ -29,17 +35,8 @@ import numpy as np
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
+from tlm_sim.frames import MAX_MOTORS, FrameLayout, frame_for
 from tlm_sim.params import Params, require_params
-
-#: number of motors of the plus frame
-N_MOTORS: int = 4
-#: unit arm direction (x forward, y right) of motors 1..4; the arm length is TLM_DIAG
-MOTOR_DIR_X: tuple[float, ...] = (0.0, 0.0, 1.0, -1.0)
-MOTOR_DIR_Y: tuple[float, ...] = (1.0, -1.0, 0.0, 0.0)
-#: arm angle from the nose, clockwise seen from above [deg] (documentation; MOTOR_DIR_* is used)
-MOTOR_ANGLE_DEG: tuple[float, ...] = (90.0, -90.0, 0.0, 180.0)
-#: yaw factor: +1 counter-clockwise propeller, -1 clockwise
-MOTOR_YAW_FACTOR: tuple[float, ...] = (1.0, 1.0, -1.0, -1.0)
 
 # ---- model values (SIM_Frame.h struct Model) --------------------------------------------
 F_MASS = 0  # vehicle mass [kg]
@@ -70,31 +67,32 @@ F_IXX, F_IYY, F_IZZ = 25, 26, 27  # principal moments of inertia [kg m^2]
 F_ROT_DAMP = 28  # rotational air damping rate c_w [1/s]
 F_PWM_LO, F_PWM_HI = 29, 30  # PWM of command 0 and command 1 [us]
 F_HOVER_CMD = 31  # motor command a_h that gives hover thrust at rho_ref and full voltage
-# ---- motor table (positions in metres, body FRD) ----------------------------------------
-F_MOT_X = 32  # 4 entries: arm x [m]
-F_MOT_Y = 36  # 4 entries: arm y [m]
-F_MOT_YAW = 40  # 4 entries: yaw factor
 # ---- environment and battery (SIM_*); live entries may change in flight ------------------
-F_HOME_ALT = 44  # SIM_OPOS_ALT, home ground altitude [m AMSL]
-F_BATT_VOLT = 45  # SIM_BATT_VOLTAGE [V] (live: a change re-initialises the battery)
-F_BATT_CAP_AH = 46  # battery capacity [Ah], 0 = infinite
-F_BATT_RES = 47  # battery internal resistance [ohm]
-F_WIND_SPD = 48  # SIM_WIND_SPD [m/s] (live)
-F_WIND_DIR = 49  # SIM_WIND_DIR, direction the wind comes FROM [deg true] (live)
-F_WIND_TURB = 50  # SIM_WIND_TURB [m/s] (live)
-F_WIND_TC = 51  # SIM_WIND_TC [s] (live)
-F_WIND_DIR_Z = 52  # SIM_WIND_DIR_Z, vertical wind angle [deg], 90 = updraft (live)
-F_WIND_T = 53  # SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)
-F_WIND_T_ALT = 54  # SIM_WIND_T_ALT [m] (live)
-F_WIND_T_COEF = 55  # SIM_WIND_T_COEF [1/s] (live)
-F_REF_ALT = 56  # refAlt [m AMSL]
+F_HOME_ALT = 32  # SIM_OPOS_ALT, home ground altitude [m AMSL]
+F_BATT_VOLT = 33  # SIM_BATT_VOLTAGE [V] (live: a change re-initialises the battery)
+F_BATT_CAP_AH = 34  # battery capacity [Ah], 0 = infinite
+F_BATT_RES = 35  # battery internal resistance [ohm]
+F_WIND_SPD = 36  # SIM_WIND_SPD [m/s] (live)
+F_WIND_DIR = 37  # SIM_WIND_DIR, direction the wind comes FROM [deg true] (live)
+F_WIND_TURB = 38  # SIM_WIND_TURB [m/s] (live)
+F_WIND_TC = 39  # SIM_WIND_TC [s] (live)
+F_WIND_DIR_Z = 40  # SIM_WIND_DIR_Z, vertical wind angle [deg], 90 = updraft (live)
+F_WIND_T = 41  # SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)
+F_WIND_T_ALT = 42  # SIM_WIND_T_ALT [m] (live)
+F_WIND_T_COEF = 43  # SIM_WIND_T_COEF [1/s] (live)
+F_REF_ALT = 44  # refAlt [m AMSL]
 # ---- airframe disturbances (SIM_SHOVE_*, SIM_TWIST_*, sitl-faults.md §6.2; live) ----------
-F_SHOVE = 57  # 3 entries: SIM_SHOVE_X/Y/Z, extra body specific force [m/s^2]
-F_SHOVE_TIME = 60  # SIM_SHOVE_TIME [ms]; the physics sets it back to 0 once elapsed
-F_TWIST = 61  # 3 entries: SIM_TWIST_X/Y/Z, extra body angular acceleration [rad/s^2]
-F_TWIST_TIME = 64  # SIM_TWIST_TIME [ms]; the physics sets it back to 0 once elapsed
+F_SHOVE = 45  # 3 entries: SIM_SHOVE_X/Y/Z, extra body specific force [m/s^2]
+F_SHOVE_TIME = 48  # SIM_SHOVE_TIME [ms]; the physics sets it back to 0 once elapsed
+F_TWIST = 49  # 3 entries: SIM_TWIST_X/Y/Z, extra body angular acceleration [rad/s^2]
+F_TWIST_TIME = 52  # SIM_TWIST_TIME [ms]; the physics sets it back to 0 once elapsed
+# ---- motor table (tlm_sim.frames; positions in metres, body FRD) --------------------------
+F_N_MOTORS = 53  # number of motors n (FRAME_CLASS / FRAME_TYPE)
+F_MOT_X = 54  # MAX_MOTORS entries: arm x [m] (0 beyond n)
+F_MOT_Y = F_MOT_X + MAX_MOTORS  # MAX_MOTORS entries: arm y [m]
+F_MOT_YAW = F_MOT_Y + MAX_MOTORS  # MAX_MOTORS entries: yaw factor (+1 CCW, -1 CW)
 
-N_FRAME = 65
+N_FRAME = F_MOT_YAW + MAX_MOTORS
 
 def _hover_command(hover_thr: float, expo: float) -> float:
     """Command ``a`` in [0, 1] solving ``(1 - e) a + e a^2 = hover_thr``."""
@@ -119,6 +117,8 @@ def build_frame(p: Params) -> np.ndarray:
         return float(p[name])
 
     f = np.zeros(N_FRAME, dtype=np.float64)
+    layout = frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"])
+    n_motors = layout.n_motors
     mass = get("TLM_MASS")
     diag = get("TLM_DIAG")
     hover_thr = get("TLM_HOVER_THR")
@@ -167,8 +167,8 @@ def build_frame(p: Params) -> np.ndarray:
     a_eff = t_hover / (0.5 * rho_ref * v_h * v_h)
     f[F_HOVER_POWER] = p_hover
     f[F_HOVER_VOUT] = v_h
-    f[F_AREA_EFF] = a_eff / N_MOTORS
-    f[F_AREA_TRUE] = f[F_DISC_AREA] / N_MOTORS
+    f[F_AREA_EFF] = a_eff / n_motors
+    f[F_AREA_TRUE] = f[F_DISC_AREA] / n_motors
     f[F_VEL_MAX] = v_h / math.sqrt(hover_thr)
     f[F_POWER_FACTOR] = p_hover / t_hover
 
@@ -186,13 +186,18 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_PWM_HI] = f[F_PWM_MIN] + f[F_SPIN_MAX] * span
     f[F_HOVER_CMD] = _hover_command(hover_thr, expo)
 
-    for i in range(N_MOTORS):
-        f[F_MOT_X + i] = diag * MOTOR_DIR_X[i]
-        f[F_MOT_Y + i] = diag * MOTOR_DIR_Y[i]
-        f[F_MOT_YAW + i] = MOTOR_YAW_FACTOR[i]
-
+    _motor_table(f, layout, diag)
     _environment(f, p)
     return f
+
+
+def _motor_table(f: np.ndarray, layout: FrameLayout, diag: float) -> None:
+    """The motor slots of frame array ``f``: count, arm positions [m, body FRD], yaw factors."""
+    f[F_N_MOTORS] = layout.n_motors
+    for i, ((ux, uy), m) in enumerate(zip(layout.arm_unit(), layout.motors, strict=True)):
+        f[F_MOT_X + i] = diag * ux
+        f[F_MOT_Y + i] = diag * uy
+        f[F_MOT_YAW + i] = m.yaw_factor
 
 
 def _environment(f: np.ndarray, p: Params) -> None:

@@ -6,6 +6,7 @@ Frames: earth NED (x north, y east, z down) relative to home at ground level; bo
 convention, scalar first): ``v_ned = q * v_body * q^-1``.
 """
 
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.slots import Layout
 
 STATE = Layout("x", "truth state of the vehicle and its environment")
@@ -22,9 +23,12 @@ FX, FY, FZ = _x.vector(("FX", "FY", "FZ"), "m/s/s",
                        "at hover)")
 AN, AE, AD = _x.vector(("AN", "AE", "AD"), "m/s/s",
                        "kinematic acceleration NED (gravity included; 0 at hover)")
-M1, M2, M3, M4 = _x.vector(("M1", "M2", "M3", "M4"), "",
-                           "motor commands after the slew limit, 0..1 (ArduPilot's numbering)")
-T1, T2, T3, T4 = _x.vector(("T1", "T2", "T3", "T4"), "N", "per-motor thrust")
+M1, M2, M3, M4, M5, M6, M7, M8 = _x.vector(
+    tuple(f"M{k + 1}" for k in range(MAX_MOTORS)), "",
+    "motor commands after the slew limit, 0..1 (ArduPilot's numbering; motors beyond the "
+    "frame's count stay 0)")
+T1, T2, T3, T4, T5, T6, T7, T8 = _x.vector(tuple(f"T{k + 1}" for k in range(MAX_MOTORS)), "N",
+                                           "per-motor thrust")
 BATT_V = _x.add("BATT_V", 1, "V", "battery terminal voltage")
 BATT_I = _x.add("BATT_I", 1, "A", "battery current")
 BATT_AH = _x.add("BATT_AH", 1, "Ah", "charge consumed")

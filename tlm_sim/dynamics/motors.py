@@ -26,13 +26,13 @@ from tlm_sim.dynamics.frame import (
     F_MOT_X,
     F_MOT_Y,
     F_MOT_YAW,
+    F_N_MOTORS,
     F_POWER_FACTOR,
     F_PROFILE,
     F_PWM_HI,
     F_PWM_LO,
     F_SLEW_MAX,
     F_VEL_MAX,
-    N_MOTORS,
 )
 
 #: paper-era rotor torque per unit command and voltage scale [N m] (radians(40))
@@ -57,8 +57,8 @@ def motor_forces(
     """Advance the motor commands and return the frame's total force and torque.
 
     Reads the body rates ``W*``, body airspeed ``VAIR_*``, air density ``RHO`` and battery
-    voltage ``BATT_V`` from ``x``; ``pwm[0..3]`` are motors 1..4 [us]. Writes the slewed
-    commands ``M1..M4`` and the thrusts ``T1..T4`` [N] into ``x``.
+    voltage ``BATT_V`` from ``x``; ``pwm[0..n-1]`` are motors 1..n [us] (n = ``F_N_MOTORS``).
+    Writes the slewed commands ``M1..Mn`` and the thrusts ``T1..Tn`` [N] into ``x``.
 
     Returns ``(fx, fy, fz, tx, ty, tz, current)``: body force [N] (thrust, momentum drag and
     parasitic drag, gravity excluded), body torque [N m] and total motor current [A].
@@ -89,7 +89,7 @@ def motor_forces(
     pwm_lo = frame[F_PWM_LO]
     per_us = 1.0 / (frame[F_PWM_HI] - pwm_lo)
     step = frame[F_SLEW_MAX] * dt
-    for i in range(N_MOTORS):
+    for i in range(int(frame[F_N_MOTORS])):
         a = slew_command(pwm[i], x[X.M1 + i], pwm_lo, per_us, step)
         x[X.M1 + i] = a
         if dead:

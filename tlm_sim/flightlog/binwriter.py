@@ -36,8 +36,8 @@ from .schema import FORMAT_CHARS, MULTS, SCHEMAS, UNITS, MessageSchema
 from .texts import event_texts
 
 __all__ = [
-    "FIRMWARE_STRING", "FRAME_STRING", "encode_bin", "fault_messages", "merge_order",
-    "message_stream", "write_bin",
+    "FIRMWARE_STRING", "FRAME_STRING", "encode_bin", "fault_messages", "frame_string",
+    "merge_order", "message_stream", "write_bin",
 ]
 
 HEAD1, HEAD2 = 0xA3, 0x95
@@ -45,6 +45,7 @@ FMT_TYPE = 128
 #: Firmware string of the VER/MSG lines: names ArduCopter (pymavlink's vehicle detection) and
 #: the reference logs' firmware, marked as tlm.
 FIRMWARE_STRING = "ArduCopter V4.7.0-dev (tlm)"
+#: The firmware's frame line of the default frame (others: :func:`frame_string`).
 FRAME_STRING = "Frame: QUAD/PLUS"
 #: Written fresh on every file (the tables of these in a FlightLog are ignored).
 _SELF_DESCRIPTION = ("FMT", "UNIT", "MULT", "FMTU")
@@ -136,12 +137,24 @@ def fault_messages(faults: Sequence[Mapping[str, Any]]) -> list[tuple[int, str]]
     return out
 
 
+def frame_string(params: Mapping[str, float] | None) -> str:
+    """ArduCopter's boot line naming the frame of FRAME_CLASS / FRAME_TYPE (``Frame: QUAD/X``);
+    the default quad "+" when the parameters do not name one of tlm's frames."""
+    from tlm_sim.frames import FrameError, frame_for
+
+    p = params or {}
+    try:
+        return "Frame: " + frame_for(p.get("FRAME_CLASS", 1.0), p.get("FRAME_TYPE", 0.0)).label
+    except FrameError:
+        return FRAME_STRING
+
+
 def _msg_frame(log: Any, t0_us: int) -> pd.DataFrame:
     """MSG rows: firmware, frame and tlm flight identity at ``t0_us``, then the fault lines
     and the firmware's text for the flight's events (:func:`tlm_sim.flightlog.texts.event_texts`)
     in time order."""
     meta = log.meta or {}
-    lines = [(t0_us, FIRMWARE_STRING), (t0_us, FRAME_STRING)]
+    lines = [(t0_us, FIRMWARE_STRING), (t0_us, frame_string(log.params))]
     ident = [f"{k} {meta[k]}" for k in ("mission", "seed", "profile") if meta.get(k) is not None]
     if ident:
         lines.append((t0_us, "tlm: " + ", ".join(ident)))

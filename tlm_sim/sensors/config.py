@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from tlm_sim.frames import frame_for
 from tlm_sim.params import Params, earth_field, require_params
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.imu import lpf2p_coefficients
@@ -19,8 +20,6 @@ IMU_RATES_HZ = ((1000.0, 1000.0), (760.0, 800.0))
 # draws the base noise once per published sample (its amplitude fitted, TLM_INSn_NSE_SC) and
 # sub-samples only the vibration sinusoids, whose phases advance per sub-sample.
 IMU_SUBSAMPLES = (8.0, 1.0, 4.0, 1.0)
-# the motors of tlm's quad frame (outputs 1-4): SITL's motor mask, ORed with SIM_VIB_MOT_MASK
-FRAME_MOTOR_MASK = 0b1111
 
 
 def _imu_config(c: np.ndarray, p: Params) -> None:
@@ -66,7 +65,9 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
                             or any(c[S.C_VIB_FREQ:S.C_VIB_FREQ + 3] != 0.0)) else 0.0
     c[S.C_VIB_MOT_MULT] = p["SIM_VIB_MOT_MULT"]
     c[S.C_VIB_MOT_HMNC] = p["SIM_VIB_MOT_HMNC"]
-    c[S.C_VIB_MOT_MASK] = float(FRAME_MOTOR_MASK | int(p["SIM_VIB_MOT_MASK"]))
+    # SITL's mask of the frame's motors (outputs 1..n), ORed with SIM_VIB_MOT_MASK
+    n_motors = frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"]).n_motors
+    c[S.C_VIB_MOT_MASK] = float((1 << n_motors) - 1 | int(p["SIM_VIB_MOT_MASK"]))
     c[S.C_IMU_NSUB:S.C_IMU_NSUB + 4] = IMU_SUBSAMPLES
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.dynamics import layout as X
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
@@ -83,7 +84,7 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
     """Take every IMU sample due at physics time t_us [us] from truth state x.
 
     throttle: mean motor output 0..1 (SITL's noise scaling; "motors on" above SIM_INS_THR_MIN).
-    pwm[0:4]: the motors' PWM [us] (what they run at after an engine fault): their commands
+    pwm[0:8]: the outputs' PWM [us] (what they run at after an engine fault): their commands
     (PWM - 1000) / 1000 set the motor vibration frequencies.
     rng: the sensor noise streams (rows S.RNG_*, tlm_sim.rng.new_streams); IMU i draws its gyro
     noise from row RNG_GYRO + i and its accelerometer noise from row RNG_ACC + i only.
@@ -269,8 +270,8 @@ def _motor_vibration(s, ph, cfg, pwm, amp, nsub, period_us, rng):
     w = TWO_PI * f_max * period_us * 1e-6 / nsub  # phase step per unit command
     total = 0.0
     for _ in range(n):
-        for m in range(4):  # tlm's quad: motors 1-4 (higher mask bits name no motor)
-            if (mask >> m) & 1 == 0:
+        for m in range(MAX_MOTORS):  # outputs 1..8; one without a PWM (0) has no motor
+            if (mask >> m) & 1 == 0 or pwm[m] <= 0.0:
                 continue
             cmd = min(max((pwm[m] - 1000.0) * 1e-3, 0.0), 1.0)
             p = s[ph + m] + w * cmd * (1.0 + VIB_FREQ_VARIATION * uniform_pm1(rng))

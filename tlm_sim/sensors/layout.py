@@ -8,6 +8,7 @@ receiver state. Units: SI (m, m/s, m/s^2, rad, rad/s),
 body frame FRD, earth frame NED.
 """
 
+from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.slots import Layout
 
 N_IMU = 2
@@ -42,9 +43,9 @@ I_T_TAKE_US = _i.add("I_T_TAKE_US", 1, "us",
                      "physics time at which the EKF last took the deltas (-1: never)")
 I_GYR_OK = _i.add("I_GYR_OK", 1, "",
                   "gyro health (IMU.GH): 1 when it delivered a sample in the last main-loop tick")
-I_ACC_PHASE = _i.add("I_ACC_PHASE", 4, "rad",
+I_ACC_PHASE = _i.add("I_ACC_PHASE", MAX_MOTORS, "rad",
                      "motor vibration phase per motor, accelerometer (SITL's accel_motor_phase)")
-I_GYR_PHASE = _i.add("I_GYR_PHASE", 4, "rad",
+I_GYR_PHASE = _i.add("I_GYR_PHASE", MAX_MOTORS, "rad",
                      "motor vibration phase per motor, gyro (SITL's gyro_motor_phase)")
 IMU_STRIDE = IMU.close()
 
