@@ -13,6 +13,7 @@ fault windows within 5 m, each fault-signature metric within 35 % of SITL's
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -38,14 +39,20 @@ def signature_rows(tlm: dict[str, float], sitl: dict[str, float],
 
 
 def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
-               seed: int | None = None) -> dict[str, Any]:
-    """Cross-check one SITL log: returns the metrics dict (with ``scenario`` information)."""
+               seed: int | None = None,
+               params: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """Cross-check one SITL log: returns the metrics dict (with ``scenario`` information).
+
+    ``params``: ArduPilot parameters tlm flies on top of the log's (e.g. ``{"FRAME_TYPE": 1}``
+    or a wind): the SITL flight's mission and faults on another frame or in other weather,
+    compared with the SITL flight as it was (``scenario["overrides"]`` records them)."""
     from tlm_process.crosscheck.metrics import crosscheck_metrics
     from tlm_process.crosscheck.scenario import reconstruct
     from tlm_sim import fly
 
     sc = reconstruct(bin_path, sidecar, seed)
-    log = fly(sc.mission, faults=sc.fly_faults, params=sc.params, seed=sc.seed)
+    flown = sc.params.updated(dict(params)) if params else sc.params
+    log = fly(sc.mission, faults=sc.fly_faults, params=flown, seed=sc.seed)
     route = sc.mission.waypoints[:, :2]
     r = crosscheck_metrics(log.tables, sc.tables, sc.mission.home,
                            sc.tlm_fault_records(log.faults), sc.faults, route)
@@ -61,6 +68,7 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
         "flown_as": "schedule" if sc.schedule is not None else (
             "parameter changes" if sc.changes else "no faults"),
         "notes": list(sc.notes),
+        "overrides": {k: float(v) for k, v in (params or {}).items()},
     }
     return r
 
