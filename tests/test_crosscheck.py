@@ -195,7 +195,7 @@ def test_wind_cruise_attitude_agrees_with_sitl():
     the return included): roll std 3.7 deg against 2.5 calm (normal_s11), pitch mean -8.4 deg
     with std 6.6 against -6.4 / 2.5. tlm flying the same wind (issue 20's targets): roll and
     pitch standard deviations within 30 %, pitch mean within 2 deg (measured: 3.72 / 6.59 /
-    -8.43 deg), and calm air as calm as SITL's."""
+    -8.42 deg against SITL's 3.74 / 6.61 / -8.39), and calm air as calm as SITL's."""
     wind = crosscheck(reference_path("normal_wind_s41.bin"))
     calm = crosscheck(reference_path("normal_s11.bin"))
     for r in (wind, calm):

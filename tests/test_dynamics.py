@@ -25,11 +25,13 @@ from tlm_sim.dynamics import (
     resting_voltage,
     run_ticks,
     set_airborne,
+    settle_wind,
     update_wind,
     yaw_of,
 )
 from tlm_sim.dynamics import frame as F
 from tlm_sim.dynamics import layout as X
+from tlm_sim.dynamics.wind import lowpass_alpha
 from tlm_sim.params import Params
 from tlm_sim.rng import new_rng
 
@@ -487,9 +489,16 @@ def test_battery_voltage_parameter_change_and_dead_battery(frame: np.ndarray) ->
 
 
 # --------------------------------------------------------------------------- wind
-def wind_state(f: np.ndarray, height: float, settled_speed: float) -> np.ndarray:
+#: SITL's slew-filter time constant at the default SIM_WIND_TC = 5 s: cut-off 1/TC Hz [s]
+WIND_RC_TC5 = 5.0 / (2.0 * math.pi)
+
+
+def wind_state(f: np.ndarray, height: float, settled: bool = True) -> np.ndarray:
+    """A vehicle ``height`` [m] above ground, its wind filters settled at the parameters (or,
+    ``settled=False``, as at boot: 0 m/s, 0 deg)."""
     x = airborne(f, height, 0.0)
-    x[X.WIND_SPD_F] = settled_speed
+    if settled:
+        settle_wind(x, f)
     return x
 
 
@@ -502,44 +511,158 @@ def wind_state(f: np.ndarray, height: float, settled_speed: float) -> np.ndarray
         (0.0, 0.0, 0.0),
         (1.0, 15.0, 10.0),  # no profile
         (2.0, 160.0, 11.0),  # linear: 10 + (160 - 60) * 0.01
-        (2.0, 30.0, 9.7),
+        (2.0, 30.0, 9.7),  # the linear law reduces the wind below T_ALT
+        (2.0, -1000.0, 0.0),  # ... and never below 0
     ],
 )
 def test_wind_height_profile(kind: float, height: float, expected: float) -> None:
     f = build_frame(Params({"SIM_WIND_SPD": 10.0, "SIM_WIND_T": kind}))
-    x = wind_state(f, height, 10.0)
-    update_wind(x, f, DT, 10.0, RNG)
+    x = wind_state(f, height)
+    update_wind(x, f, 10.0, RNG)
     # from the south (180 deg): the air moves north
     assert x[X.WIND_N] == pytest.approx(expected, abs=1e-9)
     assert abs(x[X.WIND_E]) < 1e-9 and x[X.WIND_D] == 0.0
 
 
-def test_wind_direction_delay_and_filter() -> None:
-    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0}))
-    x = wind_state(f, 100.0, 8.0)
-    update_wind(x, f, DT, 4.9, RNG)  # no wind during the first 5 s
+def test_wind_profile_height_is_height_above_ground() -> None:
+    """SITL's height_agl: 0 on the pad (PD = -frame height), so the square-root law gives no
+    mean wind on the ground; 15 m above the pad a quarter of T_ALT."""
+    f = build_frame(Params({"SIM_WIND_SPD": 10.0}))
+    x = new_state(f)
+    settle_wind(x, f)
+    update_wind(x, f, 10.0, RNG)
     assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
-    update_wind(x, f, DT, 5.1, RNG)  # from the east: the air moves west
+    x[X.PD] = -f[F.F_FRAME_HEIGHT] - 15.0
+    update_wind(x, f, 10.0 + 2 * DT, RNG)
+    assert x[X.WIND_N] == pytest.approx(5.0)
+
+
+def test_mean_wind_starts_5_s_after_boot() -> None:
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0}))
+    x = wind_state(f, 100.0)
+    update_wind(x, f, 4.9, RNG)  # no mean wind during the first 5 s, filters frozen
+    assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
+    assert x[X.WIND_SLEW_T] == 0.0
+    update_wind(x, f, 5.0, RNG)
+    assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
+    update_wind(x, f, 5.0 + DT, RNG)  # from the east: the air moves west
     assert x[X.WIND_E] == pytest.approx(-8.0)
     assert abs(x[X.WIND_N]) < 1e-9
-    # first-order ramp from zero with SIM_WIND_TC = 5 s
-    x = wind_state(f, 100.0, 0.0)
-    t = 5.0
-    for _ in range(6000):
-        t += DT
-        update_wind(x, f, DT, t, RNG)
-    assert -x[X.WIND_E] == pytest.approx(8.0 * (1.0 - math.exp(-1.0)), rel=0.01)
     # vertical direction 90 deg: a pure updraft (NED down negative)
     g = build_frame(Params({"SIM_WIND_SPD": 3.0, "SIM_WIND_DIR_Z": 90.0, "SIM_WIND_T": 1.0}))
-    x = wind_state(g, 100.0, 3.0)
-    update_wind(x, g, DT, 10.0, RNG)
+    x = wind_state(g, 100.0)
+    update_wind(x, g, 10.0, RNG)
     assert x[X.WIND_D] == pytest.approx(-3.0)
+    assert abs(x[X.WIND_N]) < 1e-9 and abs(x[X.WIND_E]) < 1e-9
+
+
+def test_lowpass_alpha_is_ardupilots() -> None:
+    assert lowpass_alpha(0.01, 1.0) == pytest.approx(0.01 / (0.01 + 1.0 / (2.0 * math.pi)))
+    assert lowpass_alpha(0.01, 0.0) == 1.0  # no cut-off: no filtering
+    assert lowpass_alpha(0.0, 1.0) == 0.0
+
+
+def slew_run(f: np.ndarray, duration_s: float, t0: float = 6.0) -> tuple[np.ndarray, float]:
+    """Physics steps of the wind from ``t0`` for ``duration_s``, filters starting at zero with
+    their last update at ``t0`` (no start-up jump); returns the state and the end time."""
+    x = wind_state(f, 100.0, settled=False)
+    x[X.WIND_SLEW_T] = t0
+    t = t0
+    for _ in range(round(duration_s / DT)):
+        t += DT
+        update_wind(x, f, t, RNG)
+    return x, t
+
+
+@pytest.mark.parametrize("tc", [5.0, 20.0])
+def test_wind_slew_time_constant_is_tc_over_2pi(tc: float) -> None:
+    """SITL's slew filter has cut-off 1/TC Hz: after TC/(2 pi) (0.80 s at TC = 5 s) the speed
+    has covered 1 - 1/e of a step, not after TC."""
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0,
+                            "SIM_WIND_TC": tc}))
+    rc = tc / (2.0 * math.pi)
+    x, _ = slew_run(f, rc)
+    assert x[X.WIND_SPD_F] == pytest.approx(8.0 * (1.0 - math.exp(-1.0)), rel=0.005)
+    x, _ = slew_run(f, 5.0 * rc)
+    assert x[X.WIND_SPD_F] == pytest.approx(8.0 * (1.0 - math.exp(-5.0)), rel=0.001)
+
+
+def test_wind_slew_advances_every_second_physics_step() -> None:
+    """The filters advance only when more than 1 ms has passed since their last update: every
+    second 833 us step, by the filter gain of 1666 us."""
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_T": 1.0}))
+    x = wind_state(f, 100.0, settled=False)
+    t0 = 6.0
+    x[X.WIND_SLEW_T] = t0
+    a = lowpass_alpha(2 * DT, 1.0 / 5.0)
+    expected = 0.0
+    for k in range(1, 11):
+        update_wind(x, f, t0 + k * DT, RNG)
+        if k % 2 == 0:
+            expected += (8.0 - expected) * a
+            assert x[X.WIND_SLEW_T] == t0 + k * DT
+        assert x[X.WIND_SPD_F] == pytest.approx(expected, rel=1e-9, abs=0.0), k
+
+
+@pytest.mark.parametrize("tc", [0.0, 0.05, 0.1])
+def test_wind_tc_is_floored_at_0_1_s(tc: float) -> None:
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_T": 1.0, "SIM_WIND_TC": tc}))
+    x, _ = slew_run(f, 2 * DT)
+    assert x[X.WIND_SPD_F] == pytest.approx(8.0 * lowpass_alpha(2 * DT, 10.0), rel=1e-9)
+
+
+def test_wind_filters_start_at_zero_and_jump_after_the_delay() -> None:
+    """At boot the filters are at 0 m/s and 0 deg with their last update at t = 0; the first
+    update after the 5 s delay spans those 5 s (86 % of the way at TC = 5 s)."""
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_DIR": 90.0, "SIM_WIND_T": 1.0}))
+    x = new_state(f)
+    assert (x[X.WIND_SPD_F], x[X.WIND_DIR_F], x[X.WIND_DIRZ_F], x[X.WIND_SLEW_T]) == (
+        0.0, 0.0, 0.0, 0.0)
+    set_airborne(x, f, 100.0, 0.0)
+    t = 5.0 + DT
+    update_wind(x, f, t, RNG)
+    a = lowpass_alpha(t, 1.0 / 5.0)
+    assert a == pytest.approx(0.8627, abs=1e-4)
+    assert x[X.WIND_SPD_F] == pytest.approx(8.0 * a)
+    assert x[X.WIND_DIR_F] == pytest.approx(90.0 * a)
+
+
+def test_wind_direction_slews_from_0_on_the_wrapped_error() -> None:
+    """SITL's direction filter starts at 0 deg: towards the default 180 deg (a wrapped error of
+    +180, ArduPilot's wrap_180 keeps +180) it swings through east; it works on the error
+    wrapped into (-180, 180] and keeps the result there."""
+    f = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_T": 1.0}))
+    x, t = slew_run(f, WIND_RC_TC5)
+    d = x[X.WIND_DIR_F]
+    assert d == pytest.approx(180.0 * (1.0 - math.exp(-1.0)), rel=0.005)
+    # the air, coming from ~114 deg (ESE), moves towards the west-north-west
+    assert x[X.WIND_N] == pytest.approx(-x[X.WIND_SPD_F] * math.cos(math.radians(d)))
+    assert x[X.WIND_E] == pytest.approx(-x[X.WIND_SPD_F] * math.sin(math.radians(d)))
+    assert x[X.WIND_E] < 0.0 < x[X.WIND_N]
+    for _ in range(round(14.0 * WIND_RC_TC5 / DT)):
+        t += DT
+        update_wind(x, f, t, RNG)
+        assert -180.0 < x[X.WIND_DIR_F] <= 180.0
+    assert x[X.WIND_DIR_F] == pytest.approx(180.0, abs=1e-3)
+    # from 170 deg towards -170 deg: the short way, through 180 into (-180, 180]
+    g = build_frame(Params({"SIM_WIND_SPD": 8.0, "SIM_WIND_T": 1.0, "SIM_WIND_DIR": -170.0}))
+    x = wind_state(g, 100.0, settled=False)
+    x[X.WIND_DIR_F] = 170.0
+    x[X.WIND_SLEW_T] = 6.0
+    update_wind(x, g, 6.0 + 2 * DT, RNG)
+    a = lowpass_alpha(2 * DT, 0.2)
+    assert x[X.WIND_DIR_F] == pytest.approx(170.0 + 20.0 * a)
+    x[X.WIND_DIR_F] = 179.0
+    x[X.WIND_SLEW_T] = 6.0
+    update_wind(x, g, 6.0 + 4.0, RNG)  # a 4 s step: alpha ~0.83
+    a = lowpass_alpha(4.0, 0.2)
+    assert x[X.WIND_DIR_F] == pytest.approx(179.0 + 11.0 * a - 360.0)
 
 
 def test_wind_pushes_hovering_vehicle_downwind() -> None:
     f = build_frame(Params({"SIM_WIND_SPD": 10.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0}))
     x = airborne(f, 100.0, hover_command(f))
-    x[X.WIND_SPD_F] = 10.0
+    settle_wind(x, f)
     run_ticks(x, hover_pwm(f), f, DT, 10.0, 2400, RNG)
     assert x[X.VN] > 1.0 and x[X.PN] > 1.0  # drifting north, with the air
     assert x[X.VAIR_X] < 0.0  # the air comes from ahead (body x = north at yaw 0)
@@ -564,16 +687,80 @@ def test_turbulence_is_deterministic_with_a_seed() -> None:
     c = run_turbulent(8)
     assert np.array_equal(a, b)
     assert not np.array_equal(a[:, X.WIND_N], c[:, X.WIND_N])
-    # gusts have a standard deviation of about SIM_WIND_TURB
-    assert np.std(a[:, X.GUST_V]) == pytest.approx(2.0, rel=0.35)
     assert np.std(a[:, X.WIND_D]) > 0.5
+
+
+def test_turbulence_statistics_are_sitls() -> None:
+    """SITL's gusts: g <- 0.98 g + 0.02 (10 TURB) N(0,1) every 1200 Hz step, i.e. a stationary
+    std of 0.2 TURB / sqrt(1 - 0.98^2) = 1.005 TURB and a correlation time of -1/ln 0.98 = 49.5
+    steps = 41 ms; the horizontal gust's azimuth is drawn afresh every step (its N and E
+    components are uncorrelated from one step to the next). No mean wind (SIM_WIND_SPD 0)."""
+    turb = 2.0
+    f = build_frame(Params({"SIM_WIND_TURB": turb}))
+    x = wind_state(f, 30.0)
+    rng = new_rng(3, 2)
+    n_warm, n = 1000, 240_000
+    gh = np.empty(n)
+    gv = np.empty(n)
+    wn = np.empty(n)
+    wd = np.empty(n)
+    t = 10.0
+    for k in range(n_warm + n):
+        t += DT
+        update_wind(x, f, t, rng)
+        if k >= n_warm:
+            i = k - n_warm
+            gh[i], gv[i], wn[i], wd[i] = x[X.GUST_H], x[X.GUST_V], x[X.WIND_N], x[X.WIND_D]
+    std_expected = 0.2 * turb / math.sqrt(1.0 - 0.98**2)
+    assert std_expected == pytest.approx(1.005 * turb, rel=1e-3)
+    for g in (gh, gv):
+        assert np.std(g) == pytest.approx(std_expected, rel=0.05)
+        phi = np.corrcoef(g[:-1], g[1:])[0, 1]
+        tau_ms = -DT / math.log(phi) * 1e3
+        assert tau_ms == pytest.approx(41.2, rel=0.1)
+    np.testing.assert_array_equal(wd, -gv)  # the vertical gust is the whole vertical wind
+    # per-step random azimuth: the north component has the gust's power spread over N and E
+    # (std / sqrt 2) and forgets itself from one step to the next
+    assert np.std(wn) == pytest.approx(std_expected / math.sqrt(2.0), rel=0.05)
+    assert abs(np.corrcoef(wn[:-1], wn[1:])[0, 1]) < 0.02
+
+
+def test_turbulence_before_the_start_delay_when_airborne() -> None:
+    """The turbulence is not delayed (only the mean wind is): airborne at 1 s the gusts blow,
+    on their own."""
+    f = build_frame(Params({"SIM_WIND_SPD": 5.0, "SIM_WIND_TURB": 2.0, "SIM_WIND_T": 1.0}))
+    x = wind_state(f, 10.0)
+    rng = new_rng(4, 2)
+    for k in range(1, 50):
+        update_wind(x, f, k * DT, rng)
+    assert x[X.GUST_H] != 0.0 and x[X.GUST_V] != 0.0
+    assert x[X.WIND_D] == -x[X.GUST_V]
+    assert math.hypot(x[X.WIND_N], x[X.WIND_E]) == pytest.approx(abs(x[X.GUST_H]))
+
+
+@pytest.mark.parametrize(("hagl", "gusts"), [(0.0, False), (0.0009, False), (0.0011, True)])
+def test_turbulence_only_when_airborne(hagl: float, gusts: bool) -> None:
+    """Gusts (and their random draws) only above 1 mm over the ground (SITL's on_ground())."""
+    f = build_frame(Params({"SIM_WIND_TURB": 3.0}))
+    x = new_state(f)
+    x[X.PD] = -f[F.F_FRAME_HEIGHT] - hagl
+    rng = new_rng(1, 2)
+    before = rng.copy()
+    update_wind(x, f, 6.0, rng)
+    assert (x[X.GUST_H] != 0.0) == gusts and (x[X.GUST_V] != 0.0) == gusts
+    assert (x[X.WIND_D] != 0.0) == gusts
+    assert (not np.array_equal(rng, before)) == gusts
 
 
 def test_no_turbulence_on_the_ground() -> None:
     f = build_frame(Params({"SIM_WIND_TURB": 3.0}))
     x = new_state(f)
-    run_ticks(x, pwm_all(1000.0), f, DT, 6.0, 100, new_rng(1, 2))
+    rng = new_rng(1, 2)
+    before = rng.copy()
+    run_ticks(x, pwm_all(1000.0), f, DT, 0.0, 8000, rng)
     assert x[X.GUST_H] == 0.0 and x[X.GUST_V] == 0.0
+    assert (x[X.WIND_N], x[X.WIND_E], x[X.WIND_D]) == (0.0, 0.0, 0.0)
+    assert np.array_equal(rng, before)
 
 
 def test_air_density_cache_tracks_altitude(frame: np.ndarray) -> None:

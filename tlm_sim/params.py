@@ -363,14 +363,27 @@ _add("SIM_ENGINE_MUL", "", 0, 2,
 _add("SIM_ENGINE_FAIL", "", 0, _U32, "bit mask of motors SIM_ENGINE_MUL acts on (§1.15)", True)
 _add("SIM_BATT_VOLTAGE", "V", 0, 100, "simulated battery voltage (§1.11)")
 _add("SIM_BATT_CAP_AH", "Ah", 0, 1000, "simulated battery capacity, 0 = infinite (§1.11)")
-_add("SIM_WIND_SPD", "m/s", 0, 100, "wind speed at full strength height (§1.10)")
-_add("SIM_WIND_DIR", "deg", -360, 360, "direction the wind comes from, true (§1.10)")
-_add("SIM_WIND_TURB", "m/s", 0, 100, "wind turbulence (§1.10)")
-_add("SIM_WIND_TC", "s", 0, 1000, "time constant of wind changes (§1.10)")
-_add("SIM_WIND_DIR_Z", "deg", -90, 90, "vertical wind direction, 90 = updraft (§1.10)")
-_add("SIM_WIND_T", "", 0, 2, "wind height profile: 0 square root, 1 none, 2 linear (§1.10)", True)
-_add("SIM_WIND_T_ALT", "m", 0.01, 10000, "height of full wind strength (§1.10)")
-_add("SIM_WIND_T_COEF", "1/s", -10, 10, "linear wind profile coefficient (§1.10)")
+_add("SIM_WIND_SPD", "m/s", 0, 100,
+     "mean wind speed (at and above SIM_WIND_T_ALT with the square-root profile); applied from "
+     "5 s after boot, slewed by SIM_WIND_TC (§1.10, sitl-faults.md §9)")
+_add("SIM_WIND_DIR", "deg", -360, 360,
+     "direction the wind comes FROM, true (0 = from the north, the air moving south) (§1.10)")
+_add("SIM_WIND_TURB", "m/s", 0, 100,
+     "turbulence while airborne: horizontal (random azimuth every step) and vertical gusts of "
+     "std ~1.005 x this, correlation time ~41 ms (sitl-faults.md §9)")
+_add("SIM_WIND_TC", "s", 0, 1000,
+     "wind slew filter: first-order low-pass with cut-off 1/TC Hz (time constant TC/(2 pi), "
+     "0.8 s at 5 s) on speed, direction and vertical angle; floored at 0.1 s (§1.10)")
+_add("SIM_WIND_DIR_Z", "deg", -90, 90,
+     "vertical angle of the wind, 90 = pure updraft, -90 = downdraft (§1.10)")
+_add("SIM_WIND_T", "", 0, 2,
+     "wind height profile over height above ground h: 0 square-root law S*sqrt(h/T_ALT) below "
+     "T_ALT, 1 none, 2 linear S + (h - T_ALT)*T_COEF (§1.10)", True)
+_add("SIM_WIND_T_ALT", "m", 0.01, 10000,
+     "height above ground of full wind strength (square-root law) or of SIM_WIND_SPD (linear "
+     "law) (§1.10)")
+_add("SIM_WIND_T_COEF", "1/s", -10, 10,
+     "linear wind profile: change of wind speed per metre of height, (m/s)/m (§1.10)")
 _add([f"SIM_SHOVE_{a}" for a in _XYZ], "m/s/s", -1000, 1000,
      "extra body-frame specific force while SIM_SHOVE_TIME runs (sitl-faults.md §6.2)")
 _add([f"SIM_TWIST_{a}" for a in _XYZ], "rad/s/s", -1000, 1000,

@@ -30,7 +30,7 @@ from tlm_sim.dynamics.frame import (
     pwm_to_command,
 )
 from tlm_sim.dynamics.motors import motor_forces
-from tlm_sim.dynamics.wind import init_wind, update_wind
+from tlm_sim.dynamics.wind import init_wind, settle_wind, update_wind
 
 #: SITL physics tick [s] (floor(1e6 / 1200) us)
 PHYSICS_DT_S: float = 833e-6
@@ -58,6 +58,7 @@ __all__ = [
     "resting_voltage",
     "run_ticks",
     "set_airborne",
+    "settle_wind",
     "update_battery",
     "update_wind",
     "yaw_of",

@@ -211,13 +211,14 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     """Advance the truth state ``x`` by one physics tick of ``dt`` [s] (in place).
 
     ``pwm[0..3]``: motor 1..4 PWM [us] as the motors see it (after any SIM_ENGINE_* fault
-    transform). ``t_s``: simulated time at the start of the tick [s] (wind start delay, ground
-    impact hold-off). ``rng``: the wind turbulence's generator state (:mod:`tlm_sim.rng`).
+    transform). ``t_s``: simulated time since boot at the start of the tick [s] (wind start
+    delay and slew-filter cadence, ground impact hold-off). ``rng``: the wind turbulence's
+    generator state (:mod:`tlm_sim.rng`).
     Allocation-free.
     """
     g = GRAVITY_MSS
     # --- environment -------------------------------------------------------------------
-    update_wind(x, frame, dt, t_s, rng)
+    update_wind(x, frame, t_s, rng)
     update_air_density(x, frame)
 
     qw, qx, qy, qz = x[X.QW], x[X.QX], x[X.QY], x[X.QZ]

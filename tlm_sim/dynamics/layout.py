@@ -36,11 +36,16 @@ BATT_VREST = _x.add("BATT_VREST", 1, "V", "battery resting voltage")
 ON_GROUND = _x.add("ON_GROUND", 1, "", "1.0 while resting on the ground (ground contact active)")
 WIND_N, WIND_E, WIND_D = _x.vector(("WIND_N", "WIND_E", "WIND_D"), "m/s",
                                    "wind (velocity of the air mass) NED at the vehicle's height")
-WIND_SPD_F = _x.add("WIND_SPD_F", 1, "m/s", "wind model: filtered speed")
-WIND_DIR_F = _x.add("WIND_DIR_F", 1, "deg", "wind model: filtered direction (from)")
-WIND_DIRZ_F = _x.add("WIND_DIRZ_F", 1, "deg", "wind model: filtered vertical direction")
+WIND_SPD_F = _x.add("WIND_SPD_F", 1, "m/s", "wind model: filtered speed (SIM_WIND_SPD slewed)")
+WIND_DIR_F = _x.add("WIND_DIR_F", 1, "deg",
+                    "wind model: filtered direction the wind comes from, true, (-180, 180]")
+WIND_DIRZ_F = _x.add("WIND_DIRZ_F", 1, "deg",
+                     "wind model: filtered vertical angle (SIM_WIND_DIR_Z slewed), 90 = updraft")
 GUST_H = _x.add("GUST_H", 1, "m/s", "wind model: horizontal gust speed")
 GUST_V = _x.add("GUST_V", 1, "m/s", "wind model: vertical gust speed")
+WIND_SLEW_T = _x.add("WIND_SLEW_T", 1, "s",
+                     "wind model: simulated time of the slew filters' last update (they advance "
+                     "only when more than 1 ms has passed, as SITL's; 0 at boot)")
 IMPACT_SPEED = _x.add("IMPACT_SPEED", 1, "m/s",
                       "vertical speed at the last ground impact, down positive")
 IMPACT_COUNT = _x.add("IMPACT_COUNT", 1, "", "ground impacts so far")

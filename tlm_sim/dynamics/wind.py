@@ -1,15 +1,42 @@
-"""SITL wind model (ardupilot-reference.md §1.10).
+"""SITL's wind model (ardupilot-reference.md §1.10, sitl-faults.md §9), every physics step.
 
-Speed, direction and vertical direction are low-pass filtered towards ``SIM_WIND_SPD``,
-``SIM_WIND_DIR`` and ``SIM_WIND_DIR_Z`` with time constant ``SIM_WIND_TC`` (direction on the
-wrapped +-180 deg error); the speed is shaped by the height profile ``SIM_WIND_T``; while
-airborne with ``SIM_WIND_TURB > 0`` filtered Gaussian gusts are added along an azimuth drawn
-afresh every step. No wind at all during the first 5 s of simulated time. The result is the
-velocity of the air mass, NED [m/s], written to ``WIND_N/E/D``.
+Mean wind (``SITL_State::_simulator_servos``):
 
+* **Start delay:** the mean wind is exactly 0 until ``WIND_START_DELAY_S`` (5 s) of simulated
+  time after boot (SITL's first servo update, tlm's ``t_s`` = 0).
+* **Slew filter:** speed, direction and vertical direction follow ``SIM_WIND_SPD``,
+  ``SIM_WIND_DIR`` and ``SIM_WIND_DIR_Z`` through a first-order low-pass filter whose
+  **cut-off frequency is 1/SIM_WIND_TC Hz**, i.e. whose time constant is TC/(2 pi) (0.80 s
+  at the default TC = 5 s), with TC floored at 0.1 s. The filters start at 0 (speed 0 m/s,
+  direction 0 deg, vertical angle 0 deg) and advance only when more than 1 ms of simulated time
+  has passed since their last update (every second 833 us physics step), with that elapsed
+  time as the filter step. Their last-update time starts at 0 (boot), so the first update
+  after the start delay spans the whole delay (the filters jump most of the way, e.g. 86 % at
+  TC = 5 s). The direction is filtered on the error wrapped into (-180, 180] deg and kept in
+  (-180, 180] deg (so from its start at 0 deg it swings through east to the default 180 deg);
+  the vertical angle on the plain difference. A parameter changed in flight slews likewise.
+* **Height profile** ``SIM_WIND_T`` with h = height of the ground-contact point above home
+  ground, ``-PD - frame_height`` [m] (SITL's ``height_agl``: altitude minus the altitude on
+  the pad, 0 at rest): 0 = square-root law ``S * sqrt(max(h / T_ALT, 0))`` below ``T_ALT``
+  (0 at and below ground level), 1 = none, 2 = linear ``S + (h - T_ALT) * T_COEF``; then
+  ``max(., 0)``. Computed only after the start delay.
+* The wind comes FROM direction psi at vertical angle theta_z: the air moves along
+  ``-S (cos psi cos theta_z, sin psi cos theta_z, sin theta_z)`` NED (theta_z = 90 deg: an
+  updraft, ``WIND_D`` < 0).
+
+Turbulence (``Aircraft::update_wind``), not delayed: while ``SIM_WIND_TURB`` > 0 and the
+vehicle is airborne (height above ground > ``AIRBORNE_HAGL_M`` = 1 mm), every physics step the
+horizontal and vertical gust speeds are updated ``g <- 0.98 g + 0.02 * (10 TURB) * N(0, 1)``
+(stationary std 0.2 TURB / sqrt(1 - 0.98^2) ~ 1.005 TURB, correlation time -1/ln 0.98 ~ 49.5
+steps ~ 41 ms) and the horizontal gust acts along an azimuth drawn uniformly afresh every step
+(SITL advances it by ``2 * rand()`` degrees, an effectively random angle). The gusts are added
+to the vector the wind comes from before it is negated. On the ground the gusts are neither
+updated nor applied (they resume from their last values after take-off, as in SITL).
+
+The result is the velocity of the air mass, NED [m/s], written to ``WIND_N/E/D``.
 Randomness comes from the flight's wind generator ``rng`` (:mod:`tlm_sim.rng`, seeded from the
 flight seed): two Gaussians (:func:`~tlm_sim.rng.normal_pair`) and a uniform direction
-(:func:`~tlm_sim.rng.unit_pair`) per step.
+(:func:`~tlm_sim.rng.unit_pair`) per airborne step with turbulence, none otherwise.
 """
 
 from __future__ import annotations
@@ -33,8 +60,15 @@ from tlm_sim.dynamics.frame import (
 )
 from tlm_sim.rng import normal_pair, unit_pair
 
-#: simulated time before any wind is applied [s] (SITL lets the airspeed sensor calibrate)
+#: simulated time after boot before the mean wind is applied [s] (SITL lets the airspeed
+#: sensor calibrate)
 WIND_START_DELAY_S: float = 5.0
+#: floor of SIM_WIND_TC [s]
+WIND_TC_MIN_S: float = 0.1
+#: the slew filters advance only when more than this has passed since their last update [s]
+WIND_SLEW_MIN_DT_S: float = 0.001
+#: height above ground [m] above which the vehicle is airborne (SITL's ``on_ground()``)
+AIRBORNE_HAGL_M: float = 0.001
 #: per-step IIR coefficient of the gust filters
 GUST_IIR: float = 0.98
 #: gust input scale: filtered N(0,1) * 10 * TURB has a standard deviation of about TURB
@@ -43,10 +77,11 @@ GUST_SCALE: float = 10.0
 
 @tick_jit
 def wrap_180(deg: float) -> float:
-    """Wrap an angle [deg] into [-180, 180)."""
-    if -180.0 <= deg < 180.0:
+    """Wrap an angle [deg] into (-180, 180] (ArduPilot's ``wrap_180``: +180 stays +180)."""
+    if -180.0 < deg <= 180.0:
         return deg
-    return (deg + 180.0) % 360.0 - 180.0
+    res = wrap_360(deg)
+    return res - 360.0 if res > 180.0 else res
 
 
 @tick_jit
@@ -58,14 +93,27 @@ def wrap_360(deg: float) -> float:
 
 
 @tick_jit
+def lowpass_alpha(dt: float, cutoff_hz: float) -> float:
+    """Gain of a first-order low-pass filter step of ``dt`` [s] with cut-off frequency
+    ``cutoff_hz`` [Hz] (ArduPilot's ``calc_lowpass_alpha_dt``): dt / (dt + 1 / (2 pi fc));
+    1 (no filtering) for a cut-off <= 0, 0 for dt <= 0."""
+    if cutoff_hz <= 0.0:
+        return 1.0
+    if dt <= 0.0:
+        return 0.0
+    return dt / (dt + 1.0 / (2.0 * math.pi * cutoff_hz))
+
+
+@tick_jit
 def profile_speed(speed: float, height_m: float, frame: np.ndarray) -> float:
-    """Wind speed [m/s] at ``height_m`` above ground for the ``SIM_WIND_T`` profile (>= 0)."""
+    """Wind speed [m/s] at ``height_m`` [m] above ground for the ``SIM_WIND_T`` profile
+    (0 square-root law below T_ALT, 1 none, 2 linear; any other value none), at least 0."""
     kind = frame[F_WIND_T]
     t_alt = frame[F_WIND_T_ALT]
     if kind < 0.5:  # 0: square-root law below T_ALT
         if height_m < t_alt:
             speed *= math.sqrt(max(height_m / t_alt, 0.0)) if t_alt > 0.0 else 1.0
-    elif kind > 1.5:  # 2: linear
+    elif 1.5 < kind < 2.5:  # 2: linear
         speed += (height_m - t_alt) * frame[F_WIND_T_COEF]
     return max(speed, 0.0)
 
@@ -85,62 +133,78 @@ def _set_direction(x: np.ndarray, dir_deg: float, dirz_deg: float) -> None:
 
 @tick_jit
 def init_wind(x: np.ndarray, frame: np.ndarray) -> None:
-    """Reset the wind state: no wind, filters at zero speed and at the parameter directions.
-
-    (SITL starts its direction filters at 0 deg; starting them at the parameter values avoids
-    a wind that swings round while it ramps up, and changes nothing once they have settled.)
-    """
+    """Reset the wind state at boot as SITL starts it: no wind, no gusts, slew filters at
+    speed 0 m/s, direction 0 deg and vertical angle 0 deg, last filter update at t = 0 s.
+    ``frame`` is not read (the parameters are followed from the first update on)."""
     x[X.WIND_N] = 0.0
     x[X.WIND_E] = 0.0
     x[X.WIND_D] = 0.0
     x[X.WIND_SPD_F] = 0.0
     x[X.GUST_H] = 0.0
     x[X.GUST_V] = 0.0
-    _set_direction(x, wrap_360(frame[F_WIND_DIR]), frame[F_WIND_DIR_Z])
+    x[X.WIND_SLEW_T] = 0.0
+    _set_direction(x, 0.0, 0.0)
 
 
 @tick_jit
-def update_wind(x: np.ndarray, frame: np.ndarray, dt: float, t_s: float,
-                rng: np.ndarray) -> None:
-    """Advance the wind model by ``dt`` [s] at simulated time ``t_s`` [s]; writes WIND_N/E/D.
-    ``rng``: the wind's random generator state (:mod:`tlm_sim.rng`).
+def settle_wind(x: np.ndarray, frame: np.ndarray) -> None:
+    """Put the slew filters at their targets (SIM_WIND_SPD, SIM_WIND_DIR wrapped into
+    (-180, 180], SIM_WIND_DIR_Z), as after a long steady wind; for tests and for experiments
+    that start in settled wind. Call after :func:`init_wind`."""
+    x[X.WIND_SPD_F] = frame[F_WIND_SPD]
+    _set_direction(x, wrap_180(frame[F_WIND_DIR]), frame[F_WIND_DIR_Z])
 
-    The height used by the profile is the height of the ground-contact point above home
-    ground, ``-PD - frame_height`` [m] (what the barometer reads relative to the pad).
-    """
+
+@tick_jit
+def _slew_filters(x: np.ndarray, frame: np.ndarray, t_s: float) -> None:
+    """Advance the speed/direction slew filters to simulated time ``t_s`` [s] if more than
+    ``WIND_SLEW_MIN_DT_S`` has passed since their last update (cut-off 1/TC Hz)."""
+    dt = t_s - x[X.WIND_SLEW_T]
+    if dt <= WIND_SLEW_MIN_DT_S:
+        return
+    x[X.WIND_SLEW_T] = t_s
+    alpha = lowpass_alpha(dt, 1.0 / max(frame[F_WIND_TC], WIND_TC_MIN_S))
+    x[X.WIND_SPD_F] += (frame[F_WIND_SPD] - x[X.WIND_SPD_F]) * alpha
+    dir_old = x[X.WIND_DIR_F]
+    dirz_old = x[X.WIND_DIRZ_F]
+    dirf = wrap_180(dir_old + wrap_180(frame[F_WIND_DIR] - dir_old) * alpha)
+    dirz = dirz_old + (frame[F_WIND_DIR_Z] - dirz_old) * alpha
+    if dirf != dir_old or dirz != dirz_old:
+        _set_direction(x, dirf, dirz)
+
+
+@tick_jit
+def update_wind(x: np.ndarray, frame: np.ndarray, t_s: float, rng: np.ndarray) -> None:
+    """Advance the wind model to simulated time ``t_s`` [s] since boot (the start of the
+    physics step) and write the air velocity ``WIND_N/E/D`` [m/s, NED].
+    ``rng``: the wind's random generator state (:mod:`tlm_sim.rng`)."""
     wn = 0.0
     we = 0.0
     wd = 0.0
+    hagl = -x[X.PD] - frame[F_FRAME_HEIGHT]
     if t_s > WIND_START_DELAY_S:
-        tc = frame[F_WIND_TC]
-        alpha = dt / (dt + tc) if tc > 0.0 else 1.0
-        spd = x[X.WIND_SPD_F] + alpha * (frame[F_WIND_SPD] - x[X.WIND_SPD_F])
-        x[X.WIND_SPD_F] = spd
-        dir_old = x[X.WIND_DIR_F]
-        dirz_old = x[X.WIND_DIRZ_F]
-        dirf = wrap_360(dir_old + alpha * wrap_180(frame[F_WIND_DIR] - dir_old))
-        dirz = dirz_old + alpha * wrap_180(frame[F_WIND_DIR_Z] - dirz_old)
-        if dirf != dir_old or dirz != dirz_old:
-            _set_direction(x, dirf, dirz)
+        _slew_filters(x, frame, t_s)
+        spd = x[X.WIND_SPD_F]
         s = 0.0
         if spd != 0.0 or frame[F_WIND_T] > 1.5:
-            s = profile_speed(spd, -x[X.PD] - frame[F_FRAME_HEIGHT], frame)
-        # vector pointing where the wind comes FROM; negated at the end
-        wn = s * x[X.WIND_UN]
-        we = s * x[X.WIND_UE]
-        wd = s * x[X.WIND_UD]
-        turb = frame[F_WIND_TURB]
-        if turb > 0.0 and x[X.ON_GROUND] < 0.5:
-            amp = GUST_SCALE * turb * (1.0 - GUST_IIR)
-            nh, nv = normal_pair(rng)
-            gh = GUST_IIR * x[X.GUST_H] + amp * nh
-            gv = GUST_IIR * x[X.GUST_V] + amp * nv
-            cos_az, sin_az = unit_pair(rng)  # the azimuth of the horizontal gust
-            x[X.GUST_H] = gh
-            x[X.GUST_V] = gv
-            wn += cos_az * gh
-            we += sin_az * gh
-            wd += gv
+            s = profile_speed(spd, hagl, frame)
+        if s != 0.0:
+            # vector pointing where the wind comes FROM; negated at the end
+            wn = s * x[X.WIND_UN]
+            we = s * x[X.WIND_UE]
+            wd = s * x[X.WIND_UD]
+    turb = frame[F_WIND_TURB]
+    if turb > 0.0 and hagl > AIRBORNE_HAGL_M:
+        amp = GUST_SCALE * turb * (1.0 - GUST_IIR)
+        nh, nv = normal_pair(rng)
+        gh = GUST_IIR * x[X.GUST_H] + amp * nh
+        gv = GUST_IIR * x[X.GUST_V] + amp * nv
+        cos_az, sin_az = unit_pair(rng)  # the azimuth of the horizontal gust
+        x[X.GUST_H] = gh
+        x[X.GUST_V] = gv
+        wn += cos_az * gh
+        we += sin_az * gh
+        wd += gv
     x[X.WIND_N] = -wn
     x[X.WIND_E] = -we
     x[X.WIND_D] = -wd
