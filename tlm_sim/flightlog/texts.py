@@ -41,7 +41,9 @@ def _lost_motor(tables: Tables, t_us: int, _code: int) -> list[str]:
     """ArduCopter names the motor with the highest 0.5 s-filtered output (1-based) as the one
     that lost thrust: the weak motor, saturated at full output (here: the highest RCOU)."""
     row = _at(tables, "RCOU", t_us)
-    motor = 1 if row is None else int(np.argmax([row[f"C{i}"] for i in range(1, 9)])) + 1
+    outputs = [] if row is None else [row[c] for c in (f"C{i}" for i in range(1, 9))
+                                      if c in row.index]
+    motor = int(np.argmax(outputs)) + 1 if outputs else 1
     return [f"Potential Thrust Loss ({motor})"]
 
 
