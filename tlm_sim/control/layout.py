@@ -109,6 +109,18 @@ CHECK_TIMER = _c.add("CHECK_TIMER", 1, "s", "time of the next 10 Hz failsafe che
 THRUST_LOSS_T = _c.add("THRUST_LOSS_T", 1, "s", "time the thrust-loss symptoms have lasted")
 THRUST_BOOST = _c.add("THRUST_BOOST", 1, "",
                       "1 while the motors' thrust boost is on (after a thrust-loss detection)")
+MIX_THRUST_FILT = _c.add("MIX_THRUST_FILT", MAX_MOTORS, "",
+                         "per-motor thrust output before the 0..1 clip, low-passed with 0.5 s "
+                         "(the motor-loss monitor's _thrust_rpyt_out_filt)")
+MOTOR_LOST = _c.add("MOTOR_LOST", 1, "",
+                    "index (0-based) of the motor with the highest filtered output: the lost "
+                    "motor (held while THRUST_BOOST)")
+THRUST_UNBALANCED = _c.add("THRUST_UNBALANCED", 1, "",
+                           "1 while the motor-loss monitor finds the thrust unbalanced (not "
+                           "_thrust_balanced; needs 6 or more motors)")
+THRUST_BOOST_RATIO = _c.add("THRUST_BOOST_RATIO", 1, "",
+                            "0..1: how far the mixer has taken the lost motor out of its limits "
+                            "(_thrust_boost_ratio; 0 = normal mixing)")
 PZ_ACC_FF = _c.add("PZ_ACC_FF", 1, "m/s^2", "feed-forward down acceleration of the path")
 PATH_STOP_T = _c.add("PATH_STOP_T", 1, "s",
                      "time into the jerk-limited stop at the path's end (-1: not stopping)")

@@ -16,6 +16,13 @@ import math
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import layout as C
 
+MOT_SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME (default; the parameter is not modelled)
+MOTOR_FILT_TC_S = 0.5  # time constant of the motor-loss monitor's output filter
+MOTOR_LOSS_MIN_MOTORS = 6  # frames with fewer motors never report an unbalanced thrust
+MOTOR_LOST_BALANCE = 1.5  # highest filtered output x n / sum: unbalanced at or above
+MOTOR_LOST_REBALANCE = 1.25  # ... balanced again at or below
+THRUST_BOOST_OFF = 0.9  # the boost goes off once the highest filtered output is below this
+
 
 @tick_jit
 def lift_max(g, v_batt):
@@ -75,8 +82,103 @@ def resting_voltage_estimate(c, g, v_batt):
 
 
 @tick_jit
+def boost_ratio_update(c, g):
+    """The motors' spool logic for a lost motor (AP_MotorsMulticopter::output_logic, throttle
+    unlimited), once per tick before the mix: THRUST_BOOST_RATIO ramps towards 1 at
+    1/MOT_SPOOL_TIME per second while the thrust boost is on and the monitor finds the thrust
+    unbalanced, and back towards 0 otherwise."""
+    step = g[C.G_DT] / MOT_SPOOL_TIME_S
+    r = c[C.THRUST_BOOST_RATIO]
+    if c[C.THRUST_BOOST] != 0.0 and c[C.THRUST_UNBALANCED] != 0.0:
+        c[C.THRUST_BOOST_RATIO] = min(1.0, r + step)
+    elif r > 0.0:
+        c[C.THRUST_BOOST_RATIO] = max(0.0, r - step)
+
+
+@tick_jit
+def _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r):
+    """Highest and lowest motor output of a roll/pitch (times rp_scale) plus yaw demand. With
+    a lost motor (index ``lost``, -1: none) the highest is taken over the others, and the lost
+    motor's output, where higher, is blended in by 1 - r (r: THRUST_BOOST_RATIO): at r = 1
+    the lost motor may go past the top of the range, the others keep their authority."""
+    hi = -1e9
+    lo = 1e9
+    v_lost = -1e9
+    for i in range(n):
+        v = (roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
+        if yaw != 0.0:
+            v += yaw * g[C.G_MIX_YAW + i]
+        lo = min(lo, v)
+        if i == lost:
+            v_lost = v
+        else:
+            hi = max(hi, v)
+    if v_lost > hi:
+        hi = r * hi + (1.0 - r) * v_lost
+    return hi, lo
+
+
+@tick_jit
+def _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r):
+    """The yaw demand that fits around thr_best: the least room of the motors with a yaw
+    factor, at least MOT_YAW_HEADROOM. While a lost motor is taken out (r > 0) its room does
+    not count, the floor rises to r 0.5 + (1 - r) MOT_YAW_HEADROOM, and the lost motor's own
+    room is blended back in by 1 - r (AP_MotorsMatrix with _thrust_boost_ratio)."""
+    allowed = 1.0
+    room_lost = 1.0
+    out = lost if r > 0.0 else -1
+    for i in range(n):
+        yf = abs(g[C.G_MIX_YAW + i])
+        if yf != 0.0:
+            rp = (roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
+            room = min((1.0 - (thr_best + rp)) / yf, (thr_best + rp) / yf)
+            if i == out:
+                room_lost = max(room, 0.0)
+            else:
+                allowed = min(allowed, room)
+    floor = g[C.G_MOT_YAW_HEADROOM]
+    if r > 0.0:
+        floor = r * 0.5 + (1.0 - r) * floor
+    allowed = max(allowed, floor)
+    if out >= 0:
+        allowed = r * allowed + (1.0 - r) * min(allowed, room_lost)
+    return allowed
+
+
+@tick_jit
+def motor_loss_monitor(c, g, n, comp, thr_adj):
+    """AP_MotorsMatrix::check_for_failed_motor, after each mix (MIX_THRUST_FILT already
+    updated): MOTOR_LOST = the motor with the highest filtered output (held while the thrust
+    boost is on); the thrust is unbalanced once that output x n / (sum of the filtered outputs)
+    reaches MOTOR_LOST_BALANCE (frames of MOTOR_LOSS_MIN_MOTORS or more only) and balanced again
+    at or below MOTOR_LOST_REBALANCE; the thrust boost goes off once the throttle is below its
+    maximum (comp: the compensation gain, the maximum being 1 before it), the highest filtered
+    output below THRUST_BOOST_OFF and the thrust balanced. thr_adj: the throttle the mix placed
+    (thrust fraction)."""
+    high = 0.0
+    total = 0.0
+    boost = c[C.THRUST_BOOST] != 0.0
+    for i in range(n):
+        f = c[C.MIX_THRUST_FILT + i]
+        total += f
+        if f > high:
+            high = f
+            if not boost:
+                c[C.MOTOR_LOST] = i
+    balance = high * n / total if total > 0.1 else 1.0
+    if n >= MOTOR_LOSS_MIN_MOTORS and balance >= MOTOR_LOST_BALANCE:
+        c[C.THRUST_UNBALANCED] = 1.0
+    if balance <= MOTOR_LOST_REBALANCE:
+        c[C.THRUST_UNBALANCED] = 0.0
+    if comp > thr_adj and high < THRUST_BOOST_OFF and c[C.THRUST_UNBALANCED] == 0.0:
+        c[C.THRUST_BOOST] = 0.0
+
+
+@tick_jit
 def mix(c, g, roll, pitch, yaw, throttle, v_batt):
-    """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM and the LIM_* saturation flags.
+    """Mix and write MIX_THRUST/MIX_ACT/MIX_PWM, the LIM_* saturation flags and the motor-loss
+    monitor's state (MIX_THRUST_FILT, MOTOR_LOST, THRUST_UNBALANCED, THRUST_BOOST_RATIO; the
+    thrust boost is switched off here once no longer needed).
 
     v_batt: battery voltage [V] (the resting-voltage estimate is formed here)."""
     ratio, lift = lift_max(g, resting_voltage_estimate(c, g, v_batt))
@@ -90,13 +192,11 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     lim_lo = 0.0
     lim_hi = 0.0
     n = int(g[C.G_N_MOTORS])
+    boost_ratio_update(c, g)
+    r = c[C.THRUST_BOOST_RATIO]
+    lost = int(c[C.MOTOR_LOST]) if c[C.THRUST_BOOST] != 0.0 else -1
     # roll/pitch first
-    rp_hi = -1e9
-    rp_lo = 1e9
-    for i in range(n):
-        v = roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]
-        rp_hi = max(rp_hi, v)
-        rp_lo = min(rp_lo, v)
+    rp_hi, rp_lo = _high_low(g, roll, pitch, 1.0, 0.0, n, lost, r)
     rp_scale = 1.0
     if rp_hi - rp_lo > 1.0:
         rp_scale = 1.0 / (rp_hi - rp_lo)
@@ -104,24 +204,11 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     # yaw headroom: keep every motor within [0, 1] around the best throttle
     thr_best = 0.5 * (1.0 - (rp_hi + rp_lo) * rp_scale)
     thr_best = min(max(thr_best, 0.0), 1.0)
-    yaw_allowed = 1.0
-    for i in range(n):
-        rp = (roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
-        if g[C.G_MIX_YAW + i] != 0.0:
-            room_hi = (1.0 - (thr_best + rp)) / abs(g[C.G_MIX_YAW + i])
-            room_lo = (thr_best + rp) / abs(g[C.G_MIX_YAW + i])
-            yaw_allowed = min(yaw_allowed, min(room_hi, room_lo))
-    yaw_allowed = max(yaw_allowed, g[C.G_MOT_YAW_HEADROOM])
+    yaw_allowed = _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r)
     if abs(yaw) > yaw_allowed:
         yaw = math.copysign(yaw_allowed, yaw)
         lim_yaw = 1.0
-    hi = -1e9
-    lo = 1e9
-    for i in range(n):
-        v = ((roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
-             + yaw * g[C.G_MIX_YAW + i])
-        hi = max(hi, v)
-        lo = min(lo, v)
+    hi, lo = _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r)
     scale = 1.0
     if hi - lo > 1.0:
         scale = 1.0 / (hi - lo)
@@ -141,9 +228,11 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
         lim_lo = 1.0
     if thr >= 1.0:
         lim_hi = 1.0
+    alpha = g[C.G_DT] / (g[C.G_DT] + MOTOR_FILT_TC_S)
     for i in range(n):
         v = t + ((roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
                  + yaw * g[C.G_MIX_YAW + i]) * scale
+        c[C.MIX_THRUST_FILT + i] += alpha * (v - c[C.MIX_THRUST_FILT + i])
         v = min(max(v, 0.0), 1.0)
         c[C.MIX_THRUST + i] = v
         a = thrust_to_actuator(g, v, ratio, lift)
@@ -153,6 +242,7 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     c[C.LIM_YAW] = lim_yaw
     c[C.LIM_THR_LO] = lim_lo
     c[C.LIM_THR_HI] = lim_hi
+    motor_loss_monitor(c, g, n, comp, t)
 
 
 @tick_jit
@@ -169,11 +259,19 @@ def pwm_out(g, actuator):
 
 @tick_jit
 def output_idle(c, g, spin):
-    """All motors at a fixed actuator value (0 = stopped, MOT_SPIN_ARM = ground idle)."""
-    for i in range(int(g[C.G_N_MOTORS])):
+    """All motors at a fixed actuator value (0 = stopped, MOT_SPIN_ARM = ground idle); the
+    thrust boost is off (as in the motors' shut-down and ground-idle states) and the filtered
+    outputs decay towards the zero thrust demand."""
+    n = int(g[C.G_N_MOTORS])
+    alpha = g[C.G_DT] / (g[C.G_DT] + MOTOR_FILT_TC_S)
+    for i in range(n):
         c[C.MIX_THRUST + i] = 0.0
         c[C.MIX_ACT + i] = spin
         c[C.MIX_PWM + i] = pwm_out(g, spin)
+        c[C.MIX_THRUST_FILT + i] -= alpha * c[C.MIX_THRUST_FILT + i]
+    c[C.THRUST_BOOST] = 0.0  # shut down / ground idle: no thrust boost
+    c[C.THRUST_BOOST_RATIO] = 0.0
+    motor_loss_monitor(c, g, n, 1.0, 0.0)
     c[C.LIM_RP] = 1.0
     c[C.LIM_YAW] = 1.0
     c[C.LIM_THR_LO] = 1.0

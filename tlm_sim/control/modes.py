@@ -36,7 +36,7 @@ from tlm_sim.control.failsafe import (
     thrust_loss_check,
     vertical_cf_update,
 )
-from tlm_sim.control.mixer import mix, output_idle
+from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
@@ -49,7 +49,7 @@ from tlm_sim.control.position import (
 from tlm_sim.control.wpnav import path_start, path_update, prepare_path
 from tlm_sim.rotation import quat_to_euler
 
-SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
+SPOOL_TIME_S = MOT_SPOOL_TIME_S
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
 # ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at MOT_SPIN_ARM and a takeoff
 # waits 2 s after arming; every reference log has EV 57 at 2.00 s, the throttle rising from
