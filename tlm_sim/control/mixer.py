@@ -8,7 +8,38 @@ battery voltage (1/lift_max, from the battery monitor's resting-voltage estimate
 (1/(rho/1.225), AP_MOTORS_DENSITY_COMP), mixed with roll/pitch priority over yaw (yaw limited to
 the headroom, at least MOT_YAW_HEADROOM), the throttle placed for best attitude authority, then
 each motor's thrust fraction is linearised through MOT_THST_EXPO into an actuator value and a
-whole-microsecond PWM.
+whole-microsecond PWM. The throttle may be lifted above the demand to keep the lowest motor at
+0 only up to THR_AVG_MAX, the attitude controller's average maximum (ATC_THR_MIX_MIN/MAX, see
+:func:`tlm_sim.control.attitude.throttle_mix_update`); beyond it the roll/pitch/yaw demand is
+scaled down (AP_MotorsMatrix's rpy_scale).
+
+Motor loss (AP_MotorsMatrix::check_for_failed_motor and the thrust boost, ArduCopter 4.7):
+
+* After each mix :func:`motor_loss_monitor` low-passes every motor's output before the 0..1
+  clip (0.5 s time constant), names the highest the lost motor (MOTOR_LOST, held while the
+  thrust boost is on) and finds the thrust unbalanced when that output x n / the sum reaches
+  1.5, balanced again at 1.25 or below -- on frames of six or more motors only.
+* The thrust-loss check (:func:`tlm_sim.control.failsafe.thrust_loss_check`: 1 s at full
+  throttle, descending, level) turns the boost on: ERR 25/1 and "Potential Thrust Loss (n)".
+  While boosted and unbalanced THRUST_BOOST_RATIO ramps to 1 over MOT_SPOOL_TIME
+  (:func:`boost_ratio_update`); by that ratio the lost motor is left out of the top of the
+  range (roll/pitch scaling and the throttle ceiling: it may go past full output and is
+  clipped), its yaw room no longer limits yaw and the yaw floor rises from MOT_YAW_HEADROOM to
+  0.5. The boost goes off once the highest filtered output is below 0.9, the thrust balanced
+  and the throttle below its maximum.
+* A quad is never unbalanced: the ratio stays 0 and the boost changes nothing in its mix (it
+  only holds the thrust-loss check off). ArduCopter applies the lost motor's yaw room after
+  the MOT_YAW_HEADROOM floor while boosted even at ratio 0; tlm does not (its quad flights
+  would otherwise change after every thrust-loss detection).
+
+Measured on built-in mission 1 (seed 0, motor n dead from 120 to 150 s in AUTO, cruise at
+20 m): with ArduCopter's hex settings (ATC_RAT_RLL_IMAX = ATC_RAT_PIT_IMAX = 1.0, MOT_YAW_HEADROOM
+0) a hexa (+ or X) descends 6.6-6.8 m in the 2.9-3.4 s before the detection, then holds its
+height (within 0.7 m) and track (error at most 1.8-7.4 m), turns 56-91 deg away from its
+heading and holds the new one, keeps AUTO and finishes the mission; with the default IMAX 0.5
+the integrator cannot hold the ~0.75 pitch (roll) output the mix needs and the crash check
+disarms it in the air 15.6 s (+) / 20.6 s (X) after the loss. An octa (+) never saturates (no
+ERR 25, 0.7 m dip); a quad falls within 3 s. tests/test_frames_motor_loss.py.
 """
 
 import math
@@ -214,6 +245,13 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
         scale = 1.0 / (hi - lo)
         lim_rp = 1.0
         lim_yaw = 1.0
+    # attitude control may raise the throttle to keep the lowest motor at 0 only up to the
+    # average maximum (THR_AVG_MAX): beyond it the roll/pitch/yaw demand is scaled down
+    avg_max = min(max(c[C.THR_AVG_MAX] * comp, thr), 1.0)
+    if avg_max + lo * scale < 0.0:
+        scale = min(scale, -avg_max / lo)
+        lim_rp = 1.0
+        lim_yaw = 1.0
     hi *= scale
     lo *= scale
     # throttle: as demanded, but move it to keep the mix inside [0, 1]
@@ -242,6 +280,7 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     c[C.LIM_YAW] = lim_yaw
     c[C.LIM_THR_LO] = lim_lo
     c[C.LIM_THR_HI] = lim_hi
+    c[C.MOT_THR_OUT] = t / comp
     motor_loss_monitor(c, g, n, comp, t)
 
 
