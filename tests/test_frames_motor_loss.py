@@ -85,21 +85,34 @@ def test_lost_motor_leaves_the_range_and_the_others_keep_their_authority():
     assert t1 == pytest.approx(0.6, abs=1e-12) and t0 == pytest.approx(0.5, abs=1e-12)
 
 
-def test_quad_mix_is_the_same_with_and_without_the_boost():
-    """A quad never finds its thrust unbalanced, so the boost ratio stays 0 and the thrust
-    boost changes nothing in its mix (ArduCopter: motor-loss handling needs 6 motors)."""
+def test_quad_boost_changes_only_the_yaw_that_would_raise_the_lost_motor():
+    """A quad never finds its thrust unbalanced, so the boost ratio stays 0 (ArduCopter:
+    motor-loss handling needs 6 motors) and the boost changes its mix only through the lost
+    motor's yaw room: without yaw the mix is the same, and a yaw that would raise the
+    saturated lost motor further is cut to its room (0 here) instead of MOT_YAW_HEADROOM."""
     g = _config(1, 1)
     rng = np.random.default_rng(3)
     for _ in range(200):
-        r, p, y = rng.uniform(-1.5, 1.5, 3)
+        r, p = rng.uniform(-1.5, 1.5, 2)
         t = rng.uniform(0.0, 1.0)
         a, b = _state(g), _state(g)
         b[C.THRUST_BOOST] = 1.0
         b[C.MIX_THRUST_FILT : C.MIX_THRUST_FILT + 4] = [1.5, 0.0, 0.2, 0.2]  # balance 3.9
-        mix(a, g, r, p, y, t, _vmax(g))
-        mix(b, g, r, p, y, t, _vmax(g))
+        mix(a, g, r, p, 0.0, t, _vmax(g))
+        mix(b, g, r, p, 0.0, t, _vmax(g))
         assert b[C.THRUST_UNBALANCED] == 0.0 and b[C.THRUST_BOOST_RATIO] == 0.0
         assert np.array_equal(a[C.MIX_PWM : C.MIX_PWM + 4], b[C.MIX_PWM : C.MIX_PWM + 4])
+    # X quad, motor 1 (front right, CCW) lost and saturated by a roll-left pitch-up demand;
+    # yaw right (+) raises the CCW motors
+    out = []
+    for boost in (0.0, 1.0):
+        c = _state(g)
+        c[C.THRUST_BOOST] = boost
+        c[C.MIX_THRUST_FILT] = 1.5
+        mix(c, g, -0.5, 0.5, 0.3, 0.5, _vmax(g))
+        out.append(c[C.MIX_THRUST : C.MIX_THRUST + 4].copy())
+    spread = [(m[0] + m[1]) - (m[2] + m[3]) for m in out]  # CCW minus CW: the yaw applied
+    assert spread[0] == pytest.approx(4 * 0.5 * 0.2) and spread[1] == pytest.approx(0.0)
 
 
 @pytest.mark.parametrize("frame", [(2, 0), (1, 1)])
@@ -162,21 +175,23 @@ def test_boost_ratio_ramps_over_the_spool_time():
 
 
 def test_yaw_headroom_without_the_lost_motor():
-    """Yaw room: the least room of the motors with a yaw factor, at least MOT_YAW_HEADROOM; with
-    a lost motor and ratio r its room is left out, the floor is r 0.5 + (1 - r) headroom, and
-    its room comes back in by 1 - r."""
+    """Yaw room: the least room of the motors with a yaw factor, at least MOT_YAW_HEADROOM (0.2
+    by default). While boosted, with ratio r: the lost motor's room does not count, the floor
+    is r 0.5 + (1 - r) 0.2, then the lost motor's room in the direction the yaw demand moves
+    it (up for a yaw that raises it) limits the result by 1 - r, floor or not."""
     g = _config(2, 0)
     n = 6
-    head = g[C.G_MOT_YAW_HEADROOM]
-    # pitch 0.6 at thr_best 0.6: motor 1 at 0.9 has room 0.1 / 0.5 = 0.2 up, motor 2 at 0.3 0.6
-    normal = _yaw_allowed(g, 0.0, 0.6, 1.0, 0.6, n, -1, 0.0)
-    assert normal == pytest.approx(max(0.2, head))
-    assert _yaw_allowed(g, 0.0, 0.6, 1.0, 0.6, n, 0, 0.0) == normal  # r = 0: unchanged
-    # without motor 1 the tightest are motors 2 (0.3: 0.6) and 4/5 (0.75: 0.5), floor 0.5
-    assert _yaw_allowed(g, 0.0, 0.6, 1.0, 0.6, n, 0, 1.0) == pytest.approx(0.5)
-    half = _yaw_allowed(g, 0.0, 0.6, 1.0, 0.6, n, 0, 0.5)
-    floor = 0.25 + 0.5 * head
-    assert half == pytest.approx(0.5 * max(0.5, floor) + 0.5 * min(max(0.5, floor), 0.2))
+    assert g[C.G_MOT_YAW_HEADROOM] == pytest.approx(0.2)
+    # hexa (+), pitch 0.7 at thr_best 0.6: motor 1 (front, CW) at 0.95 has 0.05 / 0.5 = 0.1
+    # of room up; the tightest of the others are motors 4 and 5 at 0.775: 0.45
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, -1, 0.0, -0.3) == pytest.approx(0.2)
+    # boosted, ratio 0: a yaw left (negative) raises the CW motor 1 -> its 0.1, below the floor
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.0, -0.3) == pytest.approx(0.1)
+    # ... a yaw right lowers it (room 1.9): the other motors' 0.45
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.0, 0.3) == pytest.approx(0.45)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 1.0, -0.3) == pytest.approx(0.5)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.5, -0.3) == pytest.approx(
+        0.5 * 0.45 + 0.5 * 0.1)  # floor 0.35 < 0.45
 
 
 def test_throttle_is_raised_for_attitude_only_up_to_the_average_maximum():

@@ -27,10 +27,10 @@ Motor loss (AP_MotorsMatrix::check_for_failed_motor and the thrust boost, ArduCo
   clipped), its yaw room no longer limits yaw and the yaw floor rises from MOT_YAW_HEADROOM to
   0.5. The boost goes off once the highest filtered output is below 0.9, the thrust balanced
   and the throttle below its maximum.
-* A quad is never unbalanced: the ratio stays 0 and the boost changes nothing in its mix (it
-  only holds the thrust-loss check off). ArduCopter applies the lost motor's yaw room after
-  the MOT_YAW_HEADROOM floor while boosted even at ratio 0; tlm does not (its quad flights
-  would otherwise change after every thrust-loss detection).
+* A quad is never unbalanced, so its ratio stays 0: the boost holds the thrust-loss check off,
+  and in the mix the lost motor's room in the direction the yaw demand moves it limits yaw
+  after the MOT_YAW_HEADROOM floor (as ArduCopter's order of the two; typically no yaw that
+  would raise the saturated motor further). Nothing else changes.
 
 Measured on built-in mission 1 (seed 0, motor n dead from 120 to 150 s in AUTO, cruise at
 20 m): with ArduCopter's hex settings (ATC_RAT_RLL_IMAX = ATC_RAT_PIT_IMAX = 1.0, MOT_YAW_HEADROOM
@@ -150,28 +150,27 @@ def _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r):
 
 
 @tick_jit
-def _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r):
+def _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r, yaw):
     """The yaw demand that fits around thr_best: the least room of the motors with a yaw
-    factor, at least MOT_YAW_HEADROOM. While a lost motor is taken out (r > 0) its room does
-    not count, the floor rises to r 0.5 + (1 - r) MOT_YAW_HEADROOM, and the lost motor's own
-    room is blended back in by 1 - r (AP_MotorsMatrix with _thrust_boost_ratio)."""
+    factor (either way), at least the floor MOT_YAW_HEADROOM. While the thrust boost is on
+    (``lost``: the lost motor, -1 when off) that motor's room does not count, the floor is
+    r 0.5 + (1 - r) MOT_YAW_HEADROOM (r: THRUST_BOOST_RATIO), and afterwards the lost motor's
+    room in the direction the yaw demand moves it limits the result by 1 - r, floor or not
+    (AP_MotorsMatrix::output_armed_stabilizing)."""
     allowed = 1.0
     room_lost = 1.0
-    out = lost if r > 0.0 else -1
     for i in range(n):
-        yf = abs(g[C.G_MIX_YAW + i])
+        yf = g[C.G_MIX_YAW + i]
         if yf != 0.0:
             rp = (roll * g[C.G_MIX_ROLL + i] + pitch * g[C.G_MIX_PITCH + i]) * rp_scale
-            room = min((1.0 - (thr_best + rp)) / yf, (thr_best + rp) / yf)
-            if i == out:
-                room_lost = max(room, 0.0)
+            if i == lost:
+                room = 1.0 - (thr_best + rp) if yaw * yf > 0.0 else thr_best + rp
+                room_lost = max(room, 0.0) / abs(yf)
             else:
+                room = min((1.0 - (thr_best + rp)) / abs(yf), (thr_best + rp) / abs(yf))
                 allowed = min(allowed, room)
-    floor = g[C.G_MOT_YAW_HEADROOM]
-    if r > 0.0:
-        floor = r * 0.5 + (1.0 - r) * floor
-    allowed = max(allowed, floor)
-    if out >= 0:
+    allowed = max(allowed, r * 0.5 + (1.0 - r) * g[C.G_MOT_YAW_HEADROOM])
+    if lost >= 0:
         allowed = r * allowed + (1.0 - r) * min(allowed, room_lost)
     return allowed
 
@@ -235,7 +234,7 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     # yaw headroom: keep every motor within [0, 1] around the best throttle
     thr_best = 0.5 * (1.0 - (rp_hi + rp_lo) * rp_scale)
     thr_best = min(max(thr_best, 0.0), 1.0)
-    yaw_allowed = _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r)
+    yaw_allowed = _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r, yaw)
     if abs(yaw) > yaw_allowed:
         yaw = math.copysign(yaw_allowed, yaw)
         lim_yaw = 1.0
