@@ -411,10 +411,8 @@ _flag("ATC_ANGLE_BOOST", "throttle boost with lean angle (§4.2)", modelled=Fals
 _add("ATC_ANG_LIM_TC", "s", 0.01, 100, "angle limit (to maintain altitude) time constant (§4.2)")
 _add(["ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX"], "deg/s", 0, 2000,
      "max angular rate, 0 = no limit (§4.2)", modelled=False)
-_add("ATC_THR_MIX_MIN", "", 0, 1, "throttle vs attitude priority, minimum (landing) (§4.2)",
-     modelled=False)
-_add("ATC_THR_MIX_MAX", "", 0, 5, "throttle vs attitude priority, maximum (active flight) (§4.2)",
-     modelled=False)
+_add("ATC_THR_MIX_MIN", "", 0, 1, "throttle vs attitude priority, minimum (landing) (§4.2)")
+_add("ATC_THR_MIX_MAX", "", 0, 5, "throttle vs attitude priority, maximum (active flight) (§4.2)")
 _add("ATC_THR_MIX_MAN", "", 0, 10, "throttle vs attitude priority, manual flight (§4.2)",
      modelled=False)
 for _ax in ("RLL", "PIT", "YAW"):

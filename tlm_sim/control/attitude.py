@@ -138,6 +138,7 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         te = 2.0 * sh * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * 5.0 / 112.0)))
     else:
         te = 2.0 * math.asin(min(sh, 1.0))
+    c[C.ATT_THRUST_ERR] = te
     sxy = math.sqrt(zx * zx + zy * zy)
     if sxy > 1e-12:
         ax = -zy / sxy
@@ -283,3 +284,42 @@ def rate_reset(c):
     """Zero the rate PIDs (on arming / disarmed)."""
     for k in range(3 * C.RATE_STRIDE):
         c[C.RATE_BASE + k] = 0.0
+
+
+#: throttle vs attitude priority: slew up and down per second, and its range
+#: (AC_AttitudeControl_Multi::update_throttle_rpy_mix, AC_ATTITUDE_CONTROL_MAX)
+THR_MIX_UP = 2.0
+THR_MIX_DOWN = 0.5
+THR_MIX_LO = 0.1
+THR_MIX_HI = 5.0
+
+
+@tick_jit
+def throttle_mix_update(c, g, attitude_first, thr_in, thr_unboosted):
+    """Slew the throttle vs attitude priority THR_RPY_MIX towards ATC_THR_MIX_MAX
+    (attitude_first: the land detector's "active flight") or ATC_THR_MIX_MIN, up at
+    THR_MIX_UP and down at THR_MIX_DOWN per second; going down it drops at once to the mix
+    the mixer actually used (the throttle it placed, MOT_THR_OUT, against thr_in, the throttle
+    demand 0..1, and the hover throttle), as AC_AttitudeControl_Multi does each rate-loop
+    tick. Then the highest average throttle the mixer may raise the motors to, THR_AVG_MAX:
+    the higher of thr_in and thr_unboosted (the demand before angle boost), or its blend with
+    the hover throttle by the mix if higher (set_throttle_out, get_throttle_avg_max)."""
+    dt = g[C.G_DT]
+    want = g[C.G_THR_MIX_MAX] if attitude_first else g[C.G_THR_MIX_MIN]
+    m = c[C.THR_RPY_MIX]
+    hover = c[C.THR_HOVER]
+    if m < want:
+        m += min(THR_MIX_UP * dt, want - m)
+    elif m > want:
+        m -= min(THR_MIX_DOWN * dt, m - want)
+        out = max(c[C.MOT_THR_OUT], thr_in)
+        if out < hover:
+            used = (out - thr_in) / (hover - thr_in)
+        else:
+            used = out / hover
+        m = min(m, max(used, want))
+    m = min(max(m, THR_MIX_LO), THR_MIX_HI)
+    c[C.THR_RPY_MIX] = m
+    t = min(max(max(thr_in, thr_unboosted), 0.0), 1.0)
+    c[C.THR_AVG_MAX] = max(t, t * max(0.0, 1.0 - m) + hover * m)
+

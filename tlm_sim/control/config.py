@@ -48,6 +48,8 @@ def _attitude(g: np.ndarray, p: Params, dt: float) -> None:
     g[C.G_INPUT_TC] = max(p["ATC_INPUT_TC"], 0.05)
     g[C.G_SLEW_YAW] = math.radians(p["ATC_SLEW_YAW"] / 100.0)
     g[C.G_ANGLE_MAX] = math.radians(p["ANGLE_MAX"] / 100.0)
+    g[C.G_THR_MIX_MIN] = p["ATC_THR_MIX_MIN"]
+    g[C.G_THR_MIX_MAX] = p["ATC_THR_MIX_MAX"]
     g[C.G_ACCEL_XY_MAX] = 9.80665 * math.tan(g[C.G_ANGLE_MAX])
     tc = p["ATC_ANG_LIM_TC"]
     g[C.G_ANG_LIM_ALPHA] = 1.0 if tc <= 0.0 else dt / (dt + tc)

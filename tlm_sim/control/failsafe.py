@@ -29,11 +29,11 @@ failsafe (FS_VIBE_ENABLE):
 
 * Thrust-loss check (every tick, reference section 3.6): armed, not landed, thrust boost off,
   and for 1 s: lean target < 15 deg, throttle in >= 90 % or at the upper limit (and >= 25 %),
-  the EKF descending, attitude error < 30 deg -> ERR 25/1 ("Potential Thrust Loss") and the
-  motors' thrust boost on. The boost changes nothing in tlm's quad mixer (ArduPilot's motor-loss
-  compensation needs six or more motors); it only holds the check off until the motors no
-  longer need it (every motor's thrust below 90 %, as the motor library switches it off when
-  the commanded output is achievable again).
+  the EKF descending, attitude error < 30 deg -> ERR 25/1 ("Potential Thrust Loss (n)", n the
+  motor the mixer's motor-loss monitor names) and the motors' thrust boost on. The boost holds
+  the check off until the motor library no longer needs it. On frames of six or more motors it
+  lets the mixer take the lost motor out of its limits (tlm_sim.control.mixer); on a quad it
+  changes nothing in tlm (ArduPilot's motor-loss compensation needs six or more motors).
 
 ``nav`` carries the primary lane's status into these checks (indices ``NAV_*``); innovations
 are tlm's sign (measurement - prediction), converted here.
@@ -44,7 +44,6 @@ import math
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
-from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.rotation import quat_to_euler
 
 # nav vector (filled by the flight loop from the primary EKF lane)
@@ -66,7 +65,6 @@ CRASH_LEAN_COS = math.cos(math.radians(15.0))
 THRUST_LOSS_S = 1.0  # THRUST_LOSS_CHECK_TRIGGER_SEC
 THRUST_LOSS_LEAN = math.radians(15.0)  # THRUST_LOSS_CHECK_ANGLE_DEVIATION_CD
 THRUST_LOSS_MIN_THR = 0.9  # THRUST_LOSS_CHECK_MINIMUM_THROTTLE
-THRUST_BOOST_OFF = 0.9  # boost off once every motor's thrust is below this fraction
 ATT_ERR_MAX = math.radians(30.0)  # CRASH_CHECK_ANGLE_DEVIATION_DEG
 
 ERR_EKFCHECK = 16
@@ -230,15 +228,12 @@ def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
 
     q: EKF attitude quaternion body -> NED; vd: EKF down velocity [m/s]. Uses the attitude
     targets (ATT_ROLL_CMD/ATT_PITCH_CMD), the throttle into the attitude controller (THR_OUT,
-    before angle boost), the mixer's upper throttle limit and per-motor thrusts. Logs ERR 25/1
-    and sets THRUST_BOOST when the symptoms last THRUST_LOSS_S; returns True on that tick.
+    before angle boost) and the mixer's upper throttle limit. Logs ERR 25/1 and sets
+    THRUST_BOOST when the symptoms last THRUST_LOSS_S; returns True on that tick. Nothing is
+    checked while the boost is on: the mixer's motor-loss monitor switches it off
+    (:func:`tlm_sim.control.mixer.motor_loss_monitor`).
     """
-    if c[C.THRUST_BOOST] != 0.0:
-        top = 0.0
-        for i in range(MAX_MOTORS):  # (motors beyond the frame's count stay at 0)
-            top = max(top, c[C.MIX_THRUST + i])
-        if top < THRUST_BOOST_OFF:
-            c[C.THRUST_BOOST] = 0.0
+    if c[C.THRUST_BOOST] != 0.0:  # the motor library switches it off (mixer.motor_loss_monitor)
         return False
     tr = c[C.ATT_ROLL_CMD]
     tp = c[C.ATT_PITCH_CMD]

@@ -109,6 +109,28 @@ CHECK_TIMER = _c.add("CHECK_TIMER", 1, "s", "time of the next 10 Hz failsafe che
 THRUST_LOSS_T = _c.add("THRUST_LOSS_T", 1, "s", "time the thrust-loss symptoms have lasted")
 THRUST_BOOST = _c.add("THRUST_BOOST", 1, "",
                       "1 while the motors' thrust boost is on (after a thrust-loss detection)")
+MIX_THRUST_FILT = _c.add("MIX_THRUST_FILT", MAX_MOTORS, "",
+                         "per-motor thrust output before the 0..1 clip, low-passed with 0.5 s "
+                         "(the motor-loss monitor's _thrust_rpyt_out_filt)")
+MOTOR_LOST = _c.add("MOTOR_LOST", 1, "",
+                    "index (0-based) of the motor with the highest filtered output: the lost "
+                    "motor (held while THRUST_BOOST)")
+THRUST_UNBALANCED = _c.add("THRUST_UNBALANCED", 1, "",
+                           "1 while the motor-loss monitor finds the thrust unbalanced (not "
+                           "_thrust_balanced; needs 6 or more motors)")
+THRUST_BOOST_RATIO = _c.add("THRUST_BOOST_RATIO", 1, "",
+                            "0..1: how far the mixer has taken the lost motor out of its limits "
+                            "(_thrust_boost_ratio; 0 = normal mixing)")
+THR_RPY_MIX = _c.add("THR_RPY_MIX", 1, "",
+                     "throttle vs attitude priority (_throttle_rpy_mix, 0.1..5), slewed towards "
+                     "ATC_THR_MIX_MIN or ATC_THR_MIX_MAX")
+THR_AVG_MAX = _c.add("THR_AVG_MAX", 1, "",
+                     "highest average throttle the mixer may raise the motors to for attitude "
+                     "control (_throttle_avg_max, before compensation)")
+MOT_THR_OUT = _c.add("MOT_THR_OUT", 1, "",
+                     "throttle the mixer placed, before compensation (the motors' _throttle_out)")
+ATT_THRUST_ERR = _c.add("ATT_THRUST_ERR", 1, "rad",
+                        "angle between the thrust vector and its target (att_error_angle)")
 PZ_ACC_FF = _c.add("PZ_ACC_FF", 1, "m/s^2", "feed-forward down acceleration of the path")
 PATH_STOP_T = _c.add("PATH_STOP_T", 1, "s",
                      "time into the jerk-limited stop at the path's end (-1: not stopping)")
@@ -201,6 +223,10 @@ G_ANG_ACCEL = _g.add("G_ANG_ACCEL", 3, "rad/s^2",
 G_INPUT_TC = _g.add("G_INPUT_TC", 1, "s", "ATC_INPUT_TC")
 G_SLEW_YAW = _g.add("G_SLEW_YAW", 1, "rad/s", "ATC_SLEW_YAW")
 G_ANGLE_MAX = _g.add("G_ANGLE_MAX", 1, "rad", "ANGLE_MAX")
+G_THR_MIX_MIN = _g.add("G_THR_MIX_MIN", 1, "",
+                       "ATC_THR_MIX_MIN: throttle vs attitude priority landed or descending")
+G_THR_MIX_MAX = _g.add("G_THR_MIX_MAX", 1, "",
+                       "ATC_THR_MIX_MAX: throttle vs attitude priority in active flight")
 G_POSXY_P = _g.add("G_POSXY_P", 1, "1/s", "PSC_POSXY_P")
 G_VELXY_P = _g.add("G_VELXY_P", 1, "1/s", "PSC_VELXY_P")
 G_VELXY_I = _g.add("G_VELXY_I", 1, "", "PSC_VELXY_I")

@@ -26,6 +26,7 @@ from tlm_sim.control.attitude import (
     rate_pid,
     rate_reset,
     sqrt_ctrl,
+    throttle_mix_update,
 )
 from tlm_sim.control.failsafe import (
     CRASH_LEAN_COS,
@@ -36,7 +37,7 @@ from tlm_sim.control.failsafe import (
     thrust_loss_check,
     vertical_cf_update,
 )
-from tlm_sim.control.mixer import mix, output_idle
+from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
@@ -49,7 +50,7 @@ from tlm_sim.control.position import (
 from tlm_sim.control.wpnav import path_start, path_update, prepare_path
 from tlm_sim.rotation import quat_to_euler
 
-SPOOL_TIME_S = 0.5  # MOT_SPOOL_TIME
+SPOOL_TIME_S = MOT_SPOOL_TIME_S
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
 # ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at MOT_SPIN_ARM and a takeoff
 # waits 2 s after arming; every reference log has EV 57 at 2.00 s, the throttle rising from
@@ -67,6 +68,9 @@ TAKEOFF_AUTO_FRAC = 0.915
 TAKEOFF_WP_DWELL_S = 0.8
 HOVER_LEARN_SIN_LEAN = math.sin(math.radians(5.0))  # hover learning: |pitch| < 5 deg
 HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
+THR_MIX_LEAN = math.radians(15.0)  # LAND_CHECK_LARGE_ANGLE_CD
+THR_MIX_ATT_ERR = math.radians(30.0)  # LAND_CHECK_ANGLE_ERROR_DEG
+THR_MIX_ACCEL = 3.0  # LAND_CHECK_ACCEL_MOVING [m/s^2]
 
 
 @tick_jit
@@ -521,8 +525,25 @@ def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_tilt, yaw_cmd,
     r_out = rate_pid(c, g, 0, rate_t0, gyro[0], lim_rp)
     p_out = rate_pid(c, g, 1, rate_t1, gyro[1], lim_rp)
     y_out = rate_pid(c, g, 2, rate_t2, gyro[2], lim_y)
+    throttle_mix_update(c, g, _attitude_first(c, sub), thr_b, thr)
     mix(c, g, r_out, p_out, y_out, thr_b, v_batt)
     return thr
+
+
+@inline_jit
+def _attitude_first(c, sub):
+    """Copter::update_throttle_mix for the autopilot's throttle: attitude control has priority
+    over a low throttle demand (ATC_THR_MIX_MAX) unless landed, or unless descending with a
+    lean target below 15 deg (or landing), an attitude error below 30 deg and the 1 Hz
+    acceleration below 3 m/s^2 (ATC_THR_MIX_MIN). (The vertical controller's confidence,
+    vel_U_control_ratio, is taken as 1: the mix is ATC_THR_MIX_MAX itself.)"""
+    if c[C.LANDED] != 0.0:
+        return False
+    lean2 = c[C.ATT_ROLL_T] ** 2 + c[C.ATT_PITCH_T] ** 2
+    large_angle_request = lean2 > THR_MIX_LEAN**2 and sub != C.SUB_LAND
+    a_lp2 = c[C.ALP] ** 2 + c[C.ALP + 1] ** 2 + c[C.ALP + 2] ** 2
+    return (large_angle_request or c[C.ATT_THRUST_ERR] > THR_MIX_ATT_ERR
+            or a_lp2 > THR_MIX_ACCEL**2 or c[C.PZ_VEL_T] <= 0.0)
 
 
 @inline_jit
