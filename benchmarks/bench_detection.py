@@ -48,15 +48,15 @@ def main() -> None:
     ap.add_argument("--out", help="working folder (default: a temporary one)")
     ap.add_argument("--jobs", type=int, default=1, help="threads for the models (default 1)")
     ap.add_argument("--no-env", action="store_true",
-                    help="fly as the paper and the reference SITL logs did: no wind, no extra "
-                         "sensor noise (tlm generate --no-env)")
+                    help="fly as the paper and the reference SITL logs did: '+' frame, no "
+                         "wind, no extra sensor noise (tlm generate --no-env --frame +)")
     args = ap.parse_args()
     work = Path(args.out or tempfile.mkdtemp(prefix="tlm-bench-"))
     ds, dsp, rj = work / "ds", work / "ds-tlm", work / "results.json"
     times = {
         "generate": _tlm("generate", "--flights", str(args.flights), "--out", str(ds),
                          "--seed", str(args.seed), "--kinds", "paper=1",
-                         *(["--no-env"] if args.no_env else [])),
+                         *(["--no-env", "--frame", "+"] if args.no_env else [])),
         "process": _tlm("process", str(ds), "--out", str(dsp), "--test-frac", "0.25",
                         "--seed", str(args.seed), "--quiet"),
     }

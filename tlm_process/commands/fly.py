@@ -66,11 +66,31 @@ def _parse_param_args(items: Sequence[str]) -> dict[str, float]:
     return out
 
 
+def _frame_params(name: str | None, extra: dict[str, float]) -> dict[str, float]:
+    """FRAME_CLASS / FRAME_TYPE of ``--frame NAME`` (empty without it); a --param that sets
+    either to another value is a UsageError."""
+    if name is None:
+        return {}
+    from tlm_sim.frames import FRAMES
+
+    key = name.strip().lower()
+    if key not in FRAMES:
+        raise UsageError(f"--frame: unknown frame {name!r}; choose from {', '.join(FRAMES)}")
+    f = FRAMES[key]
+    out = {"FRAME_CLASS": float(f.frame_class), "FRAME_TYPE": float(f.frame_type)}
+    for k, v in out.items():
+        if k in extra and extra[k] != v:
+            raise UsageError(f"--frame {key} sets {k} {v:g}, but --param sets {k}={extra[k]:g}; "
+                             "give one of them")
+    return out
+
+
 def _load_params(args: argparse.Namespace):
     from tlm_sim.params import Params
 
     p = Params.from_parm(args.params) if args.params else Params()
     extra = _parse_param_args(args.param or [])
+    extra.update(_frame_params(getattr(args, "frame", None), extra))
     return p.updated(extra) if extra else p
 
 
@@ -208,7 +228,7 @@ def _from_manifest(args: argparse.Namespace):
     clash = [opt for opt, v in (("--mission-file", args.mission_file), ("--faults", args.faults),
                                 ("--fault", args.fault), ("--set", args.set),
                                 ("--param", args.param), ("--params", args.params),
-                                ("--lambda", args.lam)) if v]
+                                ("--frame", args.frame), ("--lambda", args.lam)) if v]
     if clash:
         raise UsageError(f"--from-manifest flies the data set's own scenario: drop "
                          f"{', '.join(clash)}")
@@ -235,6 +255,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     f.add_argument("--params", help="ArduPilot .parm file applied on top of the defaults")
     f.add_argument("--param", action="append", metavar="NAME=VALUE",
                    help="set one parameter (repeatable), e.g. --param WPNAV_SPEED=500")
+    f.add_argument("--frame", metavar="NAME",
+                   help="airframe: + (default), x, hexa, hexax or octa; sets FRAME_CLASS and "
+                        "FRAME_TYPE (as --param FRAME_TYPE=1 for x; over a --params file's)")
     f.add_argument("--profile", default="current", metavar="current|paper",
                    help="ArduPilot semantics: current (as the reference SITL logs, default) or "
                         "paper (the paper's ArduPilot 4.1/4.2)")

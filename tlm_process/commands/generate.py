@@ -25,10 +25,10 @@ DESCRIPTION = """\
 Fly many Monte Carlo flights and write them as one labelled data set: missions (the four
 built-in shapes and random Algorithm 1 missions, fresh altitude profiles), no-fault,
 single-fault, paper-style (GPS, accel, engine, RC in one flight) and sequence flights (several
-of SITL's other faults, --faults), fault magnitudes, fault start times
-and holds (scaled by lambda), wind and sensor noise, all drawn from --seed. Flight i is the
-same whatever --flights, executor or worker count; re-running the command continues an
-interrupted data set.
+of SITL's other faults, --faults), fault magnitudes, fault start times and holds (scaled by
+lambda), the frame (+ or X quad), calm air or wind, and sensor noise, all drawn from --seed.
+Flight i is the same whatever --flights, executor or worker count; re-running the command
+continues an interrupted data set.
 """
 
 EPILOG = """\
@@ -45,18 +45,22 @@ writes:
 
 defaults: --faults all (kinds none=0.2,single=0.4,paper=0.2,sequence=0.2: single faults
 of every type 1-13, the paper sequence, sequences of the new types); missions
-builtin=0.5,random=0.5; wind
-SIM_WIND_SPD 0-5 m/s, SIM_WIND_DIR 0-360, SIM_WIND_TURB 0-1 m/s; noise SIM_GYR1/2_RND
-0-0.5 deg/s, SIM_BARO/BAR2_RND 0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: none of these).
+builtin=0.5,random=0.5; frames +=0.5,x=0.5 (FRAME_CLASS 1, FRAME_TYPE 0 or 1); wind:
+30 % calm (SIM_WIND_SPD 0, SIM_WIND_TURB 0), the others SIM_WIND_SPD 0-8 m/s, SIM_WIND_DIR
+0-360 deg, SIM_WIND_TURB 0-2 m/s; noise SIM_GYR1/2_RND 0-0.5 deg/s, SIM_BARO/BAR2_RND
+0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: no wind and no noise drawn).
 --config FILE (.json/.yaml) sets any scenario setting (docs/generate.md), e.g. the magnitude
 ranges of the new faults (magnitudes: {gps_glitch: {offset_m: [20, 60]}, battery: {volt:
-[9.9, 10.4]}, ...}); flags override it.
+[9.9, 10.4]}, ...}), frames: {"+": 0.3, x: 0.7}, wind: {calm: 0.5, speed: [2, 8]}; flags
+override it.
 
 examples:
   tlm generate --flights 1000 --out ds --seed 1
   tlm generate --flights 200 --out ds-paper --kinds paper=1 --profile paper --lambda 1.5
   tlm generate --flights 1000 --out ds-all --faults all        # every fault type
   tlm generate --flights 300 --out ds-b --faults battery,motor_partial,vibration
+  tlm generate --flights 500 --out ds-x --frame x --calm-share 0 --wind-speed 4:8
+  tlm generate --flights 200 --out ds-calm --frame + --no-env   # as the paper flew
   tlm generate --flights 5000 --out ds --scheduler tcp://127.0.0.1:8786   # via an SSH tunnel
   tlm fly --from-manifest ds --flight 123 --out flight123    # one flight again, alone
 """
@@ -102,6 +106,68 @@ def _ranges(items: Sequence[str]) -> dict[str, tuple[float, float]]:
     return out
 
 
+def _span(text: str | None, flag: str) -> tuple[float, float] | None:
+    """``LOW:HIGH`` or one value ``V`` (= ``V:V``) of a wind flag; None when not given."""
+    if text is None:
+        return None
+    lo, sep, hi = text.partition(":")
+    try:
+        return (float(lo), float(hi)) if sep else (float(lo), float(lo))
+    except ValueError:
+        raise UsageError(f"{flag} expects LOW:HIGH or one value, got {text!r}") from None
+
+
+def _frames(text: str) -> list[str] | dict[str, float]:
+    """``--frame``: ``x``, ``+,x`` (equal shares) or ``+=0.3,x=0.7``."""
+    items = [s for s in text.replace(" ", "").split(",") if s]
+    if not items:
+        raise UsageError("--frame expects NAME, NAME,NAME,... or NAME=SHARE,..., got "
+                         f"{text!r}")
+    if not any("=" in it for it in items):
+        return [it.lower() for it in items]
+    if not all("=" in it for it in items):
+        raise UsageError(f"--frame: give every frame a share (+=0.3,x=0.7) or none (+,x), got "
+                         f"{text!r}")
+    return _shares(text, "--frame")
+
+
+def _wind_setting(args: argparse.Namespace, d: dict[str, Any],
+                  ranges: dict[str, tuple[float, float]],
+                  flag_ranges: dict[str, tuple[float, float]]) -> dict[str, Any] | None:
+    """The ``wind`` setting of the command line: the file's (or the defaults), with
+    ``--calm-share``, ``--wind-speed``, ``--wind-dir``, ``--wind-turb`` and a ``--range`` of
+    SIM_WIND_SPD / _DIR / _TURB on top (removed from ``ranges``); None with ``--no-env``."""
+    from tlm_process.generate.scenario import WIND_PARAMS
+
+    flags = {"speed": ("--wind-speed", _span(args.wind_speed, "--wind-speed")),
+             "direction": ("--wind-dir", _span(args.wind_dir, "--wind-dir")),
+             "turbulence": ("--wind-turb", _span(args.wind_turb, "--wind-turb"))}
+    given = [f for f, v in flags.values() if v is not None]
+    if args.calm_share is not None:
+        given.insert(0, "--calm-share")
+    wind = None if args.no_env else d.get("wind", {})
+    if wind is None:
+        if given:
+            why = "--no-env" if args.no_env else f"{args.config} (wind: null)"
+            raise UsageError(f"{why} draws no wind: drop {', '.join(given)}, or fix the wind "
+                             "for every flight with --param SIM_WIND_SPD=V")
+        return None
+    if not isinstance(wind, dict):
+        return wind  # ScenarioConfig says what is wrong with it
+    wind = dict(wind)
+    if args.calm_share is not None:
+        wind["calm"] = args.calm_share
+    for key, name in WIND_PARAMS.items():
+        flag, span = flags[key]
+        if span is not None and name in flag_ranges:
+            raise UsageError(f"give {flag} or --range {name}, not both")
+        span = span if span is not None else flag_ranges.get(name)
+        if span is not None:  # a flag beats the file's wind and ranges
+            wind[key] = span
+            ranges.pop(name, None)
+    return wind
+
+
 def _config_file(path: str) -> dict[str, Any]:
     import yaml
 
@@ -143,13 +209,17 @@ def build_config(args: argparse.Namespace) -> Any:
         d["profile"] = args.profile
     if args.lam is not None:
         d["lam"] = args.lam
+    if args.frame:
+        d["frames"] = _frames(args.frame)
     ranges = dict(ScenarioConfig().ranges if "ranges" not in d else d["ranges"])
     if args.no_env:
         ranges = {}
-    ranges.update(_ranges(args.range or []))
+    flag_ranges = _ranges(args.range or [])
+    ranges.update(flag_ranges)
     params = {**dict(d.get("params") or {}), **_params(args.param or [])}
     for name in params:  # a fixed value replaces a drawn one
         ranges.pop(name, None)
+    d["wind"] = _wind_setting(args, d, ranges, flag_ranges)
     d["ranges"], d["params"] = ranges, params
     return ScenarioConfig.from_dict(d)
 
@@ -200,12 +270,31 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                     help="shares of built-in shapes and random Algorithm 1 missions")
     sc.add_argument("--profile", choices=("current", "paper"),
                     help="ArduPilot semantics (default current)")
+    sc.add_argument("--frame", metavar="x|+,x|+=A,x=B",
+                    help="frames drawn per flight: one name, a list (equal shares) or shares; "
+                         "names +, x (quads), hexa, hexax, octa; it sets FRAME_CLASS and "
+                         "FRAME_TYPE (default +=0.5,x=0.5)")
+    sc.add_argument("--calm-share", type=float, metavar="F",
+                    help="share of flights in calm air: no wind, no turbulence (default 0.3)")
+    sc.add_argument("--wind-speed", metavar="LOW:HIGH",
+                    help="SIM_WIND_SPD of the windy flights, m/s at full-strength height "
+                         "(uniform; one value fixes it; default 0:8)")
+    sc.add_argument("--wind-dir", metavar="LOW:HIGH",
+                    help="SIM_WIND_DIR of the windy flights, deg, where the wind comes from "
+                         "(default 0:360)")
+    sc.add_argument("--wind-turb", metavar="LOW:HIGH",
+                    help="SIM_WIND_TURB of the windy flights, m/s (default 0:2)")
     sc.add_argument("--param", action="append", metavar="NAME=VALUE",
-                    help="fixed parameter for every flight (repeatable)")
+                    help="fixed parameter for every flight (repeatable); not FRAME_CLASS / "
+                         "FRAME_TYPE (--frame) nor, unless --no-env, the drawn SIM_WIND_SPD / "
+                         "_DIR / _TURB (--wind-speed ...)")
     sc.add_argument("--range", action="append", metavar="NAME=LOW:HIGH",
-                    help="parameter drawn uniformly per flight (repeatable)")
+                    help="parameter drawn uniformly per flight (repeatable); a range of "
+                         "SIM_WIND_SPD / _DIR / _TURB is the windy flights' (as --wind-speed, "
+                         "--wind-dir, --wind-turb)")
     sc.add_argument("--no-env", action="store_true",
-                    help="no drawn wind or extra sensor noise (the reference SITL settings)")
+                    help="no drawn wind or extra sensor noise (the reference SITL settings; "
+                         "add --frame + for the paper's frame)")
     sc.add_argument("--config", metavar="FILE", help="scenario settings (.json/.yaml)")
     out = p.add_argument_group("output")
     out.add_argument("--tables", metavar="GPS,IMU,...",

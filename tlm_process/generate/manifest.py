@@ -10,8 +10,9 @@ are in place: ``flight``, ``status`` (``ok`` / ``failed``), ``scenario`` (everyt
 fly it again, :class:`~tlm_process.generate.scenario.Scenario`), ``summary``, ``timing``,
 ``worker``, ``error`` and ``traceback`` for a failed flight. The last line of a flight counts.
 
-``DS/manifest.parquet``: the journal as a table, one row per flight (written at the end of a
-run, also after Ctrl-C).
+``DS/manifest.parquet``: the journal as a table, one row per flight, with each flight's frame
+and wind as columns (:data:`CONDITION_COLUMNS`; written at the end of a run, also after
+Ctrl-C).
 """
 
 from __future__ import annotations
@@ -26,9 +27,10 @@ from typing import Any
 import pandas as pd
 
 from tlm_process.generate.errors import GenerateError
-from tlm_process.generate.scenario import FlightSpec, Scenario
+from tlm_process.generate.scenario import FlightSpec, Scenario, flight_conditions
 
 __all__ = [
+    "CONDITION_COLUMNS",
     "FORMAT",
     "FORMAT_VERSION",
     "HEADER",
@@ -201,9 +203,17 @@ def _check_entry(rec: Any, where: str) -> None:
         raise GenerateError(f"{where}: a finished flight needs its 'scenario' object; {fix}")
 
 
+#: The frame and wind columns of manifest.parquet (:func:`manifest_frame`), as
+#: :func:`~tlm_process.generate.scenario.flight_conditions` gives them.
+CONDITION_COLUMNS: tuple[str, ...] = ("frame", "frame_class", "frame_type", "calm", "wind_spd",
+                                      "wind_dir", "wind_turb")
+
+
 def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
-    """One row per flight: status, kind, seeds, mission, faults, λ, duration, landing, why the
-    flight ended (``end_reason``: ``landed``, ``crash`` or ``time_cap``, see
+    """One row per flight: status, kind, seeds, mission, frame (``frame`` name,
+    ``frame_class``, ``frame_type``), wind (``calm``; ``wind_spd`` m/s, ``wind_dir`` deg
+    (empty when calm), ``wind_turb`` m/s: the SIM_WIND_* values flown), faults, λ, duration,
+    landing, why the flight ended (``end_reason``: ``landed``, ``crash`` or ``time_cap``, see
     :data:`tlm_sim.flight.END_REASONS`), timings, error, scenario (JSON)."""
     rows = []
     for flight in sorted(entries):
@@ -212,12 +222,15 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
         m = _obj(sc.get("mission"))
         mission = (f"builtin-{m.get('id')}" if m.get("source") == "builtin"
                    else f"random-{m.get('seed')}" if m else None)
+        cond = (flight_conditions(_obj(sc.get("params"))) if sc
+                else dict.fromkeys(CONDITION_COLUMNS))
         rows.append({
             "flight": flight,
             "status": e.get("status"),
             "kind": sc.get("kind"),
             "seed": sc.get("seed"),
             "mission": mission,
+            **{c: cond[c] for c in CONDITION_COLUMNS},
             "faults": ",".join(str(_obj(f).get("fault"))
                                for f in _list(_obj(sc.get("faults")).get("faults"))),
             "faults_recorded": ",".join(str(f) for f in _list(sm.get("faults"))),
@@ -234,18 +247,19 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
             "error": e.get("error"),
             "scenario": json.dumps(sc, sort_keys=True),
         })
-    cols = ["flight", "status", "kind", "seed", "mission", "faults", "faults_recorded", "lam",
-            "duration_s", "waypoints_reached", "landed", "end_reason", "gps_rows",
-            "gps_fault_rows", "wall_s", "fly_s", "worker", "error", "scenario"]
+    cols = ["flight", "status", "kind", "seed", "mission", *CONDITION_COLUMNS, "faults",
+            "faults_recorded", "lam", "duration_s", "waypoints_reached", "landed", "end_reason",
+            "gps_rows", "gps_fault_rows", "wall_s", "fly_s", "worker", "error", "scenario"]
     df = pd.DataFrame(rows, columns=cols)
-    for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows"):
+    for c in ("flight", "seed", "waypoints_reached", "gps_rows", "gps_fault_rows",
+              "frame_class", "frame_type"):
         df[c] = pd.to_numeric(df[c], errors="coerce").round().astype("Int64")
-    for c in ("lam", "duration_s", "wall_s", "fly_s"):
+    for c in ("lam", "duration_s", "wall_s", "fly_s", "wind_spd", "wind_dir", "wind_turb"):
         df[c] = pd.to_numeric(df[c], errors="coerce").astype("float64")
-    for c in ("kind", "mission", "worker", "error"):
-        df[c] = df[c].map(lambda v: None if v is None else str(v))
-    df["landed"] = df["landed"].map(lambda v: v if isinstance(v, bool) else pd.NA
-                                    ).astype("boolean")
+    for c in ("kind", "mission", "frame", "worker", "error"):  # pandas made some None NaN
+        df[c] = df[c].map(lambda v: None if v is None or v != v else str(v))
+    for c in ("landed", "calm"):
+        df[c] = df[c].map(lambda v: v if isinstance(v, bool) else pd.NA).astype("boolean")
     return df
 
 

@@ -38,10 +38,11 @@ from typing import Any
 from tlm_process.generate.errors import ExecutorLost, GenerateError
 from tlm_process.generate.executors import ExecutorHandle, open_executor
 from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprint
-from tlm_process.generate.scenario import ScenarioConfig, sample_scenario
+from tlm_process.generate.scenario import ScenarioConfig, flight_conditions, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
 from tlm_process.generate.writer import DatasetWriter
 from tlm_sim.flight import END_TIME_CAP
+from tlm_sim.frames import FRAMES
 
 __all__ = ["GenerateOptions", "GenerateReport", "generate"]
 
@@ -54,6 +55,8 @@ DRAIN_TIMEOUT_S = 60.0
 MAX_FLIGHTS = 10**8
 #: On Dask, how often the wait for finished flights looks at the connection [s].
 DASK_POLL_S = 1.0
+#: Frames in table order (the report lists its counts so)
+_FRAME_ORDER = {name: i for i, name in enumerate(FRAMES)}
 
 
 @dataclass
@@ -121,6 +124,11 @@ class GenerateReport:
     errors: list[str] = field(default_factory=list)
     #: flights of this run (status ok) still armed at the simulator's time cap: cut off
     capped: list[int] = field(default_factory=list)
+    #: flights of this run (status ok) by frame name
+    frames: dict[str, int] = field(default_factory=dict)
+    #: flights of this run (status ok) in calm air (no wind, no turbulence) and in wind
+    calm: int = 0
+    windy: int = 0
 
     @property
     def ran(self) -> int:
@@ -168,6 +176,9 @@ class GenerateReport:
         if self.alpha_pilot is not None:
             lam += f" (pilot fault share alpha {100 * self.alpha_pilot:.1f} %)"
         out.append(lam)
+        if self.frames:
+            frames = ", ".join(f"{n} {c}" for n, c in self.frames.items())
+            out.append(f"frames, wind       {frames}; {self.calm} calm, {self.windy} windy")
         if self.gps_rows:
             target = ("" if self.target_fault_ratio is None
                       else f" (target {100 * self.target_fault_ratio:.1f} %)")
@@ -618,6 +629,20 @@ def _compact(out: Path, writer: DatasetWriter, report: GenerateReport) -> None:
     report.compact_s = time.perf_counter() - t0
 
 
+def _count_conditions(report: GenerateReport, scenario: Any) -> None:
+    """Count a finished flight's frame and calm / windy air in the report."""
+    if not isinstance(scenario, Mapping) or not isinstance(scenario.get("params"), Mapping):
+        return
+    cond = flight_conditions(scenario["params"])
+    name = str(cond["frame"])
+    report.frames = dict(sorted({**report.frames, name: report.frames.get(name, 0) + 1}.items(),
+                                key=lambda kv: _FRAME_ORDER.get(kv[0], len(_FRAME_ORDER))))
+    if cond["calm"]:
+        report.calm += 1
+    else:
+        report.windy += 1
+
+
 def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWriter,
              report: GenerateReport, config: ScenarioConfig, tables: list[str] | None,
              todo: Iterable[int], n_todo: int, t_start: float) -> None:
@@ -638,6 +663,7 @@ def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWrite
             report.encode_s += float(tm.get("encode_s", 0.0))
             if sm.get("end_reason") == END_TIME_CAP:
                 report.capped.append(int(res["flight"]))
+            _count_conditions(report, res.get("scenario"))
         else:
             report.failed += 1
             report.errors.append(f"flight {res['flight']}: {res.get('error')}")

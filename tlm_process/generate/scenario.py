@@ -42,6 +42,18 @@ any fault time. Streams:
    The paper's four types have no knobs, so their flights draw nothing here and fly the
    type's parameters (the default data set is the same flight for flight as before the
    catalogue: same seed, same flights).
+6. **frame**: the airframe, a name of :data:`tlm_sim.frames.FRAMES` (``+``, ``x``, ...) by
+   :attr:`ScenarioConfig.frames` shares; it sets ``FRAME_CLASS`` / ``FRAME_TYPE``.
+7. **wind**: calm or windy by :attr:`ScenarioConfig.wind`'s ``calm`` share (one uniform
+   draw), then speed, direction and turbulence, each uniform in its range (always all
+   three draws, so the calm share moves no windy value); a calm flight flies
+   ``SIM_WIND_SPD`` 0 and ``SIM_WIND_TURB`` 0 (and no direction), a windy one the three
+   values drawn (rounded to 0.001). The environment stream (3) no longer draws these three:
+   it draws its parameters in name order and the wind names sort last, so the sensor-noise
+   draws are those of the tlm before frames and wind.
+
+Streams 6 and 7 came last, so every draw of streams 0-5 of a flight is what it was before
+(``tests/test_generate_frames.py`` pins it against digests of the earlier sampler).
 
 :func:`fault_preset` names the usual choices of fault types (``--faults`` of ``tlm
 generate``, or ``faults:`` in a configuration): ``paper`` (the default: the paper's four
@@ -66,6 +78,7 @@ import numpy as np
 from tlm_process.generate.errors import GenerateError
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
 from tlm_sim.flight import max_duration_s
+from tlm_sim.frames import FRAMES, FrameError, frame_name
 from tlm_sim.geo import HOME_CMAC
 from tlm_sim.mission import (
     BUILTIN_IDS,
@@ -79,16 +92,23 @@ from tlm_sim.params import ParamError, Params
 from tlm_sim.profiles import PROFILES, profile_params
 
 __all__ = [
+    "DEFAULT_FRAMES",
+    "DEFAULT_RANGES",
+    "DEFAULT_WIND",
+    "FRAME_PARAMS",
     "KINDS",
     "MAGNITUDE_KNOBS",
     "NEW_TYPES",
     "PAPER_TYPES",
     "fault_params",
     "fault_preset",
+    "frame_params",
     "MISSION_SOURCES",
     "FlightSpec",
     "Scenario",
     "ScenarioConfig",
+    "WIND_PARAMS",
+    "flight_conditions",
     "mission_from_recipe",
     "sample_scenario",
 ]
@@ -100,7 +120,7 @@ MISSION_SOURCES: tuple[str, ...] = ("builtin", "random")
 #: Faults of a paper-style flight before the RC fault (shuffled unless ``shuffle=False``).
 PAPER_FIRST: tuple[str, ...] = ("gps", "accel", "engine")
 
-_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE = range(6)
+_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE, _S_FRAME, _S_WIND = range(8)
 
 #: The paper's four fault types (labels 1-4).
 PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
@@ -124,18 +144,30 @@ MAGNITUDE_KNOBS: dict[str, dict[str, tuple[str, Any, Any]]] = {
     "battery": {"volt": ("range", (0.0, 30.0), (9.9, 10.4))},
 }
 
-#: Default draws of the environment (uniform, per flight): wind as ArduPilot's SITL takes it
-#: and sensor noise amplitudes on top of the simulator's built-in noise.
+#: Default draws of the environment (uniform, per flight): sensor noise amplitudes on top of
+#: the simulator's built-in noise (the wind has its own setting, :data:`DEFAULT_WIND`).
 DEFAULT_RANGES: dict[str, tuple[float, float]] = {
-    "SIM_WIND_SPD": (0.0, 5.0),  # m/s at full-strength height
-    "SIM_WIND_DIR": (0.0, 360.0),  # deg, direction the wind comes from
-    "SIM_WIND_TURB": (0.0, 1.0),  # m/s
     "SIM_GYR1_RND": (0.0, 0.5),  # deg/s at full throttle
     "SIM_GYR2_RND": (0.0, 0.5),
     "SIM_BARO_RND": (0.0, 0.2),  # m
     "SIM_BAR2_RND": (0.0, 0.2),  # m (the second barometer has its own noise)
     "SIM_MAG_RND": (0.0, 20.0),  # mGauss
 }
+
+#: Default frame shares: both quad frames, half each (hexa and octa only when asked for).
+DEFAULT_FRAMES: dict[str, float] = {"+": 0.5, "x": 0.5}
+#: The parameters a flight's frame sets (ArduCopter's frame selection).
+FRAME_PARAMS: tuple[str, str] = ("FRAME_CLASS", "FRAME_TYPE")
+
+#: The wind setting's ranges by key -> the SITL parameter each draws (in drawing order).
+WIND_PARAMS: dict[str, str] = {"speed": "SIM_WIND_SPD", "direction": "SIM_WIND_DIR",
+                               "turbulence": "SIM_WIND_TURB"}
+#: Default wind: 30 % calm flights (no wind, no turbulence); the others draw speed U(0, 8) m/s
+#: at full-strength height (SIM_WIND_T_ALT; the square-root profile gives 0.58 of it at 20
+#: m), direction U(0, 360) deg (where it comes from) and turbulence U(0, 2) m/s: the range of
+#: SITL's held-back wind flights (up to 8 m/s, turbulence above the reference's 1).
+DEFAULT_WIND: dict[str, Any] = {"calm": 0.3, "speed": (0.0, 8.0), "direction": (0.0, 360.0),
+                                "turbulence": (0.0, 2.0)}
 
 
 def _shares(d: Mapping[str, Any], known: tuple[str, ...], what: str) -> dict[str, float]:
@@ -192,6 +224,18 @@ class ScenarioConfig:
         sequence_len: (low, high) number of faults of a ``sequence`` flight.
         magnitudes: fault type -> knob -> range or list of choices (see
             :data:`MAGNITUDE_KNOBS`; missing knobs keep their defaults).
+        frames: share of each frame of :data:`tlm_sim.frames.FRAMES` (``+``, ``x``, ``hexa``,
+            ``hexax``, ``octa``; normalised), or a list of names (equal shares). The drawn
+            frame sets ``FRAME_CLASS`` / ``FRAME_TYPE``, which ``params`` and ``ranges`` may
+            therefore not name. Default :data:`DEFAULT_FRAMES` (``+`` and ``x``, half each).
+        wind: ``calm`` (share of flights without wind or turbulence, 0..1) and the windy
+            flights' ranges ``speed`` (``SIM_WIND_SPD``, m/s), ``direction``
+            (``SIM_WIND_DIR``, deg, where the wind comes from) and ``turbulence``
+            (``SIM_WIND_TURB``, m/s), each (low, high) or one number; missing keys take
+            :data:`DEFAULT_WIND`'s. A range of one of these three parameters in ``ranges``
+            is taken as the wind setting's (so older configurations keep working); ``params``
+            may not fix them. ``None``: no wind draw (the three are the simulator's defaults,
+            calm, or what ``ranges`` / ``params`` give every flight).
     """
 
     kinds: Mapping[str, float] = field(
@@ -216,6 +260,9 @@ class ScenarioConfig:
     sequence_types: tuple[str, ...] = NEW_TYPES
     sequence_len: tuple[int, int] = (2, 4)
     magnitudes: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    frames: Mapping[str, float] | str | list[str] = field(
+        default_factory=lambda: dict(DEFAULT_FRAMES))
+    wind: Mapping[str, Any] | None = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -258,19 +305,11 @@ class ScenarioConfig:
         if self.profile not in PROFILES:
             raise GenerateError(f"unknown profile {self.profile!r}; choose from "
                                 f"{', '.join(PROFILES)}")
-        if not isinstance(self.ranges, Mapping) or not isinstance(self.params, Mapping):
-            raise GenerateError("ranges and params must be mappings by parameter name")
-        ranges = {str(k): _range(v, f"range of {k}", -math.inf)
-                  for k, v in sorted(self.ranges.items())}
-        params = {str(k): v for k, v in sorted(self.params.items())}
-        clash = sorted(set(ranges) & set(params))
-        if clash:
-            raise GenerateError(f"{clash[0]} is both drawn (ranges) and fixed (params)")
-        try:  # names and value ranges, both ends of every draw
-            Params({**params, **{k: lo for k, (lo, _) in ranges.items()}})
-            Params({**params, **{k: hi for k, (_, hi) in ranges.items()}})
-        except ParamError as exc:
-            raise GenerateError(f"parameters: {exc}") from None
+        frames = _frame_shares(self.frames)
+        ranges, params, wind = _environment(self.ranges, self.params, self.wind)
+        _check_params(params, ranges, wind, frames)
+        set_(self, "frames", frames)
+        set_(self, "wind", wind)
         set_(self, "ranges", ranges)
         set_(self, "params", {k: float(params[k]) for k in sorted(params)})
         set_(self, "sequence_types", _types(self.sequence_types, "sequence_types"))
@@ -322,6 +361,135 @@ class ScenarioConfig:
             raise GenerateError(f"unknown scenario setting {unknown[0]!r}; known: "
                                 f"{', '.join(sorted(names))}")
         return cls(**dict(d))
+
+
+def _frame_shares(v: Any) -> dict[str, float]:
+    """Validated frame shares in :data:`~tlm_sim.frames.FRAMES` order (a list of names, or one
+    name, or ``"+,x"``: equal shares)."""
+    if isinstance(v, str):
+        v = [x for x in v.split(",") if x.strip()]
+    if isinstance(v, list | tuple):
+        if not v:
+            raise GenerateError(f"frames must name at least one frame of {', '.join(FRAMES)}")
+        v = {str(x).strip().lower(): 1.0 for x in v}
+    elif isinstance(v, Mapping):
+        v = {str(k).strip().lower(): x for k, x in v.items()}
+    return _shares(v, tuple(FRAMES), "frames")
+
+
+def _environment(ranges_in: Any, params_in: Any, wind_in: Any
+                 ) -> tuple[dict[str, tuple[float, float]], dict[str, Any], dict[str, Any] | None]:
+    """(ranges, params, wind) validated: no parameter both drawn and fixed, no frame parameter
+    (the frame sets them), wind ranges given in ``ranges`` moved into the wind setting."""
+    if not isinstance(ranges_in, Mapping) or not isinstance(params_in, Mapping):
+        raise GenerateError("ranges and params must be mappings by parameter name")
+    ranges = {str(k): _range(v, f"range of {k}", -math.inf)
+              for k, v in sorted(ranges_in.items())}
+    params = {str(k): v for k, v in sorted(params_in.items())}
+    clash = sorted(set(ranges) & set(params))
+    if clash:
+        raise GenerateError(f"{clash[0]} is both drawn (ranges) and fixed (params)")
+    framed = [n for n in FRAME_PARAMS if n in ranges or n in params]
+    if framed:
+        raise GenerateError(f"{framed[0]} is set by each flight's frame: choose frames with "
+                            "the frames setting (--frame x, --frame +,x), not with params or "
+                            "ranges")
+    wind = _wind(wind_in, ranges)
+    if wind is not None:
+        fixed = [n for n in WIND_PARAMS.values() if n in params]
+        if fixed:
+            raise GenerateError(f"{fixed[0]} is both drawn (wind) and fixed (params): give the "
+                                "wind a one-value range and no calm share (--wind-speed 5 "
+                                "--calm-share 0), or draw no wind (wind: null, --no-env) and "
+                                "fix it in params")
+    return ranges, params, wind
+
+
+def _wind(w: Any, ranges: dict[str, tuple[float, float]]) -> dict[str, Any] | None:
+    """The validated wind setting (see :class:`ScenarioConfig`), None for no wind draw; a
+    wind parameter's range in ``ranges`` is moved into it (removed from ``ranges``)."""
+    if w is None:
+        return None
+    if not isinstance(w, Mapping):
+        raise GenerateError(f"wind must be a mapping (calm, speed, direction, turbulence) or "
+                            f"null for no wind draw, got {w!r}")
+    unknown = [k for k in w if k not in ("calm", *WIND_PARAMS)]
+    if unknown:
+        raise GenerateError(f"wind: unknown setting {unknown[0]!r}; known: calm, "
+                            f"{', '.join(WIND_PARAMS)}")
+    calm = w.get("calm", DEFAULT_WIND["calm"])
+    if isinstance(calm, bool) or not isinstance(calm, int | float) or not 0 <= calm <= 1:
+        raise GenerateError(f"wind: calm (the share of calm flights, --calm-share) must be a "
+                            f"number in [0, 1], got {calm!r}")
+    out: dict[str, Any] = {"calm": float(calm)}
+    for key, name in WIND_PARAMS.items():
+        if name in ranges:
+            if key in w:
+                raise GenerateError(f"{name}: the windy flights' range is given twice (wind "
+                                    f"{key} and ranges); give it once")
+            v: Any = ranges.pop(name)
+        else:
+            v = w.get(key, DEFAULT_WIND[key])
+        if isinstance(v, int | float) and not isinstance(v, bool):
+            v = (v, v)
+        out[key] = _range(v, f"wind {key} ({name})", -math.inf if key == "direction" else 0.0)
+    return out
+
+
+def _check_params(params: Mapping[str, Any], ranges: Mapping[str, tuple[float, float]],
+                  wind: Mapping[str, Any] | None, frames: Mapping[str, float]) -> None:
+    """GenerateError unless every flight's parameters are valid: both ends of every draw, on
+    every frame with a share."""
+    draws = dict(ranges)
+    if wind is not None:
+        draws.update({name: wind[key] for key, name in WIND_PARAMS.items()})
+    for name, share in frames.items():
+        if share <= 0:
+            continue
+        fp = frame_params(name)
+        try:
+            Params(fp)
+        except ParamError as exc:
+            raise GenerateError(f"frame {name!r}: tlm cannot fly it ({exc})") from None
+        try:  # names and value ranges, both ends of every draw
+            Params({**params, **fp, **{k: lo for k, (lo, _) in draws.items()}})
+            Params({**params, **fp, **{k: hi for k, (_, hi) in draws.items()}})
+        except ParamError as exc:
+            raise GenerateError(f"parameters: {exc}") from None
+
+
+def frame_params(name: str) -> dict[str, float]:
+    """``{"FRAME_CLASS": c, "FRAME_TYPE": t}`` of frame ``name`` of
+    :data:`tlm_sim.frames.FRAMES`."""
+    f = FRAMES[name]
+    return {"FRAME_CLASS": float(f.frame_class), "FRAME_TYPE": float(f.frame_type)}
+
+
+def flight_conditions(params: Mapping[str, Any]) -> dict[str, Any]:
+    """A flight's frame and wind from its parameter overrides (a scenario's ``params``;
+    missing names take tlm's defaults, a value that is no number reads NaN):
+
+    ``frame`` (name in :data:`tlm_sim.frames.FRAMES`, None for a combination it lacks),
+    ``frame_class``, ``frame_type``, ``calm`` (no mean wind and no turbulence),
+    ``wind_spd`` (m/s at full-strength height), ``wind_dir`` (deg, where the wind comes from;
+    NaN when calm) and ``wind_turb`` (m/s)."""
+    defaults = Params.defaults()
+
+    def num(name: str) -> float:
+        v = params.get(name, defaults[name])
+        ok = isinstance(v, int | float) and not isinstance(v, bool)
+        return float(v) if ok else math.nan
+
+    cls, typ = num("FRAME_CLASS"), num("FRAME_TYPE")
+    try:
+        name: str | None = frame_name(cls, typ)
+    except FrameError:
+        name = None
+    spd, turb = num("SIM_WIND_SPD"), num("SIM_WIND_TURB")
+    calm = spd == 0 and turb == 0
+    return {"frame": name, "frame_class": cls, "frame_type": typ, "calm": calm,
+            "wind_spd": spd, "wind_dir": math.nan if calm else num("SIM_WIND_DIR"),
+            "wind_turb": turb}
 
 
 def _types(v: Any, what: str) -> tuple[str, ...]:
@@ -511,6 +679,8 @@ class Scenario:
         lam: λ the holds were scaled by.
         mission_sha1: hash of the mission's waypoints, checked when the mission is rebuilt.
         dropped: faults left out because they would start after the flight can end.
+        frame: the frame's name (:data:`tlm_sim.frames.FRAMES`); ``params`` holds its
+            ``FRAME_CLASS`` / ``FRAME_TYPE`` (records of a tlm before frames: ``+``).
     """
 
     flight: int
@@ -523,6 +693,7 @@ class Scenario:
     lam: float = 1.0
     mission_sha1: str | None = None
     dropped: int = 0
+    frame: str = "+"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -541,11 +712,23 @@ class Scenario:
         """Fault types of the schedule, in order."""
         return [f["fault"] for f in self.faults.get("faults", [])]
 
+    @property
+    def conditions(self) -> dict[str, Any]:
+        """The flight's frame and wind (:func:`flight_conditions` of its parameters)."""
+        return flight_conditions(self.params)
+
     def realise(self) -> FlightSpec:
         """Mission, fault schedule, parameters, seed and profile to fly (``tlm_sim.fly``).
 
         Raises GenerateError when the rebuilt mission's hash differs from ``mission_sha1``
-        (the scenario was drawn by a tlm whose mission generator differs)."""
+        (the scenario was drawn by a tlm whose mission generator differs), or when ``frame``
+        is not the frame of the parameters' ``FRAME_CLASS`` / ``FRAME_TYPE`` (an edited
+        record)."""
+        flown = self.conditions["frame"]
+        if flown != self.frame:
+            raise GenerateError(f"flight {self.flight}: frame {self.frame!r}, but its "
+                                f"parameters FRAME_CLASS / FRAME_TYPE are those of "
+                                f"{flown!r}")
         mission = mission_from_recipe(self.mission)
         if self.mission_sha1 is not None and mission_hash(mission) != self.mission_sha1:
             raise GenerateError(f"flight {self.flight}: the mission rebuilt from its recipe "
@@ -689,6 +872,11 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     params = dict(cfg.params)
     for name, (lo, hi) in cfg.ranges.items():
         params[name] = round(float(env.uniform(lo, hi)), 3)
+    frame = _pick(_stream(run_seed, flight, _S_FRAME), cfg.frames)
+    params.update(frame_params(frame))
+    if cfg.wind is not None:
+        params.update(_draw_wind(_stream(run_seed, flight, _S_WIND), cfg.wind))
+    params = dict(sorted(params.items()))
     seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
     seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
     # drop faults that could not happen: past the longest the flight can last (whole seconds)
@@ -709,4 +897,15 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     return Scenario(flight=flight, seed=seed, kind=kind, mission=recipe,
                     faults=schedule.to_dict(), params=params, profile=cfg.profile,
                     lam=cfg.lam, mission_sha1=mission_hash(mission),
-                    dropped=len(drawn) - len(kept))
+                    dropped=len(drawn) - len(kept), frame=frame)
+
+
+def _draw_wind(rng: np.random.Generator, wind: Mapping[str, Any]) -> dict[str, float]:
+    """The wind parameters of one flight (stream 7): calm (speed and turbulence 0) with the
+    ``calm`` share, else speed, direction and turbulence uniform in their ranges (rounded
+    to 0.001). All four draws are made either way."""
+    calm = float(rng.random()) < wind["calm"]
+    drawn = {name: round(float(rng.uniform(*wind[key])), 3) for key, name in WIND_PARAMS.items()}
+    if calm:
+        return {"SIM_WIND_SPD": 0.0, "SIM_WIND_TURB": 0.0}
+    return drawn
