@@ -167,3 +167,21 @@ def test_mixer_moments_follow_the_demand_on_every_frame(name, roll, pitch, yaw):
             assert math.copysign(1.0, moment) == math.copysign(1.0, demand)
         else:
             assert abs(moment) < 1e-2
+
+
+# ----------------------------------------------------------------------------- the API
+def test_fly_takes_a_frame_by_name():
+    """``fly(frame="x")`` is ``fly(params={"FRAME_TYPE": 1})``; the frame is in the meta; a
+    frame that params contradict, or an unknown one, is a ValueError before any flying."""
+    from tlm_sim import fly
+
+    by_name = fly(1, frame="x", seed=3)
+    by_params = fly(1, params=Params({"FRAME_TYPE": 1}), seed=3)
+    assert by_name.meta["frame"] == by_params.meta["frame"] == "x"
+    assert by_name.tables["RCOU"].equals(by_params.tables["RCOU"])
+    assert fly(1, seed=3).meta["frame"] == "+"
+    assert fly(1, frame="x", params={"FRAME_TYPE": 1, "WPNAV_SPEED": 500}).meta["frame"] == "x"
+    with pytest.raises(ValueError, match="params set FRAME_TYPE = 0"):
+        fly(1, frame="x", params={"FRAME_TYPE": 0})
+    with pytest.raises(ValueError, match="unknown frame 'y6'"):
+        fly(1, frame="y6")

@@ -43,7 +43,7 @@ from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
-from tlm_sim.frames import MAX_MOTORS
+from tlm_sim.frames import FRAMES, MAX_MOTORS, frame_for
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
@@ -414,12 +414,45 @@ def end_reason(disarm_time_s: float, err_rows: np.ndarray) -> str:
     return END_CRASH if bool(np.any(err_rows[:, 1] == ERR_CRASH_CHECK)) else END_LANDED
 
 
+def _checked_mission(mission: Mission | int, seed: int) -> Mission:
+    """The Mission to fly (a built-in one for 1-4); TypeError / ValueError for a bad mission
+    or seed."""
+    if isinstance(mission, bool) or not isinstance(mission, Mission | int | np.integer):
+        raise TypeError(f"mission must be a Mission or a built-in number 1-4, got {mission!r}")
+    if not isinstance(mission, Mission):
+        mission = builtin_mission(int(mission))
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    return mission
+
+
+def _with_frame(params: Params | Mapping[str, float] | None,
+                frame: str | None) -> Params | Mapping[str, float] | None:
+    """``params`` with FRAME_CLASS / FRAME_TYPE of the frame named ``frame`` (see :func:`fly`)."""
+    if frame is None:
+        return params
+    if frame not in FRAMES:
+        raise ValueError(f"unknown frame {frame!r}; tlm has: {', '.join(FRAMES)}")
+    f = FRAMES[frame]
+    want = {"FRAME_CLASS": float(f.frame_class), "FRAME_TYPE": float(f.frame_type)}
+    given = params if params is not None else {}
+    explicit = given.changed() if isinstance(given, Params) else given
+    clash = [k for k, v in want.items() if k in explicit and float(explicit[k]) != v]
+    if clash:
+        raise ValueError(f"frame {frame!r} is FRAME_CLASS {f.frame_class} / FRAME_TYPE "
+                         f"{f.frame_type}, but params set {clash[0]} = {explicit[clash[0]]:g}")
+    if isinstance(given, Params):
+        return given.updated(want)
+    return {**given, **want}
+
+
 def fly(
     mission: Mission | int,
     faults: FaultSchedule | Sequence[Any] | None = None,
     params: Params | Mapping[str, float] | None = None,
     seed: int = 0,
     profile: str = "current",
+    frame: str | None = None,
 ) -> FlightLog:
     """Fly one mission and return its FlightLog.
 
@@ -433,13 +466,12 @@ def fly(
         seed: random seed of all noise draws; a flight is a pure function of its arguments.
         profile: "current" (ArduPilot as in the reference logs) or "paper" (the paper's
             ArduPilot 4.1/4.2 semantics), see :mod:`tlm_sim.profiles`.
+        frame: a frame of :data:`tlm_sim.frames.FRAMES` (``"+"``, ``"x"``, ``"hexa"``,
+            ``"hexax"``, ``"octa"``): sets FRAME_CLASS / FRAME_TYPE (a ValueError when
+            ``params`` sets them to another frame); None: the frame of ``params``.
     """
-    if isinstance(mission, bool) or not isinstance(mission, Mission | int | np.integer):
-        raise TypeError(f"mission must be a Mission or a built-in number 1-4, got {mission!r}")
-    if not isinstance(mission, Mission):
-        mission = builtin_mission(int(mission))
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    params = _with_frame(params, frame)
+    mission = _checked_mission(mission, seed)
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
 
     p = profile_params(profile, params)
@@ -492,6 +524,7 @@ def fly(
         "max_duration_s": duration,
         "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
         "unmodelled_params": p.unmodelled(),
+        "frame": frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"]).name,
     }
     log = FlightLog.from_buffers(
         {n: bufs[n] for n in L.LOG_ORDER},
