@@ -5,7 +5,7 @@ NUMBA_CACHE_DIR to an empty folder for a truly cold number) with the CPU time it
 process and in the compile workers (tlm_sim.precompile), the warm real-time factor (simulated
 seconds per wall second) over several flights, and the peak memory.
 
-    python benchmarks/bench_fly.py [--flights 5] [--mission 1] [--compile-procs N]
+    python benchmarks/bench_fly.py [--flights 5] [--mission 1] [--frame x] [--compile-procs N]
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--flights", type=int, default=5)
     ap.add_argument("--mission", type=int, default=1)
+    ap.add_argument("--frame", default=None,
+                    help="frame of tlm_sim.frames (+, x, hexa, hexax, octa; default: +)")
     ap.add_argument("--compile-procs", type=int, default=None,
                     help="processes for a cold compile (TLM_COMPILE_PROCS; default: CPU count)")
     args = ap.parse_args()
@@ -34,7 +36,7 @@ def main() -> None:
 
     t_import = time.perf_counter() - t0
     t0 = time.perf_counter()
-    log = fly(args.mission, seed=0)
+    log = fly(args.mission, seed=0, frame=args.frame)
     t_first = time.perf_counter() - t0
     sim_first = log.meta["duration_s"]
     cpu = [resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)]
@@ -62,14 +64,15 @@ def main() -> None:
     try:
         for k in range(args.flights):
             t = time.perf_counter()
-            log = fly(args.mission, seed=k + 1)
+            log = fly(args.mission, seed=k + 1, frame=args.frame)
             walls.append(time.perf_counter() - t)
             sims.append(log.meta["duration_s"])
     finally:
         F.run_flight = orig
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     sim_total = sum(sims)
-    print(f"{args.flights} flights of mission {args.mission}: {sim_total:.0f} s simulated "
+    print(f"{args.flights} flights of mission {args.mission} ({log.meta['frame']} frame): "
+          f"{sim_total:.0f} s simulated "
           "(real-time factor = simulated s / wall s; mean over all flights, and best flight)")
     for label, w in (("numba loop only ", loop_walls), ("fly() end to end", walls)):
         best = max(s / x for s, x in zip(sims, w, strict=True))

@@ -321,8 +321,8 @@ _add("SIM_VIB_MOT_MULT", "", 0, 100, "scale of motor vibration amplitude (§2.3)
 _add("SIM_VIB_MOT_HMNC", "", 0, 255, "motor vibration harmonics: bit k-1 adds harmonic k (§2.3)",
      True)
 _add("SIM_VIB_MOT_MASK", "", 0, 255,
-     "extra motors ORed into the vibrating motor mask (for external simulators; tlm's quad "
-     "vibrates on motors 1-4 always, higher bits name no motor and add nothing) (§2.3)", True)
+     "extra outputs ORed into the vibrating motor mask (the frame's motors 1..n always "
+     "vibrate; bits of outputs without a motor add nothing) (§2.3)", True)
 for _b in ("BARO", "BAR2", "BAR3"):  # baros 1 and 2 are modelled (sitl-faults.md §3), 3 is not
     _add(f"SIM_{_b}_RND", "m", 0, 100, f"{_b} altitude noise amplitude, uniform (§2.5)",
          modelled=_b != "BAR3")
@@ -360,7 +360,9 @@ _add("SIM_RC_FAIL", "", 0, 2,
 _add("SIM_RC_CHANCOUNT", "", 1, 32, "simulated RC channels (§2.1)", True, modelled=False)
 _add("SIM_ENGINE_MUL", "", 0, 2,
      "PWM above 1000 of the SIM_ENGINE_FAIL motors is scaled by this (engine fault, §1.15)")
-_add("SIM_ENGINE_FAIL", "", 0, _U32, "bit mask of motors SIM_ENGINE_MUL acts on (§1.15)", True)
+_add("SIM_ENGINE_FAIL", "", 0, _U32,
+     "bit mask of motors SIM_ENGINE_MUL acts on: bit k-1 = motor k = SERVOk of the frame "
+     "(quad X: bit 0 is the front-right motor; tlm_sim.frames) (§1.15)", True)
 _add("SIM_BATT_VOLTAGE", "V", 0, 100, "simulated battery voltage (§1.11)")
 _add("SIM_BATT_CAP_AH", "Ah", 0, 1000, "simulated battery capacity, 0 = infinite (§1.11)")
 _add("SIM_WIND_SPD", "m/s", 0, 100,
