@@ -14,12 +14,15 @@ import warnings
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-__all__ = ["UsageError", "WRITE_PROBE", "foreign_entries", "fraction", "int_at_least",
-           "is_one_of", "number", "positive_number", "prepare_out", "show_param_warnings",
-           "whole_number"]
+__all__ = ["OUT_MARK", "UsageError", "WRITE_PROBE", "add_overwrite", "check_writable_file",
+           "foreign_entries",
+           "fraction", "int_at_least", "is_one_of", "number", "positive_number", "prepare_out",
+           "show_param_warnings", "whole_number"]
 
 #: the empty file written and removed to check that an output folder can be written
 WRITE_PROBE = ".tlm-write-test"
+#: the file by which a folder says that a tlm command wrote it (its text: the command)
+OUT_MARK = ".tlm-out"
 
 
 class UsageError(Exception):
@@ -79,22 +82,80 @@ def fraction(*, zero: bool) -> Callable[[str], float]:
 
 
 # ------------------------------------------------------------------ output folder --------
-def prepare_out(out: str | os.PathLike) -> Path:
+def prepare_out(out: str | os.PathLike, command: str | None = None,
+                overwrite: bool = False) -> Path:
     """Create output folder ``out`` (and its parents) and check that a file can be written
     in it (an empty probe file, removed at once).
 
+    With ``command`` (the subcommand's name) the folder is that command's alone: a folder
+    that holds anything (hidden entries aside) is refused unless ``overwrite``, and then only
+    if a tlm command wrote it (its :data:`OUT_MARK` file): its whole content is removed
+    first, so two runs never mix. The folder is marked as ``command``'s. Call it before the
+    command's work, so a refused folder costs nothing.
+
     Raises:
-        UsageError: ``cannot write to output folder OUT: REASON``.
+        UsageError: ``cannot write to output folder OUT: REASON``, or a non-empty folder
+            without ``overwrite``, or one that tlm did not write.
     """
     d = Path(out)
+    if command is not None and d.exists():
+        if not d.is_dir():
+            raise UsageError(f"output folder {d} is a file")
+        held = foreign_entries(d)
+        if held and not overwrite:
+            raise UsageError(
+                f"output folder {d} is not empty ({len(held)} entries: "
+                f"{', '.join(held[:3])}{', ...' if len(held) > 3 else ''}); choose a new "
+                f"folder, or pass --overwrite to replace what tlm wrote there")
+        if held:
+            if not (d / OUT_MARK).is_file():
+                raise UsageError(f"--overwrite: {d} was not written by tlm (no {OUT_MARK} "
+                                 f"file), so tlm will not delete it; choose another folder")
+            _clear(d)
     try:
         d.mkdir(parents=True, exist_ok=True)
         probe = d / WRITE_PROBE
         probe.write_bytes(b"")
         probe.unlink()
+        if command is not None:
+            (d / OUT_MARK).write_text(command + "\n")
     except OSError as e:
         raise UsageError(f"cannot write to output folder {d}: {e.strerror or e}") from None
     return d
+
+
+def _clear(d: Path) -> None:
+    """Remove everything in folder ``d`` (a folder tlm wrote)."""
+    import shutil
+
+    for p in d.iterdir():
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p)
+        else:
+            p.unlink()
+
+
+def check_writable_file(path: str | os.PathLike, option: str) -> None:
+    """Raise UsageError unless file ``path`` can be written (it is writable, or it does not
+    exist and its folder is writable): checked before a command's work, not after it."""
+    p = Path(path)
+    if p.is_dir():
+        raise UsageError(f"{option} {p}: is a folder")
+    parent = p.parent if str(p.parent) else Path(".")
+    if p.exists():
+        ok = os.access(p, os.W_OK)
+    else:
+        ok = parent.is_dir() and os.access(parent, os.W_OK | os.X_OK)
+    if not ok:
+        why = "no such folder" if not parent.is_dir() else "permission denied"
+        raise UsageError(f"{option} {p}: cannot be written ({why})")
+
+
+def add_overwrite(parser: argparse.ArgumentParser) -> None:
+    """The ``--overwrite`` flag of a command that writes a folder (see :func:`prepare_out`)."""
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace the output folder whole if an earlier tlm run wrote it "
+                             "(default: refuse a folder that is not empty)")
 
 
 def foreign_entries(d: Path) -> list[str]:

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from tlm_process.binlog import CONVERT_FORMATS, check_types, open_log, write_tables
-from tlm_process.cliutil import UsageError, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, prepare_out
 
 __all__ = ["add_parser", "run"]
 
@@ -28,6 +28,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="csv (default), parquet, or log (Mission Planner text log)")
     c.add_argument("--types", metavar="GPS,IMU,...",
                    help="only these message types (default all)")
+    add_overwrite(c)
     c.set_defaults(func=run)
     return c
 
@@ -40,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
     types = [t.strip().upper() for t in args.types.split(",") if t.strip()] if args.types else None
     log, tables, damage = open_log(args.log)
     names = check_types(log, types)
-    out = prepare_out(args.out)  # only once the log is known to be readable
+    # only once the log is known to be readable
+    out = prepare_out(args.out, "convert", args.overwrite)
     files, rows = write_tables(log, tables, names, out, fmt, Path(args.log).stem, damage)
     print(f"converted          {args.log} -> {out}/ ({len(files)} files, {fmt}, "
           f"{len(rows)} message types, {sum(rows.values())} messages)")

@@ -13,7 +13,7 @@ import argparse
 import json
 from pathlib import Path
 
-from tlm_process.cliutil import UsageError, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, check_writable_file, prepare_out
 from tlm_process.crosscheck.compare import (
     DEFAULT_MAX_FLIGHT_TIME_DIFF,
     DEFAULT_MAX_TRAJECTORY_RMS_M,
@@ -44,6 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     c.add_argument("--max-trajectory-rms", type=float, default=None, metavar="M",
                    help=f"fail when the trajectory RMS exceeds M metres (issue target "
                         f"{DEFAULT_MAX_TRAJECTORY_RMS_M})")
+    add_overwrite(c)
     c.set_defaults(func=run)
     return c
 
@@ -55,6 +56,9 @@ def run(args: argparse.Namespace) -> int:
 
     if not Path(args.log).is_file():
         raise FileNotFoundError(2, "no such log", args.log)
+    if args.json:
+        check_writable_file(args.json, "--json")
+    out = prepare_out(args.out, "crosscheck", args.overwrite) if args.out else None
     try:
         r = crosscheck(args.log, args.sidecar, args.seed)
     except ScenarioError as e:
@@ -75,8 +79,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"checks: flight time {'pass' if c['flight_time']['pass'] else 'FAIL'}, trajectory "
           f"RMS {'pass' if c['trajectory_rms']['pass'] else 'FAIL'}, signatures "
           f"{c['signatures']['value']}")
-    if args.out:
-        out = prepare_out(args.out)
+    if out is not None:
         plot(r, out)
         (out / "report.md").write_text(text)
         r["_log"].write_bin(out / "tlm_flight.bin")

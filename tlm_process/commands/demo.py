@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
-from tlm_process.cliutil import prepare_out
+from tlm_process.cliutil import OUT_MARK, add_overwrite, prepare_out
 from tlm_process.commands import process
 from tlm_process.commands.fly import FORMATS, fault_lines, write_faults
 
@@ -20,6 +21,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     d.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
     d.add_argument("--seed", type=int, default=1,
                    help="seed of the flight and of its fault sequence (default 1)")
+    add_overwrite(d)
     d.set_defaults(func=run)
     return d
 
@@ -38,7 +40,9 @@ def run(args: argparse.Namespace) -> int:
     from tlm_sim import fly
     from tlm_sim.faults import FaultSchedule
 
-    out = prepare_out(args.out)
+    mark = Path(args.out) / OUT_MARK
+    again = mark.is_file() and mark.read_text().strip() == "demo"  # an earlier demo's folder
+    out = prepare_out(args.out, "demo", overwrite=again or args.overwrite)
     schedule = FaultSchedule.paper(args.seed)
     print(f"flying built-in mission 1 (paper-style, ~90 waypoints) with the paper's fault "
           f"sequence GPS, accel, engine, RC (seed {args.seed}) ...")

@@ -12,7 +12,15 @@ import sys
 import time
 from pathlib import Path
 
-from tlm_process.cliutil import fraction, int_at_least, prepare_out, whole_number
+from tlm_process.cliutil import (
+    UsageError,
+    add_overwrite,
+    check_writable_file,
+    fraction,
+    int_at_least,
+    prepare_out,
+    whole_number,
+)
 from tlm_process.commands.process import report_user_errors
 
 __all__ = ["MODEL_NAMES", "TABLE_NAMES", "add_parser", "run"]
@@ -97,6 +105,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    add_overwrite(p)
     p.set_defaults(func=run)
     return p
 
@@ -140,8 +149,11 @@ def _check(args: argparse.Namespace, models: list[str]) -> None:
                             "uses the data set's test flights or --folds)")
     if args.split == "random" and args.test_frac is not None and args.folds is not None:
         raise EvaluateError("--test-frac and --folds exclude each other")
-    if args.json and Path(args.json).is_dir():
-        raise EvaluateError(f"--json {args.json}: is a folder")
+    if args.json:
+        try:
+            check_writable_file(args.json, "--json")
+        except UsageError as e:
+            raise EvaluateError(str(e)) from None
     if "CNN" in models:
         from tlm_process.evaluate.cnn import require_torch
 
@@ -169,13 +181,13 @@ def _run(args: argparse.Namespace) -> int:
         if not quiet:
             print(msg, file=sys.stderr, flush=True)
 
+    out = prepare_out(args.out, "evaluate", args.overwrite) if args.out else None
     ds = load_dataset(args.dataset, tables)
     transfer = None
     if args.test_on:
         say(f"reading {len(args.test_on)} transfer log(s) with the data set's options and "
             f"scaler")
         transfer = load_transfer(args.test_on, ds, tables)
-    out = prepare_out(args.out) if args.out else None
     np.seterr(all="ignore")
     results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
                        folds=args.folds, test_frac=args.test_frac, transfer=transfer,

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tlm_process.cliutil import UsageError, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, prepare_out
 
 if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs it
     from tlm_sim.faults import FaultSchedule, Trigger
@@ -278,6 +278,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "(its mission, faults, parameters and seed; identical tables)")
     f.add_argument("--flight", type=int, metavar="N", help="flight number for --from-manifest")
     f.add_argument("--no-plot", action="store_true", help="skip trajectory.png")
+    add_overwrite(f)
     f.set_defaults(func=run)
     return f
 
@@ -299,7 +300,7 @@ def run(args: argparse.Namespace) -> int:
         profile = _check_profile(args.profile)
         schedule = _load_schedule(args, mission, profile_params(profile, params))
         seed = args.seed
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, "fly", args.overwrite)
     t0 = time.perf_counter()
     faults = schedule if schedule is not None else (changes or None)
     log = fly(mission, faults=faults, params=params, seed=seed, profile=profile)

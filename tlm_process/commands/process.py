@@ -14,6 +14,7 @@ from pathlib import Path
 
 from tlm_process.cliutil import (
     UsageError,
+    add_overwrite,
     fraction,
     is_one_of,
     positive_number,
@@ -114,6 +115,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                         "interrupted, failed flights) anyway: its finished flights only "
                         "(recorded in report.json)")
     p.add_argument("--quiet", action="store_true", help="no per-flight lines")
+    add_overwrite(p)
     p.set_defaults(func=run)
     return p
 
@@ -190,7 +192,7 @@ def _run(args: argparse.Namespace) -> int:
     if is_one_of(out, (p for _, p in sources)):
         raise PipelineError("the output folder is one of the inputs", source=str(out))
     t0 = time.perf_counter()
-    prepare_out(out)
+    prepare_out(out, "process", getattr(args, "overwrite", False))
     processed = []
     plots: list[str] = []
     seen: dict[str, int] = {}

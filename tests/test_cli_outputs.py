@@ -1,0 +1,128 @@
+"""Output folders and files are safe (issue 22, "Data safety"): a command never mixes its
+output with what a folder already holds, refuses a non-empty folder unless told
+``--overwrite`` (and then replaces only what tlm wrote, whole), and checks that its outputs can
+be written before its work."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import reference_path
+from tlm_process.cli import main
+from tlm_process.cliutil import OUT_MARK, UsageError, check_writable_file, prepare_out
+
+FLY = ["fly", "--mission", "1", "--format", "csv", "--no-plot"]
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    return err
+
+
+def test_prepare_out_rules(tmp_path):
+    fresh = prepare_out(tmp_path / "a" / "b", "fly")
+    assert (fresh / OUT_MARK).read_text() == "fly\n"
+    (fresh / "GPS.csv").write_text("old")
+    (fresh / "sub").mkdir()
+    (fresh / "sub" / "x").write_text("old")
+    with pytest.raises(UsageError, match="not empty .*--overwrite"):
+        prepare_out(fresh, "fly")
+    assert (fresh / "GPS.csv").exists()
+    prepare_out(fresh, "convert", overwrite=True)  # replaced whole: nothing of the old run
+    assert sorted(p.name for p in fresh.iterdir()) == [OUT_MARK]
+    assert (fresh / OUT_MARK).read_text() == "convert\n"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("precious")
+    with pytest.raises(UsageError, match="not written by tlm .* will not delete"):
+        prepare_out(mine, "fly", overwrite=True)
+    assert (mine / "notes.txt").read_text() == "precious"
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(UsageError, match="is a file"):
+        prepare_out(tmp_path / "file", "fly")
+    hidden = tmp_path / "hidden"
+    hidden.mkdir()
+    (hidden / ".keep").write_text("")
+    prepare_out(hidden, "fly")  # hidden entries do not make a folder non-empty
+
+
+def test_fly_refuses_a_used_folder_and_overwrite_replaces_it_whole(tmp_path, capsys):
+    out = tmp_path / "flight"
+    assert main([*FLY, "--out", str(out)]) == 0
+    first = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    (out / "trajectory.png").write_bytes(b"from an earlier run with a plot")
+    capsys.readouterr()
+    assert main([*FLY, "--seed", "3", "--out", str(out)]) == 2
+    assert "not empty" in _one_line_error(capsys)
+    assert {p.name: p.stat().st_mtime_ns for p in out.iterdir() if p.name in first} == first
+    assert main([*FLY, "--seed", "3", "--out", str(out), "--overwrite"]) == 0
+    assert not (out / "trajectory.png").exists()  # nothing of the earlier run is left
+    assert (out / "GPS.csv").is_file() and (out / "faults.json").is_file()
+
+
+def test_fly_into_a_data_set_or_foreign_folder_is_one_line(tmp_path, capsys):
+    ds = tmp_path / "ds"
+    ds.mkdir()
+    (ds / "manifest.json").write_text("{}")
+    (ds / "flights").mkdir()
+    assert main([*FLY, "--out", str(ds)]) == 2
+    _one_line_error(capsys)
+    assert sorted(p.name for p in ds.iterdir()) == ["flights", "manifest.json"]
+    assert main([*FLY, "--out", str(ds), "--overwrite"]) == 2
+    assert "not written by tlm" in _one_line_error(capsys)
+    assert (ds / "manifest.json").exists()
+
+
+def test_convert_refuses_a_used_folder(tmp_path, capsys):
+    src = reference_path("normal_s11.bin")
+    out = tmp_path / "conv"
+    assert main(["convert", str(src), "--out", str(out), "--types", "GPS"]) == 0
+    capsys.readouterr()
+    assert main(["convert", str(src), "--out", str(out), "--types", "ATT"]) == 2
+    _one_line_error(capsys)
+    assert main(["convert", str(src), "--out", str(out), "--types", "ATT",
+                 "--overwrite"]) == 0
+    assert not list(out.glob("*GPS*")) and list(out.glob("*ATT*"))
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_unwritable_outputs_fail_before_the_work(tmp_path, capsys):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        t0 = time.perf_counter()
+        assert main(["crosscheck", str(reference_path("normal_s11.bin")),
+                     "--json", str(locked / "r.json")]) == 2
+        assert time.perf_counter() - t0 < 5.0  # refused before flying
+        assert "--json" in _one_line_error(capsys)
+    finally:
+        locked.chmod(0o700)
+
+
+def test_check_writable_file(tmp_path):
+    check_writable_file(tmp_path / "new.json", "--json")
+    with pytest.raises(UsageError, match="is a folder"):
+        check_writable_file(tmp_path, "--json")
+    with pytest.raises(UsageError, match="no such folder"):
+        check_writable_file(tmp_path / "missing" / "r.json", "--json")
+    ro = tmp_path / "ro.json"
+    ro.write_text("{}")
+    ro.chmod(0o400)
+    if os.geteuid() != 0:
+        with pytest.raises(UsageError, match="permission denied"):
+            check_writable_file(ro, "--json")
+
+
+def test_crosscheck_json_into_a_missing_folder_fails_at_once(tmp_path, capsys):
+    t0 = time.perf_counter()
+    assert main(["crosscheck", str(reference_path("normal_s11.bin")),
+                 "--json", str(tmp_path / "no" / "r.json")]) == 2
+    assert time.perf_counter() - t0 < 5.0
+    assert "no such folder" in _one_line_error(capsys)
+    assert not Path(tmp_path / "no").exists()
