@@ -126,3 +126,23 @@ def test_crosscheck_json_into_a_missing_folder_fails_at_once(tmp_path, capsys):
     assert time.perf_counter() - t0 < 5.0
     assert "no such folder" in _one_line_error(capsys)
     assert not Path(tmp_path / "no").exists()
+
+
+@pytest.mark.parametrize("bad", [["--workers", "0"], ["--dask-local", "0"],
+                                 ["--scheduler", "bogus"], ["--executor", "thread",
+                                                            "--workers", "-1"]])
+def test_generate_checks_every_option_before_writing_a_data_set(tmp_path, capsys, bad):
+    """A bad executor option is refused before the data set is created, so the corrected
+    command is not refused as 'a data set made with other settings'."""
+    out = tmp_path / "ds"
+    assert main(["generate", "--flights", "1", "--out", str(out), *bad]) == 2
+    _one_line_error(capsys)
+    assert not out.exists()
+
+
+def test_generate_reaches_the_scheduler_before_writing(tmp_path, capsys):
+    out = tmp_path / "ds"
+    assert main(["generate", "--flights", "1", "--out", str(out), "--scheduler",
+                 "tcp://127.0.0.1:1", "--connect-timeout", "1"]) == 2
+    assert "cannot reach the Dask scheduler" in _one_line_error(capsys)
+    assert not out.exists()

@@ -40,7 +40,8 @@ from typing import Any
 
 from tlm_process.generate.errors import ExecutorLost, GenerateError
 
-__all__ = ["AUTO_THREADS_MAX", "EXECUTORS", "ExecutorHandle", "open_executor"]
+__all__ = ["AUTO_THREADS_MAX", "EXECUTORS", "ExecutorHandle", "check_executor_options",
+           "open_executor"]
 
 #: Local executor kinds.
 EXECUTORS: tuple[str, ...] = ("auto", "process", "thread")
@@ -174,6 +175,33 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+def check_executor_options(kind: str = "auto", workers: int | None = None, *,
+                           scheduler: str | None = None, dask_local: int | None = None) -> None:
+    """Raise GenerateError for executor options that cannot work (exclusive options, an
+    unknown executor, a worker count < 1, a scheduler address without host and port),
+    without starting anything: ``tlm generate`` checks them before it writes a data set."""
+    if scheduler is not None and dask_local is not None:
+        raise GenerateError("--scheduler and --dask-local are exclusive")
+    if dask_local is not None:
+        _check_workers(dask_local, "--dask-local")
+    if scheduler is not None:
+        from urllib.parse import urlsplit
+
+        text = str(scheduler)
+        parts = urlsplit(text if "://" in text else "tcp://" + text)
+        try:
+            port = parts.port
+        except ValueError:
+            port = None
+        if not parts.hostname or port is None:
+            raise GenerateError(f"--scheduler {text!r}: give the address as tcp://HOST:PORT")
+    if scheduler is None and dask_local is None:
+        if kind not in EXECUTORS:
+            raise GenerateError(f"unknown executor {kind!r}; choose from {', '.join(EXECUTORS)}")
+        if workers is not None:
+            _check_workers(workers, "--workers")
 
 
 def open_executor(kind: str = "auto", workers: int | None = None, *,

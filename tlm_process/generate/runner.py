@@ -36,7 +36,11 @@ from pathlib import Path
 from typing import Any
 
 from tlm_process.generate.errors import ExecutorLost, GenerateError
-from tlm_process.generate.executors import ExecutorHandle, open_executor
+from tlm_process.generate.executors import (
+    ExecutorHandle,
+    check_executor_options,
+    open_executor,
+)
 from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprint
 from tlm_process.generate.scenario import ScenarioConfig, flight_conditions, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
@@ -219,11 +223,18 @@ def _check_tables(tables: Sequence[str] | None) -> list[str] | None:
     return sorted(out)
 
 
+def _open(opts: GenerateOptions) -> ExecutorHandle:
+    return open_executor(opts.executor, opts.workers, scheduler=opts.scheduler,
+                         dask_local=opts.dask_local, timeout_s=opts.connect_timeout_s)
+
+
 def _check(opts: GenerateOptions) -> list[str] | None:
     for what, v, lo in (("--flights", opts.flights, 1), ("--seed", opts.seed, 0),
                         ("pilot flights", opts.pilot_flights, 1)):
         if isinstance(v, bool) or not isinstance(v, int) or v < lo:
             raise GenerateError(f"{what} must be a whole number >= {lo}, got {v!r}")
+    check_executor_options(opts.executor, opts.workers, scheduler=opts.scheduler,
+                           dask_local=opts.dask_local)
     if opts.flights > MAX_FLIGHTS:
         raise GenerateError(f"--flights must be at most {MAX_FLIGHTS:_} (file names hold "
                             f"8-digit flight numbers), got {opts.flights:_}")
@@ -530,15 +541,22 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     settings = _settings(opts, tables)
     wanted = {"format": FORMAT, "format_version": FORMAT_VERSION, **sim_fingerprint(),
               "seed": opts.seed, "flights": opts.flights, "settings": settings}
+    # a Dask scheduler is reached before the data set is touched: one that cannot be reached
+    # leaves no manifest behind to refuse the corrected command
+    handle = _open(opts) if opts.scheduler is not None else None
     writer = DatasetWriter(opts.out)
-    status = writer.open(wanted)
+    try:
+        status = writer.open(wanted)
+    except BaseException:
+        if handle is not None:
+            handle.close(cancel=True)
+        raise
     report = GenerateReport(Path(opts.out), opts.flights,
                             target_fault_ratio=opts.target_fault_ratio)
     done = {f for f, st in status.items() if st == "ok"}
     report.skipped = sum(1 for f in done if f < opts.flights)
     n_todo = opts.flights - report.skipped
     report.dataset_flights = int(writer.header.get("flights", opts.flights))
-    handle = None
     lost: ExecutorLost | None = None
     failure: BaseException | None = None
     run_info: dict[str, Any] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
@@ -546,10 +564,9 @@ def generate(opts: GenerateOptions) -> GenerateReport:
         config = opts.config
         gamma = opts.target_fault_ratio
         need_pilot = gamma is not None and writer.header.get("lambda") is None
-        if n_todo or need_pilot:
-            handle = open_executor(opts.executor, opts.workers, scheduler=opts.scheduler,
-                                   dask_local=opts.dask_local,
-                                   timeout_s=opts.connect_timeout_s)
+        if (n_todo or need_pilot) and handle is None:
+            handle = _open(opts)
+        if handle is not None:
             report.executor, report.slots = handle.description, handle.slots
             run_info.update(executor=handle.description, slots=handle.slots)
         if gamma is not None:
