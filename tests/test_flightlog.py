@@ -507,3 +507,14 @@ def test_lazy_tables_build_frames_on_first_access_only():
     assert log.n_rows("VIBE") == 1 and "VIBE" in log.tables and len(log.tables) == 1
     del log.tables["VIBE"]
     assert len(log.tables) == 0 and log.n_rows("VIBE") == 0
+
+
+def test_a_flights_meta_lists_only_the_changed_parameters(tmp_path):
+    """meta.json's params_changed holds what differs from tlm's defaults, not all ~1400
+    parameters (issue 22); params holds them all."""
+    from tlm_sim import fly
+
+    log = fly(1, params={"WPNAV_SPEED": 500.0, "FRAME_TYPE": 1})
+    doc = json.loads((log.write(tmp_path / "f", formats=("csv",)) / "meta.json").read_text())
+    assert doc["params_changed"] == {"FRAME_TYPE": 1.0, "WPNAV_SPEED": 500.0}
+    assert len(doc["params"]) > 1000

@@ -172,9 +172,12 @@ def _params_dict(params: Any) -> dict[str, Any] | None:
 
 
 def _params_changed(params: Any) -> dict[str, Any] | None:
-    """Parameters that differ from their declared defaults (dataclass / NamedTuple fields)."""
+    """Parameters that differ from their declared defaults (a :class:`~tlm_sim.params.Params`'
+    ``changed()``, or dataclass / NamedTuple fields with defaults)."""
     if params is None:
         return None
+    if callable(getattr(params, "changed", None)):  # tlm_sim.params.Params
+        return dict(params.changed())
     defaults: dict[str, Any] = {}
     if dataclasses.is_dataclass(params) and not isinstance(params, type):
         for f in dataclasses.fields(params):
