@@ -6,6 +6,19 @@ OUT    ?= demo-out
 
 .PHONY: demo test lint bench clean
 
+# A .venv made by another Python (an earlier try with the wrong one, or a Python since
+# removed) is rebuilt with $(PYTHON) instead of being reused.
+PY_WANT := $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PY_HAVE := $(shell $(PY) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+ifneq ($(PY_WANT),)
+ifneq ($(wildcard $(VENV)),)
+ifneq ($(PY_HAVE),$(PY_WANT))
+$(info $(VENV) runs Python $(or $(PY_HAVE),(none: broken)), not $(PY_WANT) ($(PYTHON)): rebuilding it)
+$(shell rm -rf $(VENV))
+endif
+endif
+endif
+
 $(VENV)/bin/activate:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON) on PATH (or run: make PYTHON=python3 ...)"; exit 2; }
 	$(PYTHON) -m venv $(VENV)

@@ -10,7 +10,7 @@ trained with Adam (learning rate 1e-3) on cross-entropy in mini-batches of 512 f
 ``groups`` are given to :meth:`RowImageCNN.fit`) gives the curves of Figs. 20-21
 (:meth:`RowImageCNN.plot_history`).
 
-torch is optional (``pip install tlm[cnn]``); it is imported when a CNN is fitted. The
+torch is optional (``pip install -e '.[cnn]'`` in the clone); it is imported when a CNN is fitted. The
 network runs on the GPU when one is present (``device="auto"``), else on the CPU; results
 are deterministic for a seed on the CPU. On the CPU it uses ``n_threads`` threads (default
 1: a network this small is faster on one thread than on cores other work shares).
@@ -37,8 +37,10 @@ def require_torch() -> Any:
     try:
         import torch
     except ImportError:  # pragma: no cover - depends on the environment
-        raise ImportError("the CNN needs PyTorch: pip install 'tlm[cnn]' (or pip install "
-                          "torch); the other models do not") from None
+        raise ImportError("the CNN needs PyTorch: pip install -e '.[cnn]' in tlm's clone, or "
+                          "pip install torch (CPU build: --index-url "
+                          "https://download.pytorch.org/whl/cpu); the other models do not"
+                          ) from None
     return torch
 
 
