@@ -12,8 +12,8 @@ trained with Adam (learning rate 1e-3) on cross-entropy in mini-batches of 512 f
 
 torch is optional (``pip install -e '.[cnn]'`` in the clone); it is imported when a CNN is
 fitted. The network runs on the GPU when one is present (``device="auto"``), else on the
-CPU; results are deterministic for a seed on the CPU. On the CPU it uses ``n_threads`` threads (default
-1: a network this small is faster on one thread than on cores other work shares).
+CPU; results are deterministic for a seed on the CPU. On the CPU it uses ``n_threads``
+threads (default 1: a network this small is faster on one thread than on cores other work shares).
 """
 
 from __future__ import annotations
