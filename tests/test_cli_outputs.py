@@ -146,3 +146,24 @@ def test_generate_reaches_the_scheduler_before_writing(tmp_path, capsys):
                  "tcp://127.0.0.1:1", "--connect-timeout", "1"]) == 2
     assert "cannot reach the Dask scheduler" in _one_line_error(capsys)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("content", [b"", b"hello, not a log\n"])
+def test_crosscheck_of_a_file_that_is_no_log_is_one_line(tmp_path, capsys, content):
+    f = tmp_path / "x.bin"
+    f.write_bytes(content)
+    assert main(["crosscheck", str(f)]) == 2
+    assert "not an ArduPilot DataFlash log" in _one_line_error(capsys)
+
+
+def test_info_checks_its_json_first_and_lists_each_fault_once(tmp_path, capsys):
+    src = reference_path("combined_s21.bin")
+    assert main(["info", str(src), "--json", str(tmp_path / "no" / "i.json")]) == 2
+    assert "--json" in _one_line_error(capsys)
+    assert main(["info", str(src), "--json", str(tmp_path / "i.json")]) == 0
+    import json
+
+    faults = json.loads((tmp_path / "i.json").read_text())["faults"]
+    assert [f["type"] for f in faults] == ["gps", "accel", "engine", "rc"]
+    assert {f["source"] for f in faults} == {"PARM, sidecar"}
+    assert capsys.readouterr().out.count("(label 1)") == 1

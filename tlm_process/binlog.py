@@ -116,6 +116,28 @@ def _sidecar_faults(path: Path, info: dict[str, Any]) -> list[dict[str, Any]]:
         return []
 
 
+#: a sidecar fault and a PARM fault of the same type starting this close are the same fault [us]
+_SAME_FAULT_US = 1_000_000
+
+
+def _merge_faults(found: list[dict[str, Any]],
+                  sidecar: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``found`` (PARM changes, MSG lines) and the sidecar's faults, each fault once: a
+    sidecar fault that a PARM fault of the same type starting within 1 s already shows adds
+    its name to that fault's ``source`` ("PARM, sidecar") instead of a second line."""
+    out = [dict(f) for f in found]
+    for s in sidecar:
+        twin = next((f for f in out if f.get("source") == "PARM" and f.get("type") == s["type"]
+                     and f.get("start_time_us") is not None
+                     and s.get("start_time_us") is not None
+                     and abs(f["start_time_us"] - s["start_time_us"]) <= _SAME_FAULT_US), None)
+        if twin is None:
+            out.append(s)
+        else:
+            twin["source"] = "PARM, sidecar"
+    return out
+
+
 def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     """Everything ``tlm info`` reports, as plain JSON-able data (times in seconds).
 
@@ -184,8 +206,7 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     for m, t in zip(msg["Message"], msg["TimeUS"], strict=True):
         if str(m).startswith("tlm: fault "):
             faults.append({"message": str(m), "time_us": int(t), "source": "MSG"})
-    faults += _sidecar_faults(p, info)
-    info["faults"] = faults
+    info["faults"] = _merge_faults(faults, _sidecar_faults(p, info))
     info["damage"] = damage
     info["lost_messages"] = log.info["lost_messages"]
     info["skipped_bytes"] = log.info["skipped_bytes"]

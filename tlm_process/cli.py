@@ -58,6 +58,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from tlm_process.binlog import LogError
     from tlm_process.generate.errors import GenerateError
     from tlm_sim.faults import FaultScheduleError
+    from tlm_sim.flightlog.binscan import BinLogError
     from tlm_sim.mission import MissionError
     from tlm_sim.params import ParamError
 
@@ -69,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return command_module(args.command).run(args)
     except (UsageError, ParamError, MissionError, FaultScheduleError, LogError,
-            GenerateError) as e:
+            GenerateError, BinLogError) as e:
         print(f"tlm: error: {e}", file=sys.stderr)
         return 2
     except FileNotFoundError as e:

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from tlm_process.binlog import format_info, log_info
+from tlm_process.cliutil import check_writable_file
 
 __all__ = ["add_parser", "run"]
 
@@ -29,6 +30,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Print the summary of one .bin log (and optionally write it as JSON)."""
+    if args.json:
+        check_writable_file(args.json, "--json")
     info = log_info(args.log, all_params=args.all_params)
     print(format_info(info))
     if args.json:
