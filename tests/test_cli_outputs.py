@@ -167,3 +167,31 @@ def test_info_checks_its_json_first_and_lists_each_fault_once(tmp_path, capsys):
     assert [f["type"] for f in faults] == ["gps", "accel", "engine", "rc"]
     assert {f["source"] for f in faults} == {"PARM, sidecar"}
     assert capsys.readouterr().out.count("(label 1)") == 1
+
+
+def test_a_data_set_from_a_newer_tlm_is_refused_everywhere(tmp_path, capsys):
+    """One rule for every reader (issue 22): a generated data set or a processed one whose
+    format version is newer than this tlm's is refused in one line (generate, fly
+    --from-manifest, process, evaluate)."""
+    import json
+
+    ds = tmp_path / "ds"
+    assert main(["generate", "--flights", "1", "--out", str(ds), "--workers", "1",
+                 "--no-progress", "--kinds", "none=1", "--tables", "GPS"]) == 0
+    processed = tmp_path / "p"
+    assert main(["process", str(ds), "--out", str(processed), "--quiet", "--tables", "GPS"]) == 0
+    capsys.readouterr()
+    header = json.loads((ds / "manifest.json").read_text())
+    header["format_version"] += 1
+    (ds / "manifest.json").write_text(json.dumps(header))
+    for argv in (["fly", "--from-manifest", str(ds), "--flight", "0", "--out",
+                  str(tmp_path / "f")],
+                 ["process", str(ds), "--out", str(tmp_path / "p2")],
+                 ["generate", "--flights", "1", "--out", str(ds)]):
+        assert main(argv) == 2, argv
+        assert "newer tlm" in _one_line_error(capsys) or argv[0] == "generate"
+    rep = json.loads((processed / "report.json").read_text())
+    rep["version"] += 1
+    (processed / "report.json").write_text(json.dumps(rep))
+    assert main(["evaluate", str(processed), "--models", "ZeroR", "--table", "GPS"]) == 2
+    assert "newer tlm" in _one_line_error(capsys)

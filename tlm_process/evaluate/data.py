@@ -53,7 +53,7 @@ def load_dataset(path: str | Path, tables: Sequence[str] | None = None) -> EvalD
     """Load ``tables`` (default: every table the data set has) of the data set at ``path``.
     Raises :class:`EvaluateError` for a missing folder, a folder that is not a ``tlm process``
     output, a missing table or column."""
-    from tlm_process.pipeline.report import REPORT_FORMAT
+    from tlm_process.pipeline.report import REPORT_FORMAT, REPORT_VERSION
     from tlm_process.pipeline.scaling import MinMaxScaler
 
     p = Path(path)
@@ -73,6 +73,11 @@ def load_dataset(path: str | Path, tables: Sequence[str] | None = None) -> EvalD
     if not isinstance(report, dict) or report.get("format") != REPORT_FORMAT:
         raise EvaluateError(f"report.json is not a 'tlm process' report (format "
                             f"{REPORT_FORMAT!r} expected)", source=str(p))
+    version = report.get("version")
+    if not isinstance(version, int) or isinstance(version, bool) or version > REPORT_VERSION:
+        raise EvaluateError(f"report.json has data set version {version!r}; this tlm reads "
+                            f"versions up to {REPORT_VERSION} (a newer tlm wrote it: update "
+                            f"tlm)", source=str(p))
     feats = report.get("features")
     if not isinstance(feats, dict) or not feats:
         raise EvaluateError("report.json lists no features", source=str(p))

@@ -85,6 +85,10 @@ def read_header(ds: Path) -> dict[str, Any] | None:
         if key in doc and not _is(doc[key], kinds):
             raise GenerateError(f"{path}: {key!r} must be {what}, got {json.dumps(doc[key])}; "
                                 "restore the file or use another --out")
+    if doc.get("format_version", FORMAT_VERSION) > FORMAT_VERSION:
+        raise GenerateError(f"{path}: data set format version {doc['format_version']}; this tlm "
+                            f"reads versions up to {FORMAT_VERSION} (a newer tlm wrote it: "
+                            f"update tlm)")
     return doc
 
 

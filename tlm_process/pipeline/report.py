@@ -24,6 +24,8 @@ from tlm_process.pipeline.stretching import class_counts, fault_share, lambda_fo
 __all__ = ["REPORT_FORMAT", "build_report", "counts_dict", "flight_lines", "stretching_report"]
 
 REPORT_FORMAT = "tlm.process"
+#: the report.json (processed data set) version this tlm writes and the newest it reads
+REPORT_VERSION = 1
 
 
 def stretching_report(alpha: Mapping[str, float], gamma: float) -> dict[str, Any]:
@@ -62,7 +64,7 @@ def build_report(ds: Dataset, extra: Mapping[str, Any]) -> dict[str, Any]:
         by_split[split] = counts_dict(class_counts(sub))
     rep: dict[str, Any] = {
         "format": REPORT_FORMAT,
-        "version": 1,
+        "version": REPORT_VERSION,
         "tables": list(ds.tables),
         "features": ds.features,
         "non_feature_columns": [*NON_FEATURE, "split"],
