@@ -195,3 +195,16 @@ def test_a_data_set_from_a_newer_tlm_is_refused_everywhere(tmp_path, capsys):
     (processed / "report.json").write_text(json.dumps(rep))
     assert main(["evaluate", str(processed), "--models", "ZeroR", "--table", "GPS"]) == 2
     assert "newer tlm" in _one_line_error(capsys)
+
+
+def test_an_impossible_target_fault_ratio_is_refused_and_leaves_nothing(tmp_path, capsys):
+    """--target-fault-ratio that needs lambda > 10 is refused (it used to choose 26 without
+    a word), and the refused run leaves no data set behind, so the corrected command runs."""
+    out = tmp_path / "ds"
+    base = ["generate", "--flights", "1", "--out", str(out), "--workers", "1", "--no-progress",
+            "--kinds", "none=0.95,single=0.05", "--tables", "GPS"]
+    assert main([*base, "--target-fault-ratio", "0.5"]) == 2
+    err = _one_line_error(capsys)
+    assert "needs lambda" in err and "more than the 10" in err
+    assert not out.exists()
+    assert main([*base, "--lambda", "2"]) == 0

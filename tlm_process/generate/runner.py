@@ -41,7 +41,7 @@ from tlm_process.generate.executors import (
     check_executor_options,
     open_executor,
 )
-from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, sim_fingerprint
+from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, HEADER, sim_fingerprint
 from tlm_process.generate.scenario import ScenarioConfig, flight_conditions, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
 from tlm_process.generate.writer import DatasetWriter
@@ -490,6 +490,10 @@ def _next_lambda(points: Sequence[tuple[float, float]], gamma: float) -> float:
     return min(max(lam, l2 / 4.0), l2 * 4.0)
 
 
+#: the longest stretch --target-fault-ratio may choose (Eq. 5's lambda)
+MAX_LAMBDA = 10.0
+
+
 def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
                   progress: bool | None) -> tuple[float, float, list[tuple[float, float]]]:
     """λ for the target fault share γ from pilot flights (see the module docstring).
@@ -515,6 +519,13 @@ def _pilot_lambda(opts: GenerateOptions, handle: ExecutorHandle, gamma: float,
         if abs(share - gamma) <= PILOT_TOLERANCE * gamma:
             break
         lam = _next_lambda(points, gamma)
+    if lam > MAX_LAMBDA:
+        raise GenerateError(
+            f"--target-fault-ratio {gamma:g} needs lambda = {lam:.1f} (every fault held "
+            f"{lam:.1f} times as long; the pilot flights' fault share is {alpha:.3f}), more "
+            f"than the {MAX_LAMBDA:g} tlm allows: faults that long stop looking like the "
+            f"paper's. Ask for at most about {alpha * MAX_LAMBDA:.2f}, or put more faults in "
+            f"each flight (--kinds paper=1 / sequence=...)")
     return float(lam), float(alpha), points
 
 
@@ -544,6 +555,8 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     # a Dask scheduler is reached before the data set is touched: one that cannot be reached
     # leaves no manifest behind to refuse the corrected command
     handle = _open(opts) if opts.scheduler is not None else None
+    existed = Path(opts.out).exists()
+    fresh = not existed or not (Path(opts.out) / HEADER).exists()
     writer = DatasetWriter(opts.out)
     try:
         status = writer.open(wanted)
@@ -607,6 +620,8 @@ def generate(opts: GenerateOptions) -> GenerateReport:
                             failed=report.failed, capped=len(report.capped),
                             interrupted=report.interrupted)
             report.state = _close(writer, run_info, failure or lost)
+            if failure is not None and fresh and report.ok == 0 and report.failed == 0:
+                _discard(Path(opts.out), existed)  # refused before any flight: leave nothing
     if lost is not None:
         raise GenerateError(f"{lost}; {writer.header.get('counts', {}).get('ok', report.ok)} of "
                             f"{opts.flights} flights written (data set {report.state}), run the "
@@ -614,6 +629,22 @@ def generate(opts: GenerateOptions) -> GenerateReport:
     if opts.compact and not report.interrupted:
         _compact(opts.out, writer, report)
     return report
+
+
+def _discard(out: Path, existed: bool) -> None:
+    """Remove a data set this run created and never wrote a flight to (a run refused after
+    the folder was opened, e.g. an impossible --target-fault-ratio), so the corrected command
+    is not refused as "made with other settings"; a folder that existed (empty) stays."""
+    import shutil
+
+    if not existed:
+        shutil.rmtree(out, ignore_errors=True)
+        return
+    for p in out.iterdir():
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
 
 
 def _close(writer: DatasetWriter, run_info: Mapping[str, Any],
