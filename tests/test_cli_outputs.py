@@ -197,14 +197,16 @@ def test_a_data_set_from_a_newer_tlm_is_refused_everywhere(tmp_path, capsys):
     assert "newer tlm" in _one_line_error(capsys)
 
 
-def test_an_impossible_target_fault_ratio_is_refused_and_leaves_nothing(tmp_path, capsys):
-    """--target-fault-ratio that needs lambda > 10 is refused (it used to choose 26 without
-    a word), and the refused run leaves no data set behind, so the corrected command runs."""
+def test_an_impossible_target_fault_ratio_is_refused_and_leaves_nothing(tmp_path):
+    """A target fault share that needs lambda > 10 is refused (it used to choose 26 without
+    a word), and the refused run leaves no data set behind, so the corrected run goes."""
+    from tlm_process.generate import GenerateError, GenerateOptions, ScenarioConfig, generate
+
     out = tmp_path / "ds"
-    base = ["generate", "--flights", "1", "--out", str(out), "--workers", "1", "--no-progress",
-            "--kinds", "none=0.95,single=0.05", "--tables", "GPS"]
-    assert main([*base, "--target-fault-ratio", "0.5"]) == 2
-    err = _one_line_error(capsys)
-    assert "needs lambda" in err and "more than the 10" in err
+    config = ScenarioConfig(kinds={"none": 0.9, "single": 0.1})
+    opts = dict(out=out, flights=1, config=config, tables=["GPS"], workers=1,
+                executor="thread", progress=False, pilot_flights=3, pilot_rounds=1)
+    with pytest.raises(GenerateError, match="needs lambda = .* more than the 10"):
+        generate(GenerateOptions(**opts, target_fault_ratio=0.9))
     assert not out.exists()
-    assert main([*base, "--lambda", "2"]) == 0
+    assert generate(GenerateOptions(**opts)).ok == 1
