@@ -210,3 +210,25 @@ def test_an_impossible_target_fault_ratio_is_refused_and_leaves_nothing(tmp_path
         generate(GenerateOptions(**opts, target_fault_ratio=0.9))
     assert not out.exists()
     assert generate(GenerateOptions(**opts)).ok == 1
+
+
+def test_constant_training_features_are_reported(tmp_path, capsys):
+    """Min-max scaling maps a feature constant in the training flights to 0 everywhere: tlm
+    process says which (stderr and report.json) instead of doing it silently."""
+    import json
+
+    from tlm_process.pipeline import MinMaxScaler
+
+    flight = tmp_path / "f"
+    assert main([*FLY, "--out", str(flight)]) == 0
+    capsys.readouterr()
+    assert main(["process", str(flight), "--out", str(tmp_path / "ds"), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "GPS NSats" in err and "scale to 0 everywhere" in err
+    rep = json.loads((tmp_path / "ds" / "report.json").read_text())
+    assert "NSats" in rep["scaling"]["constant_features"]["GPS"]
+    import pandas as pd
+
+    df = pd.DataFrame({"flight": ["a", "a", "b"], "x": [1.0, 1.0, 5.0], "y": [1.0, 2.0, 3.0]})
+    assert MinMaxScaler.fit({"T": df}, ["a"]).constant_features() == {"T": ["x"]}
+    assert MinMaxScaler.fit({"T": df}, ["a", "b"]).constant_features() == {}

@@ -239,6 +239,12 @@ def _run(args: argparse.Namespace) -> int:
         print(f"lambda for fault share {args.target_fault_ratio:g} (Eq. 5, gamma/alpha): "
               + ", ".join(f"{t} {v:.3f}" if v is not None else f"{t} -" for t, v in
                           lam.items()))
+    flat = ds.scaler.constant_features() if ds.scaler else {}
+    if flat:
+        names = [f"{t} {c}" for t, cs in flat.items() for c in cs]
+        print(f"tlm: warning: {len(names)} feature(s) hold one value in every training flight "
+              f"and scale to 0 everywhere (report.json scaling.constant_features): "
+              f"{', '.join(names[:8])}{', ...' if len(names) > 8 else ''}", file=sys.stderr)
     print(f"written {out}/ ({', '.join(f'{t}.parquet' for t in ds.tables)}, scaler.json, "
           f"report.json, {len(plots)} plots) in {time.perf_counter() - t0:.1f} s")
     return 0

@@ -80,7 +80,8 @@ def build_report(ds: Dataset, extra: Mapping[str, Any]) -> dict[str, Any]:
                   **{k: ds.options[k] for k in ("test_frac", "seed", "test_patterns")
                      if k in ds.options}},
         "scaling": {"method": "min-max (paper Eq. 6)", "fitted_on": "train flights",
-                    "applied": bool(ds.options.get("scaled", True)), "file": "scaler.json"},
+                    "applied": bool(ds.options.get("scaled", True)), "file": "scaler.json",
+                    "constant_features": ds.scaler.constant_features() if ds.scaler else {}},
         "options": {k: v for k, v in ds.options.items()
                     if k not in ("test_frac", "seed", "test_patterns", "scaled")},
         "flights": ds.flights,

@@ -95,6 +95,17 @@ class MinMaxScaler:
                 ranges[name][c] = (lo, hi)
         return cls(ranges, train)
 
+    def constant_features(self) -> dict[str, list[str]]:
+        """Per table, the features whose training rows hold one value (or none): Eq. 6 maps
+        them to 0 in every row, so they carry nothing (e.g. GPS ``NSats`` when every
+        training flight keeps 10 satellites)."""
+        out = {}
+        for name, feats in self.ranges.items():
+            flat = [c for c, (lo, hi) in feats.items() if not hi > lo]
+            if flat:
+                out[name] = flat
+        return out
+
     def transform_table(self, name: str, df: pd.DataFrame) -> pd.DataFrame:
         """A copy of table ``name`` with its features scaled (non-feature columns as they
         are). Every fitted feature must be present."""
