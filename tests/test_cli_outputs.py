@@ -232,3 +232,29 @@ def test_constant_training_features_are_reported(tmp_path, capsys):
     df = pd.DataFrame({"flight": ["a", "a", "b"], "x": [1.0, 1.0, 5.0], "y": [1.0, 2.0, 3.0]})
     assert MinMaxScaler.fit({"T": df}, ["a"]).constant_features() == {"T": ["x"]}
     assert MinMaxScaler.fit({"T": df}, ["a", "b"]).constant_features() == {}
+
+
+def test_data_sets_carry_a_card(tmp_path, capsys):
+    """tlm generate and tlm process write DS/README.md: how it was made, counts, labels and
+    every table's columns with units (issue 22)."""
+    ds = tmp_path / "ds"
+    assert main(["generate", "--flights", "2", "--out", str(ds), "--workers", "1",
+                 "--no-progress", "--faults", "paper", "--kinds", "paper=1",
+                 "--tables", "GPS,IMU,RATE,VIBE"]) == 0
+    card = (ds / "README.md").read_text()
+    assert "* flights: 2 asked, 2 written (complete)" in card
+    assert "* kinds: paper 2" in card and "| 3 | `engine` | Engine |" in card
+    assert "### `GPS.parquet/`" in card and "| `Spd` | m/s |" in card
+    out = tmp_path / "p"
+    assert main(["process", str(ds), "--out", str(out), "--quiet"]) == 0
+    card = (out / "README.md").read_text()
+    assert "| 1 | GPS |" in card and "### `IMU.parquet`" in card
+    assert "| `GyrX` | rad/s | feature, min-max scaled" in card
+    import json
+
+    from tlm_process.pipeline.card import dataset_card
+
+    rep = json.loads((out / "report.json").read_text())
+    n_gps = rep["counts"]["GPS"]["1"]
+    assert "| 1 | GPS | GPS 1 streams 'no fix'" in card and f"{n_gps:,}" in card
+    assert dataset_card(rep).split("## Labels")[1] == card.split("## Labels")[1]

@@ -169,8 +169,17 @@ def _warn_partial(info: dict) -> None:
         print(f"tlm: warning: {info['path']}: {'; '.join(notes)}", file=sys.stderr)
 
 
+def _command_line() -> str:
+    """``tlm process ...`` as typed, when this process is the tlm command ("" otherwise)."""
+    import shlex
+
+    argv = sys.argv[1:]
+    return "tlm " + " ".join(shlex.quote(a) for a in argv) if argv[:1] == ["process"] else ""
+
+
 def _run(args: argparse.Namespace) -> int:
     from tlm_process.pipeline.anchoring import DEFAULT_MAX_MATCH_M
+    from tlm_process.pipeline.card import dataset_card
     from tlm_process.pipeline.errors import PipelineError
     from tlm_process.pipeline.ingest import expand_inputs, read_dataset, read_flight, unique_ids
     from tlm_process.pipeline.plots import plot_label_shares
@@ -230,7 +239,8 @@ def _run(args: argparse.Namespace) -> int:
                                        f"share of each label ({len(processed)} flight"
                                        f"{'s' * (len(processed) != 1)})")))
     extra["plots"] = [str(Path(x).relative_to(out)) for x in plots]
-    write_dataset(ds, out, extra)
+    report = write_dataset(ds, out, extra)
+    (out / "README.md").write_text(dataset_card(report, _command_line()))
     n = len(processed)
     print(format_counts(ds.counts, f"rows per class ({n} flight{'s' * (n != 1)}; "
                                    f"train {len(ds.train)}, test {len(ds.test)})"))

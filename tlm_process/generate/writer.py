@@ -28,9 +28,12 @@ import json
 import os
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tlm_process.cliutil import UsageError, foreign_entries, prepare_out
+
+if TYPE_CHECKING:
+    import pandas as pd
 from tlm_process.generate.compact import block_flights, drop_compacted_parts
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.layout import (
@@ -61,6 +64,9 @@ __all__ = ["BIN_DIR", "DatasetWriter", "part_name"]
 
 #: what to do after a failed write
 _AGAIN = "free space or fix the folder, then run the same command again to continue"
+
+#: the data set card (tlm_process.generate.card), rewritten when a run closes
+CARD = "README.md"
 
 
 def _why(exc: OSError) -> str:
@@ -311,8 +317,9 @@ class DatasetWriter:
         n = int(self.header.get("flights", 0))
         ok = sum(1 for f, st in self.status.items() if st == "ok" and f < n)
         bad = sum(1 for f, st in self.status.items() if st != "ok" and f < n)
+        frame = None
         try:
-            self._write_manifest_table()
+            frame = self._write_manifest_table()
         except OSError as exc:
             failed.append(exc)
         self.header["counts"] = {"ok": ok, "failed": bad, "missing": n - ok - bad}
@@ -325,12 +332,27 @@ class DatasetWriter:
             _unlink_quietly([self.root / tmp_name(HEADER)])
             raise GenerateError(f"cannot close data set {self.root}: {_why(exc)}; its manifest "
                                 f"still says running; {_AGAIN}") from None
+        if frame is not None:
+            try:
+                self._write_card(frame)
+            except OSError as exc:
+                failed.append(exc)
         if failed:
             raise GenerateError(f"cannot finish data set {self.root}: {_why(failed[0])}; "
                                 f"its manifest says {self.header['state']}; {_AGAIN}")
         return self.header
 
-    def _write_manifest_table(self) -> None:
+    def _write_card(self, frame: pd.DataFrame) -> None:
+        """``README.md``: the data set card (tlm_process.generate.card)."""
+        from tlm_process.generate.card import generate_card
+
+        tables = sorted(p.name[:-len(".parquet")] for p in self.root.glob("*.parquet")
+                        if p.is_dir() and p.name != "faults.parquet")
+        tmp = self.root / tmp_name(CARD)
+        tmp.write_text(generate_card(self.header, frame, tables))
+        os.replace(tmp, self.root / CARD)
+
+    def _write_manifest_table(self) -> pd.DataFrame:
         frame = manifest_frame(read_journal(self.root)[0])
         tmp = self.root / tmp_name(MANIFEST_TABLE)
         try:
@@ -340,3 +362,4 @@ class DatasetWriter:
         except OSError:
             _unlink_quietly([tmp])
             raise
+        return frame
