@@ -258,3 +258,16 @@ def test_data_sets_carry_a_card(tmp_path, capsys):
     n_gps = rep["counts"]["GPS"]["1"]
     assert "| 1 | GPS | GPS 1 streams 'no fix'" in card and f"{n_gps:,}" in card
     assert dataset_card(rep).split("## Labels")[1] == card.split("## Labels")[1]
+
+
+def test_a_fault_ending_at_an_unreachable_waypoint_is_warned(tmp_path, capsys):
+    """An engine cut meant to end at waypoint 48 (the copter sits on the ground, so it never
+    gets there) lasts to the end of the log: tlm says so on stderr; the summary says 'never
+    disarmed', not 'disarmed None s'. tlm fly --help no longer suggests it."""
+    assert main([*FLY, "--fault", "engine:wp40-wp48", "--out", str(tmp_path / "f")]) == 0
+    cap = capsys.readouterr()
+    assert "warning: fault 1 (engine) was to end at waypoint 48" in cap.err
+    assert "never disarmed" in cap.out and "None" not in cap.out
+    with pytest.raises(SystemExit):
+        main(["fly", "--help"])
+    assert "engine:wp40-wp48" not in capsys.readouterr().out

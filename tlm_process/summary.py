@@ -49,8 +49,9 @@ def format_summary(s: dict[str, Any]) -> str:
     rows = ", ".join(f"{k} {v}" for k, v in s["rows"].items() if k in
                      ("GPS", "IMU", "RATE", "VIBE", "ATT", "MODE", "EV", "ERR"))
     return "\n".join([
-        f"duration           {s['duration_s']} s (armed {s['armed_s']} s -> disarmed "
-        f"{s['disarmed_s']} s)",
+        f"duration           {s['duration_s']} s (armed {s['armed_s']} s -> "
+        + (f"disarmed {s['disarmed_s']} s)" if s['disarmed_s'] is not None
+           else "never disarmed)"),
         f"distance flown     {s['distance_m']} m, max altitude {s['max_alt_m']} m",
         f"waypoints reached  {s['waypoints_reached']}",
         f"final mode         {s['final_mode']}, landed {s['landed']}",

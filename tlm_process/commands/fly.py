@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -33,10 +34,12 @@ faults (paper labels: gps 1, accel 2, engine 3, rc 4):
                            waypoints wpN (the moment waypoint N is reached)
   --fault TYPE:START-      held until the flight ends (also TYPE:START)
   --fault TYPE:START+DUR   held DUR seconds
-  e.g. --fault gps:60-110 --fault engine:wp40-wp48 --fault rc:200-
+  e.g. --fault gps:60-110 --fault accel:wp40-wp48 --fault rc:200-
   --faults FILE.json|.yaml|.yml holds the same as a list, in the order they happen:
     {"faults": [{"fault": "gps", "start": 60, "end": 110},
-                {"fault": "engine", "start": "wp40", "end": "wp48"}]}
+                {"fault": "accel", "start": "wp40", "end": "wp48"}]}
+  A fault that ends at a waypoint the vehicle cannot reach while it holds (an engine
+  cut on the ground) lasts to the end of the flight: tlm warns; end it by time instead.
   optional per fault: params_start / params_end (NAME: value, SITL parameters).
   Faults must not overlap; a schedule is checked against the mission before flying.
   DIR/faults.json gets one record per fault (paper Eq. 4: type, label, start/end
@@ -172,6 +175,31 @@ def _load_schedule(args: argparse.Namespace, mission: Mission,
         raise UsageError(f"--lambda: {e}") from None
 
 
+def fault_warnings(log: FlightLog, schedule: FaultSchedule | None) -> list[str]:
+    """``tlm: warning:`` lines for faults that did not happen as asked: one meant to end at a
+    waypoint the vehicle never reached while it held (it lasted to the end of the log), and
+    one that lasted 0 s (its end came before or with its start)."""
+    if schedule is None:
+        return []
+    started = {int(c["fault"]) for c in log.meta.get("param_changes", [])
+               if c.get("edge") == "start" and c.get("time_us") is not None}
+    records = iter(log.faults)
+    out = []
+    for i, fault in enumerate(schedule):
+        if i not in started:
+            continue
+        r = next(records)
+        name = f"fault {i + 1} ({r['type']})"
+        if fault.end is not None and fault.end.kind == "wp" and r["end_by"] == "flight end":
+            out.append(f"tlm: warning: {name} was to end at waypoint {fault.end.value:g}, "
+                       f"which the vehicle never reached while the fault held: it lasted "
+                       f"{r['duration_s']:.1f} s, to the end of the log; end it by time")
+        elif r["duration_s"] <= 0.0:
+            out.append(f"tlm: warning: {name} lasted 0 s: its end came with its start "
+                       "(mixed time and waypoint boundaries?); it has no fault rows")
+    return out
+
+
 def fault_lines(log: FlightLog, schedule: FaultSchedule | None) -> list[str]:
     """One line per scheduled fault: type, label, start/end (log TimeUS in s), duration; or
     why it has no record (the flight ended before it started)."""
@@ -266,7 +294,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "drawn with --seed) or a .json/.yaml/.yml schedule file (see below)")
     f.add_argument("--fault", action="append", metavar="SPEC",
                    help="one fault in shorthand (repeatable, in the order they happen), e.g. "
-                        "--fault gps:60-110 --fault engine:wp40-wp48 (see below)")
+                        "--fault gps:60-110 --fault accel:wp40-wp48 (see below)")
     f.add_argument("--lambda", dest="lam", type=float, metavar="LAMBDA",
                    help="stretch every fault window by LAMBDA (paper Eq. 5: longer faults in "
                         "the flight); later faults move so the gaps keep their length")
@@ -314,6 +342,8 @@ def run(args: argparse.Namespace) -> int:
     print(format_summary(s))
     for line in fault_lines(log, schedule):
         print(line)
+    for line in fault_warnings(log, schedule):
+        print(line, file=sys.stderr)
     print(f"wall time          {wall:.2f} s ({s['duration_s'] / max(wall, 1e-9):.0f}x real time, "
           "incl. compile on first run)")
     extra = "" if args.no_plot else ", trajectory.png"
