@@ -271,3 +271,29 @@ def test_a_fault_ending_at_an_unreachable_waypoint_is_warned(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["fly", "--help"])
     assert "engine:wp40-wp48" not in capsys.readouterr().out
+
+
+def test_process_reads_fault_records_from_the_log_itself(tmp_path, capsys):
+    """tlm process takes a lone .bin: tlm's own (its fault MSG lines) and SITL's (its SIM_*
+    parameter changes), with the same labels as with the records beside it (issue 22)."""
+    import json
+    import shutil
+
+    flight = tmp_path / "f"
+    assert main(["fly", "--faults", "paper", "--format", "bin", "--no-plot",
+                 "--out", str(flight)]) == 0
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    shutil.copy(flight / "flight.bin", lone / "flight.bin")
+    sitl = tmp_path / "sitl"
+    sitl.mkdir()
+    shutil.copy(reference_path("combined_s21.bin"), sitl / "combined_s21.bin")
+    counts = {}
+    for name, src in (("with", flight / "flight.bin"), ("lone", lone / "flight.bin"),
+                      ("sitl", sitl / "combined_s21.bin"),
+                      ("sidecar", reference_path("combined_s21.bin"))):
+        out = tmp_path / f"p-{name}"
+        assert main(["process", str(src), "--out", str(out), "--quiet", "--tables", "GPS"]) == 0
+        counts[name] = json.loads((out / "report.json").read_text())["counts"]["GPS"]
+    assert counts["with"] == counts["lone"] and counts["sitl"] == counts["sidecar"]
+    assert all(int(counts["lone"][str(k)]) > 50 for k in (1, 2, 3, 4))

@@ -108,7 +108,7 @@ def test_bad_inputs_fail_clearly(tmp_path):
     with pytest.raises(IngestError, match="no such file or folder"):
         read_flights([tmp_path / "missing"])
     (tmp_path / "x.bin").write_bytes(b"\xa3\x95")
-    with pytest.raises(IngestError, match="no sidecar x.json beside the log"):
+    with pytest.raises(IngestError, match="cannot read the DataFlash log"):
         read_flights([tmp_path / "x.bin"])
     (tmp_path / "notes.txt").write_text("hi")
     with pytest.raises(IngestError, match="not a .bin log, a flight folder or a dataset"):
@@ -148,13 +148,17 @@ def test_reference_bin_with_sidecar():
         ("rc", 134137157, 163894416)]
 
 
-def test_bin_copy_without_sidecar_fails(tmp_path):
+def test_bin_copy_without_sidecar_reads_its_faults_from_parm(tmp_path):
+    """Without a sidecar, a SITL log's fault records come from its SIM_* parameter changes:
+    the same types and times as the sidecar's."""
     from conftest import reference_path
 
     src = reference_path("rc_s15.bin")
     dst = tmp_path / "copy.bin"
     shutil.copy(src, dst)
-    with pytest.raises(IngestError, match=r"copy.bin: no sidecar copy.json"):
-        read_flights([dst])
+    own = read_flights([dst])[0].records
     shutil.copy(src.with_suffix(".json"), tmp_path / "copy.json")
+    side = read_flights([dst])[0].records
+    assert [r.type for r in own] == [r.type for r in side] == ["rc"]
+    assert abs(own[0].start_time_us - side[0].start_time_us) < 1000
     assert read_flights([dst])[0].id == "copy"

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -269,23 +270,55 @@ def _home(home: Any) -> tuple[float, float, float] | None:
     return vals[0], vals[1], vals[2]  # type: ignore[return-value]
 
 
+_TLM_FAULT_MSG = re.compile(r"^tlm: fault (\w+) \(label (\d+)\) (start|end)$")
+
+
+def _records_in_log(raw: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
+    """The fault records a log holds itself: tlm's own "tlm: fault TYPE (label N) start/end"
+    MSG lines, else the SIM_* parameter changes of its PARM messages (a SITL log)."""
+    from tlm_sim.faults.detect import faults_from_param_changes
+    from tlm_sim.flightlog.binreader import param_changes_from_parm
+
+    out: list[dict[str, Any]] = []
+    msg = raw.get("MSG")
+    for t, text in zip(msg["TimeUS"], msg["Message"], strict=True) if msg is not None else ():
+        m = _TLM_FAULT_MSG.match(str(text))
+        if m is None:
+            continue
+        if m.group(3) == "start":
+            out.append({"type": m.group(1), "label": int(m.group(2)),
+                        "start_time_us": int(t), "end_time_us": None})
+        elif out and out[-1]["type"] == m.group(1) and out[-1]["end_time_us"] is None:
+            out[-1]["end_time_us"] = int(t)
+    if not out and raw.get("PARM") is not None and len(raw["PARM"]):
+        changes = param_changes_from_parm(raw["PARM"], exclude=())
+        out = [{k: f[k] for k in ("type", "label", "start_time_us", "end_time_us")}
+               for f in faults_from_param_changes(changes)]
+    return {"faults": out}
+
+
 def _read_bin(path: Path) -> list[Flight]:
+    """A DataFlash log. Its fault records: the sidecar ``LOG.json`` beside it, else tlm fly's
+    ``faults.json`` in the same folder, else what the log holds itself (tlm's fault MSG
+    lines, or a SITL log's SIM_* parameter changes); none found: a normal flight."""
     from tlm_sim.flightlog import read_bin
 
     sidecar = path.with_suffix(".json")
-    if not sidecar.exists():
-        raise IngestError(f"no sidecar {sidecar.name} beside the log (the fault records, "
-                          "'{\"faults\": []}' for a normal flight)", source=str(path))
-    doc = _read_json(sidecar)
+    if not sidecar.exists() and (path.parent / "faults.json").exists():
+        sidecar = path.parent / "faults.json"
     try:
-        raw = read_bin(path, DATA_TABLES + AUX_TABLES)
+        raw = read_bin(path, DATA_TABLES + AUX_TABLES + ("MSG", "PARM"))
     except (OSError, ValueError, KeyError, IndexError) as exc:
         raise IngestError(f"cannot read the DataFlash log: {exc}", source=str(path)) from None
-    tables = {n: df for n, df in raw.items() if len(df)}
+    if sidecar.exists():
+        doc, source = _read_json(sidecar), str(sidecar)
+    else:
+        doc, source = _records_in_log(raw), f"{path} (its own MSG/PARM)"
+    tables = {n: df for n, df in raw.items() if len(df) and n in DATA_TABLES + AUX_TABLES}
     _require_gps(tables, str(path))
     home = _home((doc.get("sitl") or {}).get("home")) if isinstance(doc, Mapping) else None
     meta = {k: doc.get(k) for k in ("scenario", "seed")} if isinstance(doc, Mapping) else {}
-    return [Flight(path.stem, str(path), "bin", tables, parse_records(doc, str(sidecar)), home,
+    return [Flight(path.stem, str(path), "bin", tables, parse_records(doc, source), home,
                    meta)]
 
 
