@@ -39,7 +39,7 @@ from tlm_sim.ekf.lanes import (
     ekf_output_nav,
     ekf_update,
 )
-from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_lane_switch
+from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_ekf_evidence, log_lane_switch
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
@@ -212,7 +212,7 @@ def run_flight(
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
-                                home, x, s, scfg, c, ekf, sel, eo, pos)
+                                home, x, s, scfg, c, ekf, sel, ecfg, eo, pos)
         if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
@@ -294,7 +294,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
 
 @inline_jit
 def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
-              c, ekf, sel, eo, pos):
+              c, ekf, sel, ecfg, eo, pos):
     """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz
     messages. Returns the last GPS epoch's ms of week."""
     if gps_new:
@@ -306,6 +306,7 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
         ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
         log_sensors_10hz(bufs, counts, t_us, s, home[2])
         log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])
+        log_ekf_evidence(bufs, counts, t_us, ekf, sel, ecfg)
         log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
         log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
     return last_gps_ms

@@ -119,6 +119,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_lane_switch", (_EVENTS, _I1, _i8, _F1), 0.1),
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
     Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
+    Job("tlm_sim.ekf.log:log_ekf_evidence", (_BUFS, _I1, _i8, _F2, _F1, _F1), 0.5),
 )
 
 RUN_FLIGHT = Job(

@@ -80,6 +80,7 @@ from tlm_sim.ekf.layout import (
     HGT_RESET_COUNT,
     HGT_TR,
     IMU_OK,
+    IN_FLIGHT,
     INNOV_HGT,
     INNOV_MX,
     INNOV_MY,
@@ -115,6 +116,7 @@ from tlm_sim.ekf.layout import (
     R20,
     R21,
     R22,
+    RNG_ON_GND,
     SACC_LPF,
     SACC_PEAK,
     T_BAD_IMU,
@@ -128,6 +130,7 @@ from tlm_sim.ekf.layout import (
     T_INNOV_PASS,
     T_POS_PASS,
     T_VEL_PASS,
+    TERRAIN,
     VD,
     VE,
     VEL_RESET_COUNT,
@@ -297,8 +300,12 @@ def reset_height(e, r_hgt, pd_new, k):
     """EKF3's height reset: the filter height ``k`` ticks ago becomes pd_new [m, down].
 
     As EKF3's ResetHeight, the output height and vertical velocity (and their history) are set
-    to the filter's: the vertical output tracking errors are cleared.
+    to the filter's: the vertical output tracking errors are cleared; on the ground (the lane
+    not in flight) the terrain state is put 0.05 m below the new height, as EKF3 assumes the
+    vehicle sits on the ground (in flight the prediction's constraint keeps it below).
     """
+    if e[IN_FLIGHT] == 0.0:
+        e[TERRAIN] = pd_new + RNG_ON_GND
     dpd = pd_new - filter_get(e, k, 2)
     shift_output(e, 2, dpd + e[OUT_EPD])
     e[OUT_EPD] = 0.0

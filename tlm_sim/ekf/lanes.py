@@ -22,6 +22,7 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.compass import lane_read_mag
 from tlm_sim.ekf.core import (
     buffer_push,
+    filter_now,
     output_track,
     predict_covariance,
     propagate,
@@ -75,6 +76,7 @@ from tlm_sim.ekf.layout import (
     C_TILT_DRIFT,
     CONSTPOS_E,
     CONSTPOS_N,
+    DT_EKF_AVG,
     ES_ATT,
     ES_BA,
     ES_BG,
@@ -144,6 +146,7 @@ from tlm_sim.ekf.layout import (
     R20,
     R21,
     R22,
+    RNG_ON_GND,
     SCORE,
     SCORE_PREV,
     SEL_CHANGES,
@@ -165,6 +168,7 @@ from tlm_sim.ekf.layout import (
     T_POS_PASS,
     T_SCORE,
     T_VEL_PASS,
+    TERRAIN,
     TILT_BAD_T,
     TILT_RESET_COUNT,
     VEL_RESET_COUNT,
@@ -205,6 +209,7 @@ def ekf_init(ekf, sel, cfg):
         ekf[i, BUF_HEAD] = -1.0
         ekf[i, T_BAD_IMU] = -1.0e9
         ekf[i, T_BARO_LAST] = -1.0e9
+        ekf[i, DT_EKF_AVG] = cfg[C_TARGET_DT]
     for j in range(sel.shape[0]):
         sel[j] = 0.0
     sel[SEL_N_LANES] = n
@@ -246,6 +251,7 @@ def _align(e, cfg, t):
     reset_block(e, ES_BG, 3, INIT_GBIAS_SD**2)
     reset_block(e, ES_BA, 3, INIT_ABIAS_SD**2)
     e[ACC_DT] = 0.0
+    e[TERRAIN] = RNG_ON_GND  # EKF3 ResetHeight on the ground: the vehicle sits on the terrain
     e[ALIGNED] = 1.0
     e[T_ALIGNED] = t
     e[AID_MODE] = AID_NONE
@@ -385,6 +391,8 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
             (cfg[C_ABIAS_PNSE] * tt) ** 2,
         )
         e[N_PREDICT] += 1.0
+        e[DT_EKF_AVG] = 0.98 * e[DT_EKF_AVG] + 0.02 * tt
+        e[TERRAIN] = max(e[TERRAIN], filter_now(e, 2) + RNG_ON_GND)
         if not is_finite_lane(e):
             e[FAULT] = 1.0
             update_flags(e, cfg, t)

@@ -176,6 +176,17 @@ GPS_INNOV_FAIL = _l.add("GPS_INNOV_FAIL", 1, "",
                         "1 while the GPS innovation consistency test fails")
 GPS_GLITCHING = _l.add("GPS_GLITCHING", 1, "",
                        "EKF3's gps_glitching flag: a GPS test fails while aiding with GPS")
+# what only the log reads (XKF5, XKV1/XKV2: tlm_sim.ekf.log)
+DT_EKF_AVG = _l.add("DT_EKF_AVG", 1, "s",
+                    "average covariance prediction interval (EKF3 dtEkfAvg: 0.98/0.02 filter "
+                    "of each interval, from C_TARGET_DT): the unit of EKF3's delta-angle and "
+                    "delta-velocity bias states")
+TERRAIN = _l.add("TERRAIN", 1, "m",
+                 "EKF3's terrain state (terrainState, down): with no range finder or optical "
+                 "flow only its constraint acts, at least the filter's down position + 0.05 m "
+                 "(ground level at alignment and on-ground height resets); XKF5 offset/HAGL")
+T_XKV_LOG = _l.add("T_XKV_LOG", 1, "s",
+                   "last XKV1/XKV2 rows of this lane (EKF3 lastEkfStateVarLogTime_ms)")
 # output tracking error: filter state minus output state (pn, pe, pd, vn, ve, vd), EKF3's
 # output-observer error. The lane's VN..PD hold the *output* (what controllers and logs read);
 # measurement corrections change the filter state only, and the output follows with the time
@@ -198,6 +209,8 @@ N_EKF = LANE.close()
 # aiding modes (EKF3 names)
 AID_ABSOLUTE = 0.0
 AID_NONE = 2.0
+#: EKF3 rngOnGnd [m]: how far the terrain state (TERRAIN) is kept below the vehicle
+RNG_ON_GND = 0.05
 
 # ------------------------------------------------------------------ selector -------------------
 SELECTOR = Layout("sel", "lane selector")

@@ -528,6 +528,57 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         "uses, source set, GPS good to align, waiting for GPS checks, magnetometer fusion (0 "
         "none, 1 yaw on the ground, 2 in flight).",
     ),
+    _schema(
+        "XKF2", "QBccccchhhhhhfff",
+        "TimeUS,C,AX,AY,AZ,VWN,VWE,MN,ME,MD,MX,MY,MZ,IDX,IDY,IS",
+        "s#---nnGGGGGGoor", "F----BBCCCCCC000",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 lane states: accel bias (m/s^2, body), wind NE (m/s), earth magnetic "
+        "field NED and body magnetic field (mGauss), drag innovations (m/s^2) and sideslip "
+        "innovation (rad).",
+    ),
+    _schema(
+        "XKF3", "QBcccccchhhccff",
+        "TimeUS,C,IVN,IVE,IVD,IPN,IPE,IPD,IMX,IMY,IMZ,IYAW,IVT,RErr,ErSc",
+        "s#nnnmmmGGGd?--", "F-BBBBBBCCCBB00",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 lane innovations (predicted minus measured) of the last fusion: "
+        "velocity NED (m/s), position NED (m, D from the height sensor), magnetometer body "
+        "(mGauss), yaw (deg), airspeed (m/s); the lane's relative error and error score.",
+    ),
+    _schema(
+        "XKF5", "QBBhhhcccCCfff",
+        "TimeUS,C,NI,FIX,FIY,AFI,HAGL,offset,RI,rng,Herr,eAng,eVel,ePos",
+        "s#----m???mrnm", "F-----BBBBB000",
+        instance_field="C", rate_hz=10, instances=1,
+        description="EKF3 primary lane only: optical-flow test ratio and innovations, height "
+        "above ground and terrain state (m), range-finder innovation and range (m), terrain "
+        "height error (m), output-observer tracking errors: angle (rad), velocity (m/s), "
+        "position (m).",
+    ),
+    _schema(
+        "XKQ", "QBffff",
+        "TimeUS,C,Q1,Q2,Q3,Q4",
+        "s#????", "F-????",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 lane attitude quaternion (Q1 scalar; body -> NED).",
+    ),
+    _schema(
+        "XKV1", "QBffffffffffff",
+        "TimeUS,C,V00,V01,V02,V03,V04,V05,V06,V07,V08,V09,V10,V11",
+        "s#------------", "F-------------",
+        instance_field="C", rate_hz=2, instances=1,
+        description="EKF3 primary lane only, every 0.5 s: covariance diagonal of states 0-11 "
+        "(quaternion, velocity NED, position NED, delta-angle bias x, y).",
+    ),
+    _schema(
+        "XKV2", "QBffffffffffff",
+        "TimeUS,C,V12,V13,V14,V15,V16,V17,V18,V19,V20,V21,V22,V23",
+        "s#------------", "F-------------",
+        instance_field="C", rate_hz=2, instances=1,
+        description="EKF3 primary lane only, every 0.5 s: covariance diagonal of states 12-23 "
+        "(delta-angle bias z, delta-velocity bias, earth and body magnetic field, wind NE).",
+    ),
     # --- navigation / position control ----------------------------------------------------------
     _schema(
         "CTUN", "Qffffffefffhh",
@@ -614,6 +665,7 @@ SCHEMAS: dict[str, MessageSchema] = {s.name: s for s in _SCHEMA_LIST}
 LOGGED_MESSAGES: tuple[str, ...] = (
     "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
+    "XKF2", "XKF3", "XKF5", "XKQ", "XKV1", "XKV2",
 )
 
 #: On-event messages (``rate_hz == 0``) that carry flight events.
