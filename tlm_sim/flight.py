@@ -26,6 +26,7 @@ from tlm_sim.control.arming import (
     TXT_ROWS,
     arming_init,
     arming_step,
+    boot_texts_due,
     lifecycle_texts,
 )
 from tlm_sim.control.battery import battery_monitor
@@ -219,14 +220,17 @@ def run_flight(
                                                    rng, events, ev_counts)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
-        lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events, ev_counts)
+        if boot_texts_due(c, ekf):
+            lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events,
+                            ev_counts)
         if tick % 40 == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
-        if arming_step(c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
+        if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
+                c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,

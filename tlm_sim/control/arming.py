@@ -17,6 +17,9 @@ to arm every 2 s until an attempt passes; with the boot phase (``TLM_BOOT_PHASE`
 3.75 s (:mod:`tlm_sim.boot`), without it from ``TLM_ARM_TIME``. It gives up ARM_TIMEOUT_S after
 its first attempt: the flight then ends unarmed (``end_reason`` "not_armed"), never flies.
 
+The checks read the EKF lanes themselves (health, alignment, origin of every lane), as
+EKF3's pre_arm_check iterates its cores; the flight's logic reads the output block only.
+
 Text log: every failed attempt, every shown pre-arm report and every EKF lifecycle event
 (:mod:`tlm_sim.ekf.lifecycle`) becomes a row of the flight's text log (TXT_* columns, kept in
 ``FlightLog.meta["texts"]``); :mod:`tlm_sim.flightlog.texts` writes ArduCopter's wording.
@@ -440,6 +443,18 @@ def arming_step(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
     if switched and not passed:
         E.log_mode(events, ev_counts, t_us, C.MODE_GUIDED, C.RSN_GCS)
     return passed
+
+
+@inline_jit
+def boot_texts_due(c, ekf):
+    """Whether :func:`tlm_sim.control.arming.lifecycle_texts` has work this tick: a lane's
+    lifecycle event, or home / field elevation not yet set (cheap: the loop runs it only then)."""
+    if c[C.FIELD_SET] != 1.0 or c[C.HOME_SET] == 0.0:
+        return True
+    for i in range(ekf.shape[0]):
+        if ekf[i, EK.LIFE_EVENTS] != 0.0:
+            return True
+    return False
 
 
 @tick_jit

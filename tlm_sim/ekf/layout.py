@@ -189,10 +189,6 @@ OUT_IPN, OUT_IPE, OUT_IPD = _l.vector(("OUT_IPN", "OUT_IPE", "OUT_IPD"), "m s",
                                       "integral of the position tracking error")
 OUT_IVN, OUT_IVE, OUT_IVD = _l.vector(("OUT_IVN", "OUT_IVE", "OUT_IVD"), "m",
                                       "integral of the velocity tracking error")
-BUF_OFS = _l.add("BUF_OFS", BUF_ROW, "m, m/s",
-                 "cumulative output shifts pn, pe, pd, vn, ve, vd")
-BUF0 = _l.add("BUF0", NBUF * BUF_ROW, "m, m/s",
-              "ring buffer: NBUF rows of (pn, pe, pd, vn, ve, vd)")
 # EKF3's start-up (tlm_sim.ekf.lifecycle): tilt and yaw alignment, GPS checks, origin, gyro
 # bias learning; LIFE_EVENTS holds what changed for the flight's text log (MSG)
 TILT_DONE = _l.add("TILT_DONE", 1, "", "1 once the tilt variance fell below (5 deg)^2 "
@@ -219,6 +215,10 @@ INNOV_YAW = _l.add("INNOV_YAW", 1, "rad", "heading innovation of the ground head
                    "(measurement - prediction; XKF3.IYAW)")
 INFLIGHT_SEEN = _l.add("INFLIGHT_SEEN", 1, "", "1 once IN_FLIGHT was first set (in-flight yaw "
                        "alignment message)")
+BUF_OFS = _l.add("BUF_OFS", BUF_ROW, "m, m/s",
+                 "cumulative output shifts pn, pe, pd, vn, ve, vd")
+BUF0 = _l.add("BUF0", NBUF * BUF_ROW, "m, m/s",
+              "ring buffer: NBUF rows of (pn, pe, pd, vn, ve, vd)")
 N_EKF = LANE.close()
 
 # aiding modes (EKF3 names)
