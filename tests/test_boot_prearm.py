@@ -262,3 +262,16 @@ def test_several_failures_are_reported_in_arducopters_order():
     # every check has its text, one bit each
     assert sorted(ARM_CHECK_TEXTS) == [1 << k for k in range(A.N_FAIL_BITS)]
     assert math.log2(A.F_ARM_LEANING) == A.N_FAIL_BITS - 1
+
+
+def test_tlm_generate_reports_flights_that_never_armed(tmp_path):
+    """A dataset flight that cannot arm is counted and named, not silently empty."""
+    from tlm_process.generate import GenerateOptions, ScenarioConfig, generate
+
+    cfg = ScenarioConfig(kinds={"none": 1.0}, missions={"builtin": 1.0},
+                         ranges={"BATT_ARM_VOLT": (13.0, 13.5)})
+    rep = generate(GenerateOptions(out=tmp_path / "ds", flights=1, seed=0, config=cfg,
+                                   progress=False, executor="thread", workers=1))
+    assert (rep.ok, rep.failed, rep.not_armed) == (1, 0, [0])
+    line = next(ln for ln in rep.lines() if ln.startswith("not armed"))
+    assert "1 flight never armed" in line
