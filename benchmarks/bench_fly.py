@@ -5,7 +5,8 @@ NUMBA_CACHE_DIR to an empty folder for a truly cold number) with the CPU time it
 process and in the compile workers (tlm_sim.precompile), the warm real-time factor (simulated
 seconds per wall second) over several flights, and the peak memory.
 
-    python benchmarks/bench_fly.py [--flights 5] [--mission 1] [--frame x] [--compile-procs N]
+    python benchmarks/bench_fly.py [--flights 5] [--mission 1] [--frame x] [--boot]
+                                   [--compile-procs N]
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ def main() -> None:
     ap.add_argument("--mission", type=int, default=1)
     ap.add_argument("--frame", default=None,
                     help="frame of tlm_sim.frames (+, x, hexa, hexax, octa; default: +)")
+    ap.add_argument("--boot", action="store_true",
+                    help="fly SITL's boot phase (TLM_BOOT_PHASE 1: arming at ~40 s, not 10 s)")
     ap.add_argument("--compile-procs", type=int, default=None,
                     help="processes for a cold compile (TLM_COMPILE_PROCS; default: CPU count)")
     args = ap.parse_args()
@@ -36,7 +39,8 @@ def main() -> None:
 
     t_import = time.perf_counter() - t0
     t0 = time.perf_counter()
-    log = fly(args.mission, seed=0, frame=args.frame)
+    params = {"TLM_BOOT_PHASE": 1} if args.boot else None
+    log = fly(args.mission, seed=0, frame=args.frame, params=params)
     t_first = time.perf_counter() - t0
     sim_first = log.meta["duration_s"]
     cpu = [resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)]
@@ -64,14 +68,15 @@ def main() -> None:
     try:
         for k in range(args.flights):
             t = time.perf_counter()
-            log = fly(args.mission, seed=k + 1, frame=args.frame)
+            log = fly(args.mission, seed=k + 1, frame=args.frame, params=params)
             walls.append(time.perf_counter() - t)
             sims.append(log.meta["duration_s"])
     finally:
         F.run_flight = orig
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     sim_total = sum(sims)
-    print(f"{args.flights} flights of mission {args.mission} ({log.meta['frame']} frame): "
+    boot = ", boot phase" if args.boot else ""
+    print(f"{args.flights} flights of mission {args.mission} ({log.meta['frame']} frame{boot}): "
           f"{sim_total:.0f} s simulated "
           "(real-time factor = simulated s / wall s; mean over all flights, and best flight)")
     for label, w in (("numba loop only ", loop_walls), ("fly() end to end", walls)):

@@ -15,7 +15,9 @@ MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER"
 #: What each ``meta["end_reason"]`` (tlm_sim.flight.END_REASONS) means, for the summary.
 END_REASON_TEXT = {"landed": "landed and disarmed",
                    "crash": "the crash check disarmed it",
-                   "time_cap": "still armed at the time cap: the flight was cut off"}
+                   "time_cap": "still armed at the time cap: the flight was cut off",
+                   "not_armed": "never armed: the pre-arm checks failed until the driver gave "
+                                "up"}
 
 
 def flight_summary(log: FlightLog) -> dict[str, Any]:
@@ -32,7 +34,7 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
     final_mode = int(meta.get("final_mode", -1))
     return {
         "duration_s": round(float(meta.get("duration_s", 0.0)), 1),
-        "armed_s": meta.get("armed_s"),
+        "armed_s": None if meta.get("armed_s") is None else round(meta["armed_s"], 1),
         "disarmed_s": None if meta.get("disarmed_s") is None else round(meta["disarmed_s"], 1),
         "distance_m": round(dist, 1),
         "max_alt_m": round(max_alt, 1),
@@ -40,8 +42,20 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
         "final_mode": f"{MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
         "landed": meta.get("landed"),
         "end_reason": meta.get("end_reason"),
+        "arm_failures": last_arm_failures(meta),
         "rows": {k: len(v) for k, v in log.tables.items()},
     }
+
+
+def last_arm_failures(meta: dict[str, Any]) -> list[str]:
+    """The "Arm: ..." lines of a flight's last failed arm attempt when it never armed (why it
+    did not fly), else []."""
+    if meta.get("armed_s") is not None or not meta.get("texts"):
+        return []
+    from tlm_sim.flightlog.texts import logged_texts
+
+    arm = [(t, s) for t, s in logged_texts(meta["texts"]) if s.startswith("Arm: ")]
+    return [s for t, s in arm if t == arm[-1][0]] if arm else []
 
 
 def format_summary(s: dict[str, Any]) -> str:
@@ -56,7 +70,9 @@ def format_summary(s: dict[str, Any]) -> str:
         f"waypoints reached  {s['waypoints_reached']}",
         f"final mode         {s['final_mode']}, landed {s['landed']}",
         f"end reason         {s.get('end_reason')} "
-        f"({END_REASON_TEXT.get(str(s.get('end_reason')), 'unknown')})",
+        f"({END_REASON_TEXT.get(str(s.get('end_reason')), 'unknown')}"
+        + (f"; last attempt: {', '.join(s['arm_failures'])}" if s.get("arm_failures") else "")
+        + ")",
         f"rows               {rows}",
     ])
 

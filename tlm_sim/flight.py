@@ -18,13 +18,22 @@ import numpy as np
 
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
+from tlm_sim.boot import BOOT_ARM_S
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
+from tlm_sim.control.arming import (
+    N_TXT_COLS,
+    TXT_ROWS,
+    arming_init,
+    arming_step,
+    boot_texts_due,
+    lifecycle_texts,
+)
 from tlm_sim.control.battery import battery_monitor
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
 from tlm_sim.control.log import log_control_10hz
-from tlm_sim.control.modes import vehicle_step
+from tlm_sim.control.modes import arm_vehicle, vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
@@ -34,6 +43,7 @@ from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.lanes import (
     ekf_gps_accuracy,
+    ekf_gps_checks,
     ekf_init,
     ekf_output,
     ekf_output_nav,
@@ -49,7 +59,7 @@ from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read
+from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read, calibration_temperature
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
@@ -90,7 +100,11 @@ TRIG_WP = 1  # SCH_AT is a waypoint number: due once that many mission waypoints
 #: on the ground after an engine fault or unable to advance against a strong wind: its tables
 #: are valid but the flight was cut off.
 END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
-END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP)
+#: ... or it never armed: the driver's arm attempts failed the pre-arm checks until it gave up
+#: (tlm_sim.control.arming ARM_TIMEOUT_S after its first attempt; the reasons are the flight's
+#: "Arm:" / "PreArm:" texts)
+END_NOT_ARMED = "not_armed"
+END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP, END_NOT_ARMED)
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -160,7 +174,7 @@ def _motor_pwm(c, scfg, pwm):
 @loop_jit
 def run_flight(
     x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, t_end_us, home,
-    gps_time, bufs, counts, s, work, rng, wind_rng,
+    gps_time, bufs, counts, s, work, rng, wind_rng, txt,
 ):
     """Fly one whole flight in place; returns the final simulated time [us].
 
@@ -171,17 +185,19 @@ def run_flight(
     lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: the sensor
     noise streams, one row per sensor (S.RNG_*, :func:`tlm_sim.rng.new_streams`); wind_rng:
-    wind turbulence generator (tlm_sim.rng). Allocation-free.
+    wind turbulence generator (tlm_sim.rng); txt: the text log (tlm_sim.control.arming TXT_*,
+    its row count in c[TXT_N]). Allocation-free.
 
     The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
-    the flight ends 2 s after the autopilot disarms, or at t_end_us.
+    the flight ends 2 s after the autopilot disarms or the driver gives up arming, or at
+    t_end_us.
     """
     dang, dvel, rows, eo = work
     imu_ok, gps, pwm = rows[0], rows[1], rows[2]
     pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    _boot(s, scfg, ekf, sel, ecfg, events, ev_counts, home[0])
+    _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0])
     k_sched = 0
     t_us = 0
     next_loop = 0
@@ -204,16 +220,22 @@ def run_flight(
                                                    rng, events, ev_counts)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
+        if boot_texts_due(c, ekf):
+            lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events,
+                            ev_counts)
         if tick % 40 == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
+        if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
+                c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
+            arm_vehicle(c, t_us, q, events, ev_counts)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, ecfg, eo, pos)
-        if stop_at < 0 and c[C.DISARM_TIME] >= 0.0:
+        if stop_at < 0 and (c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0):
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
             break
@@ -221,14 +243,17 @@ def run_flight(
 
 
 @inline_jit
-def _boot(s, scfg, ekf, sel, ecfg, events, ev_counts, home_lat):
-    """Power on: sensors and EKF lanes initialised, the boot mode (STABILIZE) logged."""
+def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat):
+    """Power on: sensors and EKF lanes initialised (the GPS found at once, or when the boot
+    phase's driver finds it), the arming driver ready, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
-    gps_init(s, 0.0, home_lat)
+    gps_init(s, scfg[S.C_GPS_DETECT_US], home_lat)
     rc_init(s, 0.0)
     baro_init(s)
+    s[S.B_GND_TEMP] = calibration_temperature(scfg)
     mag_init(s)
     ekf_init(ekf, sel, ecfg)
+    arming_init(c, g)
     log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
 
@@ -282,6 +307,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
     block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
     if gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
+        ekf_gps_checks(ekf, ecfg, float(t_us), gps)
     switched = ekf_update(
         ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
@@ -401,15 +427,20 @@ def mission_path(mission: Mission, g: np.ndarray) -> np.ndarray:
 
 def max_duration_s(mission: Mission, params: Params) -> float:
     """Upper bound on a flight's simulated time (sizes the log buffers; the flight ends at
-    disarm + 2 s long before): slow cruise along the path, return, landing, margins."""
-    return float(params["TLM_ARM_TIME"] + 120.0 + 2.5 * mission.path_length_3d_m / 3.0 + 600.0)
+    disarm + 2 s long before): the arming (TLM_ARM_TIME, or the reference logs' ~42 s with the
+    boot phase), slow cruise along the path, return, landing, margins."""
+    arm_s = BOOT_ARM_S if params["TLM_BOOT_PHASE"] else params["TLM_ARM_TIME"]
+    return float(arm_s + 120.0 + 2.5 * mission.path_length_3d_m / 3.0 + 600.0)
 
 
-def end_reason(disarm_time_s: float, err_rows: np.ndarray) -> str:
+def end_reason(disarm_time_s: float, err_rows: np.ndarray, armed: bool = True) -> str:
     """Why a flight ended (one of :data:`END_REASONS`).
 
     ``disarm_time_s``: the control state's disarm time [s] (< 0: never disarmed, so the loop ran
-    to the time cap); ``err_rows``: the flight's ERR rows (TimeUS, Subsys, ECode)."""
+    to the time cap); ``err_rows``: the flight's ERR rows (TimeUS, Subsys, ECode); ``armed``:
+    whether it ever armed."""
+    if not armed:
+        return END_NOT_ARMED
     if disarm_time_s < 0.0:
         return END_TIME_CAP
     return END_CRASH if bool(np.any(err_rows[:, 1] == ERR_CRASH_CHECK)) else END_LANDED
@@ -499,6 +530,7 @@ def fly(
     path = mission_path(mission, g)
     seg = np.zeros((2, PATH_COLS))
     bufs = allocate_buffers(duration, LOGGED_MESSAGES)
+    txt = np.zeros((TXT_ROWS, N_TXT_COLS))
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
     week, ms = gps_week_ms(BOOT_UTC)
@@ -506,22 +538,25 @@ def fly(
         x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied,
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
         np.zeros(S.N_SENSOR_STATE), new_work(), new_streams(int(seed), S.N_NOISE_STREAMS),
-        new_rng(int(seed), 2),
+        new_rng(int(seed), 2), txt,
     )
+    armed = c[C.ARM_TIME_S] >= 0.0
     meta: dict[str, Any] = {
         "seed": int(seed),
         "profile": profile,
         "duration_s": t_final * 1e-6,
         "mission": mission.name,
         "home": list(mission.home),
-        "armed_s": float(g[C.G_ARM_TIME]),
+        "armed_s": float(c[C.ARM_TIME_S]) if armed else None,
         "disarmed_s": float(c[C.DISARM_TIME]) if c[C.DISARM_TIME] >= 0 else None,
         "final_mode": int(c[C.MODE]),
         "waypoints_reached": int(c[C.WP_REACHED]),
         "n_waypoints": int(mission.n_waypoints),
         "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
         "end_reason": end_reason(float(c[C.DISARM_TIME]),
-                                 bufs["ERR"][:int(counts[L.K_ERR])]),
+                                 bufs["ERR"][:int(counts[L.K_ERR])], armed),
+        "boot_phase": bool(p["TLM_BOOT_PHASE"]),
+        "texts": txt[:int(c[C.TXT_N])].tolist(),
         "max_duration_s": duration,
         "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
         "unmodelled_params": p.unmodelled(),

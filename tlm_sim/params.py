@@ -197,8 +197,17 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "0 = SITL-exact (SITL omits it, §1.8)", integer=True)),
     ("TLM_ARM_TIME", 10.0, ParamInfo(
         "s", 0.5, 3600.0,
-        "simulated time since boot at which the vehicle arms in GUIDED and takes off (the "
-        "reference SITL flights armed at ~42 s after waiting for GPS and EKF origin)")),
+        "with TLM_BOOT_PHASE 0: simulated time since boot at which the driver switches to GUIDED "
+        "and first tries to arm (retrying every 2 s until the pre-arm checks pass); ignored "
+        "with TLM_BOOT_PHASE 1, whose driver starts at 3.7 s as the reference SITL runs did "
+        "(tlm_sim.control.arming)")),
+    ("TLM_BOOT_PHASE", 0.0, ParamInfo(
+        "", 0.0, 1.0,
+        "1 = SITL's boot phase: GPS found at 9.8 s, EKF started at 4.45 s, tilt and yaw "
+        "alignment, origin after 10 s of good GPS, GPS used once the gyro biases are learnt, "
+        "arming when the pre-arm checks pass (~42 s, as the reference logs); 0 = skip it (fast "
+        "Monte Carlo): GPS and EKF ready from the start, arming at TLM_ARM_TIME "
+        "(docs/boot-and-arming.md)", integer=True)),
     ("TLM_WP_LEG_K", 0.946, ParamInfo(
         "", 0.1, 2.0,
         "S-curve leg-speed factor: cruise on a leg of length L is K*(L*sqrt(WPNAV_JERK)/2)^(2/3), "
@@ -275,7 +284,8 @@ _add(["SIM_GPS1_GLTCH_X", "SIM_GPS1_GLTCH_Y"], "deg", -10, 10,
 _add("SIM_GPS1_GLTCH_Z", "m", -10000, 10000, "GPS glitch offset added to altitude (§2.2)")
 _add([f"SIM_GPS1_VERR_{a}" for a in _XYZ], "m/s", -100, 100,
      "GPS NED velocity error amplitude, uniform (§2.2)")
-_add("SIM_GPS1_LCKTIME", "s", 0, 3600, "time before GPS 1 first lock (§2.2)", modelled=False)
+_add("SIM_GPS1_LCKTIME", "s", 0, 3600,
+     "time since boot before GPS 1 first reports a lock: no fix, 3 satellites until then (§2.2)")
 _add("SIM_GPS1_BYTELOS", "%", 0, 100, "GPS 1 serial byte loss (§2.1)", modelled=False)
 _add([f"SIM_GPS1_POS_{a}" for a in _XYZ], "m", -10, 10, "GPS 1 antenna offset, body FRD (§2.2)",
      modelled=False)
@@ -335,10 +345,12 @@ for _b in ("BARO", "BAR2", "BAR3"):  # baros 1 and 2 are modelled (sitl-faults.m
           f"{_b} disabled (no samples, unhealthy) / frozen at the last value (§2.5)",
           modelled=_b != "BAR3")
     _add(f"SIM_{_b}_DELAY", "ms", 0, 1000, f"{_b} delay (§2.5)", True, modelled=False)
-_add("SIM_TEMP_START", "degC", -40, 100, "ambient temperature at start (§2.5)", modelled=False)
-_add("SIM_TEMP_BRD_OFF", "degC", -50, 100, "board temperature offset over ambient (§2.5)",
-     modelled=False)
-_add("SIM_TEMP_TCONST", "s", 1, 10000, "board warm-up time constant (§2.5)", modelled=False)
+_add("SIM_TEMP_START", "degC", -40, 100,
+     "baro sensor temperature at boot: BARO.Temp warms from it towards the 1976-atmosphere air "
+     "temperature + SIM_TEMP_BRD_OFF (AP_Baro_SITL, §2.5)")
+_add("SIM_TEMP_BRD_OFF", "degC", -50, 100,
+     "board temperature offset over the air temperature the baro warms up to (§2.5)")
+_add("SIM_TEMP_TCONST", "s", 1, 10000, "baro (board) warm-up time constant (§2.5)")
 _add(["SIM_IMUT_START", "SIM_IMUT_END"], "degC", -40, 100, "IMU temperature start / end (§2.3)",
      modelled=False)
 _add("SIM_IMUT_TCONST", "s", 1, 10000, "IMU warm-up time constant (§2.3)", modelled=False)
@@ -526,8 +538,16 @@ _add("FRAME_TYPE", "", 0, 1,
      "frame type: 0 plus, 1 X (octa: plus only; tlm_sim.frames, sitl-faults.md §6.3)", True)
 _add("SCHED_LOOP_RATE", "Hz", 400, 400, "main loop rate (§4.1); tlm runs it at 400 Hz only",
      True)
-_add("GPS_HDOP_GOOD", "", 100, 900, "HDOP x 100 below which GPS is good enough to arm", True,
-     modelled=False)
+_add("GPS_HDOP_GOOD", "", 100, 900,
+     "HDOP x 100 above which the pre-arm check fails (\"High GPS HDOP\", tlm_sim.control.arming)",
+     True)
+_add("ARMING_CHECK", "", 0, _U32,
+     "pre-arm checks, bit mask: 1 all, 2 baro, 4 compass, 8 GPS, 16 INS, 64 RC, 128 voltage, "
+     "256 battery; 0 = only the mandatory ones (position and altitude estimate) "
+     "(tlm_sim.control.arming)", True)
+_add("ARMING_ACCTHRESH", "m/s/s", 0.25, 3,
+     "accelerometers differing by more than this fail the pre-arm check \"Accels "
+     "inconsistent\" (tlm_sim.control.arming)")
 for _i in range(1, 9):
     _add([f"RC{_i}_MIN", f"RC{_i}_TRIM", f"RC{_i}_MAX"], "PWM", 800, 2200,
          f"RC channel {_i} min / trim / max (§2.1)", modelled=False)
@@ -573,6 +593,15 @@ _add("EK3_HRT_FILT", "Hz", 0.1, 30,
 _add("GPS1_DELAY_MS", "ms", 0, 250,
      "GPS 1 delay the EKF assumes, 0 = the u-blox driver's 120 ms (§3.8)", True)
 _add("EK3_IMU_MASK", "", 1, 127, "IMUs that get an EKF lane, bit mask (§3.4)", True)
+_add("EK3_GPS_CHECK", "", 0, 255,
+     "GPS checks before the EKF sets its origin and uses GPS, bit mask: 1 satellites, 2 HDOP, "
+     "4 speed accuracy, 8 position accuracy, 16 compass yaw, 32 drift, 64 vertical speed, "
+     "128 horizontal speed (with TLM_BOOT_PHASE 1; tlm_sim.ekf.lifecycle)", True)
+_add("EK3_CHECK_SCALE", "%", 50, 200, "scale of those GPS check thresholds (percent)")
+_add("EK3_YAW_M_NSE", "rad", 0.05, 1.0,
+     "compass heading noise of the heading fusion on the ground before the first climb "
+     "(EK3_MAG_CAL 3; with TLM_BOOT_PHASE 1)")
+_add("EK3_YAW_I_GATE", "%", 100, 1000, "heading innovation gate, percent of one sigma", True)
 _add("EK3_AFFINITY", "", 0, 15, "lane sensor affinity bits (§3.4)", True, modelled=False)
 _flag("EK3_ENABLE", "EKF3 enabled (§3.8)", modelled=False)
 
@@ -591,7 +620,8 @@ _add("BATT_CAPACITY", "mAh", 0, 1e6,
      "battery capacity: BAT.RemPct and the capacity failsafes (0 = unknown, RemPct 100)")
 _add(["BATT_LOW_VOLT", "BATT_CRT_VOLT"], "V", 0, 100,
      "battery low / critical failsafe voltage, 0 = off (sitl-faults.md §7)")
-_add("BATT_ARM_VOLT", "V", 0, 100, "minimum arming voltage (§1.11)", modelled=False)
+_add("BATT_ARM_VOLT", "V", 0, 100,
+     "minimum arming voltage, 0 = none (pre-arm \"Battery 1 below minimum arming voltage\")")
 _add("BATT_LOW_TIMER", "s", 0, 120,
      "time the voltage must stay below BATT_LOW_VOLT / BATT_CRT_VOLT before the failsafe, "
      "0 = no voltage failsafes (sitl-faults.md §7)", True)

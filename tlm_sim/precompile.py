@@ -120,12 +120,19 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
     Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_BUFS, _I1, _i8, _F2, _F1, _F1), 0.5),
+    # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
+    Job("tlm_sim.control.arming:arming_step",
+        (_F1, _F1, _f8, _F1, _F1, _F2, _F1, _F1, _F2, _EVENTS, _I1), 1.5),
+    Job("tlm_sim.control.arming:lifecycle_texts",
+        (_F1, _f8, _F2, _F1, _F1, _f8, _b1, _F2, _EVENTS, _I1), 0.3),
+    Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EVENTS, _I1), 0.2),
+    Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 0.3),
 )
 
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1), 4.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1, _F2), 4.0)
 
 
 @dataclass

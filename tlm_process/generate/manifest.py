@@ -217,7 +217,8 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
     """One row per flight: status, kind, seeds, mission, frame (``frame`` name,
     ``frame_class``, ``frame_type``), wind (``calm``; ``wind_spd`` m/s, ``wind_dir`` deg
     (empty when calm), ``wind_turb`` m/s: the SIM_WIND_* values flown), faults, λ, duration,
-    landing, why the flight ended (``end_reason``: ``landed``, ``crash`` or ``time_cap``, see
+    landing, why the flight ended (``end_reason``: ``landed``, ``crash``, ``time_cap`` or
+    ``not_armed``, see
     :data:`tlm_sim.flight.END_REASONS`), timings, error, scenario (JSON)."""
     rows = []
     for flight in sorted(entries):

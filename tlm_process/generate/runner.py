@@ -45,7 +45,7 @@ from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, HEADER, sim_fi
 from tlm_process.generate.scenario import ScenarioConfig, flight_conditions, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
 from tlm_process.generate.writer import DatasetWriter
-from tlm_sim.flight import END_TIME_CAP
+from tlm_sim.flight import END_NOT_ARMED, END_TIME_CAP
 from tlm_sim.frames import FRAMES
 
 __all__ = ["GenerateOptions", "GenerateReport", "generate"]
@@ -128,6 +128,7 @@ class GenerateReport:
     errors: list[str] = field(default_factory=list)
     #: flights of this run (status ok) still armed at the simulator's time cap: cut off
     capped: list[int] = field(default_factory=list)
+    not_armed: list[int] = field(default_factory=list)
     #: flights of this run (status ok) by frame name
     frames: dict[str, int] = field(default_factory=dict)
     #: flights of this run (status ok) in calm air (no wind, no turbulence) and in wind
@@ -194,6 +195,13 @@ class GenerateReport:
             out.append(f"capped             {len(self.capped)} flight{pl} still armed at the "
                        f"time cap, cut off (flight{pl} {shown}{more}): see end_reason in "
                        "manifest.parquet")
+        if self.not_armed:
+            shown = ", ".join(str(f) for f in sorted(self.not_armed)[:10])
+            more = ", ..." if len(self.not_armed) > 10 else ""
+            pl = "s" if len(self.not_armed) > 1 else ""
+            out.append(f"not armed          {len(self.not_armed)} flight{pl} never armed: the "
+                       f"pre-arm checks failed (flight{pl} {shown}{more}): see end_reason in "
+                       "manifest.parquet and the Arm: texts")
         if self.restarts:
             out.append(f"worker pool        restarted {self.restarts} time(s): a worker process "
                        "died")
@@ -711,6 +719,8 @@ def _fly_all(opts: GenerateOptions, handle: ExecutorHandle, writer: DatasetWrite
             report.encode_s += float(tm.get("encode_s", 0.0))
             if sm.get("end_reason") == END_TIME_CAP:
                 report.capped.append(int(res["flight"]))
+            elif sm.get("end_reason") == END_NOT_ARMED:
+                report.not_armed.append(int(res["flight"]))
             _count_conditions(report, res.get("scenario"))
         else:
             report.failed += 1

@@ -10,7 +10,9 @@ import math
 
 import numpy as np
 
+from tlm_sim.boot import BOOT_ARM_ATTEMPTS_S, BOOT_DRIVER_S, PREARM_FIRST_S
 from tlm_sim.control import layout as C
+from tlm_sim.control.arming import ARM_RETRY_S, ARM_TIMEOUT_S
 from tlm_sim.dynamics.atmosphere import RHO0, air_density, air_density_gradient
 from tlm_sim.frames import frame_for
 from tlm_sim.params import Params, require_params
@@ -91,6 +93,26 @@ def _navigation(g: np.ndarray, p: Params) -> None:
     g[C.G_LAND_SPEED_HIGH] = p["LAND_SPEED_HIGH"] / 100.0
     g[C.G_LAND_ALT_LOW] = p["LAND_ALT_LOW"] / 100.0
     g[C.G_ARM_TIME] = p["TLM_ARM_TIME"]
+    _driver(g, p)
+
+
+def _driver(g: np.ndarray, p: Params) -> None:
+    """The driver's GUIDED switch and arm attempts, the pre-arm checks (ARMING_*,
+    GPS_HDOP_GOOD, BATT_ARM_VOLT; tlm_sim.control.arming): SITL's boot times with
+    TLM_BOOT_PHASE 1, TLM_ARM_TIME without."""
+    boot = p["TLM_BOOT_PHASE"] != 0.0
+    g[C.G_BOOT] = 1.0 if boot else 0.0
+    g[C.G_DRIVER_T] = BOOT_DRIVER_S if boot else p["TLM_ARM_TIME"]
+    first = BOOT_ARM_ATTEMPTS_S[0] if boot else p["TLM_ARM_TIME"]
+    g[C.G_ARM_FIRST] = first
+    g[C.G_ARM_SECOND] = BOOT_ARM_ATTEMPTS_S[1] if boot else first + ARM_RETRY_S
+    g[C.G_ARM_GIVE_UP] = first + ARM_TIMEOUT_S
+    # AP_Arming::update's 1 Hz, on the reference logs' phase (x.449 s)
+    g[C.G_PREARM_FIRST] = PREARM_FIRST_S if boot else PREARM_FIRST_S % 1.0
+    g[C.G_ARMING_CHECK] = p["ARMING_CHECK"]
+    g[C.G_ACC_THRESH] = p["ARMING_ACCTHRESH"]
+    g[C.G_HDOP_GOOD] = p["GPS_HDOP_GOOD"] / 100.0
+    g[C.G_BATT_ARM_VOLT] = p["BATT_ARM_VOLT"]
 
 
 def _motors(g: np.ndarray, p: Params) -> None:

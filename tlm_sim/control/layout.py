@@ -170,6 +170,21 @@ BATT_FS_ACT = _c.add("BATT_FS_ACT", 1, "",
 RC_THR_LOW_N = _c.add("RC_THR_LOW_N", 1, "",
                       "radio failsafe counter: RC frames with throttle below FS_THR_VALUE (0..3)")
 RC_LAST_SEEN_US = _c.add("RC_LAST_SEEN_US", 1, "us", "time of the last RC frame processed")
+# the arming driver, the pre-arm checks and the boot texts (tlm_sim.control.arming)
+ARM_NEXT_T = _c.add("ARM_NEXT_T", 1, "s", "time of the driver's next arm attempt")
+ARM_TIME_S = _c.add("ARM_TIME_S", 1, "s", "time the vehicle armed (-1: not yet)")
+ARM_GAVE_UP = _c.add("ARM_GAVE_UP", 1, "", "1 once the driver stopped trying to arm")
+PREARM_NEXT_T = _c.add("PREARM_NEXT_T", 1, "s", "time of the next 1 Hz pre-arm check")
+PREARM_SHOWN_T = _c.add("PREARM_SHOWN_T", 1, "s", "last time the pre-arm failures were shown")
+PREARM_LAST_OK = _c.add("PREARM_LAST_OK", 1, "", "result of the last 1 Hz pre-arm check")
+PREARM_REPORT = _c.add("PREARM_REPORT", 1, "",
+                       "1: the checks failed after passing, show them within 4 s")
+ACC_PASS_T = _c.add("ACC_PASS_T", 1, "s",
+                    "accelerometers consistent since (-1: not yet seen consistent)")
+GYR_PASS_T = _c.add("GYR_PASS_T", 1, "s", "gyros consistent since (-1: not yet)")
+HOME_SET = _c.add("HOME_SET", 1, "", "1 once home is set (from the EKF origin, EV SET_HOME)")
+FIELD_SET = _c.add("FIELD_SET", 1, "", "1 once the baro's field elevation is set")
+TXT_N = _c.add("TXT_N", 1, "", "rows used in the flight's text log")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
@@ -313,4 +328,14 @@ G_BATT_FS_CRT_ACT = _g.add("G_BATT_FS_CRT_ACT", 1, "", "BATT_FS_CRT_ACT")
 G_BATT_RES0 = _g.add("G_BATT_RES0", 1, "ohm",
                      "battery monitor's starting resistance estimate: TLM_BATT_SAG_HOV at the "
                      "frame's hover current TLM_REF_CURR")
+G_BOOT = _g.add("G_BOOT", 1, "", "TLM_BOOT_PHASE")
+G_DRIVER_T = _g.add("G_DRIVER_T", 1, "s", "the driver switches to GUIDED")
+G_ARM_FIRST = _g.add("G_ARM_FIRST", 1, "s", "the driver's first arm attempt")
+G_ARM_SECOND = _g.add("G_ARM_SECOND", 1, "s", "its second; then one every ARM_RETRY_S")
+G_ARM_GIVE_UP = _g.add("G_ARM_GIVE_UP", 1, "s", "no attempt after this: the flight ends unarmed")
+G_PREARM_FIRST = _g.add("G_PREARM_FIRST", 1, "s", "first 1 Hz pre-arm check")
+G_ARMING_CHECK = _g.add("G_ARMING_CHECK", 1, "", "ARMING_CHECK bit mask")
+G_ACC_THRESH = _g.add("G_ACC_THRESH", 1, "m/s^2", "ARMING_ACCTHRESH")
+G_HDOP_GOOD = _g.add("G_HDOP_GOOD", 1, "", "GPS_HDOP_GOOD / 100")
+G_BATT_ARM_VOLT = _g.add("G_BATT_ARM_VOLT", 1, "V", "BATT_ARM_VOLT")
 N_CONTROL_CFG = CONFIG.close()

@@ -2,10 +2,11 @@
 and the radio failsafe; runs every main-loop tick and drives the position/attitude/rate
 controllers and the mixer.
 
-Flight sequence (as the reference SITL flights): boot in STABILIZE, GUIDED and arm at
-TLM_ARM_TIME, take off to the first waypoint's altitude, switch to AUTO, fly the waypoints, then
-the mission's RETURN_TO_LAUNCH (climb to RTL_ALT, return at WPNAV_SPEED, loiter RTL_LOIT_TIME,
-land at LAND_SPEED below LAND_ALT_LOW) and disarm when the land detector reports landed.
+Flight sequence (as the reference SITL flights): boot in STABILIZE, GUIDED and arm when the
+driver's attempt passes the pre-arm checks (tlm_sim.control.arming), take off to the first
+waypoint's altitude, switch to AUTO, fly the waypoints, then the mission's RETURN_TO_LAUNCH
+(climb to RTL_ALT, return at WPNAV_SPEED, loiter RTL_LOIT_TIME, land at LAND_SPEED below
+LAND_ALT_LOW) and disarm when the land detector reports landed.
 
 Failsafes: radio (RTL, or LAND when there is no position; by RC timeout or low throttle),
 battery (tlm_sim.control.battery: BATT_FS_*_ACT), EKF (FS_EKF_THRESH/FS_EKF_ACTION:
@@ -169,7 +170,7 @@ def vehicle_step(
     cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])  # cos(roll) cos(pitch)
     _estimates_update(c, g, pos, acc_ned, dt)
     if c[C.ARMED] == 0.0:
-        _disarmed_step(c, g, t_us, t_s, q, events, ev_counts)
+        _disarmed_step(c, g)
         return
     c[C.SUB_TIMER] += dt
     sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
@@ -207,20 +208,26 @@ def _estimates_update(c, g, pos, acc_ned, dt):
 
 
 @inline_jit
-def _disarmed_step(c, g, t_us, t_s, q, events, ev_counts):
-    """Disarmed: motors off; at TLM_ARM_TIME arm in GUIDED (as the reference driver did) and
-    start the motors."""
+def _disarmed_step(c, g):
+    """Disarmed: motors off (the driver arms the vehicle: :func:`arm_vehicle`)."""
     output_idle(c, g, 0.0)
     rate_reset(c)
-    if c[C.DISARM_TIME] < 0.0 and t_s >= g[C.G_ARM_TIME] and c[C.SUBMODE] == C.SUB_NONE:
-        set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, events, ev_counts)
-        c[C.ARMED] = 1.0
-        c[C.LANDED] = 1.0
-        c[C.HOME_YAW] = _yaw(q)
-        c[C.SUBMODE] = C.SUB_GROUND_IDLE
-        c[C.SUB_TIMER] = 0.0
-        c[C.SPOOL] = 1.0
-        E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
+
+
+@tick_jit
+def arm_vehicle(c, t_us, q, events, ev_counts):
+    """Arm in GUIDED (the mode is logged again, as AP_Arming_Copter::arm does) once the
+    driver's attempt passed the checks (tlm_sim.control.arming): motors to ground idle, the
+    takeoff follows the arming delay. q: EKF attitude body->NED (the home heading)."""
+    set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, events, ev_counts)
+    c[C.ARMED] = 1.0
+    c[C.ARM_TIME_S] = t_us * 1e-6
+    c[C.LANDED] = 1.0
+    c[C.HOME_YAW] = _yaw(q)
+    c[C.SUBMODE] = C.SUB_GROUND_IDLE
+    c[C.SUB_TIMER] = 0.0
+    c[C.SPOOL] = 1.0
+    E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
 
 
 @tick_jit

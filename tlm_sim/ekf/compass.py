@@ -27,12 +27,14 @@ from tlm_sim.ekf.layout import (
     C_MAG_FAIL_T,
     C_MAG_SWITCH_T0,
     IN_FLIGHT,
+    INFLIGHT_SEEN,
     MAG_IDX,
     PD,
     T_ALIGNED,
     T_MAG_PASS,
     T_MAG_READ,
 )
+from tlm_sim.ekf.lifecycle import EVT_INFLIGHT_YAW, life_event
 from tlm_sim.sensors.layout import M_FIELD, M_HEALTHY, M_NEW, MAG_STRIDE, N_MAG
 
 
@@ -63,6 +65,9 @@ def lane_read_mag(e, cfg, t, mag, armed):
             e[T_MAG_PASS] = t
     elif e[ALIGNED] != 0.0 and -e[PD] > cfg[C_INFLIGHT_HGT]:
         e[IN_FLIGHT] = 1.0
+        if e[INFLIGHT_SEEN] == 0.0:  # EKF3's in-flight yaw alignment (its message only)
+            e[INFLIGHT_SEEN] = 1.0
+            life_event(e, EVT_INFLIGHT_YAW)
     b = int(e[MAG_IDX]) * MAG_STRIDE
     if mag[b + M_NEW] != 0.0:
         e[T_MAG_READ] = t

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tlm_sim.boot import BOOT_EKF_START_S
 from tlm_sim.ekf import layout as L
 from tlm_sim.params import ParamError, Params, earth_field, require_params
 
@@ -87,8 +88,9 @@ def build_ekf_config(params: Params) -> np.ndarray:
     """Return the ``cfg[N_CFG]`` float64 array of a flight from its parameters.
 
     Reads EK3_* (noises, gates, delays, EK3_IMU_MASK lanes, EK3_TAU_OUTPUT limited to 10..50
-    cs as EKF3), GPS1_DELAY_MS (:func:`gps_delay_s`), SCHED_LOOP_RATE (the prediction step)
-    and the earth field; units and defaults: ``tlm params EK3_``.
+    cs as EKF3, EK3_GPS_CHECK / EK3_CHECK_SCALE), GPS1_DELAY_MS (:func:`gps_delay_s`),
+    SCHED_LOOP_RATE (the prediction step), TLM_BOOT_PHASE (:mod:`tlm_sim.ekf.lifecycle`) and
+    the earth field; units and defaults: ``tlm params EK3_``.
     """
     p = require_params(params, "build_ekf_config")
     c = np.zeros(L.N_CFG)
@@ -105,6 +107,12 @@ def build_ekf_config(params: Params) -> np.ndarray:
     c[L.C_N_LANES] = len(imus)
     for i, imu in enumerate(imus):
         c[L.C_LANE_IMU + i] = imu
+    c[L.C_BOOT] = p["TLM_BOOT_PHASE"]
+    c[L.C_EKF_START] = BOOT_EKF_START_S if p["TLM_BOOT_PHASE"] else 0.0
+    c[L.C_GPS_CHECK] = p["EK3_GPS_CHECK"]
+    c[L.C_CHECK_SCALE] = 0.01 * p["EK3_CHECK_SCALE"]
+    c[L.C_YAW_NSE] = p["EK3_YAW_M_NSE"]
+    c[L.C_YAW_GATE] = _gate_sigmas(p["EK3_YAW_I_GATE"])
     max_delay = (L.NBUF - 1) * c[L.C_DT]
     if c[L.C_GPS_DELAY] > max_delay or c[L.C_HGT_DELAY] > max_delay:
         raise ParamError(f"EKF measurement delays must be <= {max_delay:.3f} s")

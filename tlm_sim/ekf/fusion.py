@@ -36,6 +36,7 @@ from tlm_sim.ekf.layout import (
     C_ALT_NSE,
     C_BAD_IMU_HOLD,
     C_BAD_IMU_TIMEOUT,
+    C_BOOT,
     C_CONSTPOS_DT,
     C_DT,
     C_GBIAS_LIM,
@@ -59,6 +60,8 @@ from tlm_sim.ekf.layout import (
     C_VEL_GATE,
     C_VELD_NSE,
     C_VELNE_NSE,
+    C_YAW_GATE,
+    C_YAW_NSE,
     CONSTPOS_E,
     CONSTPOS_N,
     ES_ATT,
@@ -81,6 +84,7 @@ from tlm_sim.ekf.layout import (
     HGT_TR,
     IMU_OK,
     IN_FLIGHT,
+    INFLIGHT_SEEN,
     INNOV_HGT,
     INNOV_MX,
     INNOV_MY,
@@ -90,6 +94,7 @@ from tlm_sim.ekf.layout import (
     INNOV_VD,
     INNOV_VE,
     INNOV_VN,
+    INNOV_YAW,
     MAG_HAVE,
     MAG_LX,
     MAG_LY,
@@ -107,6 +112,10 @@ from tlm_sim.ekf.layout import (
     POS_RESET_DE,
     POS_RESET_DN,
     POS_TR,
+    QW,
+    QX,
+    QY,
+    QZ,
     R00,
     R01,
     R02,
@@ -139,7 +148,18 @@ from tlm_sim.ekf.layout import (
     VEL_RESET_DN,
     VEL_TR,
     VN,
+    YAW_DONE,
 )
+from tlm_sim.ekf.lifecycle import (
+    EKF3_INIT_ROT_SD,
+    EVT_STOPPED,
+    life_event,
+    mag_heading,
+    ready_to_use_gps,
+    started_using_gps,
+    yaw_align,
+)
+from tlm_sim.rotation import quat_to_euler
 
 
 @tick_jit
@@ -290,6 +310,7 @@ def stop_aiding(e, cfg, t):
     reset_block(e, ES_VEL, 2, cfg[C_VELNE_NSE] ** 2)
     reset_block(e, ES_POS, 2, cfg[C_POSNE_NSE] ** 2)
     e[AID_MODE] = AID_NONE
+    life_event(e, EVT_STOPPED)
     e[CONSTPOS_N] = e[PN]
     e[CONSTPOS_E] = e[PE]
     e[T_CONSTPOS] = t - cfg[C_CONSTPOS_DT]
@@ -370,8 +391,10 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
         return
     k = _delay_ticks(cfg, cfg[C_GPS_DELAY])
     if e[AID_MODE] == AID_NONE:
+        if not ready_to_use_gps(e, cfg):  # the boot phase's conditions (tlm_sim.ekf.lifecycle)
+            return
         reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
-        e[AID_MODE] = AID_ABSOLUTE
+        started_using_gps(e)
         update_flags(e, cfg, t)
         return
     r_vne = cfg[C_VELNE_NSE] ** 2
@@ -481,6 +504,11 @@ def lane_fuse_mag(e, cfg, mag):
     e[MAG_HAVE] = 1.0
     if e[ALIGNED] == 0.0 or e[FAULT] != 0.0 or e[IMU_OK] == 0.0:
         return False
+    if e[YAW_DONE] == 0.0:  # boot phase: the first sample after tilt alignment sets the yaw
+        yaw_align(e, cfg, EKF3_INIT_ROT_SD**2)
+        return False
+    if cfg[C_BOOT] != 0.0 and e[INFLIGHT_SEEN] == 0.0:
+        return lane_fuse_heading(e, cfg)
     mn = cfg[C_MAG_N]
     me = cfg[C_MAG_E]
     md = cfg[C_MAG_D]
@@ -519,6 +547,30 @@ def lane_fuse_mag(e, cfg, mag):
     fuse_h3(e, ES_ATT, h00, h01, h02, y0, r)
     fuse_h3(e, ES_ATT, h10, h11, h12, y1, r)
     fuse_h3(e, ES_ATT, h20, h21, h22, y2, r)
+    apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
+    return True
+
+
+@tick_jit
+def lane_fuse_heading(e, cfg):
+    """EKF3's magnetic heading fusion (EK3_MAG_CAL 3 before the first climb's in-flight yaw
+    alignment, with the boot phase): the heading of the lane's last compass sample, levelled
+    with its roll and pitch, fused as a yaw measurement with noise EK3_YAW_M_NSE, gated by
+    EK3_YAW_I_GATE; its test ratio is the lane's compass test ratio meanwhile, its
+    innovation INNOV_YAW (measurement - prediction, rad). A yaw measurement sees the
+    earth-frame attitude error's z component (h = [0, 0, 1], exact for a level vehicle).
+    Returns True when fused."""
+    roll, pitch, yaw = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
+    y = mag_heading(e, cfg, roll, pitch) - yaw
+    y = (y + math.pi) % (2.0 * math.pi) - math.pi
+    r = max(cfg[C_YAW_NSE], 0.01) ** 2
+    s = e[P0 + (ES_ATT + 2) * (NS + 1)] + r
+    e[INNOV_YAW] = y
+    e[MAG_TR] = y * y / (cfg[C_YAW_GATE] ** 2 * s)  # EKF3's yawTestRatio takes its place
+    if e[MAG_TR] >= 1.0:
+        return False
+    clear_dx(e)
+    fuse_index(e, ES_ATT + 2, y, r)
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
     return True
 

@@ -60,15 +60,15 @@ from tlm_sim.ekf.layout import (
     C_ALT_NSE,
     C_BAD_IMU_ACC_NSE,
     C_BAD_IMU_HOLD,
+    C_BOOT,
     C_DT,
+    C_EKF_START,
     C_ERR_THRESH,
     C_GBIAS_PNSE,
     C_GPS_DELAY,
     C_GYRO_PNSE,
     C_LANE_IMU,
     C_LANE_INIT_T,
-    C_MAG_E,
-    C_MAG_N,
     C_SCORE_LAG,
     C_SELECT_T,
     C_TARGET_DT,
@@ -96,9 +96,6 @@ from tlm_sim.ekf.layout import (
     INNOV_HGT,
     INNOV_VD,
     MAG_HAVE,
-    MAG_LX,
-    MAG_LY,
-    MAG_LZ,
     MAG_TR,
     MAX_LANES,
     N_EKF,
@@ -161,6 +158,7 @@ from tlm_sim.ekf.layout import (
     T_BAD_IMU,
     T_BARO_LAST,
     T_CONSTPOS,
+    T_GPS_CHK_FAIL,
     T_GPS_FUSED,
     T_HGT_PASS,
     T_LAST,
@@ -175,7 +173,25 @@ from tlm_sim.ekf.layout import (
     VEL_TR,
     VN,
 )
+from tlm_sim.ekf.lifecycle import (
+    EKF3_INIT_ROT_SD,
+    lane_alignment_checks,
+    lane_gps_checks,
+    lane_started,
+    mag_heading,
+)
 from tlm_sim.rotation import quat_to_euler
+from tlm_sim.sensors.layout import (
+    GE_HACC,
+    GE_HDOP,
+    GE_NSATS,
+    GE_PE,
+    GE_PN,
+    GE_VACC,
+    GE_VD,
+    GE_VE,
+    GE_VN,
+)
 
 # initial standard deviations at alignment
 INIT_TILT_SD = 0.05  # rad
@@ -210,6 +226,7 @@ def ekf_init(ekf, sel, cfg):
         ekf[i, T_BAD_IMU] = -1.0e9
         ekf[i, T_BARO_LAST] = -1.0e9
         ekf[i, DT_EKF_AVG] = cfg[C_TARGET_DT]
+        ekf[i, T_GPS_CHK_FAIL] = -1.0
     for j in range(sel.shape[0]):
         sel[j] = 0.0
     sel[SEL_N_LANES] = n
@@ -228,22 +245,15 @@ def _align(e, cfg, t):
     fz = e[ALIGN_FZ] * f
     roll = math.atan2(-fy, -fz)
     pitch = math.atan2(fx, math.sqrt(fy * fy + fz * fz))
-    mx = e[MAG_LX]
-    my = e[MAG_LY]
-    mz = e[MAG_LZ]
-    cr = math.cos(roll)
-    sr = math.sin(roll)
-    cp = math.cos(pitch)
-    sp = math.sin(pitch)
-    mlx = cp * mx + sp * (sr * my + cr * mz)
-    mly = cr * my - sr * mz
-    yaw = math.atan2(cfg[C_MAG_E], cfg[C_MAG_N]) - math.atan2(mly, mlx)
-    set_quat_euler(e, roll, pitch, yaw)
+    set_quat_euler(e, roll, pitch, mag_heading(e, cfg, roll, pitch))
     for j in range(VN, BAX + 3):
         e[j] = 0.0
     for j in range(NS * NS):
         e[P0 + j] = 0.0
-    reset_block(e, ES_ATT, 2, INIT_TILT_SD**2)
+    # the boot phase starts from EKF3's initial attitude uncertainty (tilt alignment waits for
+    # it to fall below 5 deg); without it the lane starts aligned (tlm_sim.ekf.lifecycle)
+    tilt_sd = EKF3_INIT_ROT_SD if cfg[C_BOOT] != 0.0 else INIT_TILT_SD
+    reset_block(e, ES_ATT, 2, tilt_sd**2)
     reset_block(e, ES_ATT + 2, 1, INIT_YAW_SD**2)
     reset_block(e, ES_VEL, 3, INIT_VEL_SD**2)
     reset_block(e, ES_POS, 2, INIT_POS_SD**2)
@@ -272,6 +282,7 @@ def _align(e, cfg, t):
         e[BUF_OFS + j] = 0.0
         e[OUT_EPN + j] = 0.0
         e[OUT_IPN + j] = 0.0
+    lane_started(e, cfg)
 
 
 @tick_jit
@@ -362,6 +373,9 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
         return
     e[IMU_OK] = 1.0
     if e[ALIGNED] == 0.0:
+        if t < cfg[C_EKF_START] - cfg[C_ALIGN_TIME]:  # the EKF has not started yet (boot)
+            update_flags(e, cfg, t)
+            return
         e[ALIGN_FX] += dvel[ai, 0]
         e[ALIGN_FY] += dvel[ai, 1]
         e[ALIGN_FZ] += dvel[ai, 2]
@@ -393,6 +407,7 @@ def lane_predict(e, cfg, t, dang, dvel, imu_ok, armed):
         e[N_PREDICT] += 1.0
         e[DT_EKF_AVG] = 0.98 * e[DT_EKF_AVG] + 0.02 * tt
         e[TERRAIN] = max(e[TERRAIN], filter_now(e, 2) + RNG_ON_GND)
+        lane_alignment_checks(e, cfg)
         if not is_finite_lane(e):
             e[FAULT] = 1.0
             update_flags(e, cfg, t)
@@ -441,6 +456,23 @@ def ekf_gps_accuracy(ekf, cfg, t_us, hacc, sacc):
     t = t_us * 1e-6
     for i in range(ekf.shape[0]):
         lane_gps_accuracy(ekf[i], cfg, t, hacc, sacc)
+
+
+@tick_jit
+def ekf_gps_checks(ekf, cfg, t_us, gps):
+    """A new 3-D-fix GPS sample through each aligned lane's pre-alignment GPS checks and origin
+    (:func:`tlm_sim.ekf.lifecycle.lane_gps_checks`; nothing with the boot phase off). gps: the
+    epoch (``tlm_sim.sensors.layout`` GE_*: position NE [m], velocity NED [m/s], satellites,
+    HDOP, accuracies [m])."""
+    if cfg[C_BOOT] == 0.0:
+        return
+    t = t_us * 1e-6
+    for i in range(ekf.shape[0]):
+        e = ekf[i]
+        if e[ALIGNED] != 0.0 and e[FAULT] == 0.0:
+            lane_gps_checks(e, cfg, t, gps[GE_PN], gps[GE_PE], gps[GE_VN], gps[GE_VE],
+                            gps[GE_VD], gps[GE_NSATS], gps[GE_HDOP], gps[GE_HACC],
+                            gps[GE_VACC])
 
 
 @tick_jit

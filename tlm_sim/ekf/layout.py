@@ -200,6 +200,32 @@ OUT_IPN, OUT_IPE, OUT_IPD = _l.vector(("OUT_IPN", "OUT_IPE", "OUT_IPD"), "m s",
                                       "integral of the position tracking error")
 OUT_IVN, OUT_IVE, OUT_IVD = _l.vector(("OUT_IVN", "OUT_IVE", "OUT_IVD"), "m",
                                       "integral of the velocity tracking error")
+# EKF3's start-up (tlm_sim.ekf.lifecycle): tilt and yaw alignment, GPS checks, origin, gyro
+# bias learning; LIFE_EVENTS holds what changed for the flight's text log (MSG)
+TILT_DONE = _l.add("TILT_DONE", 1, "", "1 once the tilt variance fell below (5 deg)^2 "
+                   "(EKF3 tiltAlignComplete)")
+YAW_DONE = _l.add("YAW_DONE", 1, "", "1 once the yaw was aligned to the compass "
+                  "(EKF3 yawAlignComplete); no compass fusion before")
+ORIGIN_OK = _l.add("ORIGIN_OK", 1, "", "1 once the lane's origin is set (EKF3 validOrigin)")
+GPS_GOOD = _l.add("GPS_GOOD", 1, "", "EKF3 gpsGoodToAlign: the GPS checks passed for 10 s "
+                  "(cleared after 5 s without a passing sample)")
+BIAS_LEARNED = _l.add("BIAS_LEARNED", 1, "", "EKF3 delAngBiasLearned: every gyro bias standard "
+                      "deviation below 0.15 deg/s")
+T_GPS_CHK_FAIL = _l.add("T_GPS_CHK_FAIL", 1, "s",
+                        "last GPS sample failing the checks (-1: no 3-D fix sample checked yet)")
+T_GPS_CHK_PASS = _l.add("T_GPS_CHK_PASS", 1, "s", "last GPS sample passing the checks")
+GPS_CHK_FAILS = _l.add("GPS_CHK_FAILS", 1, "", "EK3_GPS_CHECK bits failing on the last sample")
+GPS_DRIFT = _l.add("GPS_DRIFT", 1, "m", "filtered GPS position drift on the ground (10 s decay)")
+GPS_PREV_N, GPS_PREV_E = _l.vector(("GPS_PREV_N", "GPS_PREV_E"), "m",
+                                   "previous GPS position NE (drift check)")
+GPS_VZ_F = _l.add("GPS_VZ_F", 1, "m/s", "filtered GPS vertical speed (ground check)")
+GPS_VH_F = _l.add("GPS_VH_F", 1, "m/s", "filtered GPS horizontal speed (ground check)")
+LIFE_EVENTS = _l.add("LIFE_EVENTS", 1, "", "lifecycle events not yet written to the text log "
+                     "(bit mask, tlm_sim.ekf.lifecycle EVT_*)")
+INNOV_YAW = _l.add("INNOV_YAW", 1, "rad", "heading innovation of the ground heading fusion "
+                   "(measurement - prediction; XKF3.IYAW)")
+INFLIGHT_SEEN = _l.add("INFLIGHT_SEEN", 1, "", "1 once IN_FLIGHT was first set (in-flight yaw "
+                       "alignment message)")
 BUF_OFS = _l.add("BUF_OFS", BUF_ROW, "m, m/s",
                  "cumulative output shifts pn, pe, pd, vn, ve, vd")
 BUF0 = _l.add("BUF0", NBUF * BUF_ROW, "m, m/s",
@@ -287,6 +313,14 @@ C_MAG_SWITCH_T0 = _c.add("C_MAG_SWITCH_T0", 1, "s",
                          "no compass change for rejected fusion this soon after alignment")
 C_INFLIGHT_HGT = _c.add("C_INFLIGHT_HGT", 1, "m",
                         "height above the origin (armed) from which a lane counts as in flight")
+C_BOOT = _c.add("C_BOOT", 1, "", "1: SITL's boot phase (TLM_BOOT_PHASE): lanes start at "
+                "C_EKF_START, align tilt and yaw, wait for the GPS checks, origin and gyro bias "
+                "learning before using GPS; 0: ready from the first GPS sample")
+C_EKF_START = _c.add("C_EKF_START", 1, "s", "time the EKF lanes initialise (EKF3 InitialiseFilter)")
+C_GPS_CHECK = _c.add("C_GPS_CHECK", 1, "", "EK3_GPS_CHECK bit mask")
+C_CHECK_SCALE = _c.add("C_CHECK_SCALE", 1, "", "EK3_CHECK_SCALE / 100")
+C_YAW_NSE = _c.add("C_YAW_NSE", 1, "rad", "EK3_YAW_M_NSE (heading fusion)")
+C_YAW_GATE = _c.add("C_YAW_GATE", 1, "", "EK3_YAW_I_GATE as sigmas")
 N_CFG = CONFIG.close()
 
 # ------------------------------------------------------------------ output vector --------------

@@ -33,7 +33,7 @@ import pandas as pd
 
 from .quantise import column_to_raw, quantise_frame
 from .schema import FORMAT_CHARS, MULTS, SCHEMAS, UNITS, MessageSchema
-from .texts import event_texts
+from .texts import event_texts, logged_texts
 
 __all__ = [
     "FIRMWARE_STRING", "FRAME_STRING", "encode_bin", "fault_messages", "frame_string",
@@ -158,7 +158,8 @@ def _msg_frame(log: Any, t0_us: int) -> pd.DataFrame:
     ident = [f"{k} {meta[k]}" for k in ("mission", "seed", "profile") if meta.get(k) is not None]
     if ident:
         lines.append((t0_us, "tlm: " + ", ".join(ident)))
-    lines += sorted(fault_messages(log.faults or ()) + event_texts(log.tables),
+    lines += sorted(fault_messages(log.faults or ()) + event_texts(log.tables)
+                    + logged_texts(meta.get("texts") or ()),
                     key=lambda line: line[0])
     return pd.DataFrame({"TimeUS": [t for t, _ in lines], "Message": [m for _, m in lines]})
 

@@ -9,6 +9,10 @@ ArduCopter 4.7-dev as the reference SITL logs show it (``shared/reference/sitl``
 977 mAh" and "Battery Failsafe". ``tlm_sim.flightlog.binwriter`` writes them into the ``.bin``'s
 ``MSG`` table.
 
+The pre-arm and arming texts and EKF3's lifecycle messages come from the flight's text log
+(``FlightLog.meta["texts"]``, rows the flight loop writes when a check fails or a lane changes
+state, :mod:`tlm_sim.control.arming`): :func:`logged_texts`.
+
 Each rule is one entry of :data:`ERR_TEXTS` or :data:`EV_TEXTS`: a subsystem/code (or event
 id) and a function of the flight's tables and the event's time that returns the lines. Texts
 that no ERR/EV row implies come from a logged column's changes (:data:`STATE_TEXTS`), e.g.
@@ -17,12 +21,13 @@ that no ERR/EV row implies come from a logged column's changes (:data:`STATE_TEX
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["ERR_TEXTS", "EV_TEXTS", "STATE_TEXTS", "event_texts", "ground_impacts"]
+__all__ = ["ARM_CHECK_TEXTS", "ERR_TEXTS", "EV_TEXTS", "STATE_TEXTS", "event_texts",
+           "gps_detected", "ground_impacts", "logged_texts"]
 
 Tables = Mapping[str, pd.DataFrame]
 Render = Callable[[Tables, int, int], list[str]]
@@ -168,3 +173,109 @@ def event_texts(tables: Tables) -> list[tuple[int, str]]:
     for rule in STATE_TEXTS:
         out += rule(tables)
     return sorted(out, key=lambda line: line[0])
+
+
+# ---------------------------------------------------------------- the flight's text log
+# (FlightLog.meta["texts"]: rows written in the flight loop by tlm_sim.control.arming)
+
+#: what each failing pre-arm / arm check reads (after "Arm: " or "PreArm: "), by its bit
+#: (tlm_sim.control.arming F_*), in ArduCopter's report order; a function takes the text row
+ARM_CHECK_TEXTS: dict[int, str | Callable[[Sequence[float]], str]] = {}
+
+_VARIANCES = ("compass", "position", "velocity", "height")
+_BATTERY = ("below minimum arming voltage", "low voltage failsafe", "low capacity failsafe",
+            "critical voltage failsafe", "critical capacity failsafe")
+
+
+def _arm_check_texts() -> dict[int, str | Callable[[Sequence[float]], str]]:
+    """ARM_CHECK_TEXTS, built on first use (the bit constants live with the numba code)."""
+    if ARM_CHECK_TEXTS:
+        return ARM_CHECK_TEXTS
+    from tlm_sim.control import arming as A
+
+    def ahrs(row: Sequence[float]) -> str:
+        lane = int(row[A.A_LANE])
+        return ("AHRS: EKF3 not started" if lane < 0 else f"AHRS: EKF3 core {lane} unhealthy")
+
+    ARM_CHECK_TEXTS.update({
+        A.F_RC_NOT_FOUND: "RC not found",
+        A.F_THR_LOW: "Throttle below failsafe",
+        A.F_NEED_ALT: "Need Alt Estimate",
+        A.F_BARO: "Baro: not healthy",
+        A.F_ALT_DISPARITY: "Altitude disparity",
+        A.F_GYRO_HEALTH: "Gyros not healthy",
+        A.F_ACC_HEALTH: "Accels not healthy",
+        A.F_ACC_INCONS: "Accels inconsistent",
+        A.F_GYRO_INCONS: "Gyros inconsistent",
+        A.F_EKF_ATTITUDE: "EKF attitude is bad",
+        A.F_COMPASS_HEALTH: "Compass not healthy",
+        A.F_MAG_FIELD: lambda row: (f"Check mag field: {row[A.A_MAG_FIELD]:4.0f}, max "
+                                    f"{A.MAG_FIELD_MAX:.0f}, min {A.MAG_FIELD_MIN:.0f}"),
+        A.F_COMPASS_INCONS: "Compasses inconsistent",
+        A.F_GPS_FIX: "GPS 1: Bad fix",
+        A.F_WAIT_HOME: "AHRS: waiting for home",
+        A.F_GPS_AHRS: lambda row: f"GPS and AHRS differ by {row[A.A_GPS_AHRS]:4.1f}m",
+        A.F_AHRS: ahrs,
+        A.F_NEED_POS: "Need Position Estimate",
+        A.F_GPS_GLITCH: "GPS glitching",
+        A.F_EKF_VARIANCE: lambda row: f"EKF {_VARIANCES[int(row[A.A_VARIANCE])]} variance",
+        A.F_HDOP: "High GPS HDOP",
+        A.F_BATTERY: lambda row: f"Battery 1 {_BATTERY[int(row[A.A_BATTERY])]}",
+        A.F_BATT_FS: "Battery failsafe",
+        A.F_ARM_AHRS: "AHRS not healthy",
+        A.F_ARM_COMPASS: "Compass not healthy",
+        A.F_ARM_LEANING: "Leaning",
+    })
+    return ARM_CHECK_TEXTS
+
+
+#: EKF3's lifecycle messages by event bit (tlm_sim.ekf.lifecycle EVT_*): IMU and compass index
+_EKF_TEXTS = {1: "EKF3 IMU{imu} initialised", 2: "EKF3 IMU{imu} tilt alignment complete",
+              4: "EKF3 IMU{imu} MAG{mag} initial yaw alignment complete",
+              8: "EKF3 IMU{imu} origin set", 16: "EKF3 IMU{imu} is using GPS",
+              32: "EKF3 IMU{imu} stopped aiding",
+              64: "EKF3 IMU{imu} MAG{mag} in-flight yaw alignment complete"}
+
+
+def logged_texts(rows: Iterable[Sequence[float]]) -> list[tuple[int, str]]:
+    """``(TimeUS, text)`` MSG lines of a flight's text log (``FlightLog.meta["texts"]``): the
+    failed arm attempts ("Arm: ..." per failing check), the periodic pre-arm reports
+    ("PreArm: ..."), EKF3's lifecycle ("EKF3 IMU0 tilt alignment complete", "origin set",
+    "is using GPS", ...), "AHRS: EKF3 active" and "Field Elevation Set: 584m", in time order."""
+    from tlm_sim.control import arming as A
+
+    checks = _arm_check_texts()
+    out: list[tuple[int, str]] = []
+    for row in rows:
+        t, kind, mask = int(row[A.TXT_TIME]), int(row[A.TXT_KIND]), int(row[A.TXT_MASK])
+        if kind in (A.KIND_ARM, A.KIND_PREARM):
+            prefix = "Arm: " if kind == A.KIND_ARM else "PreArm: "
+            for bit, text in checks.items():
+                if mask & bit:
+                    out.append((t, prefix + (text if isinstance(text, str) else text(row))))
+        elif kind == A.KIND_EKF and mask in _EKF_TEXTS:
+            out.append((t, _EKF_TEXTS[mask].format(imu=int(row[A.A_LANE]),
+                                                   mag=int(row[A.A_MAG_FIELD]))))
+        elif kind == A.KIND_AHRS_ACTIVE:
+            out.append((t, "AHRS: EKF3 active"))
+        elif kind == A.KIND_FIELD_ELEV:
+            out.append((t, f"Field Elevation Set: {row[A.A_MAG_FIELD]:.0f}m"))
+    return sorted(out, key=lambda line: line[0])
+
+
+#: AP_GPS's messages when it finds the simulated u-blox (SITL's GPS 1 at 230400 baud)
+GPS_PROBE_TEXT = "GPS 1: probing for u-blox at 230400 baud"
+GPS_DETECT_TEXT = "GPS 1: detected u-blox"
+
+
+def gps_detected(tables: Tables) -> list[tuple[int, str]]:
+    """AP_GPS finding the receiver: "GPS 1: probing for u-blox at 230400 baud" 20 ms before the
+    first GPS row, "GPS 1: detected u-blox" at it (every reference log: 9.809 s and 9.829 s)."""
+    gps = tables.get("GPS")
+    if gps is None or not len(gps):
+        return []
+    t0 = int(gps["TimeUS"].iloc[0])
+    return [(max(t0 - 20_000, 0), GPS_PROBE_TEXT), (t0, GPS_DETECT_TEXT)]
+
+
+STATE_TEXTS = (*STATE_TEXTS, gps_detected)

@@ -4,14 +4,17 @@ Two independent barometers (SIM_BARO_COUNT 2; BARO 3 is not modelled), each with
 stream and SITL's fault pipeline (``AP_Baro_SITL::_timer``, sitl-faults.md §3.2): DISABLE stops
 its samples; else altitude = truth + accumulated DRIFT + RND uniform noise + GLITCH, replaced by
 the last value while FREEZE is set. Altitude is relative to the ground calibration (home);
-pressure and temperature follow the 1976 standard atmosphere. A disabled barometer is unhealthy
+pressure follows the 1976 standard atmosphere, the temperature SITL's board warm-up
+(:func:`board_temperature`, SIM_TEMP_*). A disabled barometer is unhealthy
 (``BARO.H`` 0) from its first missed sample (baro_s44.bin: +0.09 s) until it delivers again. The
 primary is BARO_PRIMARY (0) while healthy, else the first healthy one (AP_Baro::update); the EKF
 fuses the primary. The compasses are in :mod:`tlm_sim.sensors.mag`.
 """
 
+import math
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.boot import BARO_CAL_S
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import pressure_temperature
 from tlm_sim.rng import uniform_pm1
@@ -47,8 +50,21 @@ def baro_sample(s, x, cfg, rng, i, t_us):
     s[b + S.BA_HEALTHY] = 1.0
     p, t_k = pressure_temperature(cfg[S.C_HOME_ALT] + alt)
     s[b + S.BA_PRESS] = p
-    s[b + S.BA_TEMP] = t_k - 273.15
+    s[b + S.BA_TEMP] = board_temperature(cfg, t_k - 273.15, t_us * 1e-6)
     return True
+
+
+@tick_jit
+def board_temperature(cfg, t_air, t_s):
+    """The baro's temperature [degC] at t_s [s] since boot (AP_Baro_SITL's warm-up): from
+    SIM_TEMP_START towards the air temperature t_air [degC] (1976 atmosphere at its altitude) +
+    SIM_TEMP_BRD_OFF with time constant SIM_TEMP_TCONST; exactly the end value after 23 time
+    constants. (SIM_TEMP_BFACTOR's pressure error is not modelled.)"""
+    t_end = t_air + cfg[S.C_TEMP_BRD_OFF]
+    tc = cfg[S.C_TEMP_TCONST]
+    if t_s >= 23.0 * tc:
+        return t_end
+    return t_end - (t_end - cfg[S.C_TEMP_START]) * math.exp(-t_s / tc)
 
 
 @tick_jit
@@ -59,6 +75,14 @@ def baro_init(s):
     s[S.B_PRIMARY_OK] = 1.0
     for i in range(S.N_BARO):
         s[S.BARO_BASE + i * S.BARO_STRIDE + S.BA_HEALTHY] = 1.0
+
+
+@tick_jit
+def calibration_temperature(cfg):
+    """BARO.GndTemp from the boot calibration until the field elevation is set: the sensor
+    temperature at tlm_sim.boot.BARO_CAL_S, on the ground at home [degC]."""
+    t_air = pressure_temperature(cfg[S.C_HOME_ALT])[1] - 273.15
+    return board_temperature(cfg, t_air, BARO_CAL_S)
 
 
 @tick_jit

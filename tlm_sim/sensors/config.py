@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from tlm_sim.boot import BOOT_GPS_DETECT_S
 from tlm_sim.frames import frame_for
 from tlm_sim.params import Params, earth_field, require_params
 from tlm_sim.sensors import layout as S
@@ -73,7 +74,7 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
 
 def _gps_config(c: np.ndarray, p: Params) -> None:
     """GPS 1: enable, rate, lag, satellites, reported accuracy and dilution, errors, glitch
-    offsets and jamming."""
+    offsets, jamming, lock time and (with the boot phase) the time the driver finds it."""
     c[S.C_GPS_ENABLE] = p["SIM_GPS1_ENABLE"]
     c[S.C_GPS_PERIOD_US] = round(1e6 / max(p["SIM_GPS1_HZ"], 1.0))
     c[S.C_GPS_LAG_S] = p["SIM_GPS1_LAG_MS"] / 1000.0
@@ -87,16 +88,23 @@ def _gps_config(c: np.ndarray, p: Params) -> None:
     for k, ax in enumerate("XYZ"):
         c[S.C_GPS_GLITCH + k] = p[f"SIM_GPS1_GLTCH_{ax}"]
     c[S.C_GPS_JAM] = p["SIM_GPS1_JAM"]
+    c[S.C_GPS_LOCK_US] = 1e6 * p["SIM_GPS1_LCKTIME"]
+    c[S.C_BOOT] = p["TLM_BOOT_PHASE"]
+    c[S.C_GPS_DETECT_US] = round(1e6 * BOOT_GPS_DETECT_S) if p["TLM_BOOT_PHASE"] else 0.0
 
 
 def _baro_config(c: np.ndarray, p: Params) -> None:
-    """Barometers 1 and 2 (SIM_BARO_*, SIM_BAR2_*): noise, glitch, drift, freeze, disable."""
+    """Barometers 1 and 2 (SIM_BARO_*, SIM_BAR2_*): noise, glitch, drift, freeze, disable; the
+    board temperature warm-up (SIM_TEMP_*)."""
     for i, n in enumerate(("BARO", "BAR2")):
         c[S.C_BARO_RND + i] = p[f"SIM_{n}_RND"]
         c[S.C_BARO_GLITCH + i] = p[f"SIM_{n}_GLITCH"]
         c[S.C_BARO_DRIFT + i] = p[f"SIM_{n}_DRIFT"]
         c[S.C_BARO_FREEZE + i] = p[f"SIM_{n}_FREEZE"]
         c[S.C_BARO_DISABLE + i] = p[f"SIM_{n}_DISABLE"]
+    c[S.C_TEMP_START] = p["SIM_TEMP_START"]
+    c[S.C_TEMP_BRD_OFF] = p["SIM_TEMP_BRD_OFF"]
+    c[S.C_TEMP_TCONST] = p["SIM_TEMP_TCONST"]
 
 
 def _mag_config(c: np.ndarray, p: Params) -> None:

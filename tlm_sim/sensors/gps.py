@@ -1,8 +1,10 @@
 """Simulated u-blox GPS as SITL models it: 5 Hz epochs, 100 ms lag, no horizontal noise.
 
-The receiver reports the true (delayed) position and velocity; while SIM_GPS1_ENABLE is 0 it keeps
-streaming the true position with fix type "no fix" (Status 1) and 3 satellites, as SITL's first GPS
-does. Status 6 (RTK fixed) and NSats = SIM_GPS1_NUMSATS while locked; HDop is constant.
+The receiver reports the true (delayed) position and velocity; while SIM_GPS1_ENABLE is 0, and
+before SIM_GPS1_LCKTIME, it keeps streaming the true position with fix type "no fix" (Status 1)
+and 3 satellites, as SITL's first GPS does. Status 6 (RTK fixed) and NSats = SIM_GPS1_NUMSATS
+while locked; HDop is constant. With the boot phase (TLM_BOOT_PHASE 1) the first epoch comes when
+ArduPilot's GPS driver finds the receiver (``tlm_sim.boot.BOOT_GPS_DETECT_S``) and has no fix.
 
 Faults in SITL's order (``GPS::update``, sitl-faults.md §5.2), after the lag: the glitch offsets
 SIM_GPS1_GLTCH_X/Y (degrees of latitude/longitude, converted with the flat-earth scale at home)
@@ -161,7 +163,12 @@ def gps_measure(s, cfg, t_us, out, rng):
     for k in range(3):
         if cfg[S.C_GPS_VERR + k] != 0.0:
             out[S.GE_VN + k] += cfg[S.C_GPS_VERR + k] * uniform_pm1(rng)
-    lock = cfg[S.C_GPS_ENABLE] != 0.0
+    # SITL's delayed lock (SIM_GPS1_LCKTIME); with the boot phase the driver's first message
+    # after finding the receiver carries no fix (every reference log: Status 1, 3 satellites)
+    lock = (cfg[S.C_GPS_ENABLE] != 0.0 and t_us >= cfg[S.C_GPS_LOCK_US]
+            and not (cfg[S.C_BOOT] != 0.0 and s[S.G_EPOCHS] == 0.0))
+    s[S.G_EPOCHS] += 1.0
+    out[S.GE_HDOP] = cfg[S.C_GPS_HDOP]
     out[S.GE_NSATS] = cfg[S.C_GPS_NUMSATS]
     out[S.GE_HACC] = cfg[S.C_GPS_ACC]
     out[S.GE_VACC] = cfg[S.C_GPS_ACC]

@@ -105,6 +105,7 @@ GE_FIX_3D = _ge.add("GE_FIX_3D", 1, "", "1 with a 3-D fix (the EKF may fuse the 
 GE_HACC, GE_VACC = _ge.vector(("GE_HACC", "GE_VACC"), "m",
                               "reported horizontal / vertical accuracy")
 GE_SACC = _ge.add("GE_SACC", 1, "m/s", "reported speed accuracy")
+GE_HDOP = _ge.add("GE_HDOP", 1, "", "reported horizontal dilution of precision")
 N_GPS_EPOCH = GPS_EPOCH.close()
 
 # ---- the sensor state s ----------------------------------------------------------------------
@@ -127,6 +128,11 @@ RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
 RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
 RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
 BARO_BASE = _s.block("BARO", BARO, N_BARO)
+B_GND_TEMP = _s.add("B_GND_TEMP", 1, "degC",
+                    "AP_Baro's ground temperature: the primary's at calibration (BARO.GndTemp)")
+B_FIELD_ELEV = _s.add("B_FIELD_ELEV", 1, "m",
+                      "field elevation once set from the EKF origin, 0 before (BARO.AltAMSL)")
+G_EPOCHS = _s.add("G_EPOCHS", 1, "", "GPS epochs produced so far")
 N_SENSOR_STATE = STATE.close()
 
 # ---- sensor configuration scfg (built once per flight from parameters) ------------------------
@@ -205,6 +211,14 @@ C_VIB_MOT_MASK = _c.add("C_VIB_MOT_MASK", 1, "",
 C_IMU_NSUB = _c.add("C_IMU_NSUB", 4, "",
                     "sub-samples averaged per published sample (gyro IMU0, IMU1, accel IMU0, "
                     "IMU1): SITL's fast sampling of the first IMU")
+C_GPS_LOCK_US = _c.add("C_GPS_LOCK_US", 1, "us", "SIM_GPS1_LCKTIME: no lock before this time")
+C_GPS_DETECT_US = _c.add("C_GPS_DETECT_US", 1, "us",
+                         "first GPS epoch (the driver finds the receiver; 0 without the boot "
+                         "phase, tlm_sim.boot)")
+C_BOOT = _c.add("C_BOOT", 1, "", "TLM_BOOT_PHASE")
+C_TEMP_START = _c.add("C_TEMP_START", 1, "degC", "SIM_TEMP_START")
+C_TEMP_BRD_OFF = _c.add("C_TEMP_BRD_OFF", 1, "degC", "SIM_TEMP_BRD_OFF")
+C_TEMP_TCONST = _c.add("C_TEMP_TCONST", 1, "s", "SIM_TEMP_TCONST")
 N_SENSOR_CFG = CONFIG.close()
 
 # ---- sensor noise streams: rows of the flight's noise generator array ------------------------

@@ -117,14 +117,14 @@ def _log_baro(bufs, counts, t_us, s, home_alt, i):
         alt = s[sb + S.BA_ALT]
         b[r, BARO.I] = i
         b[r, BARO.Alt] = alt
-        b[r, BARO.AltAMSL] = home_alt + alt
+        b[r, BARO.AltAMSL] = s[S.B_FIELD_ELEV] + alt  # 0 + alt until the field elevation is set
         b[r, BARO.Press] = s[sb + S.BA_PRESS]
         b[r, BARO.Temp] = s[sb + S.BA_TEMP]
         b[r, BARO.CRt] = (alt - s[sb + S.BA_ALT_PREV]) * 10.0
         # the last sample's time: frozen while the instance delivers none
         b[r, BARO.SMS] = t_us // 1000 if s[sb + S.BA_HEALTHY] != 0.0 else s[sb + S.BA_T_MS]
         b[r, BARO.Offset] = 0.0
-        b[r, BARO.GndTemp] = 25.0
+        b[r, BARO.GndTemp] = s[S.B_GND_TEMP]
         b[r, BARO.H] = s[sb + S.BA_HEALTHY]
         b[r, BARO.CPress] = s[sb + S.BA_PRESS]
 
