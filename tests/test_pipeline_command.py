@@ -87,7 +87,7 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys):
     cases = []
     cases.append(([tmp_path / "nope"], "no such file or folder"))
     (tmp_path / "lonely.bin").write_bytes(b"")
-    cases.append(([tmp_path / "lonely.bin"], "no sidecar lonely.json"))
+    cases.append(([tmp_path / "lonely.bin"], "cannot read the DataFlash log"))
     csv = tmp_path / "csvflight"
     csv.mkdir()
     (csv / "GPS.csv").write_text("TimeUS,Status,Lat,Lng,Alt\n0,6,-35,149,500\n"
