@@ -313,4 +313,14 @@ G_BATT_FS_CRT_ACT = _g.add("G_BATT_FS_CRT_ACT", 1, "", "BATT_FS_CRT_ACT")
 G_BATT_RES0 = _g.add("G_BATT_RES0", 1, "ohm",
                      "battery monitor's starting resistance estimate: TLM_BATT_SAG_HOV at the "
                      "frame's hover current TLM_REF_CURR")
+# the DCM attitude estimator (tlm_sim.control.dcm)
+G_AHRS_RP_P = _g.add("G_AHRS_RP_P", 1, "", "AHRS_RP_P (DCM roll/pitch gain, floor 0.05)")
+G_AHRS_YAW_P = _g.add("G_AHRS_YAW_P", 1, "", "AHRS_YAW_P (DCM yaw gain, floor 0.05)")
+G_AHRS_GPS_GAIN = _g.add("G_AHRS_GPS_GAIN", 1, "", "AHRS_GPS_GAIN")
+G_AHRS_GPS_MINSATS = _g.add("G_AHRS_GPS_MINSATS", 1, "", "AHRS_GPS_MINSATS")
+G_AHRS_GPS_USE = _g.add("G_AHRS_GPS_USE", 1, "", "AHRS_GPS_USE (0 none, 1, 2 also height)")
+G_MAG_DEC = _g.add("G_MAG_DEC", 1, "rad",
+                   "magnetic declination the compass library applies (COMPASS_AUTODEC: the "
+                   "field's, TLM_MAG_DEC_DEG)")
+G_GPS_LAG = _g.add("G_GPS_LAG", 1, "s", "GPS lag the AHRS assumes (GPS1_DELAY_MS or 120 ms)")
 N_CONTROL_CFG = CONFIG.close()

@@ -274,6 +274,8 @@ C_MAG_SWITCH_T0 = _c.add("C_MAG_SWITCH_T0", 1, "s",
                          "no compass change for rejected fusion this soon after alignment")
 C_INFLIGHT_HGT = _c.add("C_INFLIGHT_HGT", 1, "m",
                         "height above the origin (armed) from which a lane counts as in flight")
+C_GSF_RUN_MASK = _c.add("C_GSF_RUN_MASK", 1, "",
+                        "EK3_GSF_RUN_MASK: lanes (bit i: lane i) that run a yaw estimator")
 N_CFG = CONFIG.close()
 
 # ------------------------------------------------------------------ output vector --------------

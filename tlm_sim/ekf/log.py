@@ -1,12 +1,15 @@
-"""The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz), and
-the ERR rows of a primary-lane change and of ArduCopter's GPS glitch check. Columns by name
+"""The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz),
+XKY0 / XKY1 of the lanes' yaw estimators, and the ERR rows of a primary-lane change and of
+ArduCopter's GPS glitch check. Columns by name
 (:mod:`tlm_sim.logger`)."""
 
 import math
 
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ekf import gsf_layout as GL
 from tlm_sim.ekf import layout as EK
+from tlm_sim.ekf.gsf import gsf_refresh
 from tlm_sim.geo import ne_to_latlon_scalar
 
 XKF1, XKF4, XKFS, POS = L.XKF1_COLS, L.XKF4_COLS, L.XKFS_COLS, L.POS_COLS
@@ -115,3 +118,44 @@ def _log_sources(bufs, counts, t_us, el, ln):
         b[r, XKFS.GPS_GTA] = 1.0 if aligned and el[EK.T_GPS_FUSED] > -1.0e8 else 0.0
         b[r, XKFS.GPS_CHK_WAIT] = 0.0
         b[r, XKFS.MAG_FUSION] = (2.0 if el[EK.IN_FLIGHT] != 0.0 else 1.0) if aligned else 0.0
+
+
+XKY0, XKY1 = L.XKY0_COLS, L.XKY1_COLS
+
+
+@tick_jit
+def _deg360(a):
+    """Angle [rad] in degrees wrapped to [0, 360)."""
+    d = (a * L.RAD2DEG) % 360.0
+    return d if d < 360.0 else 0.0
+
+
+@tick_jit
+def log_gsf(bufs, counts, t_us, gsf):
+    """XKY0 and XKY1 rows (10 Hz) of every lane whose EKF-GSF yaw estimator (:mod:`tlm_sim.ekf.gsf`)
+    fuses GPS velocity, as EKF3 logs them: composite yaw and sqrt(degrees(variance)) (the
+    firmware's conversion of a rad^2 variance), each model's yaw and weight; each model's NE
+    velocity innovations."""
+    for ln in range(gsf.shape[0]):
+        g = gsf[ln]
+        if g[GL.G_FUSING] == 0.0:
+            continue
+        gsf_refresh(g)
+        r = L.new_row(bufs, counts, L.K_XKY0, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKY0]
+            b[r, XKY0.C] = ln
+            b[r, XKY0.YC] = _deg360(g[GL.G_YAW])
+            b[r, XKY0.YCS] = math.sqrt(max(g[GL.G_YAW_VAR] * L.RAD2DEG, 0.0))
+            for m in range(GL.N_MODELS):
+                mb = GL.MODEL_BASE + m * GL.MODEL_STRIDE
+                b[r, XKY0.Y0 + m] = _deg360(g[mb + GL.M_YAW])
+                b[r, XKY0.W0 + m] = g[GL.G_W + m]
+        r = L.new_row(bufs, counts, L.K_XKY1, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKY1]
+            b[r, XKY1.C] = ln
+            for m in range(GL.N_MODELS):
+                mb = GL.MODEL_BASE + m * GL.MODEL_STRIDE
+                b[r, XKY1.IVN0 + m] = g[mb + GL.M_INNOV]
+                b[r, XKY1.IVE0 + m] = g[mb + GL.M_INNOV + 1]
