@@ -300,7 +300,18 @@ def test_gsf_converges_from_between_its_hypotheses_on_a_synthetic_flight():
 
 
 # --- analytic checks of the estimators' pieces -----------------------------------------------
+def _rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Body -> NED matrix of ZYX Euler angles."""
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return (np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+            @ np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+            @ np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]]))
+
+
 def _model_block(rng):
+    """An estimator row whose AHRS is tilted and turned at random and whose model 0 has a random
+    heading offset, velocity and covariance; returns (row, model base, P, model 0's matrix)."""
     g = np.zeros(GL.N_GSF)
     b = GL.MODEL_BASE
     off = rng.uniform(-0.05, 0.05, 3)
@@ -309,35 +320,45 @@ def _model_block(rng):
     p[0, 2] = p[2, 0] = off[1]
     p[1, 2] = p[2, 1] = off[2]
     g[b + GL.M_P:b + GL.M_P + 9] = p.ravel()
-    yaw = rng.uniform(-3, 3)
-    g[b + GL.M_YAW] = yaw
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    g[b + GL.M_R:b + GL.M_R + 9] = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]]).ravel()
+    r0 = _rpy_matrix(*rng.uniform(-0.2, 0.2, 2), rng.uniform(-3, 3))
+    g[GL.G_R:GL.G_R + 9] = r0.ravel()
+    a = rng.uniform(-3, 3)
+    g[b + GL.M_COS], g[b + GL.M_SIN] = math.cos(a), math.sin(a)
     g[b + GL.M_VN], g[b + GL.M_VE] = rng.normal(size=2)
-    return g, b, p
+    rz = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+    return g, b, p, rz @ r0
+
+
+def _yaw_of(r: np.ndarray) -> float:
+    """EKFGSF's yaw of a matrix: 321 Euler yaw, or the 312 first rotation when the body x axis
+    is nearer the vertical than the y axis."""
+    if abs(r[2, 0]) < abs(r[2, 1]):
+        return math.atan2(r[1, 0], r[0, 0])
+    return math.atan2(-r[0, 1], r[1, 1])
 
 
 @pytest.mark.parametrize("seed", range(5))
 def test_gsf_prediction_is_f_p_ft_plus_q(seed):
     rng = np.random.default_rng(seed)
-    g, b, p = _model_block(rng)
+    g, b, p, rm = _model_block(rng)
     dv = rng.normal(size=3) * 0.1
     dt = 0.0125
-    r = g[b + GL.M_R:b + GL.M_R + 9].reshape(3, 3).copy()
     v0 = g[b + GL.M_VN:b + GL.M_VN + 2].copy()
-    G._ekf_predict(g, b, dv[0], dv[1], dv[2], dt)
-    dvn = r @ dv
+    d0 = g[GL.G_R:GL.G_R + 9].reshape(3, 3) @ dv  # what gsf_step hands every model
+    G._ekf_predict(g, b, d0[0], d0[1], dt)
+    dvn = rm @ dv  # the model's own AHRS rotates the delta velocity
     f = np.array([[1, 0, -dvn[1]], [0, 1, dvn[0]], [0, 0, 1]])
     q = np.diag([(G.ACCEL_NOISE * dt) ** 2] * 2 + [(G.GYRO_NOISE * dt) ** 2])
     assert g[b + GL.M_P:b + GL.M_P + 9].reshape(3, 3) == pytest.approx(f @ p @ f.T + q)
     assert g[b + GL.M_VN:b + GL.M_VN + 2] == pytest.approx(v0 + dvn[:2])
+    assert G._model_yaw(g, b) == pytest.approx(_yaw_of(rm))
 
 
 @pytest.mark.parametrize("seed", range(5))
 def test_gsf_velocity_fusion_is_a_kalman_update_and_turns_the_ahrs(seed):
     rng = np.random.default_rng(seed)
-    g, b, p = _model_block(rng)
-    x = np.array([g[b + GL.M_VN], g[b + GL.M_VE], g[b + GL.M_YAW]])
+    g, b, p, rm = _model_block(rng)
+    x = np.array([g[b + GL.M_VN], g[b + GL.M_VE], _yaw_of(rm)])
     z = x[:2] + rng.normal(size=2) * 0.3
     obs_var = 0.5**2
     assert G._correct(g, b, z[0], z[1], obs_var)
@@ -347,15 +368,26 @@ def test_gsf_velocity_fusion_is_a_kalman_update_and_turns_the_ahrs(seed):
     x_new = x + k @ (z - x[:2])
     assert g[b + GL.M_P:b + GL.M_P + 9].reshape(3, 3) == pytest.approx(p - k @ s @ k.T)
     assert [g[b + GL.M_VN], g[b + GL.M_VE]] == pytest.approx(x_new[:2])
-    # the yaw state is the AHRS's: turned by the correction about the earth vertical
-    r = g[b + GL.M_R:b + GL.M_R + 9].reshape(3, 3)
-    assert r @ r.T == pytest.approx(np.eye(3), abs=1e-12)
-    assert r[2] == pytest.approx([0.0, 0.0, 1.0])
+    # the yaw state is the AHRS's: the correction turns it about the earth vertical
+    assert g[b + GL.M_COS] ** 2 + g[b + GL.M_SIN] ** 2 == pytest.approx(1.0, abs=1e-9)
     assert G._model_yaw(g, b) == pytest.approx(math.atan2(math.sin(x_new[2]), math.cos(x_new[2])))
     innov = x[:2] - z
     dens = math.exp(-0.5 * innov @ np.linalg.inv(s) @ innov) / (2 * math.pi
                                                                * math.sqrt(np.linalg.det(s)))
     assert G._density(g, b) == pytest.approx(dens)
+
+
+def test_gsf_yaw_alignment_keeps_the_tilt_and_sets_the_hypotheses():
+    rng = np.random.default_rng(7)
+    g, _, _, _ = _model_block(rng)
+    r0 = g[GL.G_R:GL.G_R + 9].reshape(3, 3).copy()
+    G.gsf_reset(g)
+    G._align_yaw(g)
+    for m in range(5):
+        b = GL.MODEL_BASE + m * GL.MODEL_STRIDE
+        hyp = -math.pi + (0.5 + m) * 2 * math.pi / 5
+        assert G._model_yaw(g, b) == pytest.approx(math.atan2(math.sin(hyp), math.cos(hyp)))
+    assert g[GL.G_R:GL.G_R + 9].reshape(3, 3) == pytest.approx(r0)  # the tilt is G_R's
 
 
 def test_gsf_weights_follow_the_likelihoods_and_stay_normalised():

@@ -191,16 +191,26 @@ def _normalize(d):
     t0, t1, t2 = a0 - b0 * h, a1 - b1 * h, a2 - b2 * h
     u0, u1, u2 = b0 - a0 * h, b1 - a1 * h, b2 - a2 * h
     v0, v1, v2 = t1 * u2 - t2 * u1, t2 * u0 - t0 * u2, t0 * u1 - t1 * u0
-    fa = 1.0 / math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-    fb = 1.0 / math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-    fc = 1.0 / math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    for f in (fa, fb, fc):
-        if not (1e-6 < f < 1e6):
-            return False
+    fa = _inv_length(t0 * t0 + t1 * t1 + t2 * t2)
+    fb = _inv_length(u0 * u0 + u1 * u1 + u2 * u2)
+    fc = _inv_length(v0 * v0 + v1 * v1 + v2 * v2)
+    if fa < 0.0 or fb < 0.0 or fc < 0.0:
+        return False
     d[r], d[r + 1], d[r + 2] = t0 * fa, t1 * fa, t2 * fa
     d[r + 3], d[r + 4], d[r + 5] = u0 * fb, u1 * fb, u2 * fb
     d[r + 6], d[r + 7], d[r + 8] = v0 * fc, v1 * fc, v2 * fc
     return True
+
+
+@tick_jit
+def _inv_length(n2):
+    """1 / sqrt(n2) of a squared row length, -1 when absurd (outside 1e-6..1e6). Rows are
+    renormalised every tick, so n2 is within ~1e-6 of 1: there the second-order expansion
+    (3 - n2) / 2 equals the square root to ~1e-12 (below float32, what the log stores)."""
+    if abs(n2 - 1.0) < 1e-4:
+        return 0.5 * (3.0 - n2)
+    f = 1.0 / math.sqrt(n2) if n2 > 0.0 else -1.0
+    return f if 1e-6 < f < 1e6 else -1.0
 
 
 @tick_jit

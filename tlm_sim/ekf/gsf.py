@@ -8,6 +8,14 @@ EKF on top: velocity north/east predicted from the accel rotated by the model's 
 the model's yaw. GPS NE velocity is fused into every EKF; a Gaussian sum filter weighs the
 models by the likelihood of their innovations and gives a composite yaw and its variance.
 
+The firmware keeps five AHRS; they differ only by a rotation about the vertical. They start
+equal (the tilt alignment), the yaw alignment and every fusion turn a model's matrix about the
+earth vertical (``R <- Rz(a) R``), and what moves them otherwise is the same for all: the gyro,
+and a tilt correction and bias learning that read only the matrix's last row (the earth
+vertical in body axes), which a turn about the vertical leaves alone. tlm therefore runs one
+AHRS (``G_R``, ``G_GBIAS``) and keeps each model's heading offset from it (``M_COS``,
+``M_SIN``): the same numbers up to rounding, at a fifth of the cost.
+
 Lifecycle as in EKF3: the AHRS tilt aligns once from an accel sample within 10 % of 1 g
 (boot); the bank runs (``G_RUN``) while the vehicle is armed and the lane's GPS speed accuracy
 test passes, taking the lane's gyro bias when it starts; the first GPS velocity after that
@@ -42,7 +50,9 @@ from tlm_sim.ekf.gsf_layout import (
     G_BUF_HEAD,
     G_ENABLED,
     G_FUSING,
+    G_GBIAS,
     G_N_CLIPS,
+    G_R,
     G_RUN,
     G_SUM_DANG,
     G_SUM_DT,
@@ -51,11 +61,11 @@ from tlm_sim.ekf.gsf_layout import (
     G_W,
     G_YAW,
     G_YAW_VAR,
-    M_GBIAS,
+    M_COS,
     M_INNOV,
     M_P,
-    M_R,
     M_S,
+    M_SIN,
     M_VE,
     M_VN,
     M_YAW,
@@ -123,10 +133,8 @@ def gsf_update(gsf, ekf, cfg, dang, dvel, imu_ok, gps_new, gps_vn, gps_ve, gps_f
             g[G_RUN] = 0.0
         elif g[G_RUN] == 0.0:  # flying or about to: start with the lane's gyro bias
             g[G_RUN] = 1.0
-            for m in range(N_MODELS):
-                b = MODEL_BASE + m * MODEL_STRIDE
-                for k in range(3):
-                    g[b + M_GBIAS + k] = e[BGX + k]
+            for k in range(3):
+                g[G_GBIAS + k] = e[BGX + k]
         if _delay_line(g, cfg, int(e[IMU_INDEX]), dang, dvel, imu_ok):
             gsf_step(g)
         if gps_new and gps_fix and g[G_RUN] != 0.0 and g[G_TILT_ALIGNED] != 0.0:
@@ -167,8 +175,8 @@ def _delay_line(g, cfg, imu, dang, dvel, imu_ok):
 @tick_jit
 def gsf_step(g):
     """EKFGSF_yaw::update on the summed delayed deltas (then cleared): accel low-pass, tilt
-    alignment, tilt-correction gain, every model's AHRS (and EKF while fusing) prediction, the
-    composite yaw and its variance."""
+    alignment, tilt-correction gain, the AHRS prediction and, while fusing, every model's EKF
+    prediction (the composite yaw: :func:`gsf_refresh`)."""
     dt = g[G_SUM_DT]
     dax, day, daz = g[G_SUM_DANG], g[G_SUM_DANG + 1], g[G_SUM_DANG + 2]
     dvx, dvy, dvz = g[G_SUM_DVEL], g[G_SUM_DVEL + 1], g[G_SUM_DVEL + 2]
@@ -198,13 +206,15 @@ def gsf_step(g):
         g[G_ACC_GAIN] = TILT_GAIN * (2.0 * ng - 1.0) ** 2
     else:
         g[G_ACC_GAIN] = 0.0
-    fusing = g[G_FUSING] != 0.0
+    _ahrs_predict(g, dax, day, daz, dt, norm)
+    if g[G_FUSING] == 0.0:
+        return
+    r = G_R
+    dvn = g[r] * dvx + g[r + 1] * dvy + g[r + 2] * dvz
+    dve = g[r + 3] * dvx + g[r + 4] * dvy + g[r + 5] * dvz
     for m in range(N_MODELS):
-        b = MODEL_BASE + m * MODEL_STRIDE
-        _ahrs_predict(g, b, dax, day, daz, dt, norm)
-        if fusing:
-            _ekf_predict(g, b, dvx, dvy, dvz, dt)
-    if fusing and g[G_RUN] == 0.0:
+        _ekf_predict(g, MODEL_BASE + m * MODEL_STRIDE, dvn, dve, dt)
+    if g[G_RUN] == 0.0:
         g[G_FUSING] = 0.0
 
 
@@ -239,14 +249,13 @@ def _wrap_pi(a):
 
 
 @inline_jit
-def _ahrs_predict(g, b, dax, day, daz, dt, norm):
-    """One model's AHRS step: tilt correction towards the filtered accel (k x a, k the earth
-    down axis in body), gyro bias learning below BIAS_SPIN_MAX, rotation by the corrected delta
-    angle."""
+def _ahrs_predict(g, dax, day, daz, dt, norm):
+    """The AHRS step: tilt correction towards the filtered accel (k x a, k the earth down axis
+    in body), gyro bias learning below BIAS_SPIN_MAX, rotation by the corrected delta angle."""
     cx = cy = cz = 0.0
     gain = g[G_ACC_GAIN]
     if gain > 0.0:
-        kx, ky, kz = g[b + M_R + 6], g[b + M_R + 7], g[b + M_R + 8]
+        kx, ky, kz = g[G_R + 6], g[G_R + 7], g[G_R + 8]
         ax, ay, az = g[G_ACC], g[G_ACC + 1], g[G_ACC + 2]
         f = gain / norm
         cx = (ky * az - kz * ay) * f
@@ -254,14 +263,14 @@ def _ahrs_predict(g, b, dax, day, daz, dt, norm):
         cz = (kx * ay - ky * ax) * f
     rx, ry, rz = dax / dt, day / dt, daz / dt
     if rx * rx + ry * ry + rz * rz < BIAS_SPIN_MAX * BIAS_SPIN_MAX:
-        _learn_bias(g, b + M_GBIAS, cx * (GYRO_BIAS_GAIN * dt))
-        _learn_bias(g, b + M_GBIAS + 1, cy * (GYRO_BIAS_GAIN * dt))
-        _learn_bias(g, b + M_GBIAS + 2, cz * (GYRO_BIAS_GAIN * dt))
-    gx = dax + (cx - g[b + M_GBIAS]) * dt
-    gy = day + (cy - g[b + M_GBIAS + 1]) * dt
-    gz = daz + (cz - g[b + M_GBIAS + 2]) * dt
+        _learn_bias(g, G_GBIAS, cx * (GYRO_BIAS_GAIN * dt))
+        _learn_bias(g, G_GBIAS + 1, cy * (GYRO_BIAS_GAIN * dt))
+        _learn_bias(g, G_GBIAS + 2, cz * (GYRO_BIAS_GAIN * dt))
+    gx = dax + (cx - g[G_GBIAS]) * dt
+    gy = day + (cy - g[G_GBIAS + 1]) * dt
+    gz = daz + (cz - g[G_GBIAS + 2]) * dt
     for i in range(3):  # R (I + [d x]), then each row back to unit length (linearised)
-        r = b + M_R + 3 * i
+        r = G_R + 3 * i
         x, y, z = g[r], g[r + 1], g[r + 2]
         nx = x + y * gz - z * gy
         ny = y + z * gx - x * gz
@@ -282,37 +291,37 @@ def _learn_bias(g, j, step):
 
 @tick_jit
 def _model_yaw(g, b):
-    """The model's yaw from its rotation matrix: 321 Euler yaw, or the 312 first rotation when
-    the body x axis is nearer the vertical than the y axis (no gimbal lock)."""
-    r = b + M_R
+    """The yaw of model b's AHRS (Rz(offset) G_R): its 321 Euler yaw, or its 312 first rotation
+    when the body x axis is nearer the vertical than the y axis (no gimbal lock)."""
+    c, s = g[b + M_COS], g[b + M_SIN]
+    r = G_R
     if abs(g[r + 6]) < abs(g[r + 7]):
-        return math.atan2(g[r + 3], g[r])
-    return math.atan2(-g[r + 1], g[r + 4])
+        return math.atan2(s * g[r] + c * g[r + 3], c * g[r] - s * g[r + 3])
+    return math.atan2(-(c * g[r + 1] - s * g[r + 4]), s * g[r + 1] + c * g[r + 4])
 
 
 @inline_jit
-def _ekf_predict(g, b, dvx, dvy, dvz, dt):
-    """One model's EKF prediction: NE velocity plus the delta velocity rotated to NED by its
-    AHRS, covariance F P F' + Q with F = [[1, 0, -dvE], [0, 1, dvN], [0, 0, 1]] and
+def _ekf_predict(g, b, dvn, dve, dt):
+    """One model's EKF prediction from the delta velocity rotated to NED by the AHRS (dvn,
+    dve [m/s], offset 0): turned by the model's offset and added to its NE velocity;
+    covariance F P F' + Q with F = [[1, 0, -dvE], [0, 1, dvN], [0, 0, 1]] and
     Q = diag(q, q, q_yaw) (equal forward/right accel noise; the yaw state is its AHRS's,
     :func:`gsf_refresh`)."""
-    r = b + M_R
-    dvn = g[r] * dvx + g[r + 1] * dvy + g[r + 2] * dvz
-    dve = g[r + 3] * dvx + g[r + 4] * dvy + g[r + 5] * dvz
-    g[b + M_VN] += dvn
-    g[b + M_VE] += dve
+    c, s = g[b + M_COS], g[b + M_SIN]
+    n = c * dvn - s * dve
+    e = s * dvn + c * dve
+    g[b + M_VN] += n
+    g[b + M_VE] += e
     q = (ACCEL_NOISE * dt) ** 2
     q_yaw = (GYRO_NOISE * dt) ** 2
     p = b + M_P
     p00, p01, p02 = g[p], g[p + 1], g[p + 2]
     p11, p12, p22 = g[p + 4], g[p + 5], g[p + 8]
-    a = -dve
-    c = dvn
-    n00 = max(p00 + 2.0 * a * p02 + a * a * p22 + q, MIN_VAR)
-    n01 = p01 + a * p12 + c * p02 + a * c * p22
-    n02 = p02 + a * p22
-    n11 = max(p11 + 2.0 * c * p12 + c * c * p22 + q, MIN_VAR)
-    n12 = p12 + c * p22
+    n00 = max(p00 - 2.0 * e * p02 + e * e * p22 + q, MIN_VAR)
+    n01 = p01 - e * p12 + n * p02 - e * n * p22
+    n02 = p02 - e * p22
+    n11 = max(p11 + 2.0 * n * p12 + n * n * p22 + q, MIN_VAR)
+    n12 = p12 + n * p22
     n22 = max(p22 + q_yaw, MIN_VAR)
     _set_sym(g, p, n00, n01, n02, n11, n12, n22)
 
@@ -362,14 +371,20 @@ def _correct(g, b, vn, ve, obs_var):
     g[b + M_VN] -= (k00 * i0 + k01 * i1) * scale
     g[b + M_VE] -= (k10 * i0 + k11 * i1) * scale
     dyaw = -(k20 * i0 + k21 * i1) * scale
-    c = math.cos(dyaw)
-    s = math.sin(dyaw)
-    r = b + M_R
-    for j in range(3):  # rotate the AHRS about the earth vertical by the yaw change
-        x, y = g[r + j], g[r + 3 + j]
-        g[r + j] = x * c - y * s
-        g[r + 3 + j] = x * s + y * c
+    _turn(g, b, math.cos(dyaw), math.sin(dyaw))
     return True
+
+
+@tick_jit
+def _turn(g, b, c, s):
+    """Turn model b's AHRS about the earth vertical by the angle of unit vector (c, s): its
+    heading offset, kept unit length (linearised)."""
+    oc, os_ = g[b + M_COS], g[b + M_SIN]
+    nc = oc * c - os_ * s
+    ns = os_ * c + oc * s
+    f = 1.5 - 0.5 * (nc * nc + ns * ns)
+    g[b + M_COS] = nc * f
+    g[b + M_SIN] = ns * f
 
 
 @tick_jit
@@ -457,33 +472,28 @@ def _align_tilt(g, dvx, dvy, dvz):
     f = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = nx * f, ny * f, nz * f
     ex, ey, ez = dy * nz - dz * ny, dz * nx - dx * nz, dx * ny - dy * nx
+    r = G_R
+    g[r], g[r + 1], g[r + 2] = nx, ny, nz
+    g[r + 3], g[r + 4], g[r + 5] = ex, ey, ez
+    g[r + 6], g[r + 7], g[r + 8] = dx, dy, dz
     for m in range(N_MODELS):
-        r = MODEL_BASE + m * MODEL_STRIDE + M_R
-        g[r], g[r + 1], g[r + 2] = nx, ny, nz
-        g[r + 3], g[r + 4], g[r + 5] = ex, ey, ez
-        g[r + 6], g[r + 7], g[r + 8] = dx, dy, dz
+        g[MODEL_BASE + m * MODEL_STRIDE + M_COS] = 1.0
+        g[MODEL_BASE + m * MODEL_STRIDE + M_SIN] = 0.0
 
 
 @inline_jit
 def _align_yaw(g):
-    """Each model's AHRS turned to its EKF yaw, keeping its tilt (321 Euler, or 312 when the
-    body x axis is nearer the vertical than the y axis)."""
+    """Each model's AHRS turned to its EKF yaw (the hypothesis), keeping its tilt: the heading
+    offset becomes the hypothesis minus the AHRS's yaw (321 Euler yaw, or the 312 first
+    rotation when the body x axis is nearer the vertical than the y axis: a turn about the
+    vertical adds to either)."""
+    r = G_R
+    if abs(g[r + 6]) < abs(g[r + 7]):
+        yaw0 = math.atan2(g[r + 3], g[r])
+    else:
+        yaw0 = math.atan2(-g[r + 1], g[r + 4])
     for m in range(N_MODELS):
         b = MODEL_BASE + m * MODEL_STRIDE
-        r = b + M_R
-        yaw = _wrap_pi(g[b + M_YAW])
-        sy, cy = math.sin(yaw), math.cos(yaw)
-        if abs(g[r + 6]) < abs(g[r + 7]):
-            roll = math.atan2(g[r + 7], g[r + 8])
-            pitch = -math.asin(min(max(g[r + 6], -1.0), 1.0))
-            sr, cr, sp, cp = math.sin(roll), math.cos(roll), math.sin(pitch), math.cos(pitch)
-            g[r], g[r + 1], g[r + 2] = cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy
-            g[r + 3], g[r + 4], g[r + 5] = cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy
-            g[r + 6], g[r + 7], g[r + 8] = -sp, sr * cp, cr * cp
-        else:  # 312: yaw first, then roll about x, then pitch about y
-            roll = math.asin(min(max(g[r + 7], -1.0), 1.0))
-            pitch = math.atan2(-g[r + 6], g[r + 8])
-            s2, c2, s3, c3 = math.sin(roll), math.cos(roll), math.sin(pitch), math.cos(pitch)
-            g[r], g[r + 1], g[r + 2] = cy * c3 - sy * s2 * s3, -c2 * sy, s3 * cy + c3 * s2 * sy
-            g[r + 3], g[r + 4], g[r + 5] = c3 * sy + s3 * s2 * cy, cy * c2, sy * s3 - s2 * cy * c3
-            g[r + 6], g[r + 7], g[r + 8] = -s3 * c2, s2, c3 * c2
+        a = g[b + M_YAW] - yaw0
+        g[b + M_COS] = math.cos(a)
+        g[b + M_SIN] = math.sin(a)

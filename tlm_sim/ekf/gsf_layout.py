@@ -7,6 +7,11 @@
 combined by a Gaussian sum filter whose weights follow the GPS velocity innovations. The
 kernels are :mod:`tlm_sim.ekf.gsf`; XKY0 / XKY1 log the row (:func:`tlm_sim.ekf.log.log_gsf`).
 
+The models' AHRS differ only by a rotation about the vertical (module docstring of
+:mod:`tlm_sim.ekf.gsf`): the row holds one AHRS (``G_R``, ``G_GBIAS``) and each model's
+heading offset from it as a unit vector (``M_COS``, ``M_SIN``); model m's AHRS matrix is
+``Rz(offset_m) @ G_R``.
+
 Frames: earth NED, body FRD; the rotation matrices take body vectors to NED (row-major). The
 estimator runs on the lane's IMU data summed to EKF3's prediction steps and delayed by the
 assumed GPS delay (EKF3 runs it on its delayed-horizon IMU data), through the step buffer
@@ -20,10 +25,10 @@ NBUF_STEPS = 32  # delay line length in prediction steps (0.4 s of 12.5 ms steps
 STEP_ROW = 7  # one delay-line row: delta angle (3), delta velocity (3), interval
 
 # ------------------------------------------------------------------ one model ----------------
-MODEL = Layout("gsf model", "one yaw hypothesis: its AHRS and its three-state EKF")
+MODEL = Layout("gsf model", "one yaw hypothesis: its AHRS heading offset and its three-state EKF")
 _m = MODEL
-M_R = _m.add("M_R", 9, "", "AHRS rotation matrix body -> NED, row-major")
-M_GBIAS = _m.add("M_GBIAS", 3, "rad/s", "AHRS gyro bias, body (subtracted from the gyro)")
+M_COS = _m.add("M_COS", 1, "", "cosine of the model's AHRS heading offset from G_R")
+M_SIN = _m.add("M_SIN", 1, "", "sine of the model's AHRS heading offset from G_R")
 M_VN = _m.add("M_VN", 1, "m/s", "EKF state: velocity north")
 M_VE = _m.add("M_VE", 1, "m/s", "EKF state: velocity east")
 M_YAW = _m.add("M_YAW", 1, "rad",
@@ -45,6 +50,8 @@ G_RUN = _g.add("G_RUN", 1, "",
 G_FUSING = _g.add("G_FUSING", 1, "",
                   "vel_fuse_running: 1 once the bank fuses GPS velocity (XKY0/XKY1 logged)")
 G_TILT_ALIGNED = _g.add("G_TILT_ALIGNED", 1, "", "1 once the AHRS tilt was set from the accel")
+G_R = _g.add("G_R", 9, "", "the AHRS rotation matrix body -> NED (heading offset 0), row-major")
+G_GBIAS = _g.add("G_GBIAS", 3, "rad/s", "AHRS gyro bias, body (subtracted from the gyro)")
 G_ACC = _g.add("G_ACC", 3, "m/s^2", "low-pass filtered specific force, body (AHRS tilt reference)")
 G_ACC_GAIN = _g.add("G_ACC_GAIN", 1, "1/s", "AHRS tilt correction gain")
 G_YAW = _g.add("G_YAW", 1, "rad",
