@@ -221,6 +221,25 @@ def test_gsf_in_straight_flight_drifts_no_more_than_sitls(tlm, sitl):
     assert ours < 1.5 * theirs, (ours, theirs)
 
 
+def test_gsf_resets_when_gps_returns_as_sitls():
+    """gps_s12: GPS off for 34 s. The bank keeps predicting (XKY0 goes on); the first GPS
+    velocity after the outage puts every weight under the floor, the bank resets and realigns
+    on the next one: one 0.2-0.4 s gap in XKY0 at the GPS's return, in SITL and in tlm."""
+    path = reference_path("gps_s12.bin")
+    fault = json.loads(path.with_suffix(".json").read_text())["faults"][0]
+    t0, t1 = fault["start_time_us"] * 1e-6, fault["end_time_us"] * 1e-6
+    log = fly(1, faults=[(t0, "SIM_GPS1_ENABLE", 0), (t1, "SIM_GPS1_ENABLE", 1)], seed=12)
+    for ky in (read_bin(path, types=["XKY0"])["XKY0"], log.tables["XKY0"]):
+        t = ky[ky.C == 0].TimeUS.to_numpy() * 1e-6
+        dt = np.diff(t)
+        gaps = t[:-1][dt > 0.15]
+        assert len(gaps) == 1 and t1 - 0.5 < gaps[0] < t1 + 1.0, gaps
+        assert 0.2 < dt.max() < 0.45
+        after = ky[(ky.C == 0) & (ky.TimeUS > (gaps[0] + 0.2) * 1e6)].iloc[0]
+        ys = np.array([after[f"Y{m}"] for m in range(5)])
+        assert np.abs(_wrap180(np.diff(ys)) - 72.0).max() < 25.0  # spread again
+
+
 def test_no_estimator_on_a_lane_outside_ek3_gsf_run_mask():
     log = fly(1, seed=0, params={"EK3_GSF_RUN_MASK": 2})
     for name in ("XKY0", "XKY1"):
