@@ -7,8 +7,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tlm_sim.control import dcm_layout as DL
 from tlm_sim.control import layout as C
 from tlm_sim.dynamics import layout as X
+from tlm_sim.ekf import gsf_layout as GL
 from tlm_sim.ekf import layout as L
 from tlm_sim.sensors import layout as S
 from tlm_sim.slots import Layout
@@ -22,6 +24,7 @@ LAYOUTS = [
     (L, L.ERROR_STATE, "NS"), (L, L.LANE, "N_EKF"), (L, L.SELECTOR, "N_SEL"),
     (L, L.CONFIG, "N_CFG"), (L, L.OUTPUT, "N_OUT"),
     (C, C.RATE, "RATE_STRIDE"), (C, C.STATE, "N_CONTROL_STATE"), (C, C.CONFIG, "N_CONTROL_CFG"),
+    (DL, DL.DCM, "N_DCM"), (GL, GL.MODEL, "MODEL_STRIDE"), (GL, GL.GSF, "N_GSF"),
 ]
 IDS = [f"{m.__name__.split('.')[1]}.{lay.name}" for m, lay, _ in LAYOUTS]
 

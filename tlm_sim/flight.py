@@ -31,8 +31,10 @@ from tlm_sim.control.arming import (
 )
 from tlm_sim.control.battery import battery_monitor
 from tlm_sim.control.config import build_control_config
+from tlm_sim.control.dcm import dcm_init, dcm_update
+from tlm_sim.control.dcm_layout import N_DCM
 from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
-from tlm_sim.control.log import log_control_10hz
+from tlm_sim.control.log import log_control_10hz, log_dcm_10hz
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
@@ -41,6 +43,8 @@ from tlm_sim.dynamics.frame import build_frame
 from tlm_sim.dynamics.log import log_dynamics_10hz
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
+from tlm_sim.ekf.gsf import gsf_init, gsf_update
+from tlm_sim.ekf.gsf_layout import N_GSF
 from tlm_sim.ekf.lanes import (
     ekf_gps_accuracy,
     ekf_gps_checks,
@@ -49,7 +53,13 @@ from tlm_sim.ekf.lanes import (
     ekf_output_nav,
     ekf_update,
 )
-from tlm_sim.ekf.log import gps_glitch_check, log_ekf_10hz, log_ekf_evidence, log_lane_switch
+from tlm_sim.ekf.log import (
+    gps_glitch_check,
+    log_ekf_10hz,
+    log_ekf_evidence,
+    log_gsf,
+    log_lane_switch,
+)
 from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
@@ -174,7 +184,7 @@ def _motor_pwm(c, scfg, pwm):
 @loop_jit
 def run_flight(
     x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, t_end_us, home,
-    gps_time, bufs, counts, s, work, rng, wind_rng, txt,
+    gps_time, bufs, counts, s, work, rng, wind_rng, txt, dcm, gsf,
 ):
     """Fly one whole flight in place; returns the final simulated time [us].
 
@@ -186,7 +196,8 @@ def run_flight(
     s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: the sensor
     noise streams, one row per sensor (S.RNG_*, :func:`tlm_sim.rng.new_streams`); wind_rng:
     wind turbulence generator (tlm_sim.rng); txt: the text log (tlm_sim.control.arming TXT_*,
-    its row count in c[TXT_N]). Allocation-free.
+    its row count in c[TXT_N]); dcm: the DCM attitude estimator (control.dcm_layout);
+    gsf[lane]: the EKF lanes' yaw estimators (ekf.gsf_layout). Allocation-free.
 
     The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
     the flight ends 2 s after the autopilot disarms or the driver gives up arming, or at
@@ -197,7 +208,7 @@ def run_flight(
     pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0])
+    _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0], dcm, gsf)
     k_sched = 0
     t_us = 0
     next_loop = 0
@@ -218,8 +229,10 @@ def run_flight(
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
                                                    rng, events, ev_counts)
+        armed = c[C.ARMED] != 0.0
+        dcm_update(dcm, g, s, dang, dvel, imu_ok, gps, gps_new, int(eo[EK.O_IMU]), armed, t_us)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
-                  mag_new, s, c[C.ARMED] != 0.0, events, ev_counts)
+                  mag_new, s, armed, events, ev_counts, gsf)
         if boot_texts_due(c, ekf):
             lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events,
                             ev_counts)
@@ -234,7 +247,7 @@ def run_flight(
             arm_vehicle(c, t_us, q, events, ev_counts)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
-                                home, x, s, scfg, c, ekf, sel, ecfg, eo, pos)
+                                home, x, s, scfg, c, ekf, sel, ecfg, eo, pos, g, dcm, gsf)
         if stop_at < 0 and (c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0):
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
@@ -243,9 +256,10 @@ def run_flight(
 
 
 @inline_jit
-def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat):
-    """Power on: sensors and EKF lanes initialised (the GPS found at once, or when the boot
-    phase's driver finds it), the arming driver ready, the boot mode (STABILIZE) logged."""
+def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat, dcm, gsf):
+    """Power on: sensors, EKF lanes, their yaw estimators and the DCM estimator initialised
+    (the GPS found at once, or when the boot phase's driver finds it), the arming driver
+    ready, the boot mode (STABILIZE) logged."""
     imu_init(s, scfg, 0.0)
     gps_init(s, scfg[S.C_GPS_DETECT_US], home_lat)
     rc_init(s, 0.0)
@@ -254,6 +268,8 @@ def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat):
     mag_init(s)
     ekf_init(ekf, sel, ecfg)
     arming_init(c, g)
+    gsf_init(gsf, ecfg)
+    dcm_init(dcm)
     log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
 
 
@@ -302,9 +318,10 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
 
 @inline_jit
 def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
-              armed, events, ev_counts):
-    """The EKF's main-loop update with this tick's sensor data, the per-tick part of its output
-    block eo filled (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged."""
+              armed, events, ev_counts, gsf):
+    """The EKF's main-loop update with this tick's sensor data, its lanes' yaw estimators
+    (:mod:`tlm_sim.ekf.gsf`), the per-tick part of its output block eo filled (ekf.layout O_*,
+    :func:`ekf_output_nav`) and a primary-lane change logged."""
     if gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
@@ -313,6 +330,8 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
         baro_new, s[S.B_ALT], mag_new, s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
     )
+    gsf_update(gsf, ekf, ecfg, dang, dvel, imu_ok, gps_new, gps[S.GE_VN], gps[S.GE_VE],
+               gps[S.GE_FIX_3D] > 0.5, armed)
     ekf_output_nav(ekf, sel, eo)
     if switched:
         log_lane_switch(events, ev_counts, t_us, eo)
@@ -320,7 +339,7 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
 
 @inline_jit
 def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
-              c, ekf, sel, ecfg, eo, pos):
+              c, ekf, sel, ecfg, eo, pos, g, dcm, gsf):
     """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz
     messages. Returns the last GPS epoch's ms of week."""
     if gps_new:
@@ -335,6 +354,8 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
         log_ekf_evidence(bufs, counts, t_us, ekf, sel, ecfg)
         log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
         log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
+        log_dcm_10hz(bufs, counts, t_us, dcm, g, s, gps, eo, home[0], home[1], home[2])
+        log_gsf(bufs, counts, t_us, gsf)
     return last_gps_ms
 
 
@@ -538,7 +559,7 @@ def fly(
         x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied,
         int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
         np.zeros(S.N_SENSOR_STATE), new_work(), new_streams(int(seed), S.N_NOISE_STREAMS),
-        new_rng(int(seed), 2), txt,
+        new_rng(int(seed), 2), txt, np.zeros(N_DCM), np.zeros((ekf.shape[0], N_GSF)),
     )
     armed = c[C.ARM_TIME_S] >= 0.0
     meta: dict[str, Any] = {

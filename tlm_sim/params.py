@@ -604,6 +604,20 @@ _add("EK3_YAW_M_NSE", "rad", 0.05, 1.0,
 _add("EK3_YAW_I_GATE", "%", 100, 1000, "heading innovation gate, percent of one sigma", True)
 _add("EK3_AFFINITY", "", 0, 15, "lane sensor affinity bits (§3.4)", True, modelled=False)
 _flag("EK3_ENABLE", "EKF3 enabled (§3.8)", modelled=False)
+_add("EK3_GSF_RUN_MASK", "", 0, 63,
+     "lanes that run the EKF-GSF yaw estimator, bit mask (XKY0/XKY1; tlm_sim.ekf.gsf)", True)
+_add("EK3_GSF_USE_MASK", "", 0, 63,
+     "lanes whose yaw may be reset to the EKF-GSF estimate (tlm has no such reset)", True,
+     modelled=False)
+_add("EK3_GSF_RST_MAX", "", 1, 10, "EKF-GSF yaw resets allowed per flight (no such reset in "
+     "tlm)", True, modelled=False)
+# ---- the DCM attitude estimator, the AHRS's second solution (AHR2, DCM; control.dcm) ---------
+_add("AHRS_RP_P", "", 0.1, 0.4, "DCM roll/pitch correction gain (floor 0.05)")
+_add("AHRS_YAW_P", "", 0.1, 0.4, "DCM yaw correction gain (floor 0.05)")
+_add("AHRS_GPS_GAIN", "", 0, 1, "DCM gain of the GPS acceleration correction of the tilt")
+_add("AHRS_GPS_MINSATS", "", 0, 10, "satellites the DCM needs to use the GPS velocity", True)
+_add("AHRS_GPS_USE", "", 0, 2,
+     "DCM use of the GPS: 0 none, 1 position and velocity, 2 also height", True)
 
 # ---- IMU filters and calibration, battery (§1.11, §2.3, §2.4) --------------------------------
 _add(["INS_GYRO_FILTER", "INS_ACCEL_FILTER"], "Hz", 0, 1000,

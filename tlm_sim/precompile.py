@@ -127,12 +127,20 @@ JOBS: tuple[Job, ...] = (
         (_F1, _f8, _F2, _F1, _F1, _f8, _b1, _F2, _EVENTS, _I1), 0.3),
     Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EVENTS, _I1), 0.2),
     Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 0.3),
+    # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs
+    Job("tlm_sim.control.dcm:dcm_update",
+        (_F1, _F1, _F1, _F2, _F2, _F1, _F1, _b1, _i8, _b1, _i8), 1.0),
+    Job("tlm_sim.ekf.gsf:gsf_update",
+        (_F2, _F2, _F1, _F2, _F2, _F1, _b1, _f8, _f8, _b1, _b1), 1.0),
+    Job("tlm_sim.control.log:log_dcm_10hz",
+        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _f8, _f8), 0.5),
+    Job("tlm_sim.ekf.log:log_gsf", (_BUFS, _I1, _i8, _F2), 0.3),
 )
 
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
     (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1, _F2), 4.0)
+     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1, _F2, _F1, _F2), 4.0)
 
 
 @dataclass

@@ -44,6 +44,15 @@ Notes:
 * tlm arms at `TLM_ARM_TIME` (10 s after boot) instead of SITL's ~42 s (GPS and EKF start-up);
   the armed flight time above is unaffected. Both wait ArduCopter's 2 s arming delay before the
   takeoff climb.
+* DCM / AHR2 / XKY0 (not in the table; `tests/test_ahrs_messages.py` checks them against
+  normal_s11 on every run). Same mission, seed 11, while armed, tlm vs SITL: DCM minus ATT
+  roll/pitch/yaw p95 0.074/0.103/0.65 deg vs 0.111/0.111/2.02 deg; DCM minus the truth (SIM)
+  0.120/0.140/0.43 deg vs 0.130/0.128/0.45 deg; DCM.ErrRP median 0.0025 vs 0.0025, ErrYaw
+  median 0.0018 vs 0.0018. XKY0 from 0.3 s after arming (SITL 0.23 s), composite within 10 deg
+  of ATT.Yaw with YCS < 3 15.0 s after (SITL 15.4 s); from 60 s after arming median
+  |YC - ATT.Yaw| 18.8 vs 35.2 deg (the composite drifts between turns in both), YCS median
+  0.76 vs 0.83, largest weight median 0.67 vs 0.75; XKY1 innovations std 0.21-0.28 vs
+  0.18-0.26 m/s.
 """
 
 

@@ -14,6 +14,7 @@ from tlm_sim.boot import BOOT_ARM_ATTEMPTS_S, BOOT_DRIVER_S, PREARM_FIRST_S
 from tlm_sim.control import layout as C
 from tlm_sim.control.arming import ARM_RETRY_S, ARM_TIMEOUT_S
 from tlm_sim.dynamics.atmosphere import RHO0, air_density, air_density_gradient
+from tlm_sim.ekf.config import gps_delay_s
 from tlm_sim.frames import frame_for
 from tlm_sim.params import Params, require_params
 
@@ -166,6 +167,17 @@ def _failsafes(g: np.ndarray, p: Params) -> None:
     g[C.G_FS_EKF_ALPHA] = 1.0 if filt <= 0.0 else 0.1 / (0.1 + 1.0 / (2.0 * math.pi * filt))
 
 
+def _dcm(g: np.ndarray, p: Params) -> None:
+    """The DCM estimator's gains and GPS use, the declination and the assumed GPS lag."""
+    g[C.G_AHRS_RP_P] = p["AHRS_RP_P"]
+    g[C.G_AHRS_YAW_P] = p["AHRS_YAW_P"]
+    g[C.G_AHRS_GPS_GAIN] = p["AHRS_GPS_GAIN"]
+    g[C.G_AHRS_GPS_MINSATS] = p["AHRS_GPS_MINSATS"]
+    g[C.G_AHRS_GPS_USE] = p["AHRS_GPS_USE"]
+    g[C.G_MAG_DEC] = math.radians(p["TLM_MAG_DEC_DEG"])
+    g[C.G_GPS_LAG] = gps_delay_s(p)
+
+
 def build_control_config(p: Params) -> np.ndarray:
     """Controller configuration of a flight from its parameters (ArduCopter names -> SI)."""
     require_params(p, "build_control_config")
@@ -177,6 +189,7 @@ def build_control_config(p: Params) -> np.ndarray:
     _navigation(g, p)
     _motors(g, p)
     _failsafes(g, p)
+    _dcm(g, p)
     g[C.G_YAW_ERR_MAX] = yaw_error_max(g[C.G_RAT_P + 2], g[C.G_ANG_P + 2], g[C.G_ACCEL_MAX + 2])
     g[C.G_POSXY_ERR_MAX] = inv_sqrt_ctrl(g[C.G_WP_SPEED], g[C.G_POSXY_P], g[C.G_WP_ACCEL])
     g[C.G_POSZ_ERR_UP] = inv_sqrt_ctrl(g[C.G_WP_SPEED_UP], g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z])

@@ -1,15 +1,19 @@
 """The autopilot's 10 Hz log messages: RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD and BAT (the battery
-monitor, :mod:`tlm_sim.control.battery`). Columns by name (:mod:`tlm_sim.logger`); attitude and
+monitor, :mod:`tlm_sim.control.battery`), DCM and AHR2 (the DCM estimator,
+:mod:`tlm_sim.control.dcm`). Columns by name (:mod:`tlm_sim.logger`); attitude and
 heights from the EKF output block (``ekf.layout`` O_*)."""
 
 import math
 
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.control import dcm_layout as DL
 from tlm_sim.control import layout as C
 from tlm_sim.control.battery import resting_voltage
+from tlm_sim.control.dcm import dcm_eulers, dcm_location, dcm_quaternion
 from tlm_sim.ekf import layout as EK
 from tlm_sim.frames import MAX_MOTORS
+from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.sensors import layout as S
 
 RATE, ATT, RCOU, CTUN, PSC = L.RATE_COLS, L.ATT_COLS, L.RCOU_COLS, L.CTUN_COLS, L.PSCN_COLS
@@ -135,3 +139,49 @@ def _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax):
     b[r, PSC.PN] = pos[ax]
     b[r, PSC.VN] = eo[EK.O_VN + ax]
     b[r, PSC.AN] = acc[ax]
+
+
+DCMC, AHR2 = L.DCM_COLS, L.AHR2_COLS
+
+
+@tick_jit
+def log_dcm_10hz(bufs, counts, t_us, d, g, s, gps, eo, home_lat, home_lon, home_alt):
+    """DCM (the estimator's state) and AHR2 (the AHRS's secondary solution: the DCM's, while the
+    EKF is the active one) at 10 Hz from the DCM array d (:mod:`tlm_sim.control.dcm`); g: the
+    controller configuration, s: sensor state (baro), gps: the latest GPS epoch, eo: the EKF
+    output block, home: degrees, m AMSL. AHR2's angles are truncated to centidegrees as the
+    firmware's integer casts do."""
+    if d[DL.D_INIT] == 0.0:
+        return
+    dcm_eulers(d)
+    rd = L.RAD2DEG
+    yaw = (d[DL.D_YAW] * rd) % 360.0
+    r = L.new_row(bufs, counts, L.K_DCM, t_us)
+    if r >= 0:
+        b = bufs[L.K_DCM]
+        b[r, DCMC.Roll] = d[DL.D_ROLL] * rd
+        b[r, DCMC.Pitch] = d[DL.D_PITCH] * rd
+        b[r, DCMC.Yaw] = yaw
+        b[r, DCMC.ErrRP] = d[DL.D_ERR_RP]
+        b[r, DCMC.ErrYaw] = d[DL.D_ERR_YAW]
+        b[r, DCMC.VWN] = 0.0
+        b[r, DCMC.VWE] = 0.0
+        b[r, DCMC.VWD] = 0.0
+    if eo[EK.O_F_ATTITUDE] == 0.0:  # the DCM is the active solution: no secondary to log
+        return
+    r = L.new_row(bufs, counts, L.K_AHR2, t_us)
+    if r >= 0:
+        b = bufs[L.K_AHR2]
+        have, north, east, alt = dcm_location(d, g, s, gps, t_us * 1e-6, home_alt)
+        lat, lon = ne_to_latlon_scalar(north, east, home_lat, home_lon) if have else (0.0, 0.0)
+        b[r, AHR2.Roll] = int(d[DL.D_ROLL] * rd * 100.0) * 0.01
+        b[r, AHR2.Pitch] = int(d[DL.D_PITCH] * rd * 100.0) * 0.01
+        b[r, AHR2.Yaw] = int(yaw * 100.0) * 0.01
+        b[r, AHR2.Alt] = math.nan if not have and alt == 0.0 else alt
+        b[r, AHR2.Lat] = lat
+        b[r, AHR2.Lng] = lon
+        qw, qx, qy, qz = dcm_quaternion(d)
+        b[r, AHR2.Q1] = qw
+        b[r, AHR2.Q2] = qx
+        b[r, AHR2.Q3] = qy
+        b[r, AHR2.Q4] = qz

@@ -103,6 +103,7 @@ def build_ekf_config(params: Params) -> np.ndarray:
     _ekf3_constants(c)
     c[L.C_ABIAS_LIM] = p["EK3_ACC_BIAS_LIM"]
     c[L.C_TAU_OUTPUT] = min(max(0.01 * p["EK3_TAU_OUTPUT"], 0.1), 0.5)
+    c[L.C_GSF_RUN_MASK] = p["EK3_GSF_RUN_MASK"]
     imus = lane_imus(p)
     c[L.C_N_LANES] = len(imus)
     for i, imu in enumerate(imus):

@@ -321,6 +321,8 @@ C_GPS_CHECK = _c.add("C_GPS_CHECK", 1, "", "EK3_GPS_CHECK bit mask")
 C_CHECK_SCALE = _c.add("C_CHECK_SCALE", 1, "", "EK3_CHECK_SCALE / 100")
 C_YAW_NSE = _c.add("C_YAW_NSE", 1, "rad", "EK3_YAW_M_NSE (heading fusion)")
 C_YAW_GATE = _c.add("C_YAW_GATE", 1, "", "EK3_YAW_I_GATE as sigmas")
+C_GSF_RUN_MASK = _c.add("C_GSF_RUN_MASK", 1, "",
+                        "EK3_GSF_RUN_MASK: lanes (bit i: lane i) that run a yaw estimator")
 N_CFG = CONFIG.close()
 
 # ------------------------------------------------------------------ output vector --------------

@@ -1,8 +1,8 @@
-"""The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz), and
-the ERR rows of a primary-lane change and of ArduCopter's GPS glitch check; the evidence
-messages (:func:`log_ekf_evidence`): XKF2, XKF3 and XKQ per lane at 10 Hz, XKF5 (10 Hz) and
-XKV1/XKV2 (every 0.5 s) of the primary lane only, as EKF3 logs them. Columns by name
-(:mod:`tlm_sim.logger`).
+"""The EKF's log messages: XKF1, XKF4 and XKFS per lane, POS from the output block (10 Hz),
+XKY0 / XKY1 of the lanes' yaw estimators, and the ERR rows of a primary-lane change and of
+ArduCopter's GPS glitch check; the evidence messages (:func:`log_ekf_evidence`): XKF2, XKF3
+and XKQ per lane at 10 Hz, XKF5 (10 Hz) and XKV1/XKV2 (every 0.5 s) of the primary lane
+only, as EKF3 logs them. Columns by name (:mod:`tlm_sim.logger`).
 
 What each field holds, and how tlm's 15-error-state filter maps onto EKF3's 24 states, is in
 ``docs/architecture.md`` ("EKF evidence messages"). Signs follow EKF3: innovations are
@@ -13,7 +13,9 @@ import math
 
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ekf import gsf_layout as GL
 from tlm_sim.ekf import layout as EK
+from tlm_sim.ekf.gsf import gsf_refresh
 from tlm_sim.geo import ne_to_latlon_scalar
 
 XKF1, XKF4, XKFS, POS = L.XKF1_COLS, L.XKF4_COLS, L.XKFS_COLS, L.POS_COLS
@@ -286,3 +288,42 @@ def _log_variances(bufs, counts, t_us, el, ln):
             b[r, XKV2.V13 + i] = el[EK.P0 + (EK.ES_BA + i) * d] * dt2
         for i in range(8):
             b[r, XKV2.V16 + i] = 0.0
+XKY0, XKY1 = L.XKY0_COLS, L.XKY1_COLS
+
+
+@tick_jit
+def _deg360(a):
+    """Angle [rad] in degrees wrapped to [0, 360)."""
+    d = (a * L.RAD2DEG) % 360.0
+    return d if d < 360.0 else 0.0
+
+
+@tick_jit
+def log_gsf(bufs, counts, t_us, gsf):
+    """XKY0 and XKY1 rows (10 Hz) of every lane whose EKF-GSF yaw estimator (:mod:`tlm_sim.ekf.gsf`)
+    fuses GPS velocity, as EKF3 logs them: composite yaw and sqrt(degrees(variance)) (the
+    firmware's conversion of a rad^2 variance), each model's yaw and weight; each model's NE
+    velocity innovations."""
+    for ln in range(gsf.shape[0]):
+        g = gsf[ln]
+        if g[GL.G_FUSING] == 0.0:
+            continue
+        gsf_refresh(g)
+        r = L.new_row(bufs, counts, L.K_XKY0, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKY0]
+            b[r, XKY0.C] = ln
+            b[r, XKY0.YC] = _deg360(g[GL.G_YAW])
+            b[r, XKY0.YCS] = math.sqrt(max(g[GL.G_YAW_VAR] * L.RAD2DEG, 0.0))
+            for m in range(GL.N_MODELS):
+                mb = GL.MODEL_BASE + m * GL.MODEL_STRIDE
+                b[r, XKY0.Y0 + m] = _deg360(g[mb + GL.M_YAW])
+                b[r, XKY0.W0 + m] = g[GL.G_W + m]
+        r = L.new_row(bufs, counts, L.K_XKY1, t_us)
+        if r >= 0:
+            b = bufs[L.K_XKY1]
+            b[r, XKY1.C] = ln
+            for m in range(GL.N_MODELS):
+                mb = GL.MODEL_BASE + m * GL.MODEL_STRIDE
+                b[r, XKY1.IVN0 + m] = g[mb + GL.M_INNOV]
+                b[r, XKY1.IVE0 + m] = g[mb + GL.M_INNOV + 1]

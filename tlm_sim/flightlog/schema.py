@@ -648,6 +648,40 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         description="Simulator truth: roll, pitch, yaw (deg), alt AMSL (m), lat/lon (deg), "
         "attitude quaternion.",
     ),
+    # --- the AHRS's second attitude solution and EKF3's yaw estimator ------------------------
+    _schema(
+        "DCM", "Qffffffff",
+        "TimeUS,Roll,Pitch,Yaw,ErrRP,ErrYaw,VWN,VWE,VWD",
+        "sddddhnnn", "F00000000",
+        instance_field=None, rate_hz=10, instances=1,
+        description="DCM attitude estimator: roll, pitch (deg), yaw (deg 0-360), low-passed "
+        "roll/pitch and heading errors, wind NED (m/s; 0 on a copter).",
+    ),
+    _schema(
+        "AHR2", "QccCfLLffff",
+        "TimeUS,Roll,Pitch,Yaw,Alt,Lat,Lng,Q1,Q2,Q3,Q4",
+        "sddhmDU----", "FBBB0GG----",
+        instance_field=None, rate_hz=10, instances=1,
+        description="The AHRS's secondary solution (DCM while EKF3 is active): roll, pitch, "
+        "yaw (deg), alt AMSL (m), lat/lon (deg), attitude quaternion.",
+    ),
+    _schema(
+        "XKY0", "QBffffffffffff",
+        "TimeUS,C,YC,YCS,Y0,Y1,Y2,Y3,Y4,W0,W1,W2,W3,W4",
+        "s#hdhhhhh-----", "F-000000000000",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 GSF yaw estimator per lane: composite yaw (deg), sqrt of the yaw "
+        "variance in deg (as the firmware computes it), the five models' yaws (deg) and "
+        "weights.",
+    ),
+    _schema(
+        "XKY1", "QBffffffffff",
+        "TimeUS,C,IVN0,IVN1,IVN2,IVN3,IVN4,IVE0,IVE1,IVE2,IVE3,IVE4",
+        "s#nnnnnnnnnn", "F-0000000000",
+        instance_field="C", rate_hz=10, instances=2,
+        description="EKF3 GSF yaw estimator per lane: the five models' GPS velocity "
+        "innovations north and east (m/s).",
+    ),
     _schema(
         "SIM2", "QdddfffffI",
         "TimeUS,PN,PE,PD,VN,VE,VD,As,ASpdU,UFC",
@@ -666,6 +700,7 @@ LOGGED_MESSAGES: tuple[str, ...] = (
     "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
     "XKF2", "XKF3", "XKF5", "XKQ", "XKV1", "XKV2",
+    "DCM", "AHR2", "XKY0", "XKY1",
 )
 
 #: On-event messages (``rate_hz == 0``) that carry flight events.
