@@ -189,16 +189,12 @@ class GenerateReport:
                       else f" (target {100 * self.target_fault_ratio:.1f} %)")
             out.append(f"fault share        {100 * self.fault_share:.1f} % of GPS rows{target}")
         if self.capped:
-            shown = ", ".join(str(f) for f in sorted(self.capped)[:10])
-            more = ", ..." if len(self.capped) > 10 else ""
-            pl = "s" if len(self.capped) > 1 else ""
+            shown, more, pl = _flight_list(self.capped)
             out.append(f"capped             {len(self.capped)} flight{pl} still armed at the "
                        f"time cap, cut off (flight{pl} {shown}{more}): see end_reason in "
                        "manifest.parquet")
         if self.not_armed:
-            shown = ", ".join(str(f) for f in sorted(self.not_armed)[:10])
-            more = ", ..." if len(self.not_armed) > 10 else ""
-            pl = "s" if len(self.not_armed) > 1 else ""
+            shown, more, pl = _flight_list(self.not_armed)
             out.append(f"not armed          {len(self.not_armed)} flight{pl} never armed: the "
                        f"pre-arm checks failed (flight{pl} {shown}{more}): see end_reason in "
                        "manifest.parquet and the Arm: texts")
@@ -229,6 +225,13 @@ def _check_tables(tables: Sequence[str] | None) -> list[str] | None:
     if not out:
         raise GenerateError("--tables: name at least one table")
     return sorted(out)
+
+
+def _flight_list(flights: Iterable[int]) -> tuple[str, str, str]:
+    """(the first ten flight numbers, ", ..." when there are more, the plural "s")."""
+    fs = sorted(flights)
+    return (", ".join(str(f) for f in fs[:10]), ", ..." if len(fs) > 10 else "",
+            "s" if len(fs) > 1 else "")
 
 
 def _open(opts: GenerateOptions) -> ExecutorHandle:
