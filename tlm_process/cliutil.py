@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 __all__ = ["OUT_MARK", "UsageError", "WRITE_PROBE", "add_overwrite", "check_writable_file",
-           "foreign_entries",
+           "clear_folder", "foreign_entries",
            "fraction", "int_at_least", "is_one_of", "number", "positive_number", "prepare_out",
            "show_param_warnings", "whole_number"]
 
@@ -111,7 +111,7 @@ def prepare_out(out: str | os.PathLike, command: str | None = None,
             if not (d / OUT_MARK).is_file():
                 raise UsageError(f"--overwrite: {d} was not written by tlm (no {OUT_MARK} "
                                  f"file), so tlm will not delete it; choose another folder")
-            _clear(d)
+            clear_folder(d)
     try:
         d.mkdir(parents=True, exist_ok=True)
         probe = d / WRITE_PROBE
@@ -124,15 +124,20 @@ def prepare_out(out: str | os.PathLike, command: str | None = None,
     return d
 
 
-def _clear(d: Path) -> None:
-    """Remove everything in folder ``d`` (a folder tlm wrote)."""
+def clear_folder(d: Path, ignore_errors: bool = False) -> None:
+    """Remove everything in folder ``d`` (a folder tlm wrote), keeping ``d`` itself;
+    ``ignore_errors``: leave what cannot be removed (a clean-up on an error path)."""
     import shutil
 
     for p in d.iterdir():
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p)
-        else:
-            p.unlink()
+        try:
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
+        except OSError:
+            if not ignore_errors:
+                raise
 
 
 def check_writable_file(path: str | os.PathLike, option: str) -> None:

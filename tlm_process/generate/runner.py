@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from tlm_process.cliutil import clear_folder
 from tlm_process.generate.errors import ExecutorLost, GenerateError
 from tlm_process.generate.executors import (
     ExecutorHandle,
@@ -651,11 +652,7 @@ def _discard(out: Path, existed: bool) -> None:
     if not existed:
         shutil.rmtree(out, ignore_errors=True)
         return
-    for p in out.iterdir():
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p, ignore_errors=True)
-        else:
-            p.unlink(missing_ok=True)
+    clear_folder(out, ignore_errors=True)
 
 
 def _close(writer: DatasetWriter, run_info: Mapping[str, Any],
