@@ -46,7 +46,7 @@ def test_rtl_lands_at_home_and_disarms(k):
     assert abs(alt[-1]) < 0.2
     ev = log.tables["EV"]["Id"].tolist()
     assert ev[-2:] == [18, 11]  # LAND_COMPLETE then DISARMED
-    assert ev[0] == 10  # ARMED
+    assert ev[:2] == [25, 10]  # SET_HOME (with the EKF origin), ARMED
     modes = log.tables["MODE"]["Mode"].tolist()
     assert modes == [0, 4, 3]  # STABILIZE at boot, GUIDED takeoff, AUTO (RTL is AUTO's last item)
 

@@ -29,15 +29,17 @@ from tlm_sim.rotation import quat_to_euler
 K_GPS, K_GPA, K_IMU, K_RATE, K_VIBE, K_ATT, K_BARO, K_MAG, K_RCIN, K_RCOU = range(10)
 K_MODE, K_EV, K_ERR, K_XKF1, K_XKF4, K_CTUN, K_BAT, K_POS, K_SIM = range(10, 19)
 K_PSCN, K_PSCE, K_PSCD, K_XKFS = 19, 20, 21, 22
+K_ARM, K_ORGN, K_LDET, K_MOTB, K_MISE, K_SIM2 = range(23, 29)
 LOG_ORDER = (
     "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
+    "ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2",
 )  # must equal tlm_sim.flightlog.LOGGED_MESSAGES (checked by the tests)
 
 #: The event messages (MODE, EV, ERR: consecutive in LOG_ORDER) as a tuple of their own,
 #: indexed by E_*, with their row counts ``counts[K_MODE:K_ERR + 1]`` (a view): what the
 #: vehicle logic writes into. A short tuple, because numba passes each array of a tuple as
-#: seven arguments to every function that takes it (the whole log is 23 arrays).
+#: seven arguments to every function that takes it (the whole log is 29 arrays).
 E_MODE, E_EV, E_ERR = 0, 1, 2
 assert (K_EV, K_ERR) == (K_MODE + E_EV, K_MODE + E_ERR)
 
@@ -57,7 +59,9 @@ GPS_COLS, GPA_COLS, IMU_COLS, RATE_COLS, VIBE_COLS, ATT_COLS, BARO_COLS, MAG_COL
 RCIN_COLS, RCOU_COLS, MODE_COLS, EV_COLS, ERR_COLS, XKF1_COLS, XKF4_COLS, CTUN_COLS = (
     schema_columns(n) for n in LOG_ORDER[8:16])
 BAT_COLS, POS_COLS, SIM_COLS, PSCN_COLS, PSCE_COLS, PSCD_COLS, XKFS_COLS = (
-    schema_columns(n) for n in LOG_ORDER[16:])
+    schema_columns(n) for n in LOG_ORDER[16:23])
+ARM_COLS, ORGN_COLS, LDET_COLS, MOTB_COLS, MISE_COLS, SIM2_COLS = (
+    schema_columns(n) for n in LOG_ORDER[23:29])
 
 
 def event_buffers(bufs: tuple[np.ndarray, ...], counts: np.ndarray

@@ -119,6 +119,10 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_lane_switch", (_EVENTS, _I1, _i8, _F1), 0.1),
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
     Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
+    # issue 21's evidence messages (ARM, ORGN, LDET, MISE every tick; SIM2 at 50 Hz)
+    Job("tlm_sim.control.log:log_vehicle_events",
+        (_BUFS, _I1, _i8, _F1, _F1, _b1, _f8, _f8, _f8), 0.4),
+    Job("tlm_sim.dynamics.log:log_sim2", (_BUFS, _I1, _i8, _F1), 0.2),
 )
 
 RUN_FLIGHT = Job(
