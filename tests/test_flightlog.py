@@ -109,7 +109,7 @@ def test_required_messages_and_logged_subset():
     ).split()
     assert set(required) <= set(SCHEMAS)
     assert set(LOGGED_MESSAGES) <= set(SCHEMAS)
-    assert len(LOGGED_MESSAGES) == 33
+    assert len(LOGGED_MESSAGES) == 39
     for name in LOGGED_MESSAGES:
         assert SCHEMAS[name].columns[0] == "TimeUS"
         assert not SCHEMAS[name].string_columns  # the simulator fills numbers only

@@ -271,7 +271,8 @@ def _measure(frame_class: int, frame_type: int, extra: dict | None = None) -> di
         if settled.any() else None,
         "err25": e25,
         "err12": err_s(12),
-        "texts": [m for x, m in texts if T0 * 1e6 <= x <= T1 * 1e6],
+        "texts": [m for x, m in texts if T0 * 1e6 <= x <= T1 * 1e6
+                  and not m.startswith(("Mission:", "Reached command"))],  # not the progress
         "heading_change": float((late.mean() - before + 180.0) % 360.0 - 180.0),
         "heading_std_late": float(late.std()),
         "track_max": float(np.hypot((pn.TPN - pn.PN)[w], (pe.TPE - pe.PE)[w]).max()),

@@ -34,13 +34,18 @@ from tlm_sim.control.config import build_control_config
 from tlm_sim.control.dcm import dcm_init, dcm_update
 from tlm_sim.control.dcm_layout import N_DCM
 from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
-from tlm_sim.control.log import log_control_10hz, log_dcm_10hz
+from tlm_sim.control.log import (
+    log_control_10hz,
+    log_dcm_10hz,
+    log_vehicle_events,
+    vehicle_events_due,
+)
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
 from tlm_sim.control.wpnav import PATH_COLS, prepare_path
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
-from tlm_sim.dynamics.log import log_dynamics_10hz
+from tlm_sim.dynamics.log import log_dynamics_10hz, log_sim2
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.gsf import gsf_init, gsf_update
@@ -115,6 +120,10 @@ END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
 #: "Arm:" / "PreArm:" texts)
 END_NOT_ARMED = "not_armed"
 END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP, END_NOT_ARMED)
+
+# MAV_CMD ids and MAV_FRAMEs of the mission items (as the reference logs' CMD messages)
+MAV_CMD_NAV_WAYPOINT, MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_CMD_NAV_TAKEOFF = 16, 20, 22
+MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_RELATIVE_ALT = 0, 3
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -340,8 +349,14 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
 @inline_jit
 def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
               c, ekf, sel, ecfg, eo, pos, g, dcm, gsf):
-    """The main loop's logging: GPS/GPA per epoch, IMU at 25 Hz, each subsystem's 10 Hz
-    messages. Returns the last GPS epoch's ms of week."""
+    """The main loop's logging: the on-event messages (ORGN once home is set from the EKF's
+    origin, ARM, LDET, MISE), GPS/GPA per epoch, SIM2 at 50 Hz, IMU at 25 Hz, each subsystem's
+    10 Hz messages. Returns the last GPS epoch's ms of week."""
+    origin_ready = counts[L.K_ORGN] == 0 and c[C.HOME_SET] != 0.0
+    if vehicle_events_due(c, origin_ready):
+        log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home[0], home[1], home[2])
+    if tick % 8 == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
+        log_sim2(bufs, counts, t_us, x)
     if gps_new:
         last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
                               gps_time, last_gps_ms)
@@ -550,7 +565,7 @@ def fly(
     c[C.DISARM_TIME] = -1.0
     path = mission_path(mission, g)
     seg = np.zeros((2, PATH_COLS))
-    bufs = allocate_buffers(duration, LOGGED_MESSAGES)
+    bufs = allocate_buffers(duration, LOGGED_MESSAGES, rows=evidence_rows(mission, duration))
     txt = np.zeros((TXT_ROWS, N_TXT_COLS))
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
@@ -583,6 +598,7 @@ def fly(
         "unmodelled_params": p.unmodelled(),
         "frame": frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"]).name,
     }
+    fill_evidence(bufs, counts, mission, p)
     log = FlightLog.from_buffers(
         {n: bufs[n] for n in L.LOG_ORDER},
         {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
@@ -599,6 +615,60 @@ def fly(
         log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
                                    t_last)
     return log
+
+
+#: LDET rows per second at most (Copter::Log_LDET logs a change at most every 20 ms)
+LDET_MAX_HZ = 50.0
+
+
+def evidence_rows(mission: Mission, duration_s: float) -> dict[str, int]:
+    """Buffer rows of the on-event messages with a bound of their own: LDET at its 50 Hz cap,
+    MISE one per mission item (tlm_sim.flightlog.allocate_buffers ``rows``)."""
+    return {"LDET": int(LDET_MAX_HZ * duration_s) + 16,
+            "MISE": len(mission_items(mission)) + 16}
+
+
+def fill_evidence(bufs: Mapping[str, np.ndarray], counts: np.ndarray, mission: Mission,
+                  params: Params) -> None:
+    """Complete the on-event rows the loop logged with what the flight's inputs hold: each
+    MISE row's mission item (:func:`mission_items`, the CMD rows' fields), ARM.ArmChecks of an
+    arming (ARMING_CHECK) and SIM2.ASpdU (SIM_SPEEDUP: SITL's achieved wall-clock speed-up;
+    tlm's time is simulated only)."""
+    n = int(counts[L.K_MISE])
+    if n:
+        items = mission_items(mission)
+        mise = bufs["MISE"]
+        idx = np.clip(mise[:n, L.MISE_COLS.CNum].astype(np.int64), 0, len(items) - 1)
+        mise[:n, 1:] = items[idx]
+    n = int(counts[L.K_ARM])
+    arm = bufs["ARM"][:n]
+    arm[arm[:, L.ARM_COLS.ArmState] != 0.0, L.ARM_COLS.ArmChecks] = float(
+        params.get("ARMING_CHECK", 1.0))
+    bufs["SIM2"][:int(counts[L.K_SIM2]), L.SIM2_COLS.ASpdU] = float(
+        params.get("SIM_SPEEDUP", 1.0))
+
+
+def mission_items(mission: Mission) -> np.ndarray:
+    """The mission as ArduCopter stores it, one row per item in CMD / MISE column order
+    without TimeUS (CTot, CNum, CId, Prm1-4, Lat, Lng, Alt, Frame): 0 home (MAV_FRAME_GLOBAL,
+    no position, as the reference logs' CMD rows), 1 NAV_TAKEOFF to the takeoff altitude, the
+    waypoints (relative altitudes, MAV_FRAME_GLOBAL_RELATIVE_ALT), NAV_RETURN_TO_LAUNCH."""
+    wps = np.asarray(mission.waypoints, dtype=np.float64).reshape(-1, 3)
+    n = len(wps) + 3
+    out = np.zeros((n, len(L.MISE_COLS) - 1))
+    k = {name: i - 1 for i, name in enumerate(L.MISE_COLS._fields)}
+    out[:, k["CTot"]] = n
+    out[:, k["CNum"]] = np.arange(n)
+    out[:, k["CId"]] = MAV_CMD_NAV_WAYPOINT
+    out[1, k["CId"]] = MAV_CMD_NAV_TAKEOFF
+    out[-1, k["CId"]] = MAV_CMD_NAV_RETURN_TO_LAUNCH
+    out[2:-1, k["Lat"]] = wps[:, 0]
+    out[2:-1, k["Lng"]] = wps[:, 1]
+    out[2:-1, k["Alt"]] = wps[:, 2]
+    out[1, k["Alt"]] = float(mission.takeoff_alt)
+    out[:, k["Frame"]] = MAV_FRAME_GLOBAL_RELATIVE_ALT
+    out[0, k["Frame"]] = out[-1, k["Frame"]] = MAV_FRAME_GLOBAL
+    return out
 
 
 def _check_changes(params: Params, changes: Sequence[Any]) -> None:

@@ -31,16 +31,18 @@ K_MODE, K_EV, K_ERR, K_XKF1, K_XKF4, K_CTUN, K_BAT, K_POS, K_SIM = range(10, 19)
 K_PSCN, K_PSCE, K_PSCD, K_XKFS = 19, 20, 21, 22
 K_XKF2, K_XKF3, K_XKF5, K_XKQ, K_XKV1, K_XKV2 = range(23, 29)
 K_DCM, K_AHR2, K_XKY0, K_XKY1 = 29, 30, 31, 32
+K_ARM, K_ORGN, K_LDET, K_MOTB, K_MISE, K_SIM2 = range(33, 39)
 LOG_ORDER = (
     "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
     "XKF2", "XKF3", "XKF5", "XKQ", "XKV1", "XKV2", "DCM", "AHR2", "XKY0", "XKY1",
+    "ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2",
 )  # must equal tlm_sim.flightlog.LOGGED_MESSAGES (checked by the tests)
 
 #: The event messages (MODE, EV, ERR: consecutive in LOG_ORDER) as a tuple of their own,
 #: indexed by E_*, with their row counts ``counts[K_MODE:K_ERR + 1]`` (a view): what the
 #: vehicle logic writes into. A short tuple, because numba passes each array of a tuple as
-#: seven arguments to every function that takes it (the whole log is 33 arrays).
+#: seven arguments to every function that takes it (the whole log is 39 arrays).
 E_MODE, E_EV, E_ERR = 0, 1, 2
 assert (K_EV, K_ERR) == (K_MODE + E_EV, K_MODE + E_ERR)
 
@@ -64,6 +66,8 @@ BAT_COLS, POS_COLS, SIM_COLS, PSCN_COLS, PSCE_COLS, PSCD_COLS, XKFS_COLS = (
 XKF2_COLS, XKF3_COLS, XKF5_COLS, XKQ_COLS, XKV1_COLS, XKV2_COLS = (
     schema_columns(n) for n in LOG_ORDER[23:29])
 DCM_COLS, AHR2_COLS, XKY0_COLS, XKY1_COLS = (schema_columns(n) for n in LOG_ORDER[29:33])
+ARM_COLS, ORGN_COLS, LDET_COLS, MOTB_COLS, MISE_COLS, SIM2_COLS = (
+    schema_columns(n) for n in LOG_ORDER[33:39])
 
 
 def event_buffers(bufs: tuple[np.ndarray, ...], counts: np.ndarray

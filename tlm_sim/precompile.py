@@ -135,6 +135,10 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.log:log_dcm_10hz",
         (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _f8, _f8), 0.5),
     Job("tlm_sim.ekf.log:log_gsf", (_BUFS, _I1, _i8, _F2), 0.3),
+    # issue 21's evidence messages (ARM, ORGN, LDET, MISE every tick; SIM2 at 50 Hz)
+    Job("tlm_sim.control.log:log_vehicle_events",
+        (_BUFS, _I1, _i8, _F1, _F1, _b1, _f8, _f8, _f8), 0.4),
+    Job("tlm_sim.dynamics.log:log_sim2", (_BUFS, _I1, _i8, _F1), 0.2),
 )
 
 RUN_FLIGHT = Job(

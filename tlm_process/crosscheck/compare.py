@@ -7,7 +7,9 @@ and its overlay plots (trajectory, altitude and speed, IMU spectrum), ``to_json`
 document, and ``gate`` the threshold violations of a regression gate. ``checks`` are issue
 19's targets for every reference flight: flight time within 10 %, trajectory RMS outside the
 fault windows within 5 m, each fault-signature metric within 35 % of SITL's
-(``metrics.signature_rows``).
+(``metrics.signature_rows``). ``r["messages"]`` compares the two ``.bin`` files' message types
+and flight-text kinds (:mod:`tlm_process.crosscheck.messages`, the report's "Messages and
+flight text").
 """
 
 from __future__ import annotations
@@ -46,9 +48,11 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
     ``params``: ArduPilot parameters tlm flies on top of the log's (e.g. ``{"FRAME_TYPE": 1}``
     or a wind): the SITL flight's mission and faults on another frame or in other weather,
     compared with the SITL flight as it was (``scenario["overrides"]`` records them)."""
+    from tlm_process.crosscheck.messages import compare_messages, sitl_message_types
     from tlm_process.crosscheck.metrics import crosscheck_metrics
     from tlm_process.crosscheck.scenario import reconstruct
     from tlm_sim import fly
+    from tlm_sim.flightlog.binwriter import message_types, msg_table
 
     sc = reconstruct(bin_path, sidecar, seed)
     flown = sc.params.updated(dict(params)) if params else sc.params
@@ -57,6 +61,10 @@ def crosscheck(bin_path: str | Path, sidecar: str | Path | None = None,
     r = crosscheck_metrics(log.tables, sc.tables, sc.mission.home,
                            sc.tlm_fault_records(log.faults), sc.faults, route)
     r["checks"] = checks(r)
+    sitl_msg = sc.tables.get("MSG")
+    r["messages"] = compare_messages(
+        message_types(log), sitl_message_types(bin_path), msg_table(log)["Message"],
+        [] if sitl_msg is None else sitl_msg["Message"])
     r["_log"] = log
     r["scenario"] = {
         "log": str(bin_path), "name": sc.name, "source": sc.source, "seed": sc.seed,
@@ -153,6 +161,10 @@ def format_report(r: dict[str, Any]) -> str:
             f"{_verdict(c['signatures']['pass'])} |"]
     for note in sc.get("notes") or ():
         lines += ["", f"Note: {note}."]
+    if "messages" in r:
+        from tlm_process.crosscheck.messages import format_messages
+
+        lines += format_messages(r["messages"])
     for f in r["faults"]:
         lines += ["", f"## Fault: {f['type']} (label {f['label']})", ""]
         rows = f.get("rows") or signature_rows(f["tlm"], f["sitl"])

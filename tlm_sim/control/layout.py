@@ -185,6 +185,23 @@ GYR_PASS_T = _c.add("GYR_PASS_T", 1, "s", "gyros consistent since (-1: not yet)"
 HOME_SET = _c.add("HOME_SET", 1, "", "1 once home is set (from the EKF origin, EV SET_HOME)")
 FIELD_SET = _c.add("FIELD_SET", 1, "", "1 once the baro's field elevation is set")
 TXT_N = _c.add("TXT_N", 1, "", "rows used in the flight's text log")
+# logged evidence (issue 21: MOTB, LDET, ARM)
+MOT_BATT_RATIO = _c.add("MOT_BATT_RATIO", 1, "",
+                        "motors' voltage compensation: resting-voltage estimate clamped to "
+                        "MOT_BAT_VOLT_MIN..MAX over MOT_BAT_VOLT_MAX (MOTB.BatVolt)")
+MOT_LIFT_MAX = _c.add("MOT_LIFT_MAX", 1, "",
+                      "motors' maximum lift ratio at that voltage (thrust curve; MOTB.LiftMax)")
+LDET_FLAGS = _c.add("LDET_FLAGS", 1, "",
+                    "land detector condition bits of this tick (LDET.Flags, LDET_* constants)")
+LDET_COUNT = _c.add("LDET_COUNT", 1, "",
+                    "land detector pass count in main-loop ticks (LDET.Count; 0 once landed)")
+DISARM_METHOD = _c.add("DISARM_METHOD", 1, "",
+                       "AP_Arming::Method of the last disarm (ARM.Method; ARM_METHOD_*)")
+ARM_LOGGED = _c.add("ARM_LOGGED", 1, "", "armed state of the last ARM row (0 before any)")
+LDET_LOG_FLAGS = _c.add("LDET_LOG_FLAGS", 1, "", "LDET.Flags of the last LDET row")
+LDET_LOG_COUNT = _c.add("LDET_LOG_COUNT", 1, "", "LDET.Count of the last LDET row")
+LDET_LOG_MS = _c.add("LDET_LOG_MS", 1, "ms", "time of the last LDET row (whole milliseconds)")
+MISE_LOGGED = _c.add("MISE_LOGGED", 1, "", "mission item index of the last MISE row (0: none)")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
@@ -216,6 +233,25 @@ RSN_EKF_FAILSAFE = 6
 RSN_MISSION_END = 8
 RSN_CRASH_FAILSAFE = 19
 RSN_INITIALISED = 26  # the boot mode
+
+# AP_Arming::Method (ARM.Method)
+ARM_METHOD_MAVLINK = 1  # the GCS arms (the reference driver, tlm's TLM_ARM_TIME)
+ARM_METHOD_BATTERYFAILSAFE = 7
+ARM_METHOD_CRASH = 12
+ARM_METHOD_LANDED = 13  # LAND / RTL mode: the land detector
+ARM_METHOD_MISSIONEXIT = 14  # AUTO: landed at the end of the mission (its RTL item)
+ARM_METHOD_TERMINATE = 20  # FAILSAFE_ACTION_TERMINATE
+
+# Copter::LandDetectorLoggingFlag (LDET.Flags bits)
+LDET_LANDED = 1
+LDET_LANDED_MAYBE = 2
+LDET_WOW = 16  # no weight-on-wheels sensor: always set while the detector runs
+LDET_RANGEFINDER_BELOW_2M = 32  # no rangefinder: always set while the detector runs
+LDET_DESCENT_RATE_LOW = 64
+LDET_ACCEL_STATIONARY = 128
+LDET_LARGE_ANGLE = 256  # large angle request or large angle error (one bit in ArduCopter)
+LDET_MOTOR_AT_LOWER_LIMIT = 512
+LDET_THROTTLE_MIX_AT_MIN = 1024
 
 # ------------------------------------------------------------ controller configuration g ------
 CONFIG = Layout("g", "controller configuration")

@@ -1,7 +1,13 @@
-"""The autopilot's 10 Hz log messages: RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD and BAT (the battery
-monitor, :mod:`tlm_sim.control.battery`), DCM and AHR2 (the DCM estimator,
-:mod:`tlm_sim.control.dcm`). Columns by name (:mod:`tlm_sim.logger`); attitude and
-heights from the EKF output block (``ekf.layout`` O_*)."""
+"""The autopilot's log messages: at 10 Hz RATE, ATT, RCOU, CTUN, PSCN/PSCE/PSCD, BAT (the battery
+monitor, :mod:`tlm_sim.control.battery`), MOTB (the motors' battery compensation), DCM and AHR2
+(the DCM estimator, :mod:`tlm_sim.control.dcm`); on events, checked every main-loop tick, ARM
+(arming, disarming), ORGN (EKF origin and home), LDET (the land detector) and
+MISE (the mission item started). Columns by name (:mod:`tlm_sim.logger`); attitude and heights
+from the EKF output block (``ekf.layout`` O_*).
+
+MISE and ARM rows carry what the loop knows (TimeUS, item index; state, method); the mission
+item's own fields and ARM.ArmChecks are the flight's inputs, filled in once the flight is over
+(:func:`tlm_sim.flight.fill_evidence`)."""
 
 import math
 
@@ -17,7 +23,12 @@ from tlm_sim.geo import ne_to_latlon_scalar
 from tlm_sim.sensors import layout as S
 
 RATE, ATT, RCOU, CTUN, PSC = L.RATE_COLS, L.ATT_COLS, L.RCOU_COLS, L.CTUN_COLS, L.PSCN_COLS
-BAT = L.BAT_COLS
+BAT, MOTB, ARM, ORGN, LDET, MISE = (L.BAT_COLS, L.MOTB_COLS, L.ARM_COLS, L.ORGN_COLS,
+                                    L.LDET_COLS, L.MISE_COLS)
+ORGN_EKF_ORIGIN, ORGN_AHRS_HOME = 0, 1  # ORGN.Type (LogOriginType)
+#: ArduCopter's mission item numbers: 0 home, 1 NAV_TAKEOFF, then the waypoints (the first at
+#: home), then NAV_RETURN_TO_LAUNCH (as the CMD rows tlm writes)
+CMD_TAKEOFF, CMD_FIRST_WP = 1, 2
 
 
 @tick_jit
@@ -34,6 +45,124 @@ def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
     for ax in range(3):
         _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
     _log_bat(bufs, counts, t_us, c)
+    _log_motb(bufs, counts, t_us, c)
+
+
+@inline_jit
+def _log_motb(bufs, counts, t_us, c):
+    """MOTB: the motors' lift_max and voltage ratio (tlm_sim.control.mixer.voltage_compensation),
+    throttle limit (1: MOT_BAT_CURR_MAX 0, the current limit is off, as in SITL), the average
+    throttle limit the attitude controller gives the mixer, the throttle the mixer placed, and
+    the motor-loss flags: thrust boost | thrust balanced << 1."""
+    r = L.new_row(bufs, counts, L.K_MOTB, t_us)
+    if r >= 0:
+        b = bufs[L.K_MOTB]
+        b[r, MOTB.LiftMax] = c[C.MOT_LIFT_MAX]
+        b[r, MOTB.BatVolt] = c[C.MOT_BATT_RATIO]
+        b[r, MOTB.ThLimit] = 1.0
+        b[r, MOTB.ThrAvMx] = c[C.THR_AVG_MAX]
+        b[r, MOTB.ThrOut] = c[C.MOT_THR_OUT]
+        b[r, MOTB.FailFlags] = ((1.0 if c[C.THRUST_BOOST] != 0.0 else 0.0)
+                                + (0.0 if c[C.THRUST_UNBALANCED] != 0.0 else 2.0))
+
+
+@inline_jit
+def mission_item(c):
+    """The mission item AUTO runs: NAV_TAKEOFF from the switch to AUTO, the first waypoint
+    once the takeoff has reached its altitude, then the item after each waypoint reached (the
+    last waypoint's successor is the mission's RTL)."""
+    if c[C.SUBMODE] == C.SUB_TAKEOFF:
+        return CMD_TAKEOFF if c[C.TAKEOFF_DONE_T] < 0.0 else CMD_FIRST_WP
+    return CMD_FIRST_WP + c[C.WP_REACHED]
+
+
+@inline_jit
+def vehicle_events_due(c, origin_ready):
+    """Whether :func:`log_vehicle_events` has a row to write this tick (a few comparisons
+    against the last rows, kept in c: the loop asks every tick)."""
+    return (origin_ready or c[C.ARMED] != c[C.ARM_LOGGED]
+            or c[C.LDET_FLAGS] != c[C.LDET_LOG_FLAGS] or c[C.LDET_COUNT] != c[C.LDET_LOG_COUNT]
+            or (c[C.MODE] == C.MODE_AUTO and mission_item(c) > c[C.MISE_LOGGED]))
+
+
+@tick_jit
+def log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home_lat, home_lon, home_alt):
+    """The on-event messages, when :func:`vehicle_events_due` (after the autopilot's step):
+    ORGN once home is set from the EKF's origin (``origin_ready``; EV SET_HOME is the arming
+    driver's, :mod:`tlm_sim.control.arming`), ARM (and ORGN:
+    ArduCopter sets home to the current position when arming) on a change of the armed state,
+    LDET, MISE. pos: the EKF position NED [m] from the origin; home: the EKF origin (degrees,
+    m AMSL)."""
+    if origin_ready and counts[L.K_ORGN] == 0:
+        _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
+    armed = c[C.ARMED]
+    if armed != c[C.ARM_LOGGED]:
+        c[C.ARM_LOGGED] = armed
+        _log_arm(bufs, counts, t_us, c, armed)
+        if armed != 0.0:
+            _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
+    if c[C.LDET_FLAGS] != c[C.LDET_LOG_FLAGS] or c[C.LDET_COUNT] != c[C.LDET_LOG_COUNT]:
+        _log_ldet(bufs, counts, t_us, c)
+    if c[C.MODE] == C.MODE_AUTO:
+        _log_mise(bufs, counts, t_us, c)
+
+
+@inline_jit
+def _log_arm(bufs, counts, t_us, c, armed):
+    """ARM: the new state, not forced, by MAVLink (the GCS arms, as the reference driver did)
+    or by the disarm's method; ArmChecks 0 here (on arming: ARMING_CHECK, filled after the
+    flight)."""
+    r = L.new_row(bufs, counts, L.K_ARM, t_us)
+    if r >= 0:
+        b = bufs[L.K_ARM]
+        b[r, ARM.ArmState] = armed
+        b[r, ARM.ArmChecks] = 0.0
+        b[r, ARM.Forced] = 0.0
+        b[r, ARM.Method] = C.ARM_METHOD_MAVLINK if armed != 0.0 else c[C.DISARM_METHOD]
+
+
+@inline_jit
+def _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt):
+    """ORGN Type 0 (the EKF origin: the mission's home at ground level, tlm's NED origin) and
+    Type 1 (the AHRS home: the EKF's current position, lat/lon/alt AMSL)."""
+    lat, lon = ne_to_latlon_scalar(pos[0], pos[1], home_lat, home_lon)
+    for k in range(2):
+        r = L.new_row(bufs, counts, L.K_ORGN, t_us)
+        if r >= 0:
+            b = bufs[L.K_ORGN]
+            b[r, ORGN.Type] = k
+            b[r, ORGN.Lat] = home_lat if k == ORGN_EKF_ORIGIN else lat
+            b[r, ORGN.Lng] = home_lon if k == ORGN_EKF_ORIGIN else lon
+            b[r, ORGN.Alt] = home_alt if k == ORGN_EKF_ORIGIN else home_alt - pos[2]
+
+
+@inline_jit
+def _log_ldet(bufs, counts, t_us, c):
+    """LDET as Copter::Log_LDET: the land detector's flags and count, changed since the last
+    row, at most every 20 ms (whole milliseconds; the first row at once)."""
+    ms = t_us // 1000
+    if counts[L.K_LDET] > 0 and ms - c[C.LDET_LOG_MS] < 20:
+        return
+    r = L.new_row(bufs, counts, L.K_LDET, t_us)
+    if r >= 0:
+        bufs[L.K_LDET][r, LDET.Flags] = c[C.LDET_FLAGS]
+        bufs[L.K_LDET][r, LDET.Count] = c[C.LDET_COUNT]
+        c[C.LDET_LOG_FLAGS] = c[C.LDET_FLAGS]
+        c[C.LDET_LOG_COUNT] = c[C.LDET_COUNT]
+        c[C.LDET_LOG_MS] = ms
+
+
+@inline_jit
+def _log_mise(bufs, counts, t_us, c):
+    """MISE for each mission item AUTO has started since the last row (:func:`mission_item`):
+    the row's TimeUS and CNum; the item's fields are filled in after the flight."""
+    idx = mission_item(c)
+    while c[C.MISE_LOGGED] < idx:
+        r = L.new_row(bufs, counts, L.K_MISE, t_us)
+        if r < 0:
+            return
+        c[C.MISE_LOGGED] += 1.0
+        bufs[L.K_MISE][r, MISE.CNum] = c[C.MISE_LOGGED]
 
 
 @inline_jit

@@ -113,6 +113,18 @@ def resting_voltage_estimate(c, g, v_batt):
 
 
 @tick_jit
+def voltage_compensation(c, g, v_batt):
+    """The motors' voltage compensation of this tick (AP_Motors' update_lift_max_from_batt_
+    voltage, which ArduCopter runs every loop, armed or not): (ratio, lift_max) of the battery
+    monitor's resting-voltage estimate, also kept in c[MOT_BATT_RATIO], c[MOT_LIFT_MAX] (MOTB).
+    tlm applies the ratio unfiltered (ArduPilot low-passes it at 0.5 Hz)."""
+    ratio, lift = lift_max(g, resting_voltage_estimate(c, g, v_batt))
+    c[C.MOT_BATT_RATIO] = ratio
+    c[C.MOT_LIFT_MAX] = lift
+    return ratio, lift
+
+
+@tick_jit
 def boost_ratio_update(c, g):
     """The motors' spool logic for a lost motor (AP_MotorsMulticopter::output_logic, throttle
     unlimited), once per tick before the mix: THRUST_BOOST_RATIO ramps towards 1 at
@@ -211,7 +223,7 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     thrust boost is switched off here once no longer needed).
 
     v_batt: battery voltage [V] (the resting-voltage estimate is formed here)."""
-    ratio, lift = lift_max(g, resting_voltage_estimate(c, g, v_batt))
+    ratio, lift = voltage_compensation(c, g, v_batt)
     comp = density_gain(c) / lift
     roll *= comp
     pitch *= comp
@@ -309,6 +321,7 @@ def output_idle(c, g, spin):
         c[C.MIX_THRUST_FILT + i] -= alpha * c[C.MIX_THRUST_FILT + i]
     c[C.THRUST_BOOST] = 0.0  # shut down / ground idle: no thrust boost
     c[C.THRUST_BOOST_RATIO] = 0.0
+    c[C.MOT_THR_OUT] = 0.0  # no throttle placed (MOTB.ThrOut)
     motor_loss_monitor(c, g, n, 1.0, 0.0)
     c[C.LIM_RP] = 1.0
     c[C.LIM_YAW] = 1.0

@@ -38,7 +38,7 @@ from tlm_sim.control.failsafe import (
     thrust_loss_check,
     vertical_cf_update,
 )
-from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle
+from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle, voltage_compensation
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
@@ -72,6 +72,10 @@ HOVER_LEARN_TAN_LEAN = math.tan(math.radians(5.0))  # and |roll| < 5 deg
 THR_MIX_LEAN = math.radians(15.0)  # LAND_CHECK_LARGE_ANGLE_CD
 THR_MIX_ATT_ERR = math.radians(30.0)  # LAND_CHECK_ANGLE_ERROR_DEG
 THR_MIX_ACCEL = 3.0  # LAND_CHECK_ACCEL_MOVING [m/s^2]
+# the land detector's criteria: these LDET bits set (and LARGE_ANGLE clear)
+LAND_CRITERIA = (C.LDET_MOTOR_AT_LOWER_LIMIT | C.LDET_THROTTLE_MIX_AT_MIN
+                 | C.LDET_ACCEL_STATIONARY | C.LDET_DESCENT_RATE_LOW)
+LAND_CRITERIA_MASK = LAND_CRITERIA | C.LDET_LARGE_ANGLE
 
 
 @tick_jit
@@ -171,6 +175,7 @@ def vehicle_step(
     _estimates_update(c, g, pos, acc_ned, dt)
     if c[C.ARMED] == 0.0:
         _disarmed_step(c, g)
+        _motors_at_rest(c, g, v_batt)
         return
     c[C.SUB_TIMER] += dt
     sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
@@ -181,6 +186,7 @@ def vehicle_step(
         return
     if sub == C.SUB_GROUND_IDLE:
         _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts)
+        _motors_at_rest(c, g, v_batt)
         return
     yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path,
                                                     seg, events, ev_counts)
@@ -191,7 +197,7 @@ def vehicle_step(
     thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_tilt,
                        yaw_cmd, yaw_rate_ff, v_batt)
     _hover_learning(c, g, dt, sub, thr, vel, q)
-    _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts)
+    _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts)
     _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts)
 
 
@@ -205,6 +211,18 @@ def _estimates_update(c, g, pos, acc_ned, dt):
         c[C.ALP + k] += alpha * (acc_ned[k] - c[C.ALP + k])
     vertical_cf_update(c, g, pos[2], acc_ned[2], dt)
     c[C.AIR_RHO_RATIO] = g[C.G_RHO_RATIO_HOME] - g[C.G_RHO_RATIO_GRAD] * pos[2]
+
+
+@inline_jit
+def _motors_at_rest(c, g, v_batt):
+    """Disarmed or at ground idle (the controllers do not run): the motors' voltage
+    compensation still follows the battery, the mixer's average throttle limit is the
+    attitude controller's with no throttle and the mix at ATC_THR_MIX_MIN (MOTB), and the land
+    detector reports landed (LDET: ArduCopter's land_complete branch, count 0)."""
+    voltage_compensation(c, g, v_batt)
+    c[C.THR_AVG_MAX] = c[C.THR_HOVER] * g[C.G_THR_MIX_MIN]
+    c[C.LDET_FLAGS] = C.LDET_LANDED + C.LDET_LANDED_MAYBE
+    c[C.LDET_COUNT] = 0.0
 
 
 @inline_jit
@@ -298,7 +316,8 @@ def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
     c[C.BATT_FS_ACT] = -1.0
     landed = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
     if landed or act == B.ACT_TERMINATE:
-        _disarm(c, g, t_us, events, ev_counts)
+        method = C.ARM_METHOD_BATTERYFAILSAFE if landed else C.ARM_METHOD_TERMINATE
+        _disarm(c, g, t_us, method, events, ev_counts)
         return C.SUB_LANDED
     if act == B.ACT_LAND or act == B.ACT_SMARTRTL_LAND or act == B.ACT_BRAKE_LAND:
         if c[C.MODE] != C.MODE_LAND:
@@ -312,9 +331,11 @@ def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
 
 
 @inline_jit
-def _disarm(c, g, t_us, events, ev_counts):
-    """Disarm now (EV DISARMED, motors stopped; the flight ends 2 s later)."""
+def _disarm(c, g, t_us, method, events, ev_counts):
+    """Disarm now by AP_Arming::Method ``method`` (EV DISARMED, ARM.Method; motors stopped;
+    the flight ends 2 s later)."""
     E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+    c[C.DISARM_METHOD] = method
     c[C.ARMED] = 0.0
     c[C.SUBMODE] = C.SUB_LANDED
     c[C.DISARM_TIME] = t_us * 1e-6
@@ -492,6 +513,9 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
     if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
         E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE)
         E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+        # AUTO disarms when its last item (RTL) completes on the ground, LAND/RTL on landing
+        c[C.DISARM_METHOD] = (C.ARM_METHOD_MISSIONEXIT if c[C.MODE] == C.MODE_AUTO
+                              else C.ARM_METHOD_LANDED)
         c[C.ARMED] = 0.0
         c[C.SUBMODE] = C.SUB_LANDED
         c[C.DISARM_TIME] = t_s
@@ -575,25 +599,56 @@ def _hover_learning(c, g, dt, sub, thr, vel, q):
 
 
 @inline_jit
-def _land_detector(c, t_us, dt, sub, thr, pos, vel, events, ev_counts):
-    """The land detector: throttle at its lower limit, little acceleration and climb rate for
-    LAND_DETECT_S -> landed (EV LAND_COMPLETE_MAYBE after LAND_MAYBE_S); EV NOT_LANDED once
-    above 0.5 m again."""
-    a_lp = math.sqrt(c[C.ALP] ** 2 + c[C.ALP + 1] ** 2 + c[C.ALP + 2] ** 2)
-    at_lower = c[C.LIM_THR_LO] != 0.0 or thr <= 0.05
-    if at_lower and a_lp <= 1.0 and abs(vel[2]) < 1.0 and sub != C.SUB_TAKEOFF:
+def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
+    """Copter::update_land_detector: the motors at their lower limit (or the throttle below
+    0.05), the attitude controller's mix at its minimum, no lean target above 15 deg and no
+    attitude error above 30 deg, the 1 Hz acceleration at most 1 m/s^2 and the EKF's climb
+    rate below 1 m/s for LAND_DETECT_S -> landed (EV LAND_COMPLETE_MAYBE after LAND_MAYBE_S);
+    EV NOT_LANDED once above 0.5 m again. Leaves the condition bits and the pass count in
+    c[LDET_FLAGS], c[LDET_COUNT] (LDET; only LANDED | LANDED_MAYBE and 0 once landed, as
+    ArduCopter's land_complete branch)."""
+    was_landed = c[C.LANDED] != 0.0
+    flags = _land_conditions(c, g, thr, vel[2])
+    if (flags & LAND_CRITERIA_MASK) == LAND_CRITERIA and sub != C.SUB_TAKEOFF:
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
             E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
-    else:
+    elif c[C.LAND_TIMER] != 0.0 or c[C.LANDED] != 0.0:
         c[C.LAND_TIMER] = 0.0
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
             E.log_ev(events, ev_counts, t_us, E.EV_NOT_LANDED)
+    if c[C.LANDED] != 0.0:
+        flags = (0 if was_landed else flags) | (C.LDET_LANDED | C.LDET_LANDED_MAYBE)
+        c[C.LDET_COUNT] = 0.0
+    elif c[C.LAND_TIMER] > 0.0:
+        if c[C.MAYBE_LANDED] != 0.0:
+            flags |= C.LDET_LANDED_MAYBE
+        c[C.LDET_COUNT] = float(int(c[C.LAND_TIMER] / dt + 0.5))
+    else:
+        c[C.LDET_COUNT] = 0.0
+    c[C.LDET_FLAGS] = flags
+
+
+@inline_jit
+def _land_conditions(c, g, thr, vd):
+    """The land detector's condition bits (C.LDET_*; WOW and RANGEFINDER_BELOW_2M always, tlm
+    has neither sensor) from the motors' lower limit, the throttle mix, the lean target and
+    attitude error, the 1 Hz acceleration and the EKF's vertical velocity vd [m/s] (without
+    branches: the loop evaluates it every tick in flight)."""
+    lower = (c[C.LIM_THR_LO] != 0.0) | (thr <= 0.05)
+    mix_min = c[C.THR_RPY_MIX] < 1.25 * g[C.G_THR_MIX_MIN]
+    large = ((c[C.ATT_ROLL_T] * c[C.ATT_ROLL_T] + c[C.ATT_PITCH_T] * c[C.ATT_PITCH_T]
+              > THR_MIX_LEAN * THR_MIX_LEAN) | (c[C.ATT_THRUST_ERR] > THR_MIX_ATT_ERR))
+    still = c[C.ALP] * c[C.ALP] + c[C.ALP + 1] * c[C.ALP + 1] + c[C.ALP + 2] * c[C.ALP + 2] <= 1.0
+    slow = abs(vd) < 1.0
+    return (C.LDET_WOW + C.LDET_RANGEFINDER_BELOW_2M + C.LDET_MOTOR_AT_LOWER_LIMIT * lower
+            + C.LDET_THROTTLE_MIX_AT_MIN * mix_min + C.LDET_LARGE_ANGLE * large
+            + C.LDET_ACCEL_STATIONARY * still + C.LDET_DESCENT_RATE_LOW * slow)
 
 
 @inline_jit
@@ -605,6 +660,6 @@ def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
             E.log_err(events, ev_counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            _disarm(c, g, t_us, events, ev_counts)
+            _disarm(c, g, t_us, C.ARM_METHOD_CRASH, events, ev_counts)
     else:
         c[C.CRASH_TIMER] = 0.0

@@ -33,11 +33,11 @@ import pandas as pd
 
 from .quantise import column_to_raw, quantise_frame
 from .schema import FORMAT_CHARS, MULTS, SCHEMAS, UNITS, MessageSchema
-from .texts import event_texts, logged_texts
+from .texts import event_texts, logged_texts, rc_switch_changes, rc_switch_texts, startup_texts
 
 __all__ = [
     "FIRMWARE_STRING", "FRAME_STRING", "encode_bin", "fault_messages", "frame_string",
-    "merge_order", "message_stream", "write_bin",
+    "merge_order", "message_stream", "message_types", "msg_table", "write_bin",
 ]
 
 HEAD1, HEAD2 = 0xA3, 0x95
@@ -49,8 +49,12 @@ FIRMWARE_STRING = "ArduCopter V4.7.0-dev (tlm)"
 FRAME_STRING = "Frame: QUAD/PLUS"
 #: Written fresh on every file (the tables of these in a FlightLog are ignored).
 _SELF_DESCRIPTION = ("FMT", "UNIT", "MULT", "FMTU")
-#: Start-up messages written before the data at the same timestamp.
-_STARTUP = ("PARM", "VER", "MSG", "CMD")
+#: Start-up messages written before the data at the same timestamp (AUXF: the RC aux switches'
+#: runs, generated from RCIN and the parameters, at their own times).
+_STARTUP = ("PARM", "VER", "MSG", "CMD", "AUXF")
+#: AUXF fields: AuxSwitchPos of a position name, AuxFuncTrigger::Source::RC, success
+_AUX_POS = {"LOW": 0, "MIDDLE": 1, "HIGH": 2}
+_AUX_SOURCE_RC, _AUX_RESULT_OK = 1, 1
 
 # MAV_CMD ids and frames of the mission items (as the reference logs' CMD messages)
 _NAV_WAYPOINT, _NAV_RTL, _NAV_TAKEOFF = 16, 20, 22
@@ -150,18 +154,56 @@ def frame_string(params: Mapping[str, float] | None) -> str:
 
 
 def _msg_frame(log: Any, t0_us: int) -> pd.DataFrame:
-    """MSG rows: firmware, frame and tlm flight identity at ``t0_us``, then the fault lines
-    and the firmware's text for the flight's events (:func:`tlm_sim.flightlog.texts.event_texts`)
-    in time order."""
+    """MSG rows: at ``t0_us`` the firmware string, the logger's start-up lines
+    (:func:`tlm_sim.flightlog.texts.startup_texts`), the frame and the tlm flight identity; then
+    the RC switch announcements, the fault lines and the firmware's text for the flight's events
+    (:func:`tlm_sim.flightlog.texts.event_texts`) in time order."""
     meta = log.meta or {}
-    lines = [(t0_us, FIRMWARE_STRING), (t0_us, frame_string(log.params))]
+    lines = [(t0_us, FIRMWARE_STRING), *((t0_us, m) for m in startup_texts()),
+             (t0_us, frame_string(log.params))]
     ident = [f"{k} {meta[k]}" for k in ("mission", "seed", "profile") if meta.get(k) is not None]
     if ident:
         lines.append((t0_us, "tlm: " + ", ".join(ident)))
-    lines += sorted(fault_messages(log.faults or ()) + event_texts(log.tables)
-                    + logged_texts(meta.get("texts") or ()),
+    lines += sorted(rc_switch_texts(log.tables, log.params) + fault_messages(log.faults or ())
+                    + event_texts(log.tables) + logged_texts(meta.get("texts") or ()),
                     key=lambda line: line[0])
     return pd.DataFrame({"TimeUS": [t for t, _ in lines], "Message": [m for _, m in lines]})
+
+
+def _t0(log: Any) -> int:
+    """The log's first TimeUS (where the start-up messages go)."""
+    t_first = [int(df["TimeUS"].min()) for df in log.tables.values()
+               if len(df) and "TimeUS" in df.columns]
+    return min(t_first) if t_first else 0
+
+
+def msg_table(log: Any) -> pd.DataFrame:
+    """The MSG rows a ``.bin`` of ``log`` holds: its own MSG table (a log read from a ``.bin``)
+    or the generated one (:func:`_msg_frame`)."""
+    if "MSG" in log.tables:
+        return log.tables["MSG"]
+    return _msg_frame(log, _t0(log))
+
+
+def message_types(log: Any) -> dict[str, int]:
+    """Message name -> rows for every type a ``.bin`` of ``log`` holds rows of (the
+    self-description FMT, UNIT, MULT, FMTU included), without writing it."""
+    preamble, timed = message_stream(log)
+    return {s.name: len(df) for _, s, df in (*preamble, *timed) if len(df)}
+
+
+def _auxf_frame(log: Any) -> pd.DataFrame | None:
+    """AUXF rows: each RC aux switch's run, when first read and on each change
+    (:func:`tlm_sim.flightlog.texts.rc_switch_changes`, the same events as the "RC7:
+    SaveWaypoint LOW" text)."""
+    runs = rc_switch_changes(log.tables, log.params)
+    if not runs:
+        return None
+    return pd.DataFrame({
+        "TimeUS": [t for t, *_ in runs], "function": [o for _, _, o, _ in runs],
+        "pos": [_AUX_POS[p] for *_, p in runs], "source": _AUX_SOURCE_RC,
+        "index": [ch - 1 for _, ch, _, _ in runs], "result": _AUX_RESULT_OK,
+    })
 
 
 def _ver_frame(t0_us: int) -> pd.DataFrame:
@@ -212,14 +254,13 @@ def _cmd_frame(mission: Any, t0_us: int) -> pd.DataFrame | None:
 def _tables_to_write(log: Any) -> dict[str, tuple[MessageSchema, pd.DataFrame]]:
     """The log's tables plus generated start-up tables (PARM, VER, MSG, CMD) where absent."""
     out: dict[str, tuple[MessageSchema, pd.DataFrame]] = {}
-    t_first = [int(df["TimeUS"].min()) for df in log.tables.values()
-               if len(df) and "TimeUS" in df.columns]
-    t0 = min(t_first) if t_first else 0
+    t0 = _t0(log)
     generated = {
         "PARM": lambda: _parm_frame(log, t0) if log.params else None,
         "VER": lambda: _ver_frame(t0),
         "MSG": lambda: _msg_frame(log, t0),
         "CMD": lambda: _cmd_frame(log.mission, t0),
+        "AUXF": lambda: _auxf_frame(log),
     }
     for name in _STARTUP:
         if name in log.tables:

@@ -110,18 +110,21 @@ def allocate_buffers(
     names: Sequence[str] = LOGGED_MESSAGES,
     instances: Mapping[str, int] | None = None,
     event_rows: int = 256,
+    rows: Mapping[str, int] | None = None,
 ) -> dict[str, np.ndarray]:
     """Zeroed float64 log buffers ``[max_rows, n_columns]`` for a flight of ``duration_s``.
 
-    Rows: ``rate_hz × instances × duration × 1.1 + 16`` (at least ``event_rows`` for
-    on-event messages). ``instances`` overrides ``MessageSchema.instances`` per message.
+    Rows: ``rate_hz × instances × duration × 1.1 + 16`` (``event_rows`` for on-event
+    messages). ``instances`` overrides ``MessageSchema.instances`` per message, ``rows`` the
+    row count of a buffer (an on-event message with a known bound, e.g. one per mission item).
     """
     out = {}
     for n in names:
         s = SCHEMAS[n]
         k = (instances or {}).get(n, s.instances)
-        rows = s.max_rows(duration_s, k) if s.rate_hz > 0 else event_rows
-        out[n] = np.zeros((rows, len(s.columns)), dtype=np.float64)
+        n_rows = s.max_rows(duration_s, k) if s.rate_hz > 0 else event_rows
+        n_rows = int((rows or {}).get(n, n_rows))
+        out[n] = np.zeros((n_rows, len(s.columns)), dtype=np.float64)
     return out
 
 

@@ -688,7 +688,50 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         "s?????????", "F?????????",
         instance_field=None, rate_hz=50, instances=1,
         description="Simulator truth: NED position relative to home (m), NED velocity (m/s), "
-        "airspeed, unfiltered airspeed (m/s), update frame count (capped at 50 Hz).",
+        "pitot airspeed (m/s), achieved simulation speed-up, times the simulation paused for "
+        "serial output (50 Hz with LOG_FILE_RATEMAX 50).",
+    ),
+    # --- vehicle evidence (issue 21) ---------------------------------------------------------
+    _schema(
+        "ARM", "QBIBB",
+        "TimeUS,ArmState,ArmChecks,Forced,Method",
+        "s----", "F----",
+        instance_field=None, rate_hz=0, instances=1,
+        description="Arming or disarming: new armed state, arming checks enabled (ARMING_CHECK; "
+        "0 on disarming), forced, AP_Arming::Method (1 MAVLink, 12 crash, 13 landed, "
+        "14 mission exit, ...).",
+    ),
+    _schema(
+        "ORGN", "QBLLe",
+        "TimeUS,Type,Lat,Lng,Alt",
+        "s#DUm", "F-GGB",
+        instance_field="Type", rate_hz=0, instances=2,
+        description="EKF origin (Type 0) and AHRS home (Type 1): lat/lon (deg), alt AMSL (m); "
+        "written when either is set (origin, home at arming).",
+    ),
+    _schema(
+        "LDET", "QHI",
+        "TimeUS,Flags,Count",
+        "s--", "F--",
+        instance_field=None, rate_hz=0, instances=1,
+        description="Land detector: condition flags (Copter::LandDetectorLoggingFlag) and its "
+        "pass count (main-loop ticks); on change, at most 50 Hz.",
+    ),
+    _schema(
+        "AUXF", "QHBBHB",
+        "TimeUS,function,pos,source,index,result",
+        "s#----", "F-----",
+        instance_field="function", rate_hz=0, instances=1,
+        description="RC aux function run: RCn_OPTION, switch position (0 low, 1 middle, "
+        "2 high), source (1 RC), channel index (0-based), result (1 success).",
+    ),
+    _schema(
+        "MISE", "QHHHffffLLfB",
+        "TimeUS,CTot,CNum,CId,Prm1,Prm2,Prm3,Prm4,Lat,Lng,Alt,Frame",
+        "s-------DUm-", "F-------GG0-",
+        instance_field=None, rate_hz=0, instances=1,
+        description="Mission item started (as CMD): total, index, MAV_CMD id, params 1-4, "
+        "lat/lon (deg), alt (m), MAV_FRAME.",
     ),
 )
 
@@ -701,6 +744,7 @@ LOGGED_MESSAGES: tuple[str, ...] = (
     "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
     "XKF2", "XKF3", "XKF5", "XKQ", "XKV1", "XKV2",
     "DCM", "AHR2", "XKY0", "XKY1",
+    "ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2",
 )
 
 #: On-event messages (``rate_hz == 0``) that carry flight events.

@@ -16,18 +16,25 @@ state, :mod:`tlm_sim.control.arming`): :func:`logged_texts`.
 Each rule is one entry of :data:`ERR_TEXTS` or :data:`EV_TEXTS`: a subsystem/code (or event
 id) and a function of the flight's tables and the event's time that returns the lines. Texts
 that no ERR/EV row implies come from a logged column's changes (:data:`STATE_TEXTS`), e.g.
-``XKFS.MI`` -> "EKF3 IMU0 switching to compass 1".
+``XKFS.MI`` -> "EKF3 IMU0 switching to compass 1", ``MISE`` -> "Reached command #5",
+"Mission: 6 WP". :func:`startup_texts` are the lines the logger writes when the log starts and
+:func:`rc_switch_texts` the RC aux switch announcements (they need the parameters).
+
+:func:`text_kind` masks the numbers of a text ("Reached command #N"): the kinds that
+``tlm crosscheck`` compares between a tlm flight and a SITL log.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 __all__ = ["ARM_CHECK_TEXTS", "ERR_TEXTS", "EV_TEXTS", "STATE_TEXTS", "event_texts",
-           "gps_detected", "ground_impacts", "logged_texts"]
+           "gps_detected", "ground_impacts", "logged_texts", "mission_texts",
+           "rc_switch_changes", "rc_switch_texts", "startup_texts", "text_kind"]
 
 Tables = Mapping[str, pd.DataFrame]
 Render = Callable[[Tables, int, int], list[str]]
@@ -147,10 +154,112 @@ def _compass_switches(tables: Tables) -> list[tuple[int, str]]:
     return out
 
 
+#: AP_Mission::Mission_Command::type() of the MAV_CMD ids tlm's missions hold
+MISSION_CMD_TYPES: dict[int, str] = {16: "WP", 20: "RTL", 21: "Land", 22: "Takeoff"}
+MAV_CMD_NAV_WAYPOINT = 16
+
+
+def mission_texts(tables: Tables) -> list[tuple[int, str]]:
+    """ArduCopter's mission progress from the MISE rows (one per item started): "Reached
+    command #k" when a waypoint k is done (ModeAuto::verify_nav_wp, at the start of the next
+    item), then "Mission: k+1 <type>" (ModeAuto::start_command)."""
+    mise = tables.get("MISE")
+    if mise is None or not len(mise):
+        return []
+    out: list[tuple[int, str]] = []
+    prev_num, prev_id = -1, -1
+    for t, num, cid in zip(mise["TimeUS"], mise["CNum"], mise["CId"], strict=True):
+        if prev_id == MAV_CMD_NAV_WAYPOINT and int(num) == prev_num + 1:
+            out.append((int(t), f"Reached command #{prev_num}"))
+        out.append((int(t), f"Mission: {int(num)} {MISSION_CMD_TYPES.get(int(cid), str(cid))}"))
+        prev_num, prev_id = int(num), int(cid)
+    return out
+
+
+def field_elevation(tables: Tables) -> list[tuple[int, str]]:
+    """AP_Baro's "Field Elevation Set: <m>m" once the EKF origin is first known while
+    disarmed (the first ORGN Type 0 row: the baro takes the origin's altitude as its field
+    elevation)."""
+    orgn = tables.get("ORGN")
+    if orgn is None or not len(orgn):
+        return []
+    origin = orgn[orgn["Type"] == 0]
+    if not len(origin):
+        return []
+    row = origin.iloc[0]
+    return [(int(row["TimeUS"]), f"Field Elevation Set: {float(row['Alt']):.0f}m")]
+
+
 #: Texts from the changes of a logged value: functions of the flight's tables returning
 #: ``(TimeUS, text)`` lines.
 STATE_TEXTS: tuple[Callable[[Tables], list[tuple[int, str]]], ...] = (
-    ground_impacts, _compass_switches)
+    ground_impacts, _compass_switches, mission_texts, field_elevation)
+
+#: RC aux functions (RCn_OPTION) and their names as RC_Channel announces them: the ones
+#: tlm's parameter set uses (copter.parm's RC7_OPTION 7); others are not announced
+AUX_FUNCTION_NAMES: dict[int, str] = {7: "SaveWaypoint"}
+#: RC_Channel's three-position switch thresholds [us]
+AUX_SWITCH_LOW_US, AUX_SWITCH_HIGH_US = 1200, 1800
+RC_CHANNELS = 14
+
+
+def _switch_position(pwm: float) -> str | None:
+    """RC_Channel::read_3pos_switch: LOW below 1200 us, HIGH above 1800 us, else MIDDLE; None
+    when the channel reads no valid pulse (<= 900 or >= 2200 us)."""
+    if pwm <= 900 or pwm >= 2200:
+        return None
+    if pwm < AUX_SWITCH_LOW_US:
+        return "LOW"
+    return "HIGH" if pwm > AUX_SWITCH_HIGH_US else "MIDDLE"
+
+
+def rc_switch_changes(tables: Tables, params: Mapping[str, float] | None
+                      ) -> list[tuple[int, int, int, str]]:
+    """(TimeUS, channel, RCn_OPTION, position) where an RC aux switch with an announced function
+    (:data:`AUX_FUNCTION_NAMES`) is first read and where its position changes, from the RCIN
+    rows and the RCn_OPTION parameters (RC_Channel::read_aux: the first read and every change
+    run the aux function and announce it)."""
+    rcin = tables.get("RCIN")
+    if rcin is None or not len(rcin) or not params:
+        return []
+    out: list[tuple[int, int, int, str]] = []
+    for ch in range(1, RC_CHANNELS + 1):
+        option = int(params.get(f"RC{ch}_OPTION", 0) or 0)
+        if option not in AUX_FUNCTION_NAMES or f"C{ch}" not in rcin.columns:
+            continue
+        last = None
+        for t, pwm in zip(rcin["TimeUS"], rcin[f"C{ch}"], strict=True):
+            pos = _switch_position(float(pwm))
+            if pos is not None and pos != last:
+                out.append((int(t), ch, option, pos))
+                last = pos
+    return sorted(out)
+
+
+def rc_switch_texts(tables: Tables, params: Mapping[str, float] | None) -> list[tuple[int, str]]:
+    """"RC7: SaveWaypoint LOW" for each of :func:`rc_switch_changes`."""
+    return [(t, f"RC{ch}: {AUX_FUNCTION_NAMES[option]} {pos}")
+            for t, ch, option, pos in rc_switch_changes(tables, params)]
+
+
+def startup_texts() -> list[str]:
+    """The lines ArduPilot's logger writes when a log starts, after the firmware string, for
+    what tlm has: the RC protocol of SITL's RC input ("RC Protocol: UDP"), the mission,
+    rally-point and fence lists (tlm's mission is loaded before the flight, as the reference
+    driver uploaded it: "Flight plan received"; no rally points, no fence)."""
+    return ["RC Protocol: UDP", "Flight plan received", "New mission", "New rally",
+            "New fence"]
+
+
+_HEX_ID = re.compile(r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{8,}\b")
+_NUMBER = re.compile(r"\d+(?:\.\d+)*")
+
+
+def text_kind(text: str) -> str:
+    """The kind of a MSG text: hexadecimal ids (a git hash, a board id) as ``<id>``, every
+    number as ``N`` ("Reached command #12" -> "Reached command #N", "ArduCopter V4.7.0-dev
+    (2598e9d4)" -> "ArduCopter VN-dev (<id>)")."""
+    return _NUMBER.sub("N", _HEX_ID.sub("<id>", text.strip()))
 
 
 def event_texts(tables: Tables) -> list[tuple[int, str]]:

@@ -39,14 +39,15 @@ ERR_COMPASS_RESOLVED = 0
 
 @tick_jit
 def mag_init(s):
-    """Power on: every compass healthy with no sample yet (the first tick delivers one at once,
-    so the boot state does not count as a health change)."""
+    """Power on: no compass healthy yet (no sample); the first compass tick delivers one at
+    once and the first compass's change to healthy is ArduCopter's boot ERR 3/0 (every
+    reference SITL log has it at its first MAG row)."""
     for i in range(S.N_MAG):
         b = S.MAG_BASE + i * S.MAG_STRIDE
         for k in range(3):
             s[b + S.M_FIELD + k] = 0.0
         s[b + S.M_NEW] = 0.0
-        s[b + S.M_HEALTHY] = 1.0
+        s[b + S.M_HEALTHY] = 0.0
         s[b + S.M_T_US] = 0.0
     s[S.M_NEXT_US] = 0.0
 
