@@ -24,7 +24,7 @@ from tlm_sim.flightlog.texts import text_kind
 from tlm_sim.geo import latlon_to_ne
 
 REF = "normal_s11"
-NEW = ("ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2", "AUXF", "ERR")
+NEW = ("ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2", "AUXF", "ERR", "ANG")
 
 
 @pytest.fixture(scope="module")
@@ -41,8 +41,8 @@ def log(cc):
 
 @pytest.fixture(scope="module")
 def sitl():
-    return read_bin(reference_path(f"{REF}.bin"), types=[*NEW, "EV", "MSG", "CMD", "MAG", "BAT",
-                                                         "SIM", "CTUN"])
+    return read_bin(reference_path(f"{REF}.bin"),
+                    types=[*NEW, "ATT", "EV", "MSG", "CMD", "MAG", "BAT", "SIM", "CTUN"])
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +50,22 @@ def written(log, tmp_path_factory):
     path = tmp_path_factory.mktemp("bin") / "flight.bin"
     write_bin(log, path)
     return path, read_bin(path)
+
+
+def test_ang_is_att_row_for_row_with_the_loop_interval(written, sitl):
+    """ANG (written from ATT) has SITL's layout and holds ATT's rows with Dt = 1/400 s; SITL's
+    ANG also equals its ATT row for row."""
+    t = written[1]
+    ang, att = t["ANG"], t["ATT"]
+    cols = ["TimeUS", "DesRoll", "Roll", "DesPitch", "Pitch", "DesYaw", "Yaw"]
+    pd.testing.assert_frame_equal(ang[cols].reset_index(drop=True),
+                                  att[cols].reset_index(drop=True), check_dtype=False)
+    assert np.allclose(ang["Dt"], 0.0025)
+    s_ang, s_att = sitl["ANG"], sitl["ATT"]
+    assert np.array_equal(s_ang["TimeUS"], s_att["TimeUS"])
+    assert np.allclose(s_ang["Roll"], s_att["Roll"])
+    assert abs(float(np.median(s_ang["Dt"])) - 0.0025) < 2e-6  # SITL: its measured interval
+    assert read_schemas(reference_path(f"{REF}.bin"))["ANG"].fmt == SCHEMAS["ANG"].fmt
 
 
 def _ev_times(t: dict[str, pd.DataFrame], ev_id: int) -> list[int]:

@@ -604,17 +604,21 @@ def fly(
         {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
         params=p, mission=mission, faults=[], meta=meta,
     )
-    mu = p["TLM_SAT_JITTER"]
-    if mu > 0.0 and log.n_rows("GPS"):
-        gps = log.tables["GPS"]
-        gps["NSats"] = jitter_nsats(gps["Status"].to_numpy(), int(seed), mu).astype(
-            gps["NSats"].dtype)
+    _jitter_sats(log, int(seed), p["TLM_SAT_JITTER"])
     if schedule is not None:
         t_last = max((float(log.columns(n)["TimeUS"][-1]) for n in log.tables
                       if log.n_rows(n)), default=0.0)
         log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
                                    t_last)
     return log
+
+
+def _jitter_sats(log: FlightLog, seed: int, mu: float) -> None:
+    """GPS.NSats jittered by the seed's satellite-count stream (TLM_SAT_JITTER ``mu`` > 0)."""
+    if mu > 0.0 and log.n_rows("GPS"):
+        gps = log.tables["GPS"]
+        gps["NSats"] = jitter_nsats(gps["Status"].to_numpy(), seed, mu).astype(
+            gps["NSats"].dtype)
 
 
 #: LDET rows per second at most (Copter::Log_LDET logs a change at most every 20 ms)

@@ -34,8 +34,6 @@ _BOOKKEEPING = "hardware or software bookkeeping, nothing to simulate"
 SITL_ONLY_TYPES: dict[str, str] = {
     "XKT": "EKF3 timing (IMU and EKF sample intervals): scheduler bookkeeping, not yet written",
     "XKTV": "EKF3 timing of its variances: scheduler bookkeeping, not yet written",
-    "ANG": "attitude controller targets with the loop interval: not yet written (ATT holds "
-           "the same targets)",
     "EAHR": "external-AHRS view of the EKF attitude, velocity and position: not yet written "
             "(ATT, XKF1 and POS hold them)",
     "MAVC": "MAVLink commands the reference driver sent (mode, arm, takeoff): tlm's driver is "

@@ -272,7 +272,18 @@ def _tables_to_write(log: Any) -> dict[str, tuple[MessageSchema, pd.DataFrame]]:
         if name in _SELF_DESCRIPTION or not len(df):
             continue
         out[name] = (log.schemas[name], df)
+    if "ANG" not in log.tables and "ATT" in out:
+        out["ANG"] = (SCHEMAS["ANG"], _ang_frame(out["ATT"][1], log.params))
     return out
+
+
+def _ang_frame(att: pd.DataFrame, params: Mapping[str, float] | None) -> pd.DataFrame:
+    """ANG rows: ArduCopter logs the attitude controller's targets and attitude with the
+    main-loop interval beside ATT, row for row (the same values); Dt [s] is the loop period
+    1 / SCHED_LOOP_RATE (SITL logs its measured interval, 0.002499 s at 400 Hz)."""
+    df = att[["TimeUS", "DesRoll", "Roll", "DesPitch", "Pitch", "DesYaw", "Yaw"]].copy()
+    df["Dt"] = 1.0 / float((params or {}).get("SCHED_LOOP_RATE", 400.0))
+    return quantise_frame(df, SCHEMAS["ANG"])
 
 
 def _self_description(

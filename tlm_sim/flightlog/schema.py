@@ -726,6 +726,14 @@ _SCHEMA_LIST: tuple[MessageSchema, ...] = (
         "2 high), source (1 RC), channel index (0-based), result (1 success).",
     ),
     _schema(
+        "ANG", "Qfffffff",
+        "TimeUS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw,Dt",
+        "sddddhhs", "F0000000",
+        instance_field=None, rate_hz=10, instances=1,
+        description="Attitude controller: ATT's targets and attitude (deg) with the main-loop "
+        "interval Dt (s); written in a .bin from ATT.",
+    ),
+    _schema(
         "MISE", "QHHHffffLLfB",
         "TimeUS,CTot,CNum,CId,Prm1,Prm2,Prm3,Prm4,Lat,Lng,Alt,Frame",
         "s-------DUm-", "F-------GG0-",
