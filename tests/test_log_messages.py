@@ -357,3 +357,20 @@ def test_pymavlink_tools_read_a_tlm_bin_as_sitls(written, log):
         return int(mm) * 60 + int(ss)
 
     assert seconds(ft) == pytest.approx(seconds(ref), rel=0.10)
+
+
+def test_tlm_crosscheck_param_flies_the_log_with_overrides(tmp_path, capsys):
+    """``tlm crosscheck --param NAME=VALUE`` flies SITL's scenario with the override (recorded
+    in the JSON); a malformed or unknown one is one line and exit 2 before any flying."""
+    from tlm_process.cli import main
+
+    log = str(reference_path(f"{REF}.bin"))
+    assert main(["crosscheck", log, "--param", "TLM_BOOT_PHASE"]) == 2
+    assert "--param expects NAME=VALUE" in capsys.readouterr().err
+    assert main(["crosscheck", log, "--param", "NO_SUCH_PARAM=1"]) == 2
+    assert "NO_SUCH_PARAM" in capsys.readouterr().err
+    out = tmp_path / "r.json"
+    assert main(["crosscheck", log, "--param", "tlm_boot_phase=1", "--json", str(out)]) in (0, 1)
+    r = json.loads(out.read_text())
+    assert r["scenario"]["overrides"] == {"TLM_BOOT_PHASE": 1.0}
+    assert "PreArm: Need Position Estimate" in r["messages"]["stale_text_kinds"]

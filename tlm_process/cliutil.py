@@ -11,7 +11,7 @@ import argparse
 import os
 import sys
 import warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 __all__ = ["OUT_MARK", "UsageError", "WRITE_PROBE", "add_overwrite", "check_writable_file",
@@ -189,3 +189,18 @@ def show_param_warnings() -> None:
             previous(message, category, filename, lineno, file, line)
 
     warnings.showwarning = show
+
+
+def parse_param_args(items: Sequence[str]) -> dict[str, float]:
+    """``--param NAME=VALUE`` arguments as {NAME (upper case): value}; a malformed one is a
+    :class:`UsageError` naming it."""
+    out: dict[str, float] = {}
+    for it in items:
+        name, sep, value = it.partition("=")
+        try:
+            if not sep or not name.strip():
+                raise ValueError
+            out[name.strip().upper()] = float(value)
+        except ValueError:
+            raise UsageError(f"--param expects NAME=VALUE with a number, got {it!r}") from None
+    return out

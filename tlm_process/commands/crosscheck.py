@@ -13,7 +13,13 @@ import argparse
 import json
 from pathlib import Path
 
-from tlm_process.cliutil import UsageError, add_overwrite, check_writable_file, prepare_out
+from tlm_process.cliutil import (
+    UsageError,
+    add_overwrite,
+    check_writable_file,
+    parse_param_args,
+    prepare_out,
+)
 from tlm_process.crosscheck.compare import (
     DEFAULT_MAX_FLIGHT_TIME_DIFF,
     DEFAULT_MAX_TRAJECTORY_RMS_M,
@@ -34,6 +40,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     c.add_argument("log", help="the SITL .bin")
     c.add_argument("--sidecar", help="fault sidecar JSON (default: LOG.json beside the log)")
     c.add_argument("--seed", type=int, help="tlm seed (default: the sidecar's, else 0)")
+    c.add_argument("--param", action="append", metavar="NAME=VALUE",
+                   help="fly with this parameter over the log's (repeatable): another frame "
+                        "(--param FRAME_TYPE=1), a wind, or SITL's start-up (--param "
+                        "TLM_BOOT_PHASE=1: then the pre-arm and EKF start-up texts are compared "
+                        "too)")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
     c.add_argument("--out", metavar="DIR",
                    help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "
@@ -56,11 +67,12 @@ def run(args: argparse.Namespace) -> int:
 
     if not Path(args.log).is_file():
         raise FileNotFoundError(2, "no such log", args.log)
+    overrides = parse_param_args(args.param or [])
     if args.json:
         check_writable_file(args.json, "--json")
     out = prepare_out(args.out, "crosscheck", args.overwrite) if args.out else None
     try:
-        r = crosscheck(args.log, args.sidecar, args.seed)
+        r = crosscheck(args.log, args.sidecar, args.seed, params=overrides or None)
     except ScenarioError as e:
         raise UsageError(str(e)) from None
     text = format_report(r)

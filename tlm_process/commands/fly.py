@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tlm_process.cliutil import UsageError, add_overwrite, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, parse_param_args, prepare_out
 
 if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs it
     from tlm_sim.faults import FaultSchedule, Trigger
@@ -56,19 +56,6 @@ def _parse_formats(text: str) -> tuple[str, ...]:
     return fmts
 
 
-def _parse_param_args(items: Sequence[str]) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for it in items:
-        if "=" not in it:
-            raise UsageError(f"--param expects NAME=VALUE, got {it!r}")
-        k, v = it.split("=", 1)
-        try:
-            out[k.strip().upper()] = float(v)
-        except ValueError:
-            raise UsageError(f"--param {k}: {v!r} is not a number") from None
-    return out
-
-
 def _frame_params(name: str | None, extra: dict[str, float]) -> dict[str, float]:
     """FRAME_CLASS / FRAME_TYPE of ``--frame NAME`` (empty without it); a --param that sets
     either to another value is a UsageError."""
@@ -92,7 +79,7 @@ def _load_params(args: argparse.Namespace):
     from tlm_sim.params import Params
 
     p = Params.from_parm(args.params) if args.params else Params()
-    extra = _parse_param_args(args.param or [])
+    extra = parse_param_args(args.param or [])
     extra.update(_frame_params(getattr(args, "frame", None), extra))
     return p.updated(extra) if extra else p
 

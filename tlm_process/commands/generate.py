@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from tlm_process.cliutil import UsageError
+from tlm_process.cliutil import UsageError, parse_param_args
 
 __all__ = ["add_parser", "build_config", "run"]
 
@@ -76,19 +76,6 @@ def _shares(text: str, flag: str) -> dict[str, float]:
             out[name.lower()] = float(value)
         except ValueError:
             raise UsageError(f"{flag} expects NAME=SHARE,..., got {text!r}") from None
-    return out
-
-
-def _params(items: Sequence[str]) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for it in items:
-        name, sep, value = it.partition("=")
-        try:
-            if not sep:
-                raise ValueError
-            out[name.strip().upper()] = float(value)
-        except ValueError:
-            raise UsageError(f"--param expects NAME=VALUE, got {it!r}") from None
     return out
 
 
@@ -216,7 +203,7 @@ def build_config(args: argparse.Namespace) -> Any:
         ranges = {}
     flag_ranges = _ranges(args.range or [])
     ranges.update(flag_ranges)
-    params = {**dict(d.get("params") or {}), **_params(args.param or [])}
+    params = {**dict(d.get("params") or {}), **parse_param_args(args.param or [])}
     for name in params:  # a fixed value replaces a drawn one
         ranges.pop(name, None)
     d["wind"] = _wind_setting(args, d, ranges, flag_ranges)
