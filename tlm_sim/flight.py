@@ -527,9 +527,7 @@ def fly(
     params = _with_frame(params, frame)
     mission = _checked_mission(mission, seed)
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
-
-    p = profile_params(profile, params)
-    p, earth = with_home_field(p, mission.home, BOOT_UTC)  # TLM_MAG_*: the field at home
+    p, earth = with_home_field(profile_params(profile, params), mission.home, BOOT_UTC)
     duration = max_duration_s(mission, p)
     schedule = faults if isinstance(faults, FaultSchedule) else None
     if schedule is not None:
