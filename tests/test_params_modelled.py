@@ -16,6 +16,7 @@ from tlm_sim.control.config import build_control_config
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state
 from tlm_sim.dynamics.frame import build_frame
+from tlm_sim.earthfield import with_home_field
 from tlm_sim.ekf.config import build_ekf_config
 from tlm_sim.faults import Fault, FaultSchedule, FaultScheduleError, Trigger, jitter_nsats
 from tlm_sim.params import (
@@ -38,7 +39,9 @@ ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG_DELAY", "SIM_BAR3_DRIFT", "SIM_BAR
 
 def _inputs(p: Params) -> list[np.ndarray]:
     """Everything a flight builds from its parameters before flying: the four configuration
-    arrays, the initial state, the log buffer sizing and the GPS.NSats jitter of a fixed log."""
+    arrays, the initial state, the log buffer sizing and the GPS.NSats jitter of a fixed log;
+    first the earth field at the mission's home (TLM_MAG_*, as ``fly`` resolves it)."""
+    p, _ = with_home_field(p, FL.builtin_mission(1).home, FL.BOOT_UTC)
     scfg, frame, g, ecfg = FL._configs(p)
     x = np.zeros(X.N_STATE)
     init_state(x, frame, math.radians(p["SIM_OPOS_HDG"]))

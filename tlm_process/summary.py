@@ -43,6 +43,7 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
         "landed": meta.get("landed"),
         "end_reason": meta.get("end_reason"),
         "arm_failures": last_arm_failures(meta),
+        "earth_field": meta.get("earth_field"),
         "rows": {k: len(v) for k, v in log.tables.items()},
     }
 
@@ -73,8 +74,15 @@ def format_summary(s: dict[str, Any]) -> str:
         f"({END_REASON_TEXT.get(str(s.get('end_reason')), 'unknown')}"
         + (f"; last attempt: {', '.join(s['arm_failures'])}" if s.get("arm_failures") else "")
         + ")",
+        *([_earth_field_line(s["earth_field"])] if s.get("earth_field") else []),
         f"rows               {rows}",
     ])
+
+
+def _earth_field_line(f: dict[str, Any]) -> str:
+    """The summary line of a flight's earth field (``meta["earth_field"]``)."""
+    return (f"earth field        declination {f['declination_deg']:.2f} deg, inclination "
+            f"{f['inclination_deg']:.2f} deg, {f['intensity_gauss']:.4f} gauss: {f['source']}")
 
 
 def plot_trajectory(log: FlightLog, path: Path, title: str = "") -> Path:

@@ -46,6 +46,7 @@ from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
 from tlm_sim.dynamics.log import log_dynamics_10hz, log_sim2
+from tlm_sim.earthfield import with_home_field
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.config import build_ekf_config, new_ekf
 from tlm_sim.ekf.gsf import gsf_init, gsf_update
@@ -541,8 +542,7 @@ def fly(
     params = _with_frame(params, frame)
     mission = _checked_mission(mission, seed)
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
-
-    p = profile_params(profile, params)
+    p, earth = with_home_field(profile_params(profile, params), mission.home, BOOT_UTC)
     duration = max_duration_s(mission, p)
     schedule = faults if isinstance(faults, FaultSchedule) else None
     if schedule is not None:
@@ -597,6 +597,7 @@ def fly(
         "param_changes": [_change_record(ch, t) for ch, t in zip(changes, applied, strict=True)],
         "unmodelled_params": p.unmodelled(),
         "frame": frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"]).name,
+        "earth_field": earth.as_meta(),
     }
     fill_evidence(bufs, counts, mission, p)
     log = FlightLog.from_buffers(

@@ -178,19 +178,30 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "", 0.5, 99.99, "constant HDOP the simulated u-blox reports (SIM_GPS_UBLOX.cpp, §2.2)")),
     ("TLM_GPS_VDOP", 2.0, ParamInfo(
         "", 0.5, 99.99, "constant VDOP the simulated u-blox reports (SIM_GPS_UBLOX.cpp, §2.2)")),
-    # Earth field at CMAC (-35.363261, 149.16523) as SITL simulates it (ArduPilot's 10-degree
-    # WMM tables, AP_Declination): measured from normal_s11.bin, compass 0 on the pad rotated
-    # by SITL's true attitude = (232.1, 52.1, -528.0) mGauss NED, see
-    # `tools/extract_defaults.py --mag`. WMM2025 (pygeomag 1.1.0) at 2025.8 gives 12.67 deg,
-    # -66.05 deg, 0.5809 gauss: the table interpolation differs by < 0.3 deg.
+    # Earth field: SITL's at CMAC (-35.363261, 149.16523) by default. SITL reads ArduPilot's
+    # AP_Declination tables (IGRF-13 on a 10-degree grid, 2022-12-29): measured from
+    # normal_s11.bin, compass 0 on the pad rotated by SITL's true attitude = (232.1, 52.1,
+    # -528.0) mGauss NED (`tools/extract_defaults.py --mag`; the tables themselves give 12.80,
+    # -65.77, 0.5800: ArduPilot logs MAG truncated to whole mGauss, tlm rounds). Elsewhere the
+    # field follows the mission's home (TLM_MAG_MODEL, tlm_sim.earthfield).
     ("TLM_MAG_DEC_DEG", 12.65, ParamInfo(
         "deg", -180.0, 180.0,
-        "earth field declination at home, + east (SITL WMM table at CMAC, §1.13)")),
+        "earth field declination, + east; left at this default (SITL's at CMAC) it follows the "
+        "mission's home (TLM_MAG_MODEL), any other value is used as given (§1.13)")),
     ("TLM_MAG_INC_DEG", -65.75, ParamInfo(
         "deg", -90.0, 90.0,
-        "earth field inclination at home, + down (SITL WMM table at CMAC, §1.13)")),
+        "earth field inclination, + down; left at this default (SITL's at CMAC) it follows the "
+        "mission's home (TLM_MAG_MODEL), any other value is used as given (§1.13)")),
     ("TLM_MAG_INT_GA", 0.579, ParamInfo(
-        "gauss", 0.0, 2.0, "earth field intensity at home (SITL WMM table at CMAC, §1.13)")),
+        "gauss", 0.0, 2.0,
+        "earth field intensity; left at this default (SITL's at CMAC) it follows the mission's "
+        "home (TLM_MAG_MODEL), any other value is used as given (§1.13)")),
+    ("TLM_MAG_MODEL", 1.0, ParamInfo(
+        "", 0.0, 2.0,
+        "where TLM_MAG_* left at their defaults come from: 1 = SITL's field at the mission's "
+        "home (ArduPilot's AP_Declination tables: IGRF-13 2022-12-29, 10-degree grid; at CMAC "
+        "the defaults), 2 = IGRF-14 at home on the simulated date, 0 = the TLM_MAG_* values "
+        "as given at any home (tlm_sim.earthfield)", integer=True)),
     ("TLM_GYRO_CPL", 1.0, ParamInfo(
         "", 0.0, 1.0,
         "1 = include the gyroscopic w x Iw term in the rigid body (conserves angular momentum); "
