@@ -189,7 +189,7 @@ def test_fly_format_bin_writes_flight_bin(tmp_path, capsys):
     assert log.faults and log.faults[0]["type"] == "rc"
     assert main(["info", str(out / "flight.bin")]) == 0
     text = capsys.readouterr().out
-    assert "rc (label 4)" in text and "[PARM]" in text and "[MSG]" in text
+    assert text.count("rc (label 4)") == 1 and "[PARM, MSG, sidecar]" in text  # faults.json
     assert "SIM_RC_FAIL = 1" in text
 
 

@@ -279,7 +279,7 @@ def test_schedule_container():
 @pytest.mark.parametrize(("faults", "match"), [
     ("gps:1-2", "faults must be a sequence of Fault, got str"),
     (Fault("gps", 1, 2), "got Fault"),
-    ([Fault("gps", 1, 2), {"fault": "rc"}], r"^fault 1: is a dict, not a Fault$"),
+    ([Fault("gps", 1, 2), {"fault": "rc"}], r"^fault 2: is a dict, not a Fault$"),
 ])
 def test_schedule_construction_errors(faults, match):
     one_line_error(FaultSchedule, faults, match=match)
@@ -287,23 +287,23 @@ def test_schedule_construction_errors(faults, match):
 
 @pytest.mark.parametrize(("specs", "match"), [
     (["gps:60-110", "rc:100-120"],
-     r"^fault 1 \(rc\): start 100 s is before the end 110 s of fault 0 \(gps\); "
+     r"^fault 2 \(rc\): start 100 s is before the end 110 s of fault 1 \(gps\); "
      "faults must not overlap$"),
     (["gps:60-110", "rc:10-20"],
-     r"fault 1 \(rc\): start 10 s is before the start 60 s of fault 0 \(gps\); list faults in "
+     r"fault 2 \(rc\): start 10 s is before the start 60 s of fault 1 \(gps\); list faults in "
      "the order they happen"),
     (["engine:wp40-wp48", "gps:wp45-wp50"],
-     r"fault 1 \(gps\): start wp45 is before the end wp48 of fault 0 \(engine\); "
+     r"fault 2 \(gps\): start wp45 is before the end wp48 of fault 1 \(engine\); "
      "faults must not overlap"),
-    (["gps:wp10-140", "rc:130-150"], r"fault 1 \(rc\): start 130 s is before the end 140 s"),
+    (["gps:wp10-140", "rc:130-150"], r"fault 2 \(rc\): start 130 s is before the end 140 s"),
     (["gps:60-wp20", "rc:wp5-200"],
-     r"fault 1 \(rc\): start wp5 is before the end wp20 of fault 0 \(gps\)"),
+     r"fault 2 \(rc\): start wp5 is before the end wp20 of fault 1 \(gps\)"),
     (["gps:60-wp20", "rc:wp30-50"],
-     r"fault 1 \(rc\): end 50 s is before the start 60 s of fault 0 \(gps\); list faults"),
+     r"fault 2 \(rc\): end 50 s is before the start 60 s of fault 1 \(gps\); list faults"),
     (["gps:100-110", "accel:wp5-wp6", "rc:50-60"],
-     r"fault 2 \(rc\): start 50 s is before the start 100 s of fault 0 \(gps\)"),
+     r"fault 3 \(rc\): start 50 s is before the start 100 s of fault 1 \(gps\)"),
     (["gps:60-", "rc:100-120"],
-     r"^fault 0 \(gps\): has no end \(held until the flight ends\) but fault 1 \(rc\) comes "
+     r"^fault 1 \(gps\): has no end \(held until the flight ends\) but fault 2 \(rc\) comes "
      "after it"),
 ])
 def test_schedule_order_errors(specs, match):
@@ -322,10 +322,10 @@ def test_validate_bounds():
     s.validate(n_waypoints=40, max_time_s=300)
     s.validate(n_waypoints=np.int64(90), max_time_s=np.float64(1e3))
     one_line_error(s.validate, n_waypoints=39,
-                   match=r"^fault 0 \(gps\): end wp40 is beyond the mission's last waypoint "
+                   match=r"^fault 1 \(gps\): end wp40 is beyond the mission's last waypoint "
                          r"wp39$")
     one_line_error(s.validate, max_time_s=250.5,
-                   match=r"^fault 1 \(rc\): end 300 s is after the end of the flight "
+                   match=r"^fault 2 \(rc\): end 300 s is after the end of the flight "
                          r"\(250.5 s\)$")
     one_line_error(s.validate, n_waypoints=0, match="n_waypoints must be a whole number >= 1")
     one_line_error(s.validate, n_waypoints=True, match="n_waypoints")
@@ -336,7 +336,7 @@ def test_validate_bounds():
     one_line_error(FaultSchedule.from_shorthand, ["gps:wp3-wp40"], n_waypoints=10,
                    match="wp40 is beyond")
     one_line_error(FaultSchedule.from_dict, [{"fault": "rc", "start": 600}], max_time_s=500,
-                   match=r"fault 0 \(rc\): start 600 s is after")
+                   match=r"fault 1 \(rc\): start 600 s is after")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -422,16 +422,16 @@ def test_dict_form_examples():
     ({"faults": "gps:1-2"}, "got str"),
     (42, "got int"),
     ([{"fault": "gps", "strat": 1}],
-     r"^fault 0 \(gps\): unknown key 'strat' \(did you mean 'start'\?\)"),
+     r"^fault 1 \(gps\): unknown key 'strat' \(did you mean 'start'\?\)"),
     ([{"fault": "gps", "start": 1, "end": 2}, {"fault": "rc"}],
-     r"^fault 1 \(rc\): missing 'start'$"),
-    ([{"start": 1}], r"^fault 0: missing 'fault'$"),
-    ([{"fault": "gsp", "start": 1}], r"^fault 0: unknown fault type 'gsp'"),
-    (["gps:1-2"], r"^fault 0: expected a mapping like"),
+     r"^fault 2 \(rc\): missing 'start'$"),
+    ([{"start": 1}], r"^fault 1: missing 'fault'$"),
+    ([{"fault": "gsp", "start": 1}], r"^fault 1: unknown fault type 'gsp'"),
+    (["gps:1-2"], r"^fault 1: expected a mapping like"),
     ([{"fault": "gps", "start": 1, "end": 2}, {"fault": "engine", "start": 120, "end": 90}],
-     r"^fault 1 \(engine\): end 90 s is before start 120 s$"),
+     r"^fault 2 \(engine\): end 90 s is before start 120 s$"),
     ([{"fault": "rc", "start": 1, "params_start": {"SIM_RCFAIL": 1}}],
-     r"^fault 0 \(rc\): params_start: unknown parameter 'SIM_RCFAIL' \(did you mean "
+     r"^fault 1 \(rc\): params_start: unknown parameter 'SIM_RCFAIL' \(did you mean "
      "SIM_RC_FAIL"),
 ])
 def test_from_dict_errors(d, match):
@@ -473,14 +473,14 @@ def test_file_errors(tmp_path):
     content.write_text("faults:\n  - {fault: gps, start: 60, end: 110}\n"
                        "  - {fault: engine, start: 120, end: 90}\n")
     err = one_line_error(FaultSchedule.from_file, content)
-    assert str(err) == f"{content}: fault 1 (engine): end 90 s is before start 120 s"
+    assert str(err) == f"{content}: fault 2 (engine): end 90 s is before start 120 s"
     assert (err.index, err.fault_type) == (1, "engine")
     assert err.reason == "end 90 s is before start 120 s"
     one_line_error(FaultSchedule.from_file, content.with_name("c2.yaml"), match="cannot read")
     bounds = tmp_path / "bounds.json"
     FaultSchedule.from_shorthand(["gps:wp3-wp40"]).to_file(bounds)
     one_line_error(FaultSchedule.from_file, bounds, n_waypoints=20,
-                   match=r"bounds.json: fault 0 \(gps\): end wp40 is beyond")
+                   match=r"bounds.json: fault 1 \(gps\): end wp40 is beyond")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -511,20 +511,20 @@ def test_shorthand_single_string():
 
 
 @pytest.mark.parametrize(("specs", "match"), [
-    (["gps60-110"], r"^fault 0: cannot read 'gps60-110'; expected TYPE:START-END"),
-    (["gps:60-110", "engine:"], r"^fault 1: cannot read 'engine:'"),
+    (["gps60-110"], r"^fault 1: cannot read 'gps60-110'; expected TYPE:START-END"),
+    (["gps:60-110", "engine:"], r"^fault 2: cannot read 'engine:'"),
     (["gps:60--110"], "cannot read"),
-    (["gsp:60-110"], r"^fault 0: unknown fault type 'gsp' \(did you mean 'gps'\?\)"),
-    (["gps:soon-110"], r"^fault 0 \(gps\): start 'soon' is not a time"),
-    (["gps:60-later"], r"^fault 0 \(gps\): end 'later' is not a time"),
+    (["gsp:60-110"], r"^fault 1: unknown fault type 'gsp' \(did you mean 'gps'\?\)"),
+    (["gps:soon-110"], r"^fault 1 \(gps\): start 'soon' is not a time"),
+    (["gps:60-later"], r"^fault 1 \(gps\): end 'later' is not a time"),
     (["gps:wp0-wp4"], r"start waypoint 0 is not a waypoint number"),
-    (["accel:wp10+30"], r"^fault 0 \(accel\): 'accel:wp10\+30': a duration \(\+\) needs a start "
+    (["accel:wp10+30"], r"^fault 1 \(accel\): 'accel:wp10\+30': a duration \(\+\) needs a start "
                         "time in s, not wp10$"),
     (["accel:10+wp3"], r"duration 'wp3' is not a number of seconds"),
     (["accel:10+"], r"duration '' is not a number of seconds"),
     (["accel:10+0"], r"duration must be > 0 s"),
-    (["accel:10-5"], r"^fault 0 \(accel\): end 5 s is before start 10 s$"),
-    ([7], r"^fault 0: shorthand 7 is not a string"),
+    (["accel:10-5"], r"^fault 1 \(accel\): end 5 s is before start 10 s$"),
+    ([7], r"^fault 1: shorthand 7 is not a string"),
 ])
 def test_shorthand_errors(specs, match):
     one_line_error(FaultSchedule.from_shorthand, specs, match=match)

@@ -69,7 +69,7 @@ def test_process_reference_log_and_tlm_folder(tmp_path, capsys):
     scaler = json.loads((ds / "scaler.json").read_text())
     assert scaler["train_flights"] == ["tlm_m2"]
     for png in ("label_shares.png", "plots/combined_s21_trajectory.png",
-                "plots/combined_s21_fault0_gps.png", "plots/combined_s21_fault3_rc.png"):
+                "plots/combined_s21_fault1_gps.png", "plots/combined_s21_fault4_rc.png"):
         assert (ds / png).stat().st_size > 10_000, png
     assert not (ds / "plots" / "tlm_m2_trajectory.png").exists()  # --plots 1
 

@@ -52,7 +52,7 @@ def test_records_of_tlm_and_sidecar_shapes():
 def test_bad_records_are_one_line_errors(rec, msg):
     with pytest.raises(IngestError, match=msg) as exc:
         parse_records([rec], "x.json")
-    assert str(exc.value).startswith("x.json: fault 0") and "\n" not in str(exc.value)
+    assert str(exc.value).startswith("x.json: fault 1") and "\n" not in str(exc.value)
 
 
 def test_tlm_folder_csv_folder_and_dataset_read_the_same_flight(tmp_path):

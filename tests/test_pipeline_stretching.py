@@ -121,7 +121,7 @@ def test_stretched_without_shift_keeps_starts_or_reports_overlap():
     kept = s.stretched(2.0, shift=False)
     assert [f.start.value for f in kept] == [60.0, 100.0]
     assert [f.end.value for f in kept] == [80.0, 120.0]
-    with pytest.raises(FaultScheduleError, match=r"fault 1 \(rc\): stretched by lambda 5.*"
+    with pytest.raises(FaultScheduleError, match=r"fault 2 \(rc\): stretched by lambda 5.*"
                                                  "must not overlap"):
         s.stretched(5.0, shift=False)
 

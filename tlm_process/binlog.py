@@ -9,14 +9,14 @@ holds the log's parameters, so ``FlightLog.read(DIR)`` reads the folder back.
 
 ``log_info(LOG.bin)``: time span and armed time, firmware, every message type with its count,
 instances and rate, the flight modes, the parameters changed in flight, and the faults found
-(from SIM_* parameter changes, tlm's fault MSG lines, and a sidecar ``LOG.json`` if present).
+(from SIM_* parameter changes, tlm's fault MSG lines, and a sidecar ``LOG.json`` or tlm fly's
+``faults.json`` if present), each fault once with every source that shows it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
-import json
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -102,39 +102,46 @@ _INFO_TABLES: dict[str, tuple[str, ...]] = {
 
 # --------------------------------------------------------------------------- info ----------
 def _sidecar_faults(path: Path, info: dict[str, Any]) -> list[dict[str, Any]]:
-    """Faults of a sidecar ``LOG.json`` beside the log ([] if none or not a fault sidecar)."""
-    sidecar = path.with_suffix(".json")
-    if not sidecar.is_file():
+    """Faults of the sidecar beside the log (``<log>.json``, or tlm fly's ``faults.json``:
+    ``tlm_sim.flightlog.sidecar.fault_sidecar``); [] if none, or if it is not a fault
+    sidecar (``info["sidecar_error"]`` then says why)."""
+    from tlm_sim.flightlog.sidecar import fault_sidecar, read_sidecar_faults
+
+    sidecar = fault_sidecar(path)
+    if sidecar is None:
         return []
     try:
-        doc = json.loads(sidecar.read_text(encoding="utf-8"))
-        return [{**{k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")},
-                 "source": "sidecar"} for f in doc.get("faults") or ()]
-    except (ValueError, AttributeError, TypeError, OSError) as exc:  # ValueError: JSON, UTF-8
-        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        info["sidecar_error"] = f"{sidecar} is not a fault sidecar JSON ({why})"
+        faults = read_sidecar_faults(sidecar)
+    except (ValueError, OSError) as exc:
+        info["sidecar_error"] = (f"{sidecar}: {exc.strerror}" if isinstance(exc, OSError)
+                                 and exc.strerror else str(exc))
         return []
+    return [{**{k: f.get(k) for k in ("type", "label", "start_time_us", "end_time_us")},
+             "source": "sidecar"} for f in faults]
 
 
-#: a sidecar fault and a PARM fault of the same type starting this close are the same fault [us]
+#: two records of the same fault type starting this close are the same fault [us]
 _SAME_FAULT_US = 1_000_000
 
 
-def _merge_faults(found: list[dict[str, Any]],
-                  sidecar: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """``found`` (PARM changes, MSG lines) and the sidecar's faults, each fault once: a
-    sidecar fault that a PARM fault of the same type starting within 1 s already shows adds
-    its name to that fault's ``source`` ("PARM, sidecar") instead of a second line."""
-    out = [dict(f) for f in found]
-    for s in sidecar:
-        twin = next((f for f in out if f.get("source") == "PARM" and f.get("type") == s["type"]
-                     and f.get("start_time_us") is not None
-                     and s.get("start_time_us") is not None
-                     and abs(f["start_time_us"] - s["start_time_us"]) <= _SAME_FAULT_US), None)
-        if twin is None:
-            out.append(s)
-        else:
-            twin["source"] = "PARM, sidecar"
+def _merge_faults(*sources: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The fault records of every source (PARM changes, tlm's MSG lines, the sidecar), each
+    fault once: a record of the same type as one already listed, starting within 1 s of it,
+    adds its source to that one's ``source`` ("PARM, MSG, sidecar") instead of a line of its
+    own; the first source's times are kept."""
+    out: list[dict[str, Any]] = []
+    for found in sources:
+        for s in found:
+            twin = next((f for f in out if f.get("type") == s.get("type")
+                         and s["source"] not in f["source"].split(", ")
+                         and f.get("start_time_us") is not None
+                         and s.get("start_time_us") is not None
+                         and abs(f["start_time_us"] - s["start_time_us"]) <= _SAME_FAULT_US),
+                        None)
+            if twin is None:
+                out.append(dict(s))
+            else:
+                twin["source"] += f", {s['source']}"
     return out
 
 
@@ -148,7 +155,7 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     Raises:
         FileNotFoundError, LogError: as ``open_log``.
     """
-    from tlm_sim.faults.detect import faults_from_param_changes
+    from tlm_sim.faults.detect import faults_from_messages, faults_from_param_changes
     from tlm_sim.flightlog.binreader import COPTER_MODES, MODE_REASONS, param_changes_from_parm
     from tlm_sim.flightlog.flightlog import table_summary
 
@@ -202,11 +209,8 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
         for t, n, v in zip(shown.TimeUS, shown.Name, shown.Value, strict=True)
     ]
     info["params_changed_hidden"] = len(changes) - len(shown)
-    faults = faults_from_param_changes(changes)
-    for m, t in zip(msg["Message"], msg["TimeUS"], strict=True):
-        if str(m).startswith("tlm: fault "):
-            faults.append({"message": str(m), "time_us": int(t), "source": "MSG"})
-    info["faults"] = _merge_faults(faults, _sidecar_faults(p, info))
+    info["faults"] = _merge_faults(faults_from_param_changes(changes),
+                                   faults_from_messages(msg), _sidecar_faults(p, info))
     info["damage"] = damage
     info["lost_messages"] = log.info["lost_messages"]
     info["skipped_bytes"] = log.info["skipped_bytes"]
@@ -255,15 +259,12 @@ def format_info(info: dict[str, Any]) -> str:
     if not info["faults"]:
         lines.append("  none")
     for f in info["faults"]:
-        if f["source"] == "MSG":
-            lines.append(f"  {f['time_us'] * 1e-6:9.2f} s  {f['message']}  [MSG]")
-            continue
         t0 = f.get("start_time_us")
         t1 = f.get("end_time_us")
         dur = "" if t0 is None or t1 is None else f" ({(t1 - t0) * 1e-6:.1f} s)"
+        end = "s - end of log" if t1 is None else f"- {_fmt_s(t1 * 1e-6)} s"
         lines.append(f"  {f.get('type')} (label {f.get('label')}): "
-                     f"{_fmt_s(None if t0 is None else t0 * 1e-6)} - "
-                     f"{'end of log' if t1 is None else _fmt_s(t1 * 1e-6)} s{dur}  "
+                     f"{_fmt_s(None if t0 is None else t0 * 1e-6)} {end}{dur}  "
                      f"[{f['source']}]")
     return "\n".join(lines)
 

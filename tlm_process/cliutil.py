@@ -176,14 +176,20 @@ def is_one_of(out: str | os.PathLike, paths: Iterable[str | os.PathLike]) -> boo
 
 
 def show_param_warnings() -> None:
-    """Print ``UnmodelledParamWarning`` (a loaded parameter set changes parameters tlm does not
-    model) as one ``tlm: warning: ...`` line on stderr; other warnings as Python shows them."""
+    """Print tlm's own warnings as one ``tlm: warning: ...`` line each on stderr (no file name,
+    line number or source line): ``UnmodelledParamWarning`` (a loaded parameter set changes
+    parameters tlm does not model), ``BinLogWarning`` (a .bin log was damaged or cut off: how
+    much was read, what was skipped) and ``SidecarWarning`` (a sidecar beside a log is not
+    fault records); other warnings as Python shows them."""
+    from tlm_sim.flightlog.binscan import BinLogWarning
+    from tlm_sim.flightlog.sidecar import SidecarWarning
     from tlm_sim.params import UnmodelledParamWarning
 
+    ours = (UnmodelledParamWarning, BinLogWarning, SidecarWarning)
     previous = warnings.showwarning
 
     def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
-        if issubclass(category, UnmodelledParamWarning):
+        if issubclass(category, ours):
             print(f"tlm: warning: {message}", file=sys.stderr)
         else:
             previous(message, category, filename, lineno, file, line)

@@ -85,32 +85,63 @@ def _earth_field_line(f: dict[str, Any]) -> str:
             f"{f['inclination_deg']:.2f} deg, {f['intensity_gauss']:.4f} gauss: {f['source']}")
 
 
+def fault_windows_s(log: FlightLog) -> list[tuple[int, str, int, float, float]]:
+    """The flight's fault windows for the plots: (number counted from 1, type, label, start,
+    end [s since boot]); a fault without an end runs to the end of the log."""
+    sim = log.tables.get("SIM")
+    t_end = float(sim["TimeUS"].iloc[-1]) * 1e-6 if sim is not None and len(sim) else None
+    out = []
+    for k, f in enumerate(log.faults):
+        t0, t1 = f.get("start_time_us"), f.get("end_time_us")
+        if t0 is None:
+            continue
+        end = t1 * 1e-6 if t1 is not None else t_end
+        if end is not None:
+            out.append((k + 1, str(f.get("type")), int(f.get("label") or 0), t0 * 1e-6, end))
+    return out
+
+
 def plot_trajectory(log: FlightLog, path: Path, title: str = "") -> Path:
-    """Top view of the true path (SIM) over the mission waypoints, and altitude over time."""
+    """Top view of the true path (SIM) over the mission waypoints, and altitude over time; each
+    fault's window (start to end, or to the end of the log) shaded on the altitude plot and its
+    stretch of the path drawn in its label's colour, labelled "fault N: TYPE" (N from 1)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from tlm_process.labels import label_colour
+
     sim = log.tables["SIM"]
     home_lat, home_lon = float(sim["Lat"].iloc[0]), float(sim["Lng"].iloc[0])
     n, e = latlon_to_ne(sim["Lat"].to_numpy(float), sim["Lng"].to_numpy(float), home_lat, home_lon)
+    t = sim["TimeUS"].to_numpy(float) * 1e-6
+    windows = fault_windows_s(log)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5))
     if log.mission is not None:
         wp = np.asarray(log.mission.waypoints)
         wn, we = latlon_to_ne(wp[:, 0], wp[:, 1], home_lat, home_lon)
         ax1.plot(we, wn, "o", ms=3, color="0.6", label="waypoints")
-    ax1.plot(e, n, lw=1.2, label="true path (SIM)")
+    ax1.plot(e, n, lw=1.2, color="k", label="true path (SIM)")
+    for k, ftype, label, a, b in windows:
+        m = (t >= a) & (t <= b)
+        ax1.plot(e[m], n[m], lw=2.4, color=label_colour(label), label=f"fault {k}: {ftype}")
     ax1.plot([0], [0], "k^", label="home")
     ax1.set_xlabel("east [m]")
     ax1.set_ylabel("north [m]")
     ax1.set_aspect("equal")
     ax1.legend(loc="best", fontsize=8)
-    t = sim["TimeUS"].to_numpy(float) * 1e-6
-    ax2.plot(t, sim["Alt"].to_numpy(float) - sim["Alt"].iloc[0], label="true altitude")
+    ax2.plot(t, sim["Alt"].to_numpy(float) - sim["Alt"].iloc[0], color="k",
+             label="true altitude")
     if "CTUN" in log.tables:
         ct = log.tables["CTUN"]
-        ax2.plot(ct["TimeUS"] * 1e-6, ct["DAlt"], "--", lw=0.8, label="desired altitude")
+        ax2.plot(ct["TimeUS"] * 1e-6, ct["DAlt"], "--", lw=0.8, color="0.45",
+                 label="desired altitude")
+    for k, ftype, label, a, b in windows:
+        ax2.axvspan(a, b, color=label_colour(label), alpha=0.2, lw=0,
+                    label=f"fault {k}: {ftype} (label {label})")
+        ax2.annotate(f"{k}: {ftype}", (a, 1.0), xycoords=("data", "axes fraction"),
+                     xytext=(2, -2), textcoords="offset points", va="top", fontsize=8)
     ax2.set_xlabel("time since boot [s]")
     ax2.set_ylabel("altitude above home [m]")
     ax2.legend(loc="best", fontsize=8)

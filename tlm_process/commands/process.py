@@ -150,9 +150,9 @@ def _make_plots(p, plots_dir: Path) -> list[str]:
                            f"{p.flight.id}: GPS track, fault segments coloured",
                            p.flight.records, p.home_alt)]
     for w in p.windows:
-        out.append(plot_fault_traces(p.labelled, w, plots_dir / f"{fid}_fault{w.index}_"
-                                     f"{w.type}.png", f"{p.flight.id}: {w.type} fault "
-                                     f"(label {w.label}), window shaded"))
+        out.append(plot_fault_traces(p.labelled, w, plots_dir / f"{fid}_fault{w.index + 1}_"
+                                     f"{w.type}.png", f"{p.flight.id}: {w.name}, label "
+                                     f"{w.label}, window shaded"))
     return [str(x) for x in out]
 
 

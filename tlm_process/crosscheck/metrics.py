@@ -43,6 +43,7 @@ presence (both > 0 or both 0); both NaN (neither log has the event) passes, one 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -233,8 +234,20 @@ def crosscheck_metrics(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.Da
     ``route``: the mission's waypoints as (lat, lon) rows (route deviation of the baro and
     GPS glitch signatures; None: each log's CMD messages).
 
-    Returns a JSON-able dict (and, under ``_series``, arrays for the plots).
+    Returns a JSON-able dict (and, under ``_series``, arrays for the plots). A metric with
+    nothing to measure (a log cut off before cruise: no cruise rows) is NaN, quietly (the
+    report shows "-"; numpy's "Mean of empty slice" warnings are not printed).
     """
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.filterwarnings("ignore", r"Mean of empty slice", RuntimeWarning)
+        warnings.filterwarnings("ignore", r"Degrees of freedom <= 0", RuntimeWarning)
+        return _metrics(tlm, sitl, home, tlm_faults, sitl_faults, route)
+
+
+def _metrics(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.DataFrame],
+             home: Sequence[float], tlm_faults: Sequence[Mapping[str, Any]],
+             sitl_faults: Sequence[Mapping[str, Any]], route: Any) -> dict[str, Any]:
+    """``crosscheck_metrics`` (its warnings filtered there)."""
     ts, ss = armed_span_us(tlm), armed_span_us(sitl)
     tw, sw = _windows(tlm_faults, ts[1]), _windows(sitl_faults, ss[1])
     a, b = _side(tlm, home, tw), _side(sitl, home, sw)

@@ -9,6 +9,10 @@ A sidecar JSON (the reference logs' ``.json``) is preferred where it is given: i
 (with Algorithm 1's raw points), SITL home, seed and fault records (Eq. 4, with the parameters
 set).
 
+A fault still active when the log ends (a log cut off during it: no end in its parameter
+changes) runs to the log's end: tlm holds it to the end of its flight (no ``params_end``) and
+the scenario's notes say so in one line.
+
 Time lines differ: SITL arms ~40 s after boot (GPS lock, EKF start-up), tlm at TLM_ARM_TIME.
 Faults are moved to tlm's time line by keeping their offset from arming.
 """
@@ -330,10 +334,23 @@ def _schedule(faults: list[dict[str, Any]], to_tlm_s, skip: set[str] = frozenset
             item["end"] = round(to_tlm_s(f["end_time_us"]), 3)
         if f.get("params_start"):
             item["params_start"] = {k: float(v) for k, v in f["params_start"].items()}
-        if f.get("params_end"):
+        if f.get("params_end") and "end" in item:  # a fault without end is held: no end values
             item["params_end"] = {k: float(v) for k, v in f["params_end"].items()}
         items.append(item)
     return FaultSchedule.from_dict({"faults": items})
+
+
+def _held_notes(faults: list[dict[str, Any]], t: Mapping[str, pd.DataFrame]) -> list[str]:
+    """One note per fault still active when the log ends (no end: a log cut off during it)."""
+    held = [f for f in faults if f.get("start_time_us") is not None
+            and f.get("end_time_us") is None]
+    if not held:
+        return []
+    last = [float(df.TimeUS.max()) for df in t.values() if "TimeUS" in df and len(df)]
+    end = f" at {max(last) * 1e-6:.1f} s" if last else ""
+    return [f"{f.get('type')} fault (from {float(f['start_time_us']) * 1e-6:.1f} s) is still "
+            f"active when the log ends{end}: it runs to the log's end (held to the end of "
+            "tlm's flight)" for f in held]
 
 
 def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
@@ -385,6 +402,7 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
         faults = _faults_from_log(t["PARM"])
         source = "log"
     schedule, changes, notes = _plan(faults, to_tlm_s)
+    notes[:0] = _held_notes(faults, t)
     return SitlScenario(
         name=bin_path.stem, tables=t, mission=mission, params=params, faults=faults,
         schedule=schedule, sitl_arm_us=sitl_arm_us, tlm_arm_s=tlm_arm_s,

@@ -81,7 +81,8 @@ class FaultWindow:
 
     @property
     def name(self) -> str:
-        return f"fault {self.index} ({self.type})"
+        """``fault N (TYPE)``, N = index + 1 (faults count from 1 in every message)."""
+        return f"fault {self.index + 1} ({self.type})"
 
     def describe(self) -> str:
         end = "end of log" if not np.isfinite(self.end_us) else f"{self.end_us * 1e-6:.3f} s"

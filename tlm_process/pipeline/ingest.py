@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -92,8 +91,8 @@ class FaultRecord:
 
     @property
     def name(self) -> str:
-        """``fault INDEX (TYPE)``, as error messages name it."""
-        return f"fault {self.index} ({self.type})"
+        """``fault N (TYPE)``, as messages name it (N = index + 1: faults count from 1)."""
+        return f"fault {self.index + 1} ({self.type})"
 
     @property
     def has_times(self) -> bool:
@@ -167,7 +166,7 @@ def _time_us(d: Mapping[str, Any], key: str, where: str) -> int | None:
 
 
 def _record(d: Any, index: int, source: str) -> FaultRecord:
-    where = f"fault {index}"
+    where = f"fault {index + 1}"
     if not isinstance(d, Mapping):
         raise IngestError(f"{where}: expected a mapping, got {type(d).__name__}", source=source)
     try:
@@ -190,7 +189,7 @@ def _record(d: Any, index: int, source: str) -> FaultRecord:
                 raise IngestError(f"{where}: label {label!r} is not a fault label "
                                   f"({min(_LABEL_TO_TYPE)}-{max(_LABEL_TO_TYPE)})")
             ftype = FAULT_TYPES[_LABEL_TO_TYPE[int(lab)]]
-        where = f"fault {index} ({ftype.name})"
+        where = f"fault {index + 1} ({ftype.name})"
         t0 = _time_us(d, "start_time_us", where)
         t1 = _time_us(d, "end_time_us", where)
         p0 = _position(d, "start", where)
@@ -270,31 +269,18 @@ def _home(home: Any) -> tuple[float, float, float] | None:
     return vals[0], vals[1], vals[2]  # type: ignore[return-value]
 
 
-_TLM_FAULT_MSG = re.compile(r"^tlm: fault (\w+) \(label (\d+)\) (start|end)$")
-
-
 def _records_in_log(raw: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
-    """The fault records a log holds itself: tlm's own "tlm: fault TYPE (label N) start/end"
-    MSG lines, else the SIM_* parameter changes of its PARM messages (a SITL log)."""
-    from tlm_sim.faults.detect import faults_from_param_changes
+    """The fault records a log holds itself (``tlm_sim.faults.detect.faults_in_log``): tlm's
+    own "tlm: fault TYPE (label N) start/end" MSG lines, else the SIM_* parameter changes of
+    its PARM messages (a SITL log)."""
+    from tlm_sim.faults.detect import faults_in_log
     from tlm_sim.flightlog.binreader import param_changes_from_parm
 
-    out: list[dict[str, Any]] = []
-    msg = raw.get("MSG")
-    for t, text in zip(msg["TimeUS"], msg["Message"], strict=True) if msg is not None else ():
-        m = _TLM_FAULT_MSG.match(str(text))
-        if m is None:
-            continue
-        if m.group(3) == "start":
-            out.append({"type": m.group(1), "label": int(m.group(2)),
-                        "start_time_us": int(t), "end_time_us": None})
-        elif out and out[-1]["type"] == m.group(1) and out[-1]["end_time_us"] is None:
-            out[-1]["end_time_us"] = int(t)
-    if not out and raw.get("PARM") is not None and len(raw["PARM"]):
-        changes = param_changes_from_parm(raw["PARM"], exclude=())
-        out = [{k: f[k] for k in ("type", "label", "start_time_us", "end_time_us")}
-               for f in faults_from_param_changes(changes)]
-    return {"faults": out}
+    parm = raw.get("PARM")
+    changes = (param_changes_from_parm(parm, exclude=())
+               if parm is not None and len(parm) else None)
+    return {"faults": [{k: f[k] for k in ("type", "label", "start_time_us", "end_time_us")}
+                       for f in faults_in_log(raw.get("MSG"), changes)]}
 
 
 def _read_bin(path: Path) -> list[Flight]:
@@ -302,15 +288,14 @@ def _read_bin(path: Path) -> list[Flight]:
     ``faults.json`` in the same folder, else what the log holds itself (tlm's fault MSG
     lines, or a SITL log's SIM_* parameter changes); none found: a normal flight."""
     from tlm_sim.flightlog import read_bin
+    from tlm_sim.flightlog.sidecar import fault_sidecar
 
-    sidecar = path.with_suffix(".json")
-    if not sidecar.exists() and (path.parent / "faults.json").exists():
-        sidecar = path.parent / "faults.json"
+    sidecar = fault_sidecar(path)
     try:
         raw = read_bin(path, DATA_TABLES + AUX_TABLES + ("MSG", "PARM"))
     except (OSError, ValueError, KeyError, IndexError) as exc:
         raise IngestError(f"cannot read the DataFlash log: {exc}", source=str(path)) from None
-    if sidecar.exists():
+    if sidecar is not None:
         doc, source = _read_json(sidecar), str(sidecar)
     else:
         doc, source = _records_in_log(raw), f"{path} (its own MSG/PARM)"

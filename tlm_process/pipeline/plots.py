@@ -5,8 +5,8 @@
   (A-B first fault, C-D second, ...); the positions a ground station recorded (the paper's
   Eq. 4 input) are drawn as crosses, so a recorded position far from the track (after a GPS
   loss) shows. Right: height above home over time with the windows shaded.
-* :func:`plot_fault_traces` — GPS speed and course, accelerations and attitude around one fault
-  with its window shaded (Figs. 10, 12, 14, 16).
+* :func:`plot_fault_traces` — GPS speed, satellites and course, accelerations and attitude
+  around one fault with its window shaded, one unit per axis (Figs. 10, 12, 14, 16).
 * :func:`plot_label_shares` — share of each label per table (Figs. 17 and 18).
 """
 
@@ -127,10 +127,10 @@ def _panel(ax, df: pd.DataFrame | None, cols: Sequence[str], t0: float, t1: floa
 def plot_fault_traces(tables: Mapping[str, pd.DataFrame], window: FaultWindow,
                       path: str | os.PathLike, title: str = "",
                       margin_s: float | None = None) -> Path:
-    """Four panels around one fault (window shaded): GPS ground speed [m/s] and satellites,
-    GPS course [deg], IMU 0 acceleration [m/s^2], roll/pitch [deg] (ATT) or body rates
-    [deg/s] (RATE) when ATT is not logged. ``margin_s``: time shown before and after the
-    window (default: the window's length, at least 20 s)."""
+    """Five panels around one fault (window shaded), one unit per axis: GPS ground speed
+    [m/s], GPS satellites [count], GPS course [deg], IMU 0 acceleration [m/s^2], roll/pitch
+    [deg] (ATT) or body rates [deg/s] (RATE) when ATT is not logged. ``margin_s``: time shown
+    before and after the window (default: the window's length, at least 20 s)."""
     plt = _plt()
     gps = tables["GPS"]
     t_end_log = float(gps["TimeUS"].max()) * 1e-6
@@ -141,14 +141,16 @@ def plot_fault_traces(tables: Mapping[str, pd.DataFrame], window: FaultWindow,
     imu = tables.get("IMU")
     if imu is not None and "I" in imu.columns:
         imu = imu[imu["I"] == 0]
-    fig, axes = plt.subplots(4, 1, figsize=(10, 9), sharex=True)
-    _panel(axes[0], gps, ["Spd", "NSats"], t0, t1, "GPS speed [m/s], sats")
-    _panel(axes[1], gps, ["GCrs"], t0, t1, "GPS course [deg]")
-    _panel(axes[2], imu, ["AccX", "AccY", "AccZ"], t0, t1, "IMU0 accel [m/s^2]")
+    fig, axes = plt.subplots(5, 1, figsize=(10, 10.5), sharex=True,
+                             height_ratios=(1, 0.6, 1, 1, 1))
+    _panel(axes[0], gps, ["Spd"], t0, t1, "GPS speed [m/s]")
+    _panel(axes[1], gps, ["NSats"], t0, t1, "GPS satellites")
+    _panel(axes[2], gps, ["GCrs"], t0, t1, "GPS course [deg]")
+    _panel(axes[3], imu, ["AccX", "AccY", "AccZ"], t0, t1, "IMU0 accel [m/s^2]")
     if tables.get("ATT") is not None and len(tables["ATT"]):
-        _panel(axes[3], tables["ATT"], ["Roll", "Pitch"], t0, t1, "attitude [deg]")
+        _panel(axes[4], tables["ATT"], ["Roll", "Pitch"], t0, t1, "attitude [deg]")
     else:
-        _panel(axes[3], tables.get("RATE"), ["R", "P"], t0, t1, "body rate [deg/s]")
+        _panel(axes[4], tables.get("RATE"), ["R", "P"], t0, t1, "body rate [deg/s]")
     for ax in axes:
         ax.axvspan(w0, w1, color=label_colour(window.label), alpha=0.2, lw=0)
     axes[-1].set_xlabel("time since boot [s]")

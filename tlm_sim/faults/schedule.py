@@ -175,7 +175,7 @@ class FaultSchedule:
             if f.end is None and i + 1 < len(self.faults):
                 nxt = self.faults[i + 1]
                 raise FaultScheduleError(
-                    f"has no end (held until the flight ends) but fault {i + 1} ({nxt.type}) "
+                    f"has no end (held until the flight ends) but fault {i + 2} ({nxt.type}) "
                     "comes after it; give it an end or make it the last fault",
                     index=i, fault_type=f.type)
         self._check_order()
@@ -203,7 +203,7 @@ class FaultSchedule:
                        "list faults in the order they happen (boundaries apply in list order)")
                 raise FaultScheduleError(
                     f"{q.edge} {q.trigger} is before the {p.edge} {p.trigger} of fault "
-                    f"{p.index} ({first.type}); {why}",
+                    f"{p.index + 1} ({first.type}); {why}",
                     index=q.index, fault_type=self.faults[q.index].type)
 
     # -- what the simulation consumes -----------------------------------------------------

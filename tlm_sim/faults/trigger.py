@@ -24,10 +24,12 @@ TIME_RE = re.compile(r"^(\d+(?:\.\d*)?|\.\d+)(?:e[-+]?\d+)?\s*s?$", re.IGNORECAS
 class FaultScheduleError(ValueError):
     """A bad fault, fault schedule or schedule file.
 
-    The message is one line: ``[source: ]fault INDEX (TYPE): reason``, where ``INDEX`` is the
-    0-based position of the fault in the schedule (the same number as
-    :attr:`ParamChange.fault`); parts that are unknown are left out. The parts are also
-    attributes: ``reason``, ``index``, ``fault_type``, ``source`` (a file name).
+    The message is one line: ``[source: ]fault N (TYPE): reason``, where ``N`` is the fault's
+    number counted from 1 (fault 1 is the first of the schedule, as ``tlm fly``'s summary,
+    warnings and every other message and file name number them); parts that are unknown are
+    left out. The parts are also attributes: ``reason``, ``index`` (the 0-based position in
+    the schedule, ``N - 1``: the same number as :attr:`ParamChange.fault`), ``fault_type``,
+    ``source`` (a file name).
     """
 
     def __init__(self, reason: str, *, index: int | None = None, fault_type: str | None = None,
@@ -38,7 +40,7 @@ class FaultScheduleError(ValueError):
         self.source = source
         where = ""
         if index is not None or fault_type is not None:
-            where = "fault" + (f" {index}" if index is not None else "")
+            where = "fault" + (f" {index + 1}" if index is not None else "")
             where += f" ({fault_type})" if fault_type is not None else ""
             where += ": "
         prefix = f"{source}: " if source is not None else ""

@@ -15,11 +15,15 @@ Damaged files: an empty file, one that is not a regular file, or one without a v
 message raises ``BinLogError`` (a ``ValueError`` naming the file). Skipped bytes, damaged,
 conflicting or unsafely named FMT messages (a name must be 1-4 of A-Z, 0-9), and a type whose
 FMT name looks damaged (its layout is that of a known message the log lacks) give a partial
-result and one ``BinLogWarning`` per kind of damage; ``read_log(...).info["lost_messages"]``
-counts the messages dropped per type. An incomplete final message is
-dropped silently, as pymavlink does: ArduPilot's logger leaves one at the end of most logs
-(every reference SITL log ends so), so warning about it would warn on every genuine log;
-``read_log(...).info["tail_bytes"]`` reports it.
+result; ``read_log(...).info["lost_messages"]`` counts the messages dropped per type. An
+incomplete final message is dropped, as pymavlink does (``read_log(...).info["tail_bytes"]``);
+ArduPilot's logger leaves one at the end of most logs (every reference SITL log ends so), so
+it is reported only when the log was cut off (``cut_off``: the vehicle still armed, or a
+tlm log, which never ends so). A damaged or cut-off log gives ONE ``BinLogWarning``, one line
+saying how much was read and what was skipped (``read_notice``), e.g.
+``flight.bin: read 2.6 MB to 105.0 s (log time); cut off while armed: the last 37 bytes (an
+incomplete message) skipped`` or ``...; skipped 45 bytes that are not messages (1 place, first
+at byte 999999)``; ``tlm`` prints it as one ``tlm: warning:`` line.
 
 Log context: ``read_params`` (values at log start), ``read_param_changes`` (PARM after the
 initial block), ``read_mission`` (CMD), ``read_messages`` (MSG), ``read_modes`` (MODE with mode
@@ -83,6 +87,8 @@ __all__ = [
     "read_schemas",
     "split_instances",
     "empty_table",
+    "cut_off",
+    "read_notice",
     "mission_from_cmd",
     "param_changes_from_parm",
     "modes_with_names",
@@ -120,11 +126,90 @@ MISSION_FIELDS: tuple[str, ...] = (
 
 # --- decoding ----------------------------------------------------------------------------------
 def _index(path: str | os.PathLike) -> BinIndex:
-    """Scan ``path`` and warn (BinLogWarning) about each kind of damage found."""
+    """Scan ``path`` and warn (one BinLogWarning, ``read_notice``) when it was damaged or cut
+    off."""
     ix = scan_bin(path)
-    for msg in ix.issues:
-        warnings.warn(msg, BinLogWarning, stacklevel=3)
+    notice = read_notice(ix)
+    if notice is not None:
+        warnings.warn(notice, BinLogWarning, stacklevel=3)
     return ix
+
+
+# --- what was read -----------------------------------------------------------------------------
+_EV_ARMED, _EV_DISARMED = 10, 11
+
+
+def _last_time_us(ix: BinIndex) -> int | None:
+    """TimeUS of the last complete message that has one (the one at the highest offset)."""
+    last_at = -1
+    for t, f in ix.formats.items():
+        offs = ix.offsets.get(t)
+        if f.columns[:1] == ("TimeUS",) and f.format[:1] == "Q" and offs is not None \
+                and offs.size and int(offs[-1]) > last_at:
+            last_at = int(offs[-1])
+    if last_at < 0:
+        return None
+    return int(ix.data[last_at + 3 : last_at + 11].view("<u8")[0])
+
+
+def _raw_column(ix: BinIndex, name: str, col: str) -> np.ndarray | None:
+    """Raw values of column ``col`` of every ``name`` message (numpy, no DataFrame: this runs
+    on every read); None when the log does not define ``name`` with that column."""
+    f = ix.by_name.get(name)
+    if f is None or col not in f.columns:
+        return None
+    offs = ix.offsets.get(f.type)
+    if offs is None or offs.size == 0:
+        return np.zeros(0)
+    dtype = _record_dtype(f)
+    rec = sliding_window_view(ix.data, dtype.itemsize)[offs + 3].view(dtype).reshape(-1)
+    return rec[f"f{f.columns.index(col)}"]
+
+
+def _ends_armed(ix: BinIndex) -> bool:
+    """Whether the log's last arming event (EV 10 ARMED / 11 DISARMED) is ARMED."""
+    ids = _raw_column(ix, "EV", "Id")
+    if ids is None:
+        return False
+    arming = ids[(ids == _EV_ARMED) | (ids == _EV_DISARMED)]
+    return bool(arming.size) and int(arming[-1]) == _EV_ARMED
+
+
+def _written_by_tlm(ix: BinIndex) -> bool:
+    """Whether a MSG line is tlm's firmware string (``binwriter.FIRMWARE_STRING``)."""
+    from .binwriter import FIRMWARE_STRING
+
+    text = _raw_column(ix, "MSG", "Message")
+    return text is not None and text.dtype.kind == "S" and bool(
+        (text == FIRMWARE_STRING.encode("ascii")).any())
+
+
+def cut_off(ix: BinIndex) -> bool:
+    """Whether the log was cut off (truncated): it ends in an incomplete message and either
+    the vehicle was still armed (its last arming event is EV 10 ARMED) or it is tlm's own log
+    (tlm writes whole messages only). ArduPilot leaves an incomplete final message at the end
+    of most complete logs too (every reference SITL log ends so, disarmed), so that alone says
+    nothing; a log cut exactly between two messages, or cut while disarmed, cannot be told
+    from a complete one."""
+    return ix.tail_bytes > 0 and (_ends_armed(ix) or _written_by_tlm(ix))
+
+
+def read_notice(ix: BinIndex) -> str | None:
+    """One line saying how much of a damaged or cut-off log was read and what was skipped,
+    e.g. ``"flight.bin: read 2.6 MB to 105.0 s (log time); cut off while armed: the last 37
+    bytes (an incomplete message) skipped"``; None for an intact log (one that ends in an
+    incomplete message but not cut off, ``cut_off``, is intact)."""
+    name = ix.path.name
+    parts = [m.removeprefix(f"{name}: ") for m in ix.issues]
+    if cut_off(ix):
+        parts.insert(0, f"cut off{' while armed' if _ends_armed(ix) else ''}: the last "
+                        f"{ix.tail_bytes} bytes (an incomplete message) skipped")
+    if not parts:
+        return None
+    read = ix.size - ix.skipped_bytes - ix.tail_bytes
+    t = _last_time_us(ix)
+    at = "" if t is None else f" to {t * 1e-6:.1f} s (log time)"
+    return f"{name}: read {read / 1e6:.1f} MB{at}; " + "; ".join(parts)
 
 
 def _log_schema(fmt: LogFormat) -> MessageSchema:
@@ -532,7 +617,9 @@ class BinLog:
         modes: ``read_modes`` (MODE with ModeName, RsnName).
         info: size_bytes, messages (name → count of complete messages), skipped_bytes,
             tail_bytes (incomplete final message, dropped), lost_messages (``BinIndex.lost``:
-            what → messages dropped), issues (one line per kind of damage, as warned).
+            what → messages dropped), issues (one line per kind of damage), cut_off (the log
+            was truncated: ``cut_off``), notice (the one line warned: ``read_notice``; None
+            for an intact log).
     """
 
     path: str
@@ -577,6 +664,8 @@ def _bin_log(ix: BinIndex, path: str | os.PathLike, tables: dict[str, pd.DataFra
         "tail_bytes": ix.tail_bytes,
         "lost_messages": dict(ix.lost),
         "issues": list(ix.issues),
+        "cut_off": cut_off(ix),
+        "notice": read_notice(ix),
     }
     return BinLog(
         path=os.fspath(path),

@@ -394,16 +394,21 @@ class FlightLog:
         """FlightLog of a DataFlash ``.bin`` log, read in one pass (``binreader.read_log``).
 
         Tables as ``read_bin`` (all types when ``types`` is None), parameters at log start from
-        PARM, the mission as CMD items (``mission_from_cmd``), and in ``meta`` the source path
-        and what the reader found (size, message counts, skipped or damaged bytes).
+        PARM, the mission as CMD items (``mission_from_cmd``), the fault records of the sidecar
+        beside the log, else of the log itself (``sidecar.log_faults``: ``<log>.json``, tlm
+        fly's ``faults.json``, tlm's fault MSG lines or SIM_* parameter changes; where from in
+        ``meta["faults_source"]``), and in ``meta`` the source path and what the reader found
+        (size, message counts, skipped or damaged bytes).
         """
         from .binreader import read_log
+        from .sidecar import log_faults
 
         log = read_log(path, None if types is None else list(types))
         tables = {n: df for n, df in log.tables.items() if len(df)}
-        return cls(tables, params=log.params, mission=log.mission,
+        faults, source = log_faults(path, log.messages, log.param_changes)
+        return cls(tables, params=log.params, mission=log.mission, faults=faults,
                    schemas={n: log.schemas[n] for n in tables},
-                   meta={"source": os.fspath(path), **log.info})
+                   meta={"source": os.fspath(path), **log.info, "faults_source": source})
 
     # --- access -------------------------------------------------------------------------------
     def columns(self, name: str) -> Mapping[str, np.ndarray]:
