@@ -255,7 +255,8 @@ def test_mission_item_arrays_validated_and_kept():
         Mission(wp, commands=[16, 16, 17, 16, 16, 16])
     with pytest.raises(MissionError, match="waypoint 2 is a NAV_LAND but not the last row"):
         Mission(wp, commands=[16, 16, 21, 16, 16, 16])
-    with pytest.raises(MissionError, match="waypoint 5 is a NAV_LAND at [0-9.]+ m: a landing point's altitude"):
+    with pytest.raises(MissionError,
+                       match="waypoint 5 is a NAV_LAND at [0-9.]+ m: a landing point's altitude"):
         Mission(wp, commands=[16] * 5 + [21])
     with pytest.raises(MissionError, match="speed change before waypoint 3 is 0.05 m/s"):
         Mission(wp, speed_changes=[np.nan] * 3 + [0.05, np.nan, np.nan])
