@@ -445,6 +445,8 @@ class Mission:
         for f in fields(self):
             v = getattr(self, f.name)
             out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+        if self.commands is not None:
+            out["commands"] = [int(v) for v in self.commands]
         if self.speed_changes is not None:
             out["speed_changes"] = [None if math.isnan(v) else v for v in out["speed_changes"]]
         return out
