@@ -423,7 +423,8 @@ def _wp_line(seq: int, lat: object = HOME_CMAC[0], cmd: int = 16, frame: int = 3
         ("QGC WPL 110\n" + _home_line() + "1\t0\t3\t16\t0\n", r":3: expected 12 fields"),
         ("QGC WPL 110\n" + _home_line() + _wp_line(1, lat="abc"), r":3: bad number"),
         ("QGC WPL 110\n" + _home_line() + _wp_line(2), r":3: sequence number 2, expected 1"),
-        ("QGC WPL 110\n" + _home_line() + _wp_line(1, cmd=178), r":3: unsupported command 178"),
+        ("QGC WPL 110\n" + _home_line() + _wp_line(1, cmd=17),
+         r":3: unsupported command 17 \(tlm flies 16 NAV_WAYPOINT"),
         ("QGC WPL 110\n" + _home_line() + _wp_line(1, frame=10), r":3: unsupported frame 10"),
         (
             "QGC WPL 110\n" + _home_line() + _wp_line(1) + _wp_line(2, lat="nan"),
@@ -431,7 +432,7 @@ def _wp_line(seq: int, lat: object = HOME_CMAC[0], cmd: int = 16, frame: int = 3
         ),
         (
             "QGC WPL 110\n" + _home_line() + _wp_line(1, cmd=20) + _wp_line(2),
-            r":4: item after RETURN_TO_LAUNCH",
+            r":4: NAV_WAYPOINT item after RETURN_TO_LAUNCH",
         ),
         ("QGC WPL 110\n" + _home_line(), "no waypoints"),
         ("QGC WPL 110\n" + _wp_line(0, cmd=22), r":2: item 0 must be home"),

@@ -35,13 +35,22 @@ from tlm_sim.control.dcm import dcm_init, dcm_update
 from tlm_sim.control.dcm_layout import N_DCM
 from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
 from tlm_sim.control.log import (
+    CMD_TAKEOFF,
     log_control_10hz,
     log_dcm_10hz,
     log_vehicle_events,
     vehicle_events_due,
 )
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
-from tlm_sim.control.wpnav import PATH_COLS, prepare_path
+from tlm_sim.control.wpnav import (
+    P_CMD,
+    P_CNUM,
+    P_HOLD,
+    P_SPEED,
+    P_STOP,
+    PATH_COLS,
+    prepare_path,
+)
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
 from tlm_sim.dynamics.frame import build_frame
@@ -71,6 +80,7 @@ from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.frames import FRAMES, MAX_MOTORS, frame_for
 from tlm_sim.mission import Mission, builtin_mission
+from tlm_sim.mission.mission import ITEM_FIELDS
 from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
@@ -122,9 +132,7 @@ END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
 END_NOT_ARMED = "not_armed"
 END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP, END_NOT_ARMED)
 
-# MAV_CMD ids and MAV_FRAMEs of the mission items (as the reference logs' CMD messages)
-MAV_CMD_NAV_WAYPOINT, MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_CMD_NAV_TAKEOFF = 16, 20, 22
-MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_RELATIVE_ALT = 0, 3
+MAV_CMD_NAV_TAKEOFF = 22  # the takeoff point's P_CMD
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -452,22 +460,55 @@ def build_schedule(
 
 
 def mission_path(mission: Mission, g: np.ndarray) -> np.ndarray:
-    """The mission as NED points (the takeoff point above home, then the waypoints) with the
-    per-leg data of control.wpnav.prepare_path for the controller configuration g."""
+    """The mission as NED points (the takeoff point above home, then the waypoints) with its
+    items (control.wpnav P_SPEED, P_STOP, P_HOLD, P_CMD, P_CNUM: set speeds, stops, hold times,
+    commands and item numbers) and the per-leg data of control.wpnav.prepare_path for the
+    controller configuration g. A final NAV_LAND's point is at the altitude the copter comes
+    from (ModeAuto::do_land flies to the landing point at its current altitude)."""
     ned = mission.ned()
     path = np.zeros((ned.shape[0] + 1, PATH_COLS))
     path[0, :3] = (0.0, 0.0, -mission.takeoff_alt)
     path[1:, :3] = ned
+    path[0, P_CMD], path[0, P_CNUM] = MAV_CMD_NAV_TAKEOFF, CMD_TAKEOFF
+    path[1:, P_CMD] = mission.nav_commands
+    path[1:, P_CNUM] = mission.item_numbers()
+    path[1:, P_HOLD] = mission.holds
+    path[1:, P_STOP] = mission.stops()
+    speeds = mission.leg_speeds()
+    path[1:, P_SPEED] = np.where(np.isnan(speeds), 0.0, speeds)
+    if mission.lands:
+        path[-1, 2] = path[-2, 2]
     prepare_path(path, path.shape[0], g)
     return path
+
+
+def new_control_state(g: np.ndarray, mission: Mission, path: np.ndarray) -> np.ndarray:
+    """The autopilot's state ``c`` at power-on for the controller configuration g: hover
+    throttle MOT_THST_HOVER, the mission's takeoff altitude, not disarmed yet, AUTO's first
+    waypoint (item number) of the mission path (:func:`mission_path`) once the takeoff is
+    done."""
+    c = np.zeros(C.N_CONTROL_STATE)
+    c[C.THR_HOVER] = g[C.G_MOT_HOVER]
+    c[C.TAKEOFF_ALT] = mission.takeoff_alt
+    c[C.DISARM_TIME] = -1.0
+    c[C.NAV_CNUM] = path[1, P_CNUM]
+    return c
 
 
 def max_duration_s(mission: Mission, params: Params) -> float:
     """Upper bound on a flight's simulated time (sizes the log buffers; the flight ends at
     disarm + 2 s long before): the arming (TLM_ARM_TIME, or the reference logs' ~42 s with the
-    boot phase), slow cruise along the path, return, landing, margins."""
+    boot phase), slow cruise along the path (slower where a speed change sets less than
+    3 m/s), the hold times, return, landing, margins."""
     arm_s = BOOT_ARM_S if params["TLM_BOOT_PHASE"] else params["TLM_ARM_TIME"]
-    return float(arm_s + 120.0 + 2.5 * mission.path_length_3d_m / 3.0 + 600.0)
+    total = float(arm_s + 120.0 + 2.5 * mission.path_length_3d_m / 3.0 + 600.0)
+    if mission.has_items:
+        legs = np.linalg.norm(np.diff(mission.ned(), axis=0), axis=1)
+        v = mission.leg_speeds()[1:]
+        slow = ~np.isnan(v) & (v < 3.0)
+        total += float(np.sum(mission.holds)) + float(
+            2.5 * np.sum(legs[slow] * (1.0 / v[slow] - 1.0 / 3.0)))
+    return total
 
 
 def end_reason(disarm_time_s: float, err_rows: np.ndarray, armed: bool = True) -> str:
@@ -559,11 +600,8 @@ def fly(
     x = np.zeros(X.N_STATE)
     init_state(x, frame, math.radians(p["SIM_OPOS_HDG"]))
     ekf, sel = new_ekf(p)
-    c = np.zeros(C.N_CONTROL_STATE)
-    c[C.THR_HOVER] = g[C.G_MOT_HOVER]
-    c[C.TAKEOFF_ALT] = mission.takeoff_alt
-    c[C.DISARM_TIME] = -1.0
     path = mission_path(mission, g)
+    c = new_control_state(g, mission, path)
     seg = np.zeros((2, PATH_COLS))
     bufs = allocate_buffers(duration, LOGGED_MESSAGES, rows=evidence_rows(mission, duration))
     txt = np.zeros((TXT_ROWS, N_TXT_COLS))
@@ -654,25 +692,18 @@ def fill_evidence(bufs: Mapping[str, np.ndarray], counts: np.ndarray, mission: M
 
 
 def mission_items(mission: Mission) -> np.ndarray:
-    """The mission as ArduCopter stores it, one row per item in CMD / MISE column order
-    without TimeUS (CTot, CNum, CId, Prm1-4, Lat, Lng, Alt, Frame): 0 home (MAV_FRAME_GLOBAL,
-    no position, as the reference logs' CMD rows), 1 NAV_TAKEOFF to the takeoff altitude, the
-    waypoints (relative altitudes, MAV_FRAME_GLOBAL_RELATIVE_ALT), NAV_RETURN_TO_LAUNCH."""
-    wps = np.asarray(mission.waypoints, dtype=np.float64).reshape(-1, 3)
-    n = len(wps) + 3
+    """The mission as ArduCopter stores it (:meth:`tlm_sim.mission.Mission.items`: home,
+    NAV_TAKEOFF, the waypoints' items, NAV_RETURN_TO_LAUNCH unless it lands), one row per
+    item in CMD / MISE column order without TimeUS (CTot, CNum, CId, Prm1-4, Lat, Lng, Alt,
+    Frame)."""
+    items = mission.items()
+    n = len(items)
     out = np.zeros((n, len(L.MISE_COLS) - 1))
     k = {name: i - 1 for i, name in enumerate(L.MISE_COLS._fields)}
     out[:, k["CTot"]] = n
     out[:, k["CNum"]] = np.arange(n)
-    out[:, k["CId"]] = MAV_CMD_NAV_WAYPOINT
-    out[1, k["CId"]] = MAV_CMD_NAV_TAKEOFF
-    out[-1, k["CId"]] = MAV_CMD_NAV_RETURN_TO_LAUNCH
-    out[2:-1, k["Lat"]] = wps[:, 0]
-    out[2:-1, k["Lng"]] = wps[:, 1]
-    out[2:-1, k["Alt"]] = wps[:, 2]
-    out[1, k["Alt"]] = float(mission.takeoff_alt)
-    out[:, k["Frame"]] = MAV_FRAME_GLOBAL_RELATIVE_ALT
-    out[0, k["Frame"]] = out[-1, k["Frame"]] = MAV_FRAME_GLOBAL
+    for j, name in enumerate(ITEM_FIELDS):
+        out[:, k[name]] = items[:, j]
     return out
 
 

@@ -260,7 +260,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                        epilog=FAULTS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     f.add_argument("--mission", type=int, default=1, choices=(1, 2, 3, 4),
                    help="built-in mission number (default 1)")
-    f.add_argument("--mission-file", help="QGC WPL 110 mission file instead of a built-in one")
+    f.add_argument("--mission-file",
+                   help="QGC WPL 110 mission file instead of a built-in one: waypoints (with "
+                        "hold times), LOITER_TIME, DO_CHANGE_SPEED, TAKEOFF, RTL or a final "
+                        "LAND; anything else is refused (docs/missions.md)")
     f.add_argument("--seed", type=int, default=0,
                    help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", required=True, help="output folder")

@@ -80,7 +80,8 @@ HOME_YAW = _c.add("HOME_YAW", 1, "rad", "heading at arming")
 RC_FAILSAFE = _c.add("RC_FAILSAFE", 1, "", "radio failsafe active")
 SPOOL = _c.add("SPOOL", 1, "", "0 shut down, 1 ground idle, 2 throttle unlimited")
 MAYBE_LANDED = _c.add("MAYBE_LANDED", 1, "", "land detector's maybe-landed flag")
-WP_REACHED = _c.add("WP_REACHED", 1, "", "waypoints reached so far")
+WP_REACHED = _c.add("WP_REACHED", 1, "",
+                    "waypoints reached so far (one with a hold time once the hold is over)")
 TAKEOFF_ALT = _c.add("TAKEOFF_ALT", 1, "m", "takeoff target altitude above home")
 LAND_DESCENT_STARTED = _c.add("LAND_DESCENT_STARTED", 1, "", "1 once the LAND descent has begun")
 CRASH_TIMER = _c.add("CRASH_TIMER", 1, "s", "time the crash-check conditions have held")
@@ -202,6 +203,14 @@ LDET_LOG_FLAGS = _c.add("LDET_LOG_FLAGS", 1, "", "LDET.Flags of the last LDET ro
 LDET_LOG_COUNT = _c.add("LDET_LOG_COUNT", 1, "", "LDET.Count of the last LDET row")
 LDET_LOG_MS = _c.add("LDET_LOG_MS", 1, "ms", "time of the last LDET row (whole milliseconds)")
 MISE_LOGGED = _c.add("MISE_LOGGED", 1, "", "mission item index of the last MISE row (0: none)")
+# issue 22: the mission items AUTO flies (hold times, LOITER_TIME, LAND, speed changes)
+NAV_CNUM = _c.add("NAV_CNUM", 1, "",
+                  "mission item number (CNum) of the navigation item AUTO flies to (the end "
+                  "item's once the last waypoint is done); the path's P_CNUM")
+HOLD_START_MS = _c.add("HOLD_START_MS", 1, "ms",
+                       "when the copter reached the waypoint it holds at (whole milliseconds, "
+                       "ModeAuto's loiter_time; 0: not reached yet)")
+MISSION_LAND = _c.add("MISSION_LAND", 1, "", "1 once AUTO lands at the mission's NAV_LAND item")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND

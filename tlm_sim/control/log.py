@@ -27,8 +27,9 @@ BAT, MOTB, ARM, ORGN, LDET, MISE = (L.BAT_COLS, L.MOTB_COLS, L.ARM_COLS, L.ORGN_
                                     L.LDET_COLS, L.MISE_COLS)
 ORGN_EKF_ORIGIN, ORGN_AHRS_HOME = 0, 1  # ORGN.Type (LogOriginType)
 #: ArduCopter's mission item numbers: 0 home, 1 NAV_TAKEOFF, then the waypoints (the first at
-#: home), then NAV_RETURN_TO_LAUNCH (as the CMD rows tlm writes)
-CMD_TAKEOFF, CMD_FIRST_WP = 1, 2
+#: home; each may follow a DO_CHANGE_SPEED), then NAV_RETURN_TO_LAUNCH (as the CMD rows tlm
+#: writes, tlm_sim.mission.Mission.items)
+CMD_TAKEOFF = 1
 
 
 @tick_jit
@@ -69,11 +70,13 @@ def _log_motb(bufs, counts, t_us, c):
 @inline_jit
 def mission_item(c):
     """The mission item AUTO runs: NAV_TAKEOFF from the switch to AUTO, the first waypoint
-    once the takeoff has reached its altitude, then the item after each waypoint reached (the
-    last waypoint's successor is the mission's RTL)."""
-    if c[C.SUBMODE] == C.SUB_TAKEOFF:
-        return CMD_TAKEOFF if c[C.TAKEOFF_DONE_T] < 0.0 else CMD_FIRST_WP
-    return CMD_FIRST_WP + c[C.WP_REACHED]
+    once the takeoff has reached its altitude, then the navigation item after each waypoint
+    done (c[NAV_CNUM], kept by the navigation: the last waypoint's successor is the mission's
+    RTL; DO_CHANGE_SPEED items between two start with the second, as AP_Mission starts them
+    on its way to the next navigation item)."""
+    if c[C.SUBMODE] == C.SUB_TAKEOFF and c[C.TAKEOFF_DONE_T] < 0.0:
+        return CMD_TAKEOFF
+    return c[C.NAV_CNUM]
 
 
 @inline_jit

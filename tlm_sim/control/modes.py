@@ -48,10 +48,19 @@ from tlm_sim.control.position import (
     z_reset,
     z_update,
 )
-from tlm_sim.control.wpnav import path_start, path_update, prepare_path
+from tlm_sim.control.wpnav import (
+    P_CMD,
+    P_CNUM,
+    P_HOLD,
+    path_resume,
+    path_start,
+    path_update,
+    prepare_path,
+)
 from tlm_sim.rotation import quat_to_euler
 
 SPOOL_TIME_S = MOT_SPOOL_TIME_S
+MAV_CMD_NAV_LAND = 21  # a path point's P_CMD: the mission's landing point
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
 # ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at MOT_SPIN_ARM and a takeoff
 # waits 2 s after arming; every reference log has EV 57 at 2.00 s, the throttle rising from
@@ -392,7 +401,7 @@ def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, events, ev_count
     if sub == C.SUB_TAKEOFF:
         _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts)
     elif sub == C.SUB_WP:
-        heading = _nav_waypoints(c, g, pos, vel, path, n_path, seg)
+        heading = _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg)
         if not math.isnan(heading):
             yaw_cmd = heading
             yaw_rate_ff = c[C.YAW_RATE_CMD]
@@ -428,16 +437,35 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
 
 
 @inline_jit
-def _nav_waypoints(c, g, pos, vel, path, n_path, seg):
-    """AUTO along the mission; RTL once the last waypoint is reached. Returns the path's
-    heading [rad] (NaN: keep the yaw)."""
+def _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg):
+    """AUTO along the mission. At a point the path stops at (a hold, a LOITER_TIME, the point
+    before a LAND, the last one), once the target has stopped there and the copter is within
+    WP_RADIUS: hold it the point's P_HOLD seconds (ModeAuto::verify_nav_wp and
+    verify_loiter_time: the timer starts when the waypoint is reached, in whole
+    milliseconds), then go on: the next leg from rest, or at the last point RTL (the mission's
+    RETURN_TO_LAUNCH) or its NAV_LAND. Returns the path's heading [rad] (NaN: keep the
+    yaw)."""
     heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
     if done > 0.0:
-        dn = path[n_path - 1, 0] - pos[0]
-        de = path[n_path - 1, 1] - pos[1]
-        if dn * dn + de * de <= g[C.G_WP_RADIUS] ** 2:
+        i = int(c[C.WP_INDEX])
+        dn = path[i, 0] - pos[0]
+        de = path[i, 1] - pos[1]
+        t_ms = float(t_us // 1000)
+        if c[C.HOLD_START_MS] == 0.0 and dn * dn + de * de <= g[C.G_WP_RADIUS] ** 2:
+            c[C.HOLD_START_MS] = t_ms  # reached: AC_WPNav's reached_wp_destination latches
+        if c[C.HOLD_START_MS] != 0.0 and (t_ms - c[C.HOLD_START_MS]) // 1000.0 >= path[i, P_HOLD]:
+            c[C.HOLD_START_MS] = 0.0
             c[C.WP_REACHED] += 1.0
-            _start_rtl(c, g, pos, vel, seg)
+            if i < n_path - 1:
+                c[C.NAV_CNUM] = path[i + 1, P_CNUM]
+                path_resume(c, i)
+            elif path[i, P_CMD] == MAV_CMD_NAV_LAND:
+                # ModeAuto::verify_land: at the landing point, descend (and disarm, landed)
+                c[C.MISSION_LAND] = 1.0
+                _start_land(c, pos, False)
+            else:
+                c[C.NAV_CNUM] = path[i, P_CNUM] + 1.0  # the mission's RETURN_TO_LAUNCH
+                _start_rtl(c, g, pos, vel, seg)
     return heading
 
 
@@ -513,9 +541,10 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
     if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
         E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE)
         E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
-        # AUTO disarms when its last item (RTL) completes on the ground, LAND/RTL on landing
+        # AUTO disarms when its last item (RTL) completes on the ground, LAND/RTL on landing,
+        # as AUTO's NAV_LAND does (ModeAuto::verify_land)
         c[C.DISARM_METHOD] = (C.ARM_METHOD_MISSIONEXIT if c[C.MODE] == C.MODE_AUTO
-                              else C.ARM_METHOD_LANDED)
+                              and c[C.MISSION_LAND] == 0.0 else C.ARM_METHOD_LANDED)
         c[C.ARMED] = 0.0
         c[C.SUBMODE] = C.SUB_LANDED
         c[C.DISARM_TIME] = t_s

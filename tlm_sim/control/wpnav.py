@@ -47,14 +47,26 @@ P_BLEND = 9  # half-length [m] of the corner blend at the END of this leg (0: no
 P_RAMP = 10  # jerk ramp of that blend as a fraction of its duration (see smooth_step)
 P_ALEG = 11  # acceleration limit along this leg [m/s^2] (WPNAV_ACCEL, WPNAV_ACCEL_Z)
 P_RAMP_C = 12  # normalisation of that blend's S-curve (step_norm(P_RAMP))
-P_DEND = 13  # path length after this leg's end point [m]
-PATH_COLS = 14
+P_DEND = 13  # path length from this leg's end point to the next stop [m]
+# inputs set with the points (0 in a plain path: defaults), from the mission's items
+P_SPEED = 14  # speed limit of this leg [m/s] (DO_CHANGE_SPEED; 0: WPNAV_SPEED)
+P_STOP = 15  # 1: the path stops at this point (a hold, LOITER_TIME, the point before a LAND)
+P_HOLD = 16  # time held at this point once reached [s] (ModeAuto's loiter_time_max)
+P_CMD = 17  # MAV_CMD of this point's navigation item (0: none)
+P_CNUM = 18  # its mission item number (CMD / MISE CNum)
+PATH_COLS = 19
 
 
 @tick_jit
 def leg_speed(g, length, dd):
     """Speed limit [m/s] of a leg of 3-D length [m] and down displacement dd [m]."""
-    v = g[C.G_WP_SPEED]
+    return leg_speed_max(g, g[C.G_WP_SPEED], length, dd)
+
+
+@tick_jit
+def leg_speed_max(g, v, length, dd):
+    """Speed limit [m/s] of a leg of 3-D length [m] and down displacement dd [m] whose speed
+    is set to v [m/s] (WPNAV_SPEED, or a DO_CHANGE_SPEED's)."""
     if length <= 1e-6:
         return v
     v_jerk = g[C.G_WP_LEG_K] * (length * math.sqrt(g[C.G_WP_JERK]) / 2.0) ** (2.0 / 3.0)
@@ -161,7 +173,9 @@ def blend_half_length(g, v, a):
 
 @tick_jit
 def prepare_path(path, n, g):
-    """Fill the leg columns (P_LEN..P_DEND) of path[0:n] from its points (NED in 0:3)."""
+    """Fill the leg columns (P_LEN..P_DEND) of path[0:n] from its points (NED in 0:3) and the
+    input columns P_SPEED (a leg's set speed) and P_STOP (the path stops at a point as at its
+    end: no corner blend there, the target comes to rest)."""
     path[0, P_LEN] = 0.0
     path[0, P_UN] = 0.0
     path[0, P_UE] = 0.0
@@ -183,7 +197,8 @@ def prepare_path(path, n, g):
             path[i, P_UN] = 0.0
             path[i, P_UE] = 0.0
             path[i, P_UD] = 0.0
-        path[i, P_VLEG] = leg_speed(g, length, dd)
+        v_set = path[i, P_SPEED] if path[i, P_SPEED] > 0.0 else g[C.G_WP_SPEED]
+        path[i, P_VLEG] = leg_speed_max(g, v_set, length, dd)
         path[i, P_ALEG] = leg_accel(g, path[i, P_UN], path[i, P_UE], path[i, P_UD])
     path[0, P_BLEND] = 0.0
     path[0, P_RAMP] = 0.0
@@ -192,7 +207,7 @@ def prepare_path(path, n, g):
         path[i, P_BLEND] = 0.0
         path[i, P_RAMP] = 0.0
         path[i, P_RAMP_C] = step_norm(0.0)
-        if i >= n - 1:
+        if i >= n - 1 or path[i, P_STOP] != 0.0:
             path[i, P_CORNER] = 0.0
             continue
         path[i, P_CORNER] = 1.0
@@ -206,6 +221,8 @@ def prepare_path(path, n, g):
             path[i, P_RAMP_C] = step_norm(path[i, P_RAMP])
     rest = 0.0
     for i in range(n - 1, -1, -1):
+        if path[i, P_CORNER] == 0.0:
+            rest = 0.0
         path[i, P_DEND] = rest
         rest += path[i, P_LEN]
 
@@ -260,6 +277,17 @@ def path_start(c):
     c[C.PATH_A] = 0.0
     c[C.PATH_STOP_T] = -1.0
     c[C.TRACK_K] = 1.0
+
+
+@tick_jit
+def path_resume(c, i):
+    """Go on from the stop at point i along leg i + 1, the target at rest (AC_WPNav's next
+    destination after a waypoint the copter stopped at)."""
+    c[C.WP_INDEX] = i + 1.0
+    c[C.PATH_S] = 0.0
+    c[C.PATH_V] = 0.0
+    c[C.PATH_A] = 0.0
+    c[C.PATH_STOP_T] = -1.0
 
 
 @tick_jit
@@ -329,8 +357,12 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     :func:`track_scaler`; the feed-forwards are the profile's speed and acceleration at that
     time.
 
+    The target stops at the path's end and at every point marked P_STOP (P_CORNER 0), where
+    it reports 1.0 until the caller moves it on (:func:`path_resume`). Each point it passes
+    counts in c[WP_REACHED], with the next point's P_CNUM in c[NAV_CNUM].
+
     Returns (heading of the horizontal velocity [rad], nan for a vertical leg; 1.0 when the end
-    is reached).
+    or a stop is reached).
     """
     dt = g[C.G_DT] * track_scaler(c, g, pos, vel) if scale_time else g[C.G_DT]
     i = int(c[C.WP_INDEX])
@@ -346,19 +378,21 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     s += v * dt
     done = 0.0
     if stopped:
-        # the stop is complete: the target is at the path's end (to within a tick's travel)
-        while i < n - 1:
+        # the stop is complete: the target is at the stop (to within a tick's travel)
+        while path[i, P_CORNER] != 0.0:
             i += 1
             c[C.WP_REACHED] += 1.0
+            c[C.NAV_CNUM] = path[i, P_CNUM]
         c[C.WP_INDEX] = float(i)
         length = path[i, P_LEN]
         s = length
     if s >= length:
-        if i < n - 1:
+        if path[i, P_CORNER] != 0.0:
             s -= length
             c[C.WP_INDEX] = i + 1.0
             c[C.WP_REACHED] += 1.0
             i += 1
+            c[C.NAV_CNUM] = path[i, P_CNUM]
             length = path[i, P_LEN]
             s = min(s, length)
         else:

@@ -56,9 +56,8 @@ _STARTUP = ("PARM", "VER", "MSG", "CMD", "AUXF")
 _AUX_POS = {"LOW": 0, "MIDDLE": 1, "HIGH": 2}
 _AUX_SOURCE_RC, _AUX_RESULT_OK = 1, 1
 
-# MAV_CMD ids and frames of the mission items (as the reference logs' CMD messages)
-_NAV_WAYPOINT, _NAV_RTL, _NAV_TAKEOFF = 16, 20, 22
-_FRAME_GLOBAL, _FRAME_RELATIVE = 0, 3
+# the columns of tlm_sim.mission.Mission.items (ITEM_FIELDS there)
+_ITEM_FIELDS = ("CId", "Prm1", "Prm2", "Prm3", "Prm4", "Lat", "Lng", "Alt", "Frame")
 
 
 def _raw_dtype(schema: MessageSchema) -> np.dtype:
@@ -214,40 +213,36 @@ def _ver_frame(t0_us: int) -> pd.DataFrame:
     })
 
 
-def _mission_items(mission: Any) -> tuple[tuple[float, float, float], np.ndarray, float] | None:
-    """(home, waypoints [N, 3], takeoff_alt) of a Mission or its JSON form; None if unknown."""
+def _mission_items(mission: Any) -> np.ndarray | None:
+    """The items (:meth:`tlm_sim.mission.Mission.items`) of a Mission or its JSON form (a
+    FlightLog read back from disk); None if there is none or it is not a valid mission."""
     if mission is None:
         return None
-    get = mission.get if isinstance(mission, Mapping) else (
-        lambda k, d=None: getattr(mission, k, d))
-    wps, home = get("waypoints"), get("home")
-    if wps is None or home is None:
-        return None
-    wps = np.asarray(wps, dtype=np.float64).reshape(-1, 3)
-    takeoff = get("takeoff_alt")
-    takeoff = float(takeoff) if takeoff is not None else (float(wps[0, 2]) if len(wps) else 0.0)
-    return (float(home[0]), float(home[1]), float(home[2])), wps, takeoff
+    from tlm_sim.mission import Mission, MissionError  # (flightlog does not need missions)
+
+    if not isinstance(mission, Mission):
+        if not isinstance(mission, Mapping):
+            return None
+        try:
+            mission = Mission.from_dict(mission)
+        except MissionError:
+            return None
+    return mission.items()
 
 
 def _cmd_frame(mission: Any, t0_us: int) -> pd.DataFrame | None:
-    """CMD rows as ArduCopter logs an uploaded mission: home, takeoff, waypoints, RTL."""
+    """CMD rows as ArduCopter logs an uploaded mission: home, takeoff, the waypoints' items
+    (with their DO_CHANGE_SPEED items), RTL or the final LAND."""
     items = _mission_items(mission)
     if items is None:
         return None
-    _, wps, takeoff = items
-    n = len(wps) + 3
-    cid = np.full(n, _NAV_WAYPOINT)
-    cid[1], cid[-1] = _NAV_TAKEOFF, _NAV_RTL
-    lat, lng, alt = np.zeros(n), np.zeros(n), np.zeros(n)
-    lat[2:-1], lng[2:-1], alt[2:-1] = wps[:, 0], wps[:, 1], wps[:, 2]
-    alt[1] = takeoff
-    frame = np.full(n, _FRAME_RELATIVE)
-    frame[0] = frame[-1] = _FRAME_GLOBAL
-    zeros = np.zeros(n)
+    n = len(items)
+    col = {name: items[:, j] for j, name in enumerate(_ITEM_FIELDS)}
     return pd.DataFrame({
         "TimeUS": np.full(n, t0_us, dtype=np.int64), "CTot": np.full(n, n), "CNum": np.arange(n),
-        "CId": cid, "Prm1": zeros, "Prm2": zeros, "Prm3": zeros, "Prm4": zeros,
-        "Lat": lat, "Lng": lng, "Alt": alt, "Frame": frame,
+        "CId": col["CId"].astype(np.int64), "Prm1": col["Prm1"], "Prm2": col["Prm2"],
+        "Prm3": col["Prm3"], "Prm4": col["Prm4"], "Lat": col["Lat"], "Lng": col["Lng"],
+        "Alt": col["Alt"], "Frame": col["Frame"].astype(np.int64),
     })
 
 

@@ -129,7 +129,8 @@ def allocate_buffers(
 
 
 def to_jsonable(obj: Any) -> Any:
-    """Plain JSON structures from numpy arrays/scalars, dataclasses, NamedTuples, Paths."""
+    """Plain JSON structures from numpy arrays/scalars, dataclasses, NamedTuples, Paths, and
+    objects with a ``to_json()`` method (its result)."""
     if obj is None or isinstance(obj, bool | int | float | str):
         return obj
     if isinstance(obj, np.generic):
@@ -138,6 +139,8 @@ def to_jsonable(obj: Any) -> Any:
         return obj.tolist()
     if isinstance(obj, os.PathLike):
         return os.fspath(obj)
+    if callable(getattr(obj, "to_json", None)) and not isinstance(obj, type):
+        return to_jsonable(obj.to_json())  # an object with a JSON form of its own (Mission)
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
     if hasattr(obj, "_asdict"):

@@ -155,21 +155,25 @@ def _compass_switches(tables: Tables) -> list[tuple[int, str]]:
 
 
 #: AP_Mission::Mission_Command::type() of the MAV_CMD ids tlm's missions hold
-MISSION_CMD_TYPES: dict[int, str] = {16: "WP", 20: "RTL", 21: "Land", 22: "Takeoff"}
-MAV_CMD_NAV_WAYPOINT = 16
+MISSION_CMD_TYPES: dict[int, str] = {16: "WP", 19: "LoitTime", 20: "RTL", 21: "Land",
+                                     22: "Takeoff", 178: "ChangeSpeed"}
+#: the items whose completion ArduCopter announces: NAV_WAYPOINT (verify_nav_wp) and
+#: NAV_LOITER_TIME (verify_loiter_time), once their hold time is over
+REACHED_CMDS = (16, 19)
 
 
 def mission_texts(tables: Tables) -> list[tuple[int, str]]:
     """ArduCopter's mission progress from the MISE rows (one per item started): "Reached
-    command #k" when a waypoint k is done (ModeAuto::verify_nav_wp, at the start of the next
-    item), then "Mission: k+1 <type>" (ModeAuto::start_command)."""
+    command #k" when a waypoint or loiter k is done (ModeAuto::verify_nav_wp,
+    verify_loiter_time: after its hold time, at the start of the next item), then "Mission:
+    k+1 <type>" (AP_Mission::start_command, for DO_CHANGE_SPEED items too)."""
     mise = tables.get("MISE")
     if mise is None or not len(mise):
         return []
     out: list[tuple[int, str]] = []
     prev_num, prev_id = -1, -1
     for t, num, cid in zip(mise["TimeUS"], mise["CNum"], mise["CId"], strict=True):
-        if prev_id == MAV_CMD_NAV_WAYPOINT and int(num) == prev_num + 1:
+        if prev_id in REACHED_CMDS and int(num) == prev_num + 1:
             out.append((int(t), f"Reached command #{prev_num}"))
         out.append((int(t), f"Mission: {int(num)} {MISSION_CMD_TYPES.get(int(cid), str(cid))}"))
         prev_num, prev_id = int(num), int(cid)
