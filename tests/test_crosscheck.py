@@ -206,3 +206,29 @@ def test_wind_cruise_attitude_agrees_with_sitl():
     for side in ("tlm", "sitl"):  # the wind is there on both sides
         assert wind["att_roll_std_deg"][side] > 1.3 * calm["att_roll_std_deg"][side]
         assert wind["att_pitch_std_deg"][side] > 2 * calm["att_pitch_std_deg"][side]
+
+
+def test_mission_from_cmd_keeps_what_tlm_flies_and_refuses_the_rest():
+    """A log's CMD items go through the mission-file rules: a hold time and a speed change are
+    flown (not dropped), a parameter tlm does not fly is a ScenarioError naming the item."""
+    import pandas as pd
+
+    from tlm_process.crosscheck.scenario import ScenarioError, mission_from_cmd
+
+    home = (-35.363261, 149.16523, 584.09)
+
+    def cmd(rows):
+        cols = ["TimeUS", "CTot", "CNum", "CId", "Prm1", "Prm2", "Prm3", "Prm4", "Lat", "Lng",
+                "Alt", "Frame"]
+        return pd.DataFrame([(0, len(rows), k, *r) for k, r in enumerate(rows)], columns=cols)
+
+    base = [(16, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0), (22, 0, 0, 0, 0, 0.0, 0.0, 10.0, 3)]
+    wp = [(16, 5, 0, 0, 0, -35.3630, 149.1650, 12.0, 3), (178, 1, 3.0, -1, 0, 0.0, 0.0, 0.0, 0),
+          (16, 0, 0, 0, 0, -35.3620, 149.1650, 12.0, 3), (20, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0)]
+    m = mission_from_cmd(cmd(base + wp), home, "t")
+    assert m.takeoff_alt == 10.0 and list(m.hold_s) == [5.0, 0.0]
+    assert np.isnan(m.speed_changes[0]) and m.speed_changes[1] == 3.0
+    bad = list(wp)
+    bad[0] = (16, 5, 2.0, 0, 0, -35.3630, 149.1650, 12.0, 3)  # acceptance radius 2 m
+    with pytest.raises(ScenarioError, match=r"t CMD item:2: NAV_WAYPOINT param2"):
+        mission_from_cmd(cmd(base + bad), home, "t")

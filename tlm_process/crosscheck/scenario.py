@@ -37,7 +37,6 @@ ARMED, DISARMED = 10, 11
 TYPES = tuple(dict.fromkeys((
     "GPS", "IMU", "RATE", "VIBE", "CTUN", "ATT", "EV", "MODE", "ERR", "SIM", "XKF1", "POS",
     "CMD", "PARM", "ORGN", "MSG", *SIGNATURE_MESSAGES)))  # + what the fault signatures read
-_NAV_WAYPOINT, _NAV_TAKEOFF = 16, 22
 
 
 class ScenarioError(ValueError):
@@ -120,22 +119,24 @@ def _home_from_log(t: dict[str, pd.DataFrame]) -> tuple[float, float, float]:
 def mission_from_cmd(cmd: pd.DataFrame, home: tuple[float, float, float], name: str = ""):
     """A ``Mission`` from a log's CMD messages (the last upload, ``binreader.mission_from_cmd``).
 
-    Item 0 is home; NAV_TAKEOFF gives the takeoff altitude; NAV_WAYPOINT items after it are the
-    waypoints (relative altitudes, frame 3); RTL and other commands are not waypoints.
+    Item 0 is home; the items after it are read with the mission-file rules
+    (:func:`tlm_sim.mission.wpl.mission_from_items`): NAV_TAKEOFF gives the takeoff altitude,
+    NAV_WAYPOINT / NAV_LOITER_TIME items are the waypoints with their hold times, DO_CHANGE_SPEED
+    and a final NAV_LAND are flown, RTL ends the mission; an item or parameter tlm does not fly
+    is a ScenarioError naming it, never dropped.
     """
     from tlm_sim.flightlog.binreader import mission_from_cmd as cmd_items
-    from tlm_sim.mission import Mission
+    from tlm_sim.mission import MissionError
+    from tlm_sim.mission.wpl import mission_from_items
 
     items = cmd_items(cmd)
     if not items:
         raise ScenarioError("the log has no mission (no CMD messages)")
-    wps = [(i["Lat"], i["Lng"], i["Alt"]) for i in items
-           if i["CId"] == _NAV_WAYPOINT and i["CNum"] > 0]
-    if not wps:
-        raise ScenarioError("the log's mission has no waypoints")
-    takeoff = [i["Alt"] for i in items if i["CId"] == _NAV_TAKEOFF]
-    return Mission(waypoints=np.asarray(wps, dtype=np.float64), home=home, name=name,
-                   takeoff_alt=takeoff[0] if takeoff else None)
+    try:
+        return mission_from_items([i for i in items if i["CNum"] > 0], home, name,
+                                  source=f"{name or 'log'} CMD item")
+    except MissionError as exc:
+        raise ScenarioError(str(exc)) from None
 
 
 def _initial_params(parm: pd.DataFrame) -> dict[str, float]:

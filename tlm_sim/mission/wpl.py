@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -53,6 +54,7 @@ from tlm_sim.mission.mission import (
 from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
+    "mission_from_items",
     "MAV_CMD_DO_CHANGE_SPEED",
     "MAV_CMD_NAV_LAND",
     "MAV_CMD_NAV_LOITER_TIME",
@@ -198,6 +200,23 @@ def read_wpl(
     for it in items[1:]:
         b.add(it)
     return b.mission(path.stem if name is None else name)
+
+
+def mission_from_items(
+    rows: Sequence[Mapping[str, float]], home: tuple[float, float, float], name: str = "",
+    source: str = "mission",
+) -> Mission:
+    """A :class:`Mission` from mission items after home as ArduPilot stores them (a log's CMD
+    rows: ``CId``, ``Frame``, ``Prm1``..``Prm4``, ``Lat``, ``Lng``, ``Alt``; ``CNum`` names
+    the item in errors), with :func:`read_wpl`'s rules: what tlm flies is kept (hold times,
+    speed changes, LAND), anything else is refused (MissionError naming ``source`` and the
+    item), never dropped."""
+    b = _Builder(Path(source), (float(home[0]), float(home[1]), float(home[2])))
+    for r in rows:
+        b.add(_Item(lineno=int(r.get("CNum", 0)), frame=int(r["Frame"]), cmd=int(r["CId"]),
+                    p=(float(r["Prm1"]), float(r["Prm2"]), float(r["Prm3"]), float(r["Prm4"])),
+                    lat=float(r["Lat"]), lon=float(r["Lng"]), alt=float(r["Alt"])))
+    return b.mission(name)
 
 
 def _read_items(path: Path) -> list[_Item]:
