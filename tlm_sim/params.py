@@ -191,10 +191,13 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "earth field inclination at home, + down (SITL WMM table at CMAC, §1.13)")),
     ("TLM_MAG_INT_GA", 0.579, ParamInfo(
         "gauss", 0.0, 2.0, "earth field intensity at home (SITL WMM table at CMAC, §1.13)")),
-    ("TLM_GYRO_CPL", 1.0, ParamInfo(
+    ("TLM_GYRO_CPL", 0.0, ParamInfo(
         "", 0.0, 1.0,
-        "1 = include the gyroscopic w x Iw term in the rigid body (conserves angular momentum); "
-        "0 = SITL-exact (SITL omits it, §1.8)", integer=True)),
+        "0 = SITL-exact (SITL omits the gyroscopic term, §1.8); 1 = include the gyroscopic "
+        "w x Iw term in the rigid body (conserves angular momentum). It decides how a copter "
+        "that lost a motor tumbles, so where it lands and whether it then lies still at full "
+        "throttle as SITL's does (engine_s14.bin, combined_s21.bin) or hops on three motors",
+        integer=True)),
     ("TLM_ARM_TIME", 10.0, ParamInfo(
         "s", 0.5, 3600.0,
         "with TLM_BOOT_PHASE 0: simulated time since boot at which the driver switches to GUIDED "

@@ -31,8 +31,9 @@ COMBINED = "combined_s21"
 #: the second set's single-fault references (labels 5-12)
 CATALOGUE = ("gyro_s42", "compass_s43", "baro_s44", "battery_s45", "gps_glitch_s46",
              "motor_partial_s47", "vibration_s48")
-#: messages fault_signature reads (and that both SITL and tlm log)
-TYPES = list(SIGNATURE_MESSAGES)
+#: messages fault_signature reads (and that both SITL and tlm log), and RATE and MSG for
+#: engine_ground
+TYPES = [*SIGNATURE_MESSAGES, "RATE", "MSG"]
 #: "close" for the note column: within this fraction of SITL's value, or the unit's floor below
 REL_CLOSE = 0.25
 #: absolute floor of "close" by metric-name suffix (s, m, deg, m/s); flags/fractions: 0.02
@@ -123,12 +124,66 @@ def accel_timeline(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
     return {"vibe_on_s": vibe, "height_18_28s_m": back}
 
 
+#: engine_ground: the rows it measures start this long after the first impact [s]
+SETTLE_S = 3.0
+#: engine_ground: an IMU row is still when |AccZ + g| [m/s^2] and |gyro| [rad/s] are below these
+STILL_ACC, STILL_GYR = 0.05, 0.05
+
+
+def impact_times_us(tables: Mapping[str, pd.DataFrame]) -> list[float]:
+    """TimeUS of every "SIM Hit ground" text: the log's MSG rows, or for tlm's tables (no MSG:
+    its texts are rendered when the .bin is written) ``texts.ground_impacts`` of its truth."""
+    msg = tables.get("MSG")
+    if msg is None:
+        from tlm_sim.flightlog.texts import ground_impacts
+
+        return [float(t) for t, _ in ground_impacts(tables)]
+    hit = msg[msg.Message.str.startswith("SIM Hit ground")]
+    return [float(t) for t in hit.TimeUS]
+
+
+def engine_ground(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
+                  ) -> dict[str, float]:
+    """What an engine or partial-motor fault's copter does on the ground (issue 23: SITL's lies
+    still at full throttle for the rest of the window; tlm's used to hop on three motors).
+
+    Returns:
+        ``impacts_in``: ground impacts in the window (the log's "SIM Hit ground" MSG texts; a
+        tlm log's tables have no MSG, they are rendered from the SIM truth by
+        ``texts.ground_impacts``, as its .bin gets them); ``still_frac_in``: fraction of
+        IMU 0 rows from SETTLE_S after the first impact to the end of the window with
+        |AccZ + g| < STILL_ACC and |gyro| < STILL_GYR; ``rout_ground``: mean RATE.ROut over
+        those rows (negative: the rate loop pushes the failed motor 1's side up, the live
+        motors stay below the copter's weight). NaN without an impact.
+    """
+    t0, t1 = float(fault["start_time_us"]), float(fault["end_time_us"])
+    hits = [t for t in impact_times_us(tables) if t0 <= t <= t1]
+    out = {"impacts_in": float(len(hits)), "still_frac_in": math.nan, "rout_ground": math.nan}
+    if not hits:
+        return out
+    a = hits[0] + SETTLE_S * 1e6
+    imu = tables["IMU"]
+    imu = imu[(imu.I == 0) & (imu.TimeUS >= a) & (imu.TimeUS <= t1)]
+    rate = tables["RATE"]
+    rate = rate[(rate.TimeUS >= a) & (rate.TimeUS <= t1)]
+    if len(imu):
+        gyro = (imu.GyrX ** 2 + imu.GyrY ** 2 + imu.GyrZ ** 2) ** 0.5
+        still = ((imu.AccZ + 9.80665).abs() < STILL_ACC) & (gyro < STILL_GYR)
+        out["still_frac_in"] = float(still.mean())
+    if len(rate):
+        out["rout_ground"] = float(rate.ROut.mean())
+    return out
+
+
 def signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any],
               route: Any = None) -> dict[str, float]:
-    """``fault_signature`` plus, for accelerometer faults, :func:`accel_timeline`."""
+    """``fault_signature`` plus, for accelerometer faults, :func:`accel_timeline`, and for
+    engine and partial-motor faults :func:`engine_ground`."""
     out = fault_signature(tables, fault, route)
     if fault["type"] == "accel":
         out.update(accel_timeline(tables, fault))
+    if fault["type"] in ("engine", "motor_partial"):
+        out.update(engine_ground(tables, fault))
     return out
 
 
