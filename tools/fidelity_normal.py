@@ -57,7 +57,8 @@ Notes:
   SITL's start value, which the takeoff's current transient sets while that filter still
   converges: 0.0023-0.0032 ohm over the six paper-set references, 0.00135 with tlm's takeoff.
   Left as a measured residual: 0.2-0.7 % of throttle after faults, none in normal flight.
-* tlm arms at `TLM_ARM_TIME` (10 s after boot) instead of SITL's ~42 s (GPS and EKF start-up);
+* tlm arms at `TLM_ARM_TIME` (10 s after boot) instead of SITL's ~42 s (GPS and EKF start-up;
+  `TLM_BOOT_PHASE 1` runs that start-up and arms at ~40 s, docs/boot-and-arming.md);
   the armed flight time above is unaffected. Both wait ArduCopter's 2 s arming delay before the
   takeoff climb.
 * DCM / AHR2 / XKY0 (not in the table; `tests/test_ahrs_messages.py` checks them against
