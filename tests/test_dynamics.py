@@ -254,7 +254,7 @@ def test_free_fall_with_drag_matches_quadratic_drag_solution(frame: np.ndarray) 
 )
 def test_torque_free_spin_conserves_angular_momentum(rates: tuple[float, float, float]) -> None:
     # no rotor thrust (so no inflow torques) and no rotational damping: torque-free body
-    f = frame_copy(build_frame(Params()), F_ROT_DAMP=0.0, F_AREA_EFF=0.0)
+    f = frame_copy(build_frame(Params()), F_ROT_DAMP=0.0, F_AREA_EFF=0.0, F_GYRO=1.0)
     x = airborne(f, 5000.0, 0.0)
     x[X.WX], x[X.WY], x[X.WZ] = rates
     inertia = np.array([f[F.F_IXX], f[F.F_IYY], f[F.F_IZZ]])

@@ -41,6 +41,7 @@ from tlm_sim.control.log import (
     log_vehicle_events,
     vehicle_events_due,
 )
+from tlm_sim.control.mixer import throttle_slew_update
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
 from tlm_sim.control.wpnav import (
     P_CMD,
@@ -263,6 +264,7 @@ def run_flight(
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)
+        throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, ecfg, eo, pos, g, dcm, gsf)

@@ -202,10 +202,13 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "home (ArduPilot's AP_Declination tables: IGRF-13 2022-12-29, 10-degree grid; at CMAC "
         "the defaults), 2 = IGRF-14 at home on the simulated date, 0 = the TLM_MAG_* values "
         "as given at any home (tlm_sim.earthfield)", integer=True)),
-    ("TLM_GYRO_CPL", 1.0, ParamInfo(
+    ("TLM_GYRO_CPL", 0.0, ParamInfo(
         "", 0.0, 1.0,
-        "1 = include the gyroscopic w x Iw term in the rigid body (conserves angular momentum); "
-        "0 = SITL-exact (SITL omits it, §1.8)", integer=True)),
+        "0 = SITL-exact (SITL omits the gyroscopic term, §1.8); 1 = include the gyroscopic "
+        "w x Iw term in the rigid body (conserves angular momentum). It decides how a copter "
+        "that lost a motor tumbles, so where it lands and whether it then lies still at full "
+        "throttle as SITL's does (engine_s14.bin, combined_s21.bin) or hops on three motors",
+        integer=True)),
     ("TLM_ARM_TIME", 10.0, ParamInfo(
         "s", 0.5, 3600.0,
         "with TLM_BOOT_PHASE 0: simulated time since boot at which the driver switches to GUIDED "

@@ -31,8 +31,9 @@ COMBINED = "combined_s21"
 #: the second set's single-fault references (labels 5-12)
 CATALOGUE = ("gyro_s42", "compass_s43", "baro_s44", "battery_s45", "gps_glitch_s46",
              "motor_partial_s47", "vibration_s48")
-#: messages fault_signature reads (and that both SITL and tlm log)
-TYPES = list(SIGNATURE_MESSAGES)
+#: messages fault_signature reads (and that both SITL and tlm log), and RATE and MSG for
+#: engine_ground
+TYPES = [*SIGNATURE_MESSAGES, "RATE", "MSG"]
 #: "close" for the note column: within this fraction of SITL's value, or the unit's floor below
 REL_CLOSE = 0.25
 #: absolute floor of "close" by metric-name suffix (s, m, deg, m/s); flags/fractions: 0.02
@@ -58,8 +59,40 @@ last two columns are issue 19's target: each metric within 35 % of SITL's (or wi
 near zero: 0.25 s, 1 m, 0.25 m/s, 2 deg; flags equal; ERR counts by presence;
 `tlm_process.crosscheck.metrics.signature_rows`). Accelerometer faults add `vibe_on_s` (first
 ERR 29/1 after the start) and `height_18_28s_m` (mean true height 18-28 s after the start
-minus the height at the start), see `tools/fidelity_faults.py`. "Truth" is the simulator's
-true state (SIM), heights are above home.
+minus the height at the start), see `tools/fidelity_faults.py`. Engine and partial-motor faults
+add `impacts_in` ("SIM Hit ground" in the window), `still_frac_in` (IMU 0 rows still, from 3 s
+after the first impact to the end: |AccZ + g| < 0.05 m/s^2, |gyro| < 0.05 rad/s) and
+`rout_ground` (mean RATE.ROut there). "Truth" is the simulator's true state (SIM), heights are
+above home.
+
+**Engine fault on the ground** (issue 23). SITL's copter (motor 1 out) tumbles for 2.5 s, hits
+the ground once, and then lies still at full throttle for the rest of the window: AccZ
+-9.817 +- 0.0006, gyros ~0, VN = VE = 0, ROut -0.50/-0.58, POut -0.60/-0.56, YDes 159.5 deg/s,
+AOut 1.0 (engine_s14, combined_s21). Its ground contact (SIM_Aircraft's NO_MOVEMENT: level at
+its heading, horizontal motion stopped, a downward velocity cleared, an upward one kept while
+the copter is held in the 1 mm contact band) is what tlm's was already; whether the copter then
+lies still or hops is decided in the fall. On the ground the position controller asks for a
+lean back towards the route, about 90 deg left of the heading before the fault; the rate loops
+wind their integrators to that lean; if it is left of the nose, they push the dead motor's side
+up and the live motors stay below the weight (lies still); if it is right of the nose, they
+raise motor 2 and the copter lifts off, tumbles and lands again, fault after fault (hops). SITL's
+tumble turns the heading by -84 and -57 deg, tlm's turned it by -145 +- 5 deg (16 built-in
+flights: 15 hopped, 4-5 impacts each) for two reasons, both fixed: tlm's rigid body had the
+gyroscopic term SITL omits (`TLM_GYRO_CPL` now 0 by default), and when the heading-error limit
+dragged tlm's euler heading target round (at the tumble's yaw rate) the lean target turned with
+it, where ArduPilot resets its target quaternion with the thrust direction kept
+(`tlm_sim.control.attitude._keep_thrust_direction`). Now tlm's desired roll, pitch and yaw
+follow SITL's through engine_s14's fall, it lands at 303 deg (SITL 290) and lies still as SITL's
+(ROut -0.56, POut -0.60, YDes 158.8, one impact, one ERR 25); the fall turns 12 built-in flights
+by -28 to -86 deg (one -149) and 11 of 12 lie still after one impact
+(`tests/test_fault_engine_ground.py`). Its vertical controller now freezes its integrator
+while either throttle limit is set (AC_PID with AC_PosControl's limit), so on the ground CTUN.ThI
+(now logged unclamped, as AC_PosControl hands it on) is 1.03 as SITL's, not 1.8, and
+RATE.AOutSlew (now ArduPilot's throttle slew rate, `docs/log-messages.md`) freezes at 0.45
+where SITL's does at 0.35 (79 in the tumble, SITL 79.5). combined_s21's tlm flight reaches its
+engine fault after GPS and accelerometer faults that leave it 16 m off SITL's track, lands
+49 deg further round (a lean target 16 deg right of the nose, on the boundary) and hops: its
+ground metrics below fail.
 
 **Time alignment.** tlm flies the mission recorded in each reference's sidecar
 (`Mission.from_sidecar`) with the sidecar's seed and sets the sidecar's `params_start` /
@@ -123,12 +156,66 @@ def accel_timeline(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
     return {"vibe_on_s": vibe, "height_18_28s_m": back}
 
 
+#: engine_ground: the rows it measures start this long after the first impact [s]
+SETTLE_S = 3.0
+#: engine_ground: an IMU row is still when |AccZ + g| [m/s^2] and |gyro| [rad/s] are below these
+STILL_ACC, STILL_GYR = 0.05, 0.05
+
+
+def impact_times_us(tables: Mapping[str, pd.DataFrame]) -> list[float]:
+    """TimeUS of every "SIM Hit ground" text: the log's MSG rows, or for tlm's tables (no MSG:
+    its texts are rendered when the .bin is written) ``texts.ground_impacts`` of its truth."""
+    msg = tables.get("MSG")
+    if msg is None:
+        from tlm_sim.flightlog.texts import ground_impacts
+
+        return [float(t) for t, _ in ground_impacts(tables)]
+    hit = msg[msg.Message.str.startswith("SIM Hit ground")]
+    return [float(t) for t in hit.TimeUS]
+
+
+def engine_ground(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
+                  ) -> dict[str, float]:
+    """What an engine or partial-motor fault's copter does on the ground (issue 23: SITL's lies
+    still at full throttle for the rest of the window; tlm's used to hop on three motors).
+
+    Returns:
+        ``impacts_in``: ground impacts in the window (the log's "SIM Hit ground" MSG texts; a
+        tlm log's tables have no MSG, they are rendered from the SIM truth by
+        ``texts.ground_impacts``, as its .bin gets them); ``still_frac_in``: fraction of
+        IMU 0 rows from SETTLE_S after the first impact to the end of the window with
+        |AccZ + g| < STILL_ACC and |gyro| < STILL_GYR; ``rout_ground``: mean RATE.ROut over
+        those rows (negative: the rate loop pushes the failed motor 1's side up, the live
+        motors stay below the copter's weight). NaN without an impact.
+    """
+    t0, t1 = float(fault["start_time_us"]), float(fault["end_time_us"])
+    hits = [t for t in impact_times_us(tables) if t0 <= t <= t1]
+    out = {"impacts_in": float(len(hits)), "still_frac_in": math.nan, "rout_ground": math.nan}
+    if not hits:
+        return out
+    a = hits[0] + SETTLE_S * 1e6
+    imu = tables["IMU"]
+    imu = imu[(imu.I == 0) & (imu.TimeUS >= a) & (imu.TimeUS <= t1)]
+    rate = tables["RATE"]
+    rate = rate[(rate.TimeUS >= a) & (rate.TimeUS <= t1)]
+    if len(imu):
+        gyro = (imu.GyrX ** 2 + imu.GyrY ** 2 + imu.GyrZ ** 2) ** 0.5
+        still = ((imu.AccZ + 9.80665).abs() < STILL_ACC) & (gyro < STILL_GYR)
+        out["still_frac_in"] = float(still.mean())
+    if len(rate):
+        out["rout_ground"] = float(rate.ROut.mean())
+    return out
+
+
 def signature(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any],
               route: Any = None) -> dict[str, float]:
-    """``fault_signature`` plus, for accelerometer faults, :func:`accel_timeline`."""
+    """``fault_signature`` plus, for accelerometer faults, :func:`accel_timeline`, and for
+    engine and partial-motor faults :func:`engine_ground`."""
     out = fault_signature(tables, fault, route)
     if fault["type"] == "accel":
         out.update(accel_timeline(tables, fault))
+    if fault["type"] in ("engine", "motor_partial"):
+        out.update(engine_ground(tables, fault))
     return out
 
 

@@ -50,10 +50,16 @@ writes:
 anchoring: --anchor auto uses the recorded log times when every fault record has them
 (tlm and the SITL sidecars do) and the paper's position method otherwise.
 
+RC labels: --rc-label window (default) labels an RC fault as the paper does, while the radio
+is lost; --rc-label failsafe also labels the RTL the radio failsafe started (MODE reason 3)
+as RC until it lands (EV 18), is disarmed or leaves that mode, but never into the next
+fault's window. report.json records the choice.
+
 examples:
   tlm process ../shared/reference/sitl --out ds-sitl
   tlm process flight1 flight2 combined_s21.bin --out ds --test-flight 'combined_*'
   tlm process runs/ --out ds --test-frac 0.25 --target-fault-ratio 0.54
+  tlm process ../shared/reference/sitl/rc_s15.bin --out ds-rc --rc-label failsafe
 """
 
 
@@ -89,6 +95,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--max-match-m", type=positive_number, default=None, metavar="M",
                    help="position anchoring: a recorded position farther than M metres from "
                         "every GPS row matches nowhere (default 25)")
+    p.add_argument("--rc-label", choices=("window", "failsafe"), default="window",
+                   help="RC fault rows: window (default, the paper's: while the radio is "
+                        "lost) or failsafe (also the radio failsafe's RTL, until it lands)")
     p.add_argument("--phase", choices=("armed", "all"), default="armed",
                    help="rows kept: from arming to disarming (default, as a log with "
                         "LOG_DISARMED=0) or all")
@@ -195,6 +204,7 @@ def _run(args: argparse.Namespace) -> int:
     tables = tuple(t.strip().upper() for t in args.tables.split(",") if t.strip())
     options = ProcessOptions(
         method=args.anchor, phase=args.phase, instance=args.instance, tables=tables,
+        rc_label=args.rc_label,
         max_match_m=args.max_match_m if args.max_match_m is not None else DEFAULT_MAX_MATCH_M)
     out = Path(args.out)
     sources = expand_inputs(args.inputs)

@@ -14,6 +14,13 @@ Two ways to find where a fault starts and ends in a log:
   assignments the one with the least total distance is chosen (dynamic programming), so a
   loop that passes the same spot twice cannot pull a boundary onto the wrong pass.
 
+**RC labels** (:func:`extend_rc_failsafe`): the paper labels an RC fault from the radio's loss
+to its return; the radio failsafe it started (RTL, MODE reason 3) goes on after that, and
+after the first second the mode change is the only trace of it. ``rc_label="failsafe"``
+(``tlm process --rc-label failsafe``) labels the failsafe's consequence too: the RC window runs
+on to the end of the mode the failsafe started (landed: EV 18 LAND_COMPLETE, or disarmed, or
+another mode), never into the next fault's window.
+
 ``method="auto"`` (the default) anchors by time when every record has its times, else by
 position: on the reference SITL logs the position method puts the end of a GPS fault 14-20 s
 early (the recorded position is the EKF's dead-reckoned estimate, 138-208 m from where the
@@ -48,14 +55,23 @@ __all__ = [
     "anchor_by_time",
     "anchor_flight",
     "armed_span_us",
+    "RC_LABELS",
     "check_windows",
     "compare_methods",
+    "extend_rc_failsafe",
     "home_altitude",
     "label_rows",
     "label_tables",
 ]
 
 Method = Literal["auto", "time", "position"]
+#: How RC fault rows are labelled: "window" (the paper's: while the radio is lost) or
+#: "failsafe" (also the radio failsafe's mode, until it lands); see :func:`extend_rc_failsafe`
+RC_LABELS = ("window", "failsafe")
+#: ArduCopter's ModeReason::RADIO_FAILSAFE (MODE.Rsn)
+RADIO_FAILSAFE_REASON = 3
+#: ArduCopter's LogEvent LAND_COMPLETE and DISARMED (EV.Id)
+EV_LAND_COMPLETE, EV_DISARMED = 18, 11
 
 #: A recorded position farther than this from every GPS row of the allowed part of the flight
 #: [m] "matches nowhere" (position anchoring raises). On the reference logs correct matches are
@@ -399,6 +415,56 @@ def anchor_flight(flight: Flight, method: Method = "auto",
 # --------------------------------------------------------------------------------------------
 # Labels
 # --------------------------------------------------------------------------------------------
+
+def _failsafe_end_us(tables: Mapping[str, pd.DataFrame], w: FaultWindow) -> float | None:
+    """End of the mode the radio failsafe switched to inside RC window ``w`` [us]: the first
+    landing (EV 18) or disarm (EV 11), or change to another mode, after it; ``inf`` when none
+    comes before the log ends; None when no failsafe mode change (MODE.Rsn 3) is in the
+    window."""
+    mode = tables.get("MODE")
+    if mode is None or not len(mode) or "Rsn" not in mode.columns:
+        return None
+    t = mode["TimeUS"].to_numpy(np.float64)
+    fs = np.flatnonzero((t >= w.start_us) & (t < w.end_us)
+                        & (mode["Rsn"].to_numpy() == RADIO_FAILSAFE_REASON))
+    if not len(fs):
+        return None
+    t_fs = t[fs[0]]
+    m_fs = mode["Mode"].to_numpy()[fs[0]]
+    ends = [np.inf]
+    later = (t > t_fs) & (mode["Mode"].to_numpy() != m_fs)
+    if later.any():
+        ends.append(float(t[later].min()))
+    ev = tables.get("EV")
+    if ev is not None and len(ev):
+        te = ev["TimeUS"].to_numpy(np.float64)
+        done = (te > t_fs) & np.isin(ev["Id"].to_numpy(), (EV_LAND_COMPLETE, EV_DISARMED))
+        if done.any():
+            ends.append(float(te[done].min()))
+    return min(ends)
+
+
+def extend_rc_failsafe(windows: Sequence[FaultWindow], tables: Mapping[str, pd.DataFrame],
+                       source: str | None = None) -> list[FaultWindow]:
+    """The windows with every RC window that started a radio failsafe run on to the end of
+    the failsafe's mode (:func:`_failsafe_end_us`: landed, disarmed or another mode), cut at
+    the next window's start; the others as they are. An RC fault whose failsafe did not
+    change the mode (FS_THR_ENABLE 0) keeps its window."""
+    from dataclasses import replace
+
+    out = list(windows)
+    starts = sorted(w.start_us for w in windows)
+    for i, w in enumerate(out):
+        if w.type != "rc":
+            continue
+        end = _failsafe_end_us(tables, w)
+        if end is None or end <= w.end_us:
+            continue
+        nxt = [s for s in starts if s > w.start_us]
+        out[i] = replace(w, end_us=min(end, nxt[0]) if nxt else end)
+    check_windows(out, source)
+    return out
+
 
 def label_rows(time_us: np.ndarray, windows: Sequence[FaultWindow]) -> np.ndarray:
     """Label (int8) of each TimeUS: the window's label inside a window, 0 elsewhere."""

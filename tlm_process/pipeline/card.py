@@ -24,6 +24,11 @@ _NON_FEATURE_DOC = {
 }
 
 
+#: the card's words for ProcessOptions.rc_label
+_RC_LABEL_TEXT = {"window": "while the radio is lost (the paper's)",
+                  "failsafe": "while the radio is lost and through the radio failsafe's RTL "
+                              "until it lands (--rc-label failsafe)"}
+
 def _label_rows(report: Mapping[str, Any]) -> list[str]:
     from tlm_process.labels import class_name
     from tlm_sim.faults import FAULT_TYPES
@@ -87,7 +92,8 @@ def dataset_card(report: Mapping[str, Any], command: str = "") -> str:
         f"* flights: {len(split.get('train') or [])} for training, "
         f"{len(split.get('test') or [])} for testing (whole flights)",
         f"* anchoring: {opts.get('anchoring', '?')}; rows kept: {opts.get('phase', '?')} "
-        f"phase; IMU instance {opts.get('instance', 0)}",
+        f"phase; IMU instance {opts.get('instance', 0)}; RC labels: "
+        f"{_RC_LABEL_TEXT.get(opts.get('rc_label', 'window'), opts.get('rc_label'))}",
         f"* scaling: {scaling.get('method', 'min-max')}, fitted on the training flights, "
         f"{'applied' if scaled else 'not applied (raw values)'}",
     ]

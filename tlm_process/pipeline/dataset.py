@@ -11,6 +11,7 @@ import pandas as pd
 
 from tlm_process.pipeline.anchoring import (
     DEFAULT_MAX_MATCH_M,
+    RC_LABELS,
     AnchorComparison,
     FaultWindow,
     Method,
@@ -34,6 +35,8 @@ class ProcessOptions:
     default LOG_DISARMED=0 holds, as the paper's did — or "all" rows of the log. ``instance``:
     sensor instance kept (0; None keeps all, see :mod:`.features`). ``max_match_m``: position
     anchoring's "matches nowhere" distance [m]. ``tables``: data tables to build.
+    ``rc_label``: "window" (the paper's: RC rows while the radio is lost) or "failsafe" (also
+    the radio failsafe's RTL until it lands; :func:`.anchoring.extend_rc_failsafe`).
     """
 
     method: Method = "auto"
@@ -41,8 +44,12 @@ class ProcessOptions:
     instance: int | None = 0
     max_match_m: float = DEFAULT_MAX_MATCH_M
     tables: tuple[str, ...] = DATA_TABLES
+    rc_label: str = "window"
 
     def __post_init__(self) -> None:
+        if self.rc_label not in RC_LABELS:
+            raise PipelineError(f"unknown RC labelling {self.rc_label!r}; use "
+                                f"{' or '.join(RC_LABELS)}")
         if self.phase not in PHASES:
             raise PipelineError(f"unknown phase {self.phase!r}; use {' or '.join(PHASES)}")
         bad = [t for t in self.tables if t not in DATA_TABLES]

@@ -21,6 +21,7 @@ from tlm_process.pipeline.anchoring import (
     anchor_flight,
     armed_span_us,
     compare_methods,
+    extend_rc_failsafe,
     home_altitude,
     label_tables,
 )
@@ -36,12 +37,15 @@ __all__ = ["PHASES", "Dataset", "ProcessOptions", "ProcessedFlight", "build_data
 
 
 def process_flight(flight: Flight, options: ProcessOptions | None = None) -> ProcessedFlight:
-    """Anchor, label, trim to the phase and apply Algorithm 2 to one flight."""
+    """Anchor (RC windows run on through the radio failsafe with ``rc_label="failsafe"``),
+    label, trim to the phase and apply Algorithm 2 to one flight."""
     opt = options or ProcessOptions()
     missing = [t for t in opt.tables if t not in flight.tables or not len(flight.tables[t])]
     if missing:
         raise IngestError(f"no {', '.join(missing)} table(s) in the log", source=flight.source)
     windows = anchor_flight(flight, opt.method, opt.max_match_m)
+    if opt.rc_label == "failsafe":
+        windows = extend_rc_failsafe(windows, flight.tables, flight.id)
     home_alt = home_src = None
     if any(r.start_pos is not None for r in flight.records):
         home_alt, home_src = home_altitude(flight)
@@ -82,7 +86,7 @@ def build_dataset(processed: Sequence[ProcessedFlight], *, test_frac: float = 0.
                    {"scaled": scale, "test_frac": test_frac, "seed": seed,
                     "test_patterns": list(test_patterns), "anchoring": opt.method,
                     "max_match_m": opt.max_match_m, "phase": opt.phase,
-                    "instance": opt.instance})
+                    "instance": opt.instance, "rc_label": opt.rc_label})
 
 
 def write_dataset(ds: Dataset, out: str | os.PathLike,

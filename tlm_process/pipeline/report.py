@@ -5,8 +5,8 @@ columns), ``non_feature_columns``, ``dropped_columns`` (table -> column -> reaso
 ``counts`` (table -> label "0".."4", and each other label present, and "total" -> rows),
 ``counts_by_split``, ``fault_share``
 (α per table), ``split`` (train/test flight ids), ``scaling``, ``options`` (anchoring, phase,
-instance), ``flights`` (per flight: source, windows, rows per fault, anchoring disagreement)
-and, when a target γ is given, ``stretching`` (λ per table).
+instance, rc_label), ``flights`` (per flight: source, windows, rows per fault, anchoring
+disagreement) and, when a target γ is given, ``stretching`` (λ per table).
 """
 
 from __future__ import annotations

@@ -163,6 +163,7 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     if e2 > hmax or e2 < -hmax:
         lim = hmax if e2 > 0.0 else -hmax
         c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] - (e2 - lim))
+        _keep_thrust_direction(c, e2 - lim)
         # the heading rate the limit takes back stays in the feed-forward, but about the
         # thrust axis (AC_AttitudeControl's thrust vector + heading target: the heading
         # turns about the thrust axis, the thrust direction does not move with it)
@@ -180,6 +181,39 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
     r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
     _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+
+
+@inline_jit
+def _keep_thrust_direction(c, shift):
+    """Re-express the roll and pitch targets (and their shaped rates) about a heading target
+    that was just turned back by ``shift`` [rad], so that the target's thrust direction stays
+    where it was in the earth frame.
+
+    AC_AttitudeControl::thrust_heading_rotation_angles limits the heading error by resetting
+    the target quaternion to the body attitude x the thrust-vector correction x the limited
+    heading correction: the target keeps its thrust direction, only its heading moves. tlm's
+    target is euler (roll and pitch about the heading target), so turning the heading alone
+    would turn the tilt with it. It matters when the copter tumbles after a motor loss: the
+    heading target is then dragged round at the yaw rate (hundreds of deg/s) and the lean
+    direction would spin with it (engine_s14.bin: with it, tlm's desired roll, pitch and yaw
+    follow SITL's through the fall, and the copter lands with SITL's heading)."""
+    cs = math.cos(shift)
+    sn = math.sin(shift)
+    r = c[C.ATT_ROLL_T]
+    p = c[C.ATT_PITCH_T]
+    # the target z axis in the old heading frame (ZYX euler), turned into the new one
+    zx = math.sin(p) * math.cos(r)
+    zy = -math.sin(r)
+    zz = math.cos(p) * math.cos(r)
+    hx = cs * zx - sn * zy
+    hy = sn * zx + cs * zy
+    c[C.ATT_ROLL_T] = -math.asin(min(max(hy, -1.0), 1.0))
+    c[C.ATT_PITCH_T] = math.atan2(hx, zz)
+    # the shaped tilt rates turn with the tilt (pitch ~ x, -roll ~ y of the heading frame)
+    dp = c[C.ATT_PITCH_RATE_T]
+    dr = c[C.ATT_ROLL_RATE_T]
+    c[C.ATT_PITCH_RATE_T] = cs * dp + sn * dr
+    c[C.ATT_ROLL_RATE_T] = cs * dr - sn * dp
 
 
 @inline_jit

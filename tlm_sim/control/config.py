@@ -21,6 +21,13 @@ from tlm_sim.params import Params, require_params
 _AXES = ("RLL", "PIT", "YAW")
 
 
+#: AC_PosControl's throttle cutoff (POSCONTROL_THROTTLE_CUTOFF_FREQ_HZ): the motors low-pass the
+#: throttle the position controller gives them at this frequency [Hz]
+THROTTLE_CUTOFF_HZ = 2.0
+#: AP_Motors' throttle slew-rate filter (AP_MOTORS_SLEW_FILTER_CUTOFF) [Hz]
+SLEW_FILTER_CUTOFF_HZ = 50.0
+
+
 def lpf_alpha(cutoff_hz: float, dt: float) -> float:
     """First-order low-pass alpha for a cut-off frequency (1 = no filtering when cut-off is 0)."""
     if cutoff_hz <= 0.0:
@@ -142,6 +149,9 @@ def _motors(g: np.ndarray, p: Params) -> None:
     home_alt = p["SIM_OPOS_ALT"]
     g[C.G_RHO_RATIO_HOME] = air_density(home_alt) / RHO0
     g[C.G_RHO_RATIO_GRAD] = air_density_gradient(home_alt) / RHO0
+    dt = g[C.G_DT]
+    g[C.G_THR_FILT_A] = lpf_alpha(THROTTLE_CUTOFF_HZ, dt)
+    g[C.G_SLEW_FILT_A] = lpf_alpha(SLEW_FILTER_CUTOFF_HZ, dt)
 
 
 def _failsafes(g: np.ndarray, p: Params) -> None:

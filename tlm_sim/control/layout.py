@@ -211,6 +211,26 @@ HOLD_START_MS = _c.add("HOLD_START_MS", 1, "ms",
                        "when the copter reached the waypoint it holds at (whole milliseconds, "
                        "ModeAuto's loiter_time; 0: not reached yet)")
 MISSION_LAND = _c.add("MISSION_LAND", 1, "", "1 once AUTO lands at the mission's NAV_LAND item")
+# the motors' throttle filter and its slew detector (issue 23: RATE.AOutSlew)
+THR_IN_RAW = _c.add("THR_IN_RAW", 1, "",
+                    "the vertical controller's throttle demand before its 0..1 clamp (what "
+                    "AC_PosControl hands the attitude controller: above 1 while it asks for "
+                    "more than full throttle)")
+THR_FILT = _c.add("THR_FILT", 1, "",
+                  "AP_Motors' throttle filter: the unclamped demand with ArduPilot's angle "
+                  "boost, low-passed at the position controller's 2 Hz, clamped to 0..1, 0 "
+                  "while disarmed or at ground idle (tlm's mixer takes the clamped, unfiltered "
+                  "throttle; this feeds the slew detector only)")
+SLEW_SAMPLES = _c.add("SLEW_SAMPLES", 7, "",
+                      "throttle slew detector (DerivativeFilter, 7 points): THR_FILT samples, "
+                      "a ring written at SLEW_IDX")
+SLEW_TIMES = _c.add("SLEW_TIMES", 7, "us", "throttle slew detector: the samples' times")
+SLEW_IDX = _c.add("SLEW_IDX", 1, "", "throttle slew detector: next ring slot (0..6)")
+SLEW_NEW = _c.add("SLEW_NEW", 1, "", "throttle slew detector: 1 when a sample came since the "
+                  "last slope (else the last slope is reused)")
+SLEW_LAST = _c.add("SLEW_LAST", 1, "1/us", "throttle slew detector: the last slope")
+THR_SLEW_RATE = _c.add("THR_SLEW_RATE", 1, "1/s",
+                       "throttle slew rate: |slope| low-passed at 50 Hz (RATE.AOutSlew)")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
@@ -393,4 +413,10 @@ G_MAG_DEC = _g.add("G_MAG_DEC", 1, "rad",
                    "magnetic declination the compass library applies (COMPASS_AUTODEC: the "
                    "field's, TLM_MAG_DEC_DEG)")
 G_GPS_LAG = _g.add("G_GPS_LAG", 1, "s", "GPS lag the AHRS assumes (GPS1_DELAY_MS or 120 ms)")
+G_THR_FILT_A = _g.add("G_THR_FILT_A", 1, "",
+                      "motors' throttle filter alpha per main-loop tick (2 Hz: "
+                      "POSCONTROL_THROTTLE_CUTOFF_FREQ_HZ)")
+G_SLEW_FILT_A = _g.add("G_SLEW_FILT_A", 1, "",
+                       "throttle slew-rate filter alpha per main-loop tick (50 Hz: "
+                       "AP_MOTORS_SLEW_FILTER_CUTOFF)")
 N_CONTROL_CFG = CONFIG.close()

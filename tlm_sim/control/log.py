@@ -190,7 +190,8 @@ def _log_bat(bufs, counts, t_us, c):
 
 @inline_jit
 def _log_rate(bufs, counts, t_us, c):
-    """RATE: rate targets, measurements and outputs per axis [deg/s], vertical acceleration."""
+    """RATE: rate targets, measurements and outputs per axis [deg/s], vertical acceleration,
+    throttle and its slew rate (tlm_sim.control.mixer.throttle_slew_update)."""
     d = L.RAD2DEG
     r = L.new_row(bufs, counts, L.K_RATE, t_us)
     if r >= 0:
@@ -203,7 +204,7 @@ def _log_rate(bufs, counts, t_us, c):
         b[r, RATE.ADes] = c[C.PZ_ACC_T] * 100.0
         b[r, RATE.A] = c[C.PZ_ACC_MEAS] * 100.0
         b[r, RATE.AOut] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
-        b[r, RATE.AOutSlew] = 0.0
+        b[r, RATE.AOutSlew] = c[C.THR_SLEW_RATE]
 
 
 @inline_jit
@@ -231,7 +232,7 @@ def _log_ctun(bufs, counts, t_us, c, eo, s, pos):
     r = L.new_row(bufs, counts, L.K_CTUN, t_us)
     if r >= 0:
         b = bufs[L.K_CTUN]
-        b[r, CTUN.ThI] = c[C.THR_OUT]
+        b[r, CTUN.ThI] = c[C.THR_IN_RAW]
         b[r, CTUN.ABst] = c[C.THR_OUT_BOOSTED] - c[C.THR_OUT]
         b[r, CTUN.ThO] = c[C.THR_OUT_BOOSTED] if c[C.ARMED] != 0.0 else 0.0
         b[r, CTUN.ThH] = c[C.THR_HOVER]

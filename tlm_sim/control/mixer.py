@@ -327,3 +327,79 @@ def output_idle(c, g, spin):
     c[C.LIM_YAW] = 1.0
     c[C.LIM_THR_LO] = 1.0
     c[C.LIM_THR_HI] = 0.0
+
+
+#: points of the throttle slew detector (AP_Motors' DerivativeFilterFloat_Size7)
+SLEW_POINTS = 7
+
+
+@tick_jit
+def throttle_slew_update(c, g, t_us, q):
+    """AP_MotorsMulticopter::update_throttle_filter, every main-loop tick at t_us [us], q: the
+    EKF attitude body->NED the controllers used.
+
+    The motors' throttle input is AC_PosControl's demand unclamped (THR_IN_RAW) with
+    AC_AttitudeControl_Multi's angle boost (x 1/cos(tilt), the cosine floored at 0.1, faded
+    out between 84 and 90 deg of tilt; no upper limit), 0 at ground idle; it is low-passed at
+    2 Hz and clamped to 0..1 while armed, 0 while disarmed (THR_FILT); when that changed, a
+    sample of it for the 7-point slew detector; the detector's slope [1/s], its magnitude
+    low-passed at 50 Hz: THR_SLEW_RATE, logged as RATE.AOutSlew.
+
+    tlm's mixer takes the clamped, unfiltered throttle (RATE.AOut, CTUN.ThO), ArduPilot's the
+    filtered one: THR_FILT feeds the detector only. Where the filtered throttle sits at a limit
+    (1.0 at full throttle) it does not change, no sample comes and the rate stays at its last
+    value: engine_s14.bin logs a constant AOutSlew 0.346 while its copter lies on the ground
+    at full throttle, 79.5 during the tumble before (the last rise to 1.0)."""
+    last = c[C.THR_FILT]
+    if c[C.ARMED] != 0.0:
+        thr = 0.0
+        if c[C.SUBMODE] != C.SUB_GROUND_IDLE:
+            cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])
+            inverted = min(max(10.0 * cos_tilt, 0.0), 1.0)
+            thr = c[C.THR_IN_RAW] * inverted / min(max(cos_tilt, 0.1), 1.0)
+        f = last + g[C.G_THR_FILT_A] * (thr - last)
+        f = min(max(f, 0.0), 1.0)
+    else:
+        f = 0.0
+    c[C.THR_FILT] = f
+    if f != last:
+        _slew_sample(c, f, float(t_us))
+    rate = abs(_slew_slope(c) * 1e6)
+    c[C.THR_SLEW_RATE] += g[C.G_SLEW_FILT_A] * (rate - c[C.THR_SLEW_RATE])
+
+
+@tick_jit
+def _slew_sample(c, value, t_us):
+    """DerivativeFilter::update: a new (value, time) into the ring unless the time repeats."""
+    i = int(c[C.SLEW_IDX])
+    prev = SLEW_POINTS - 1 if i == 0 else i - 1
+    if c[C.SLEW_TIMES + prev] == t_us:
+        return
+    c[C.SLEW_TIMES + i] = t_us
+    c[C.SLEW_SAMPLES + i] = value
+    c[C.SLEW_IDX] = (i + 1) % SLEW_POINTS
+    c[C.SLEW_NEW] = 1.0
+
+
+@tick_jit
+def _slew_slope(c):
+    """DerivativeFilter::slope (Holoborodko's 7-point smooth differentiator on uneven times)
+    [1/us]: the last slope again when no sample came since; 0 until the ring has filled (its
+    last two time slots differ)."""
+    if c[C.SLEW_NEW] == 0.0:
+        return c[C.SLEW_LAST]
+    if c[C.SLEW_TIMES + SLEW_POINTS - 1] == c[C.SLEW_TIMES + SLEW_POINTS - 2]:
+        return 0.0
+    base = int(c[C.SLEW_IDX]) + 10  # the oldest sample is k = -3, the newest k = 3
+    out = 0.0
+    for k, w in ((1, 10.0), (2, 16.0), (3, 6.0)):
+        hi = (base + k) % SLEW_POINTS
+        lo = (base - k) % SLEW_POINTS
+        out += w * (c[C.SLEW_SAMPLES + hi] - c[C.SLEW_SAMPLES + lo]) / (
+            c[C.SLEW_TIMES + hi] - c[C.SLEW_TIMES + lo])
+    out /= 32.0
+    if not math.isfinite(out):
+        out = 0.0
+    c[C.SLEW_NEW] = 0.0
+    c[C.SLEW_LAST] = out
+    return out

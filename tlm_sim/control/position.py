@@ -221,7 +221,8 @@ def z_reset(c, g, pd, vd, throttle):
 
 @tick_jit
 def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
-    """Run the vertical controller; returns the throttle demand 0..1 (before angle boost).
+    """Run the vertical controller; returns the throttle demand 0..1 (before angle boost; the
+    unclamped demand, as AC_PosControl passes it on, in c[THR_IN_RAW]).
 
     pd, vd: EKF down position [m] and velocity [m/s]; acc_up_meas: measured up acceleration
     [m/s^2] (earth frame, gravity removed); limit_lo/hi: mixer throttle saturation flags.
@@ -263,17 +264,19 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
                 or (c[C.PZ_I] < 0.0 and verr_cm > 0.0)):
             c[C.PZ_I] = min(max(i_new, -imax), imax)
         thr = VIBE_COMP_P_GAIN * thr_per_cmss * acc_up * 100.0 + c[C.PZ_I] + c[C.THR_HOVER]
+        c[C.THR_IN_RAW] = thr
         return min(max(thr, 0.0), 1.0)
     # acceleration PID in ArduPilot units (cm/s^2 in, throttle x1000 out)
     err_cm = (acc_up - acc_up_meas) * 100.0
     c[C.PZ_ACC_EF] += g[C.G_ACCZ_FLTE] * (err_cm - c[C.PZ_ACC_EF])
     ef = c[C.PZ_ACC_EF]
-    i_new = c[C.PZ_I] + g[C.G_ACCZ_I] * ef * dt * 0.001
-    i_new = min(max(i_new, -imax), imax)
-    if (limit_lo and i_new < c[C.PZ_I]) or (limit_hi and i_new > c[C.PZ_I]):
-        i_new = c[C.PZ_I]
-    c[C.PZ_I] = i_new
+    # AC_PID::update_i with AC_PosControl's limit (either throttle limit of the motors): while
+    # limited the integrator moves only where the error opposes its sign (back towards zero)
+    i0 = c[C.PZ_I]
+    if not (limit_lo or limit_hi) or (i0 > 0.0 and ef < 0.0) or (i0 < 0.0 and ef > 0.0):
+        c[C.PZ_I] = min(max(i0 + g[C.G_ACCZ_I] * ef * dt * 0.001, -imax), imax)
     thr = g[C.G_ACCZ_P] * ef * 0.001 + c[C.PZ_I] + c[C.THR_HOVER]
+    c[C.THR_IN_RAW] = thr
     return min(max(thr, 0.0), 1.0)
 
 

@@ -10,10 +10,13 @@ Differences from SITL, on purpose:
 
 * attitude is a unit quaternion (body -> NED) advanced with the exact exponential of the
   body rate over the step and renormalised, instead of a first-order DCM update;
-* with ``F_GYRO = 1`` (default) the gyroscopic term ``-w x (I w)`` is included, integrated by
-  rotating the body angular momentum with the same rotation as the attitude, so that a
-  torque-free body keeps its earth-frame angular momentum exactly; ``F_GYRO = 0`` drops it as
-  SITL does;
+* with ``F_GYRO = 1`` (``TLM_GYRO_CPL`` 1; the default 0 drops it, as SITL does) the
+  gyroscopic term ``-w x (I w)`` is included, integrated by rotating the body angular momentum
+  with the same rotation as the attitude, so that a torque-free body keeps its earth-frame
+  angular momentum exactly. Off by default because it changes how a copter tumbles after a
+  motor loss: with it, tlm's copter landed ~60 deg further round than SITL's and hopped on
+  its three motors where SITL's lies still (docs/fidelity-faults.md, "Engine fault on the
+  ground");
 * the body airspeed is recomputed at the start of the tick from the current wind.
 """
 
