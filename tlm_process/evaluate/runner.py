@@ -33,7 +33,10 @@ from tlm_process.evaluate.models import ALL_MODELS, TIME_MODELS, make_model
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
+    TRAIN_HZ,
+    FlightRuns,
     WindowFeatures,
+    merged_windows,
     row_rate_hz,
     train_rows,
     window_features,
@@ -144,7 +147,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
         say(tab.describe())
         results[t] = {}
         for name in models:
-            make = partial(make_model, name, n_features=tab.x(name).shape[1], seed=seed,
+            make = partial(make_model, name, n_features=tab.n_inputs(name), seed=seed,
                            n_jobs=n_jobs, progress=lambda s, t=t: say(f"[{t}]   {s}"),
                            cnn_epochs=cnn_epochs)
             counts, cm, last, fit_s = _fit_folds(tab, name, make, say)
@@ -154,9 +157,10 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             r.update(counts)
             if tab.yt is not None:  # transfer rows
                 last = _fit_all(tab, name, make) if len(tab.folds) > 1 else last
+                pred = _predict(last, partial(tab.transfer_inputs, name),
+                                np.arange(len(tab.yt)))
                 r["transfer"] = classification_metrics(
-                    confusion_matrix(tab.yt, last.predict(tab.xt(name)), labels=tab.labels),
-                    class_names(tab.labels))
+                    confusion_matrix(tab.yt, pred, labels=tab.labels), class_names(tab.labels))
             results[t][name] = r
             say(_model_line(t, name, r, fit_s))
             if out is not None:
@@ -166,12 +170,41 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
     return results
 
 
+#: Rows predicted per call: bounds the copies (window matrices as float64 inside
+#: scikit-learn) whatever the table's size; every model predicts rows independently.
+PREDICT_CHUNK = 65_536
+
+
+@dataclass
+class _Inputs:
+    """Model inputs of a set of rows (a table's or the transfer rows): ``rows`` (n, d)
+    float64, the matrices of the merged window specs (``win``) over the rows ``pos`` maps
+    to (table row -> matrix row; None: every row, in table order)."""
+
+    rows: np.ndarray
+    win: list[np.ndarray] = field(default_factory=list)
+    pos: np.ndarray | None = None
+
+    def get(self, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
+            ) -> np.ndarray:
+        """Inputs of table rows ``rows``: the rows' features (``which`` None), else the
+        columns ``which[1]`` of window matrix ``which[0]`` (one copy)."""
+        if which is None:
+            return self.rows[rows]
+        i, cols = which
+        at = rows if self.pos is None else self.pos[rows]
+        mat = self.win[i]
+        return mat[at] if cols is None else mat[np.ix_(at, cols)]
+
+
 @dataclass
 class _Table:
-    """One table's rows as every model needs them: labels, flights, features per row and
-    per time window (window models), folds, and the transfer rows (``xt`` None without).
-    ``labels``: the classes of its confusion matrices (``tlm_process.labels.class_labels`` of
-    the table's and the transfer rows' labels)."""
+    """One table's rows as every model needs them, computed once and shared by all models:
+    labels, flights, the feature matrix, the window statistics of every window model (each
+    statistic once: :func:`.temporal.merged_windows`; only for the rows some model is fitted
+    on or predicts), folds, and the transfer rows (``xt`` None without). ``labels``: the
+    classes of its confusion matrices (``tlm_process.labels.class_labels`` of the table's and
+    the transfer rows' labels)."""
 
     name: str
     n_rows: int
@@ -179,13 +212,13 @@ class _Table:
     n_features: int
     y: np.ndarray
     groups: np.ndarray
-    x_rows: np.ndarray
-    x_win: dict[str, np.ndarray]
-    thin: np.ndarray | None  # rows the window models are fitted on
+    x: _Inputs
+    win_of: dict[str, tuple[int, np.ndarray | None]]  # window model -> its columns
+    train_hz: dict[str, float]  # model -> rate its training rows are thinned to [Hz]; 0: all
+    thin: dict[float, np.ndarray]  # rate [Hz] -> mask of the rows kept at that rate
     folds: list[Fold]
     yt: np.ndarray | None = None
-    xt_rows: np.ndarray | None = None
-    xt_win: dict[str, np.ndarray] = field(default_factory=dict)
+    xt: _Inputs | None = None
     labels: list[int] = field(default_factory=list)
 
     @classmethod
@@ -201,27 +234,60 @@ class _Table:
             fold_list = _folds(df, split, seed, folds, test_frac)
         except ValueError as exc:
             raise EvaluateError(f"{t}: {exc}") from None
-        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
-        rate = row_rate_hz(df) if specs else None  # measured once for every window model
+        train_hz = {m: (TRAIN_HZ if m in TIME_MODELS else 0.0) for m in models}
+        runs = FlightRuns.of(df)
+        rate = row_rate_hz(df, runs)  # measured once for every model
+        thin = {hz: train_rows(df, rate, hz, runs) for hz in set(train_hz.values()) if hz}
         groups = df["flight"].astype(str).to_numpy()
+        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
+        merged, win_of = merged_windows(specs, feats)
+        x = _Inputs(df[feats].to_numpy(np.float64))
+        if merged:
+            need = np.zeros(len(df), dtype=bool)  # rows some window model fits or predicts
+            for f in fold_list:
+                need[f.test] = True
+                for m in specs:
+                    need[f.train[thin[train_hz[m]][f.train]] if train_hz[m] else f.train] = True
+            if len(fold_list) > 1:
+                for m in specs:
+                    need |= thin[train_hz[m]] if train_hz[m] else True
+            rows = np.flatnonzero(need)
+            x.pos = np.full(len(df), -1, dtype=np.int64)
+            x.pos[rows] = np.arange(len(rows))
+            x.win = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
         tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
-                  df["label"].to_numpy(np.int64), groups, df[feats].to_numpy(np.float64),
-                  {m: window_features(df, feats, sp, rate)[0] for m, sp in specs.items()},
-                  train_rows(df, rate) if specs else None, fold_list)
+                  df["label"].to_numpy(np.int64), groups, x, win_of, train_hz, thin, fold_list)
         if xt is not None:
             tab.yt = xt["label"].to_numpy(np.int64)
-            tab.xt_rows = xt[feats].to_numpy(np.float64)
-            tab.xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
+            xt_runs = FlightRuns.of(xt)
+            xt_rate = row_rate_hz(xt, xt_runs) if merged else None
+            tab.xt = _Inputs(xt[feats].to_numpy(np.float64),
+                             [window_features(xt, feats, sp, xt_rate, None, xt_runs)[0]
+                              for sp in merged])
         tab.labels = class_labels(tab.y, tab.yt if tab.yt is not None else [])
         return tab
 
-    def x(self, model: str) -> np.ndarray:
-        """The model's inputs: window features for a window model, else the rows."""
-        return self.x_win[model] if model in TIME_MODELS else self.x_rows
+    def n_inputs(self, model: str) -> int:
+        """Number of input columns of ``model``."""
+        if model not in self.win_of:
+            return self.x.rows.shape[1]
+        i, cols = self.win_of[model]
+        return self.x.win[i].shape[1] if cols is None else len(cols)
 
-    def xt(self, model: str) -> np.ndarray:
-        """The model's inputs on the transfer rows."""
-        return self.xt_win[model] if model in TIME_MODELS else self.xt_rows
+    def inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
+        """The model's inputs of table rows ``rows``: window features for a window model,
+        else the rows' features."""
+        return self.x.get(self.win_of.get(model), rows)
+
+    def transfer_inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
+        """The model's inputs of transfer rows ``rows``."""
+        assert self.xt is not None
+        return self.xt.get(self.win_of.get(model), rows)
+
+    def fit_rows(self, model: str, train: np.ndarray) -> np.ndarray:
+        """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
+        hz = self.train_hz[model]
+        return train[self.thin[hz][train]] if hz else train
 
     def describe(self) -> str:
         """The progress line of the table."""
@@ -232,13 +298,23 @@ class _Table:
                 + (f"; transfer {len(self.yt):,} rows" if self.yt is not None else ""))
 
 
+def _predict(est: Any, get: Callable[[np.ndarray], np.ndarray], rows: np.ndarray
+             ) -> np.ndarray:
+    """``est.predict`` of rows ``rows`` (``get(rows)``: their inputs), in chunks of
+    :data:`PREDICT_CHUNK` rows."""
+    if not len(rows):
+        return np.empty(0, dtype=np.int64)
+    return np.concatenate([est.predict(get(rows[a:a + PREDICT_CHUNK]))
+                           for a in range(0, len(rows), PREDICT_CHUNK)])
+
+
 def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
                ) -> tuple[dict[str, Any], np.ndarray, Any, float]:
     """Fit a fresh model ``make()`` on each fold's training rows and predict its test rows.
 
     Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
     fit time [s])."""
-    X, y, groups, t = tab.x(name), tab.y, tab.groups, tab.name
+    y, groups, t = tab.y, tab.groups, tab.name
     cm = np.zeros((len(tab.labels),) * 2, dtype=np.int64)
     fit_s = pred_s = 0.0
     n_train = n_test = n_fit = 0
@@ -246,13 +322,11 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
     per_fold: list[dict[str, Any]] = []
     for fold in tab.folds:
         est = make()
-        fit_rows = fold.train
-        if name in TIME_MODELS:
-            fit_rows = fit_rows[tab.thin[fit_rows]]
+        fit_rows = tab.fit_rows(name, fold.train)
         t0 = time.perf_counter()
-        _fit(est, X[fit_rows], y[fit_rows], groups[fit_rows])
+        _fit(est, tab.inputs(name, fit_rows), y[fit_rows], groups[fit_rows])
         t1 = time.perf_counter()
-        pred = est.predict(X[fold.test])
+        pred = _predict(est, partial(tab.inputs, name), fold.test)
         t2 = time.perf_counter()
         fit_s += t1 - t0
         pred_s += t2 - t1
@@ -277,12 +351,11 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
 
 
 def _fit_all(tab: _Table, name: str, make: Callable[[], Any]) -> Any:
-    """A fresh model fitted on every row (window models: every training row) of the table:
-    the one tested on the transfer rows after cross-validation."""
+    """A fresh model fitted on every row (thinned to the model's rate) of the table: the one
+    tested on the transfer rows after cross-validation."""
     est = make()
-    every = tab.thin if name in TIME_MODELS else slice(None)
-    X = tab.x(name)
-    _fit(est, X[every], tab.y[every], tab.groups[every])
+    rows = tab.fit_rows(name, np.arange(tab.n_rows))
+    _fit(est, tab.inputs(name, rows), tab.y[rows], tab.groups[rows])
     return est
 
 
