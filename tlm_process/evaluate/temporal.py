@@ -37,7 +37,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
+from numba import njit
+from scipy.ndimage import maximum_filter1d
 
 __all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "FlightRuns", "WindowFeatures",
            "merged_windows", "row_rate_hz", "train_rows", "window_features", "window_hgb",
@@ -176,6 +177,63 @@ def _trailing_filter(fn, x: np.ndarray, w: int) -> np.ndarray:
     return centred[w // 2: w // 2 + len(x)]
 
 
+@njit(cache=True, nogil=True)
+def _trailing_stats(ve: np.ndarray, w: int, lead: int, n: int) -> np.ndarray:
+    """Statistics of the trailing windows of ``w`` rows of series ``ve`` (its start padded
+    with ``ve[0]``) ending at rows ``lead .. lead + n - 1``: (n, 6) columns mean, standard
+    deviation, minimum, maximum, mean absolute row-to-row change, last minus first value.
+
+    One pass (numba): the sums are differences of running sums accumulated in the order
+    ``np.cumsum`` adds (the results equal the former numpy code's to the bit), the minimum
+    and maximum come from monotonic queues."""
+    m = len(ve)
+    c1 = np.zeros(m + w)
+    c2 = np.zeros(m + w)
+    ca = np.zeros(m + w)
+    for i in range(m + w - 1):  # running sums of the padded series
+        j = i - (w - 1)
+        x = ve[0] if j < 0 else ve[j]
+        a = 0.0 if j <= 0 else abs(ve[j] - ve[j - 1])
+        c1[i + 1] = c1[i] + x
+        c2[i + 1] = c2[i] + x * x
+        ca[i + 1] = ca[i] + a
+    out = np.empty((n, 6))
+    qmin = np.empty(m, dtype=np.int64)  # row indices, values increasing
+    qmax = np.empty(m, dtype=np.int64)  # values decreasing
+    h0 = t0 = h1 = t1 = 0
+    for t in range(lead + n):
+        x = ve[t]
+        while t0 > h0 and ve[qmin[t0 - 1]] >= x:
+            t0 -= 1
+        qmin[t0] = t
+        t0 += 1
+        while t1 > h1 and ve[qmax[t1 - 1]] <= x:
+            t1 -= 1
+        qmax[t1] = t
+        t1 += 1
+        first = t - w + 1
+        while qmin[h0] < first:
+            h0 += 1
+        while qmax[h1] < first:
+            h1 += 1
+        if t < lead:
+            continue
+        r = t - lead
+        mean = (c1[t + w] - c1[t]) / w
+        out[r, 0] = mean
+        out[r, 1] = np.sqrt(max((c2[t + w] - c2[t]) / w - mean * mean, 0.0))
+        lo = ve[qmin[h0]]
+        hi = ve[qmax[h1]]
+        if first < 0:  # the padding repeats ve[0]
+            lo = min(lo, ve[0])
+            hi = max(hi, ve[0])
+        out[r, 2] = lo
+        out[r, 3] = hi
+        out[r, 4] = (ca[t + w] - ca[t]) / w
+        out[r, 5] = x - ve[max(first, 0)]
+    return out
+
+
 def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
                   rows: Sequence[int]) -> np.ndarray:
     """Window features of one flight's rows (time order), shape (n, n_out); ``rows``: the
@@ -201,18 +259,8 @@ def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
         cols.append(v)
         for w in rows:
             lead = (w - 1 - w // 2) if spec.centred else 0
-            ve = np.concatenate([v, np.full(lead, v[-1])])
-            ade = np.abs(np.diff(ve, prepend=ve[0]))
-            m = len(ve)
-            s1 = _trailing_sum(ve, w)
-            s2 = _trailing_sum(ve * ve, w)
-            mean = s1 / w
-            first = np.concatenate([np.full(min(w - 1, m), ve[0]), ve])[:m]
-            for c in (mean, np.sqrt(np.maximum(s2 / w - mean * mean, 0.0)),
-                      _trailing_filter(minimum_filter1d, ve, w),
-                      _trailing_filter(maximum_filter1d, ve, w),
-                      _trailing_sum(ade, w) / w, ve - first):
-                cols.append(c[lead:lead + n])
+            ve = np.concatenate([v, np.full(lead, v[-1])]) if lead else v
+            cols.extend(_trailing_stats(ve, w, lead, n).T)
         if spec.history:
             cols.append(np.cumsum(v) / np.arange(1, n + 1))
             cols.append(np.minimum.accumulate(v))
