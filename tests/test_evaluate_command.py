@@ -94,6 +94,30 @@ def test_evaluate_is_deterministic_given_the_seed(tiny_ds, tmp_path, capsys):
     assert rnd != a
 
 
+def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp_path,
+                                                capsys):
+    """--jobs changes the speed only: RandomForest and KNN (threads), SMO (processes),
+    Logistic (BLAS), the window models (OpenMP) and the CNN (torch) give the same test and
+    transfer confusion matrices and the same CNN training curve on 1 and 2 threads."""
+    pytest.importorskip("torch")
+
+    def once(jobs):
+        rj = tmp_path / f"jobs{jobs}.json"
+        rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models",
+                          "Logistic,SMO,KNN,RandomForest,CNN,WindowHGB", "--cnn-epochs", "2",
+                          "--jobs", jobs, "--quiet", "--test-on", tiny_flight_folder,
+                          "--json", rj)
+        assert rc == 0, err
+        res = json.loads(rj.read_text())["GPS"]
+        return {m: (r["confusion"], r["transfer"]["confusion"], r["macro_f1"],
+                    [(h["loss"], h["accuracy"], h["val_loss"]) for h in r.get("history", [])])
+                for m, r in res.items()}
+
+    one, two = once(1), once(2)
+    assert len(one["CNN"][3]) == 2
+    assert one == two
+
+
 def test_evaluate_transfer_to_a_reference_sitl_log(tiny_ds, tmp_path, capsys):
     log = reference_path("combined_s21.bin")
     rj = tmp_path / "t.json"

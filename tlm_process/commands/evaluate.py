@@ -100,8 +100,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                                                 "training curves and report.txt here")
     p.add_argument("--details", action="store_true",
                    help="print every model's confusion matrix and per-class scores")
-    p.add_argument("--jobs", type=int_at_least(1), default=1, metavar="N",
-                   help="CPU threads for RandomForest and KNN (default 1)")
+    p.add_argument("--jobs", type=int_at_least(1), default=None, metavar="N",
+                   help="CPU threads (RandomForest, KNN, SMO, the window models, the CNN; "
+                        "default: all cores); results do not depend on it")
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")

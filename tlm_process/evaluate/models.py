@@ -424,8 +424,12 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
                progress: Callable[[str], None] | None = None,
                cnn_epochs: int | None = None) -> Any:
     """A fresh estimator for model ``name`` (one of :data:`ALL_MODELS`) on ``n_features``
-    features, seeded with ``seed``. ``progress`` receives one line per epoch from the
-    neural network; ``cnn_epochs`` overrides its epoch count."""
+    features, seeded with ``seed``. ``n_jobs``: threads of RandomForest (trees), KNN
+    (queries) and the CNN (torch), worker processes of SMO (its class pairs: liblinear's
+    random generator is one per process, so threads would share it); the window models'
+    OpenMP threads are set by the caller (``threadpoolctl``). None of them changes a result.
+    ``progress`` receives one line per epoch from the neural network; ``cnn_epochs``
+    overrides its epoch count."""
     s = int(seed)
     k = weka_num_features(n_features)
     builders: dict[str, Callable[[], Any]] = {
@@ -433,7 +437,8 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
         "Logistic": lambda: _impute(make_pipeline(StandardScaler(), LogisticRegression(
             C=1.0 / (2.0 * LOGISTIC_RIDGE), max_iter=500, tol=1e-6))),
         "SMO": lambda: _impute(make_pipeline(MinMaxScaler(), OneVsOneClassifier(
-            LinearSVC(C=1.0, loss="hinge", dual=True, max_iter=20000, random_state=s)))),
+            LinearSVC(C=1.0, loss="hinge", dual=True, max_iter=20000, random_state=s),
+            n_jobs=n_jobs if n_jobs > 1 else None))),
         "KNN": lambda: _impute(make_pipeline(MinMaxScaler(), KNeighborsClassifier(
             n_neighbors=1, n_jobs=n_jobs))),
         "AdaBoost": lambda: AdaBoostM1(n_estimators=10, random_state=s),

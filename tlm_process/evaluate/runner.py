@@ -11,6 +11,7 @@ also predicts the transfer rows.
 from __future__ import annotations
 
 import inspect
+import os
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -44,7 +45,15 @@ from tlm_process.evaluate.temporal import (
 )
 from tlm_process.labels import class_labels, class_names
 
-__all__ = ["evaluate", "resolve_models", "window_spec"]
+__all__ = ["default_jobs", "evaluate", "resolve_models", "window_spec"]
+
+
+def default_jobs() -> int:
+    """Cores this process may run on (``--jobs``' default)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not Linux
+        return max(1, os.cpu_count() or 1)
 
 
 def resolve_models(text: str | Sequence[str]) -> list[str]:
@@ -106,7 +115,7 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              folds: int | None = None, test_frac: float | None = None,
              transfer: Mapping[str, pd.DataFrame] | None = None,
              out_dir: str | Path | None = None,
-             progress: Callable[[str], None] | None = None, n_jobs: int = 1,
+             progress: Callable[[str], None] | None = None, n_jobs: int | None = None,
              cnn_epochs: int | None = None) -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
     ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
@@ -115,13 +124,15 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     with cross-validation ``per_fold`` (accuracy and macro-F1 of each fold), for the CNN
     ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows).
     ``out_dir``: confusion matrix PNGs (and the CNN's training curves) are written there.
-    ``n_jobs``:
-    threads for every library (BLAS, OpenMP, torch); 1 by default, as on a shared machine
-    more threads than free cores slow OpenMP code down several times. Convergence warnings
+    ``n_jobs``: threads for every library (BLAS, OpenMP, torch, joblib; default: this
+    machine's cores, :func:`default_jobs`); results are the same whatever it is. On a
+    machine whose cores other work keeps busy, fewer threads can be faster (OpenMP threads
+    wait for each other). Convergence warnings
     (liblinear for SMO, lbfgs for Logistic) are silenced: those models are used as they
     stand after their iteration limit (see ``docs/evaluation.md``)."""
     from threadpoolctl import threadpool_limits
 
+    n_jobs = n_jobs or default_jobs()
     with threadpool_limits(limits=n_jobs), warnings.catch_warnings():
         warnings.simplefilter("ignore", category=ConvergenceWarning)
         return _evaluate(ds, tables=tables, models=models, split=split, seed=seed, folds=folds,
