@@ -49,6 +49,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 __all__ = [
     "ALL_MODELS",
+    "DEFAULT_TRAIN_HZ",
     "PAPER_MODELS",
     "TIME_MODELS",
     "AdaBoostM1",
@@ -67,6 +68,13 @@ PAPER_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoo
 TIME_MODELS: tuple[str, ...] = ("WindowHGB", "WindowHGB60", "CentredHGB")
 #: Every model ``tlm evaluate --models all`` runs.
 ALL_MODELS: tuple[str, ...] = PAPER_MODELS + ("CNN",) + TIME_MODELS
+
+#: Rate [Hz] each model's training rows are thinned to by default (``tlm evaluate
+#: --train-hz``; 0: every row): in each flight, in time order, every k-th row, k =
+#: round(table rate / Hz). Test rows are never thinned. Chosen by measurement
+#: (``docs/evaluation.md``, "Training rows"): macro-F1 within 0.01 of fitting on every row.
+DEFAULT_TRAIN_HZ: dict[str, float] = {
+    **{m: 0.0 for m in PAPER_MODELS}, "CNN": 0.0, **{m: 5.0 for m in TIME_MODELS}}
 
 #: Weka's default ridge of ``weka.classifiers.functions.Logistic``.
 LOGISTIC_RIDGE = 1e-8
