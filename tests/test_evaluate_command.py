@@ -71,7 +71,8 @@ def test_evaluate_end_to_end_table_json_and_pngs(tiny_ds, tmp_path, capsys):
                 "weighted_tp_rate", "weighted_fp_rate", "per_class", "confusion"):
         assert key in r
     assert sum(map(sum, r["confusion"])) == r["n_test"] > 0
-    assert r["n_fit"] == r["n_train"]  # row models fit on every training row
+    assert r["fit_seconds"] >= 0 and r["predict_seconds"] >= 0
+    assert "GPS: time per model" in out and "rows fitted" in out
     assert 0 < res["GPS"]["WindowHGB"]["n_fit"] <= r["n_train"]  # GPS 5 Hz: thinned to 5 Hz
     assert res["GPS"]["ZeroR"]["weighted_precision"] is None
     assert res["GPS"]["WindowHGB"]["macro_f1"] > res["GPS"]["ZeroR"]["macro_f1"]
@@ -92,6 +93,45 @@ def test_evaluate_is_deterministic_given_the_seed(tiny_ds, tmp_path, capsys):
     assert a == b
     rnd = once("c.json", "--split", "random")
     assert rnd != a
+
+
+def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp_path,
+                                                capsys):
+    """--jobs changes the speed only: RandomForest and KNN (threads), SMO (processes),
+    Logistic (BLAS), the window models (OpenMP) and the CNN (torch) give the same test and
+    transfer confusion matrices and the same CNN training curve on 1 and 2 threads."""
+    pytest.importorskip("torch")
+
+    def once(jobs):
+        rj = tmp_path / f"jobs{jobs}.json"
+        rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models",
+                          "Logistic,SMO,KNN,RandomForest,CNN,WindowHGB", "--cnn-epochs", "2",
+                          "--jobs", jobs, "--quiet", "--test-on", tiny_flight_folder,
+                          "--json", rj)
+        assert rc == 0, err
+        res = json.loads(rj.read_text())["GPS"]
+        return {m: (r["confusion"], r["transfer"]["confusion"], r["macro_f1"],
+                    [(h["loss"], h["accuracy"], h["val_loss"]) for h in r.get("history", [])])
+                for m, r in res.items()}
+
+    one, two = once(1), once(2)
+    assert len(one["CNN"][3]) == 2
+    assert one == two
+
+
+def test_evaluate_train_hz_thins_training_rows_only(tiny_ds, tmp_path, capsys):
+    def once(hz):
+        rj = tmp_path / f"hz{hz}.json"
+        rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "J48,WindowHGB",
+                          "--train-hz", hz, "--quiet", "--json", rj)
+        assert rc == 0, err
+        return json.loads(rj.read_text())["GPS"]
+
+    every, thin = once("0"), once("1")  # GPS logs at 5 Hz: 1 Hz keeps every 5th row
+    for m in ("J48", "WindowHGB"):
+        assert every[m]["train_hz"] == 0 and every[m]["n_fit"] == every[m]["n_train"]
+        assert thin[m]["train_hz"] == 1 and thin[m]["n_test"] == every[m]["n_test"]
+        assert abs(thin[m]["n_fit"] - thin[m]["n_train"] / 5) <= 2  # 2 training flights
 
 
 def test_evaluate_transfer_to_a_reference_sitl_log(tiny_ds, tmp_path, capsys):

@@ -131,3 +131,25 @@ def test_window_models_fit_on_rows_thinned_per_flight_in_time_order():
         ("a", 0), ("a", 5), ("b", 0), ("b", 5), ("b", 10)]
     assert train_rows(df, rate_hz=5.0).all()  # GPS rate: every row
     assert train_rows(df, rate_hz=10.0).sum() == 6 + 4  # every 2nd row of each flight
+
+
+def test_merged_windows_give_every_model_its_own_features_for_the_rows_asked():
+    from tlm_process.evaluate.temporal import FlightRuns, merged_windows, row_rate_hz
+
+    df = _noise_flights(4, 3).sample(frac=1.0, random_state=1)  # rows in no order
+    df["y"] = np.cos(np.arange(len(df)) / 7.0)
+    feats = ["x", "y"]
+    specs = {m: window_spec_for(m, {"y": 2.0}) for m in WINDOW_MODELS}
+    merged, which = merged_windows(specs, feats)
+    assert len(merged) == 2  # trailing windows shared by WindowHGB and WindowHGB60; centred
+    runs = FlightRuns.of(df)
+    rate = row_rate_hz(df, runs)
+    assert rate == pytest.approx(5.0)
+    rows = np.flatnonzero(np.random.default_rng(0).random(len(df)) < 0.3)[::-1].copy()
+    mats = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
+    for m, sp in specs.items():
+        own, names = window_features(df, feats, sp)
+        i, cols = which[m]
+        got = mats[i] if cols is None else mats[i][:, cols]
+        assert got.shape == (len(rows), len(names))
+        assert np.array_equal(got, own[rows]), m

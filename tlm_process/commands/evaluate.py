@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -18,6 +19,7 @@ from tlm_process.cliutil import (
     check_writable_file,
     fraction,
     int_at_least,
+    number,
     prepare_out,
     whole_number,
 )
@@ -71,6 +73,14 @@ examples:
 """
 
 
+def _rate_hz(text: str) -> float:
+    """A finite rate >= 0 [Hz] (``--train-hz``)."""
+    v = number(text)
+    if not (v >= 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError("must be a finite number >= 0")
+    return v
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``evaluate`` subcommand to ``tlm``'s subparsers; returns its parser."""
     p = subparsers.add_parser(
@@ -100,8 +110,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                                                 "training curves and report.txt here")
     p.add_argument("--details", action="store_true",
                    help="print every model's confusion matrix and per-class scores")
-    p.add_argument("--jobs", type=int_at_least(1), default=1, metavar="N",
-                   help="CPU threads for RandomForest and KNN (default 1)")
+    p.add_argument("--jobs", type=int_at_least(1), default=None, metavar="N",
+                   help="CPU threads (RandomForest, KNN, SMO, the window models, the CNN; "
+                        "default: all cores); results do not depend on it")
+    p.add_argument("--train-hz", type=_rate_hz, default=None, metavar="HZ",
+                   help="fit every model on each training flight's rows thinned to about HZ "
+                        "rows per second (0: every row; default: per model, see below); "
+                        "test rows are never thinned")
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -192,7 +207,8 @@ def _run(args: argparse.Namespace) -> int:
     results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
                        folds=args.folds, test_frac=args.test_frac, transfer=transfer,
                        out_dir=out, progress=say, n_jobs=args.jobs,
-                       cnn_epochs=args.cnn_epochs)
+                       cnn_epochs=args.cnn_epochs, train_hz=args.train_hz,
+                       bar=False if quiet else None)
     lines: list[str] = []
     for t, res in results.items():
         lines += _table_lines(t, res, args, details_of=_shown(res, args.details,
@@ -227,7 +243,9 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
         format_confusion,
         format_per_class,
         format_results_table,
+        format_timing_table,
     )
+    from tlm_process.evaluate.runner import default_jobs
 
     first = next(iter(res.values()))
     how = (f"{args.split} split, {first['folds']} folds" if first["folds"] > 1 else
@@ -258,6 +276,10 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
         lines.append("'?': precision undefined (paper: NaN) because the model never "
                      "predicts " + "; ".join(f"{m}: {', '.join(c)}"
                                              for m, c in undefined.items()))
+    lines.append("")
+    jobs = args.jobs or default_jobs()
+    lines.append(format_timing_table(res, f"{t}: time per model (wall seconds, {jobs} "
+                                          f"thread(s); training rows thinned to 'train Hz')"))
     lines.append("")
     return lines
 

@@ -44,6 +44,7 @@ __all__ = [
     "format_confusion",
     "format_per_class",
     "format_results_table",
+    "format_timing_table",
     "plot_confusion",
 ]
 
@@ -208,6 +209,28 @@ def format_results_table(results: Mapping[str, Mapping[str, Any]], title: str = 
     lines.append("  ".join(h.ljust(widths[0]) if i == 0 else h.rjust(widths[i])
                            for i, h in enumerate(head)))
     for r in rows:
+        lines.append("  ".join(c.ljust(widths[0]) if i == 0 else c.rjust(widths[i])
+                               for i, c in enumerate(r)))
+    return "\n".join(lines)
+
+
+def format_timing_table(results: Mapping[str, Mapping[str, Any]], title: str = "") -> str:
+    """Per model: the rate its training rows were thinned to (``all``: every row), the rows
+    it was fitted on, and its fit and predict wall seconds (summed over folds; predict
+    includes the transfer rows, refitting for them after cross-validation is added to fit)."""
+    head = ["Method", "train Hz", "rows fitted", "fit s", "predict s"]
+    rows = []
+    for model, r in results.items():
+        hz = r.get("train_hz")
+        fit = r.get("fit_seconds", 0.0) + r.get("transfer_fit_seconds", 0.0)
+        pred = r.get("predict_seconds", 0.0) + r.get("transfer_predict_seconds", 0.0)
+        rows.append([model, "all" if not hz else f"{hz:g}", f"{r.get('n_fit', 0):,}",
+                     f"{fit:.2f}", f"{pred:.2f}"])
+    rows.append(["total", "", "", f"{sum(float(r[3]) for r in rows):.2f}",
+                 f"{sum(float(r[4]) for r in rows):.2f}"])
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    lines = [title] if title else []
+    for r in [head, *rows]:
         lines.append("  ".join(c.ljust(widths[0]) if i == 0 else c.rjust(widths[i])
                                for i, c in enumerate(r)))
     return "\n".join(lines)

@@ -49,6 +49,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 __all__ = [
     "ALL_MODELS",
+    "DEFAULT_TRAIN_HZ",
     "PAPER_MODELS",
     "TIME_MODELS",
     "AdaBoostM1",
@@ -67,6 +68,13 @@ PAPER_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoo
 TIME_MODELS: tuple[str, ...] = ("WindowHGB", "WindowHGB60", "CentredHGB")
 #: Every model ``tlm evaluate --models all`` runs.
 ALL_MODELS: tuple[str, ...] = PAPER_MODELS + ("CNN",) + TIME_MODELS
+
+#: Rate [Hz] each model's training rows are thinned to by default (``tlm evaluate
+#: --train-hz``; 0: every row): in each flight, in time order, every k-th row, k =
+#: round(table rate / Hz). Test rows are never thinned. Chosen by measurement
+#: (``docs/evaluation.md``, "Training rows"): macro-F1 within 0.01 of fitting on every row.
+DEFAULT_TRAIN_HZ: dict[str, float] = {
+    **{m: 0.0 for m in PAPER_MODELS}, "CNN": 0.0, **{m: 5.0 for m in TIME_MODELS}}
 
 #: Weka's default ridge of ``weka.classifiers.functions.Logistic``.
 LOGISTIC_RIDGE = 1e-8
@@ -424,8 +432,12 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
                progress: Callable[[str], None] | None = None,
                cnn_epochs: int | None = None) -> Any:
     """A fresh estimator for model ``name`` (one of :data:`ALL_MODELS`) on ``n_features``
-    features, seeded with ``seed``. ``progress`` receives one line per epoch from the
-    neural network; ``cnn_epochs`` overrides its epoch count."""
+    features, seeded with ``seed``. ``n_jobs``: threads of RandomForest (trees), KNN
+    (queries) and the CNN (torch), worker processes of SMO (its class pairs: liblinear's
+    random generator is one per process, so threads would share it); the window models'
+    OpenMP threads are set by the caller (``threadpoolctl``). None of them changes a result.
+    ``progress`` receives one line per epoch from the neural network; ``cnn_epochs``
+    overrides its epoch count."""
     s = int(seed)
     k = weka_num_features(n_features)
     builders: dict[str, Callable[[], Any]] = {
@@ -433,7 +445,8 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
         "Logistic": lambda: _impute(make_pipeline(StandardScaler(), LogisticRegression(
             C=1.0 / (2.0 * LOGISTIC_RIDGE), max_iter=500, tol=1e-6))),
         "SMO": lambda: _impute(make_pipeline(MinMaxScaler(), OneVsOneClassifier(
-            LinearSVC(C=1.0, loss="hinge", dual=True, max_iter=20000, random_state=s)))),
+            LinearSVC(C=1.0, loss="hinge", dual=True, max_iter=20000, random_state=s),
+            n_jobs=n_jobs if n_jobs > 1 else None))),
         "KNN": lambda: _impute(make_pipeline(MinMaxScaler(), KNeighborsClassifier(
             n_neighbors=1, n_jobs=n_jobs))),
         "AdaBoost": lambda: AdaBoostM1(n_estimators=10, random_state=s),

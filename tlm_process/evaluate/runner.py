@@ -11,6 +11,8 @@ also predicts the transfer rows.
 from __future__ import annotations
 
 import inspect
+import os
+import sys
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -29,11 +31,13 @@ from tlm_process.evaluate.metrics import (
     confusion_matrix,
     plot_confusion,
 )
-from tlm_process.evaluate.models import ALL_MODELS, TIME_MODELS, make_model
+from tlm_process.evaluate.models import ALL_MODELS, DEFAULT_TRAIN_HZ, TIME_MODELS, make_model
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
+    FlightRuns,
     WindowFeatures,
+    merged_windows,
     row_rate_hz,
     train_rows,
     window_features,
@@ -41,7 +45,15 @@ from tlm_process.evaluate.temporal import (
 )
 from tlm_process.labels import class_labels, class_names
 
-__all__ = ["evaluate", "resolve_models", "window_spec"]
+__all__ = ["default_jobs", "evaluate", "resolve_models", "window_spec"]
+
+
+def default_jobs() -> int:
+    """Cores this process may run on (``--jobs``' default)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not Linux
+        return max(1, os.cpu_count() or 1)
 
 
 def resolve_models(text: str | Sequence[str]) -> list[str]:
@@ -103,35 +115,60 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              folds: int | None = None, test_frac: float | None = None,
              transfer: Mapping[str, pd.DataFrame] | None = None,
              out_dir: str | Path | None = None,
-             progress: Callable[[str], None] | None = None, n_jobs: int = 1,
-             cnn_epochs: int | None = None) -> dict[str, dict[str, dict[str, Any]]]:
+             progress: Callable[[str], None] | None = None, n_jobs: int | None = None,
+             cnn_epochs: int | None = None,
+             train_hz: float | Mapping[str, float] | None = None, bar: bool | None = False
+             ) -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
     ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
-    than ``n_train`` for the window models, :data:`.temporal.TRAIN_HZ`), ``n_test``,
-    ``fit_seconds``, ``predict_seconds``,
+    than ``n_train`` where they are thinned, ``train_hz``), ``train_hz``, ``n_test``,
+    ``fit_seconds``, ``predict_seconds`` (wall seconds summed over folds; with transfer rows
+    ``transfer_predict_seconds`` and, after cross-validation, ``transfer_fit_seconds`` of the
+    model refitted on every flight),
     with cross-validation ``per_fold`` (accuracy and macro-F1 of each fold), for the CNN
     ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows).
     ``out_dir``: confusion matrix PNGs (and the CNN's training curves) are written there.
-    ``n_jobs``:
-    threads for every library (BLAS, OpenMP, torch); 1 by default, as on a shared machine
-    more threads than free cores slow OpenMP code down several times. Convergence warnings
+    ``n_jobs``: threads for every library (BLAS, OpenMP, torch, joblib; default: this
+    machine's cores, :func:`default_jobs`); results are the same whatever it is. On a
+    machine whose cores other work keeps busy, fewer threads can be faster (OpenMP threads
+    wait for each other). ``train_hz``: the rate [Hz] the training rows of every model (a
+    number) or of some (model -> rate) are thinned to, 0 for every row; the others'
+    :data:`.models.DEFAULT_TRAIN_HZ`. Test and transfer rows are never thinned. ``bar``: a
+    progress bar per table on stderr (None: when stderr is a terminal). Convergence
+    warnings
     (liblinear for SMO, lbfgs for Logistic) are silenced: those models are used as they
     stand after their iteration limit (see ``docs/evaluation.md``)."""
     from threadpoolctl import threadpool_limits
 
+    n_jobs = n_jobs or default_jobs()
     with threadpool_limits(limits=n_jobs), warnings.catch_warnings():
         warnings.simplefilter("ignore", category=ConvergenceWarning)
         return _evaluate(ds, tables=tables, models=models, split=split, seed=seed, folds=folds,
                          test_frac=test_frac, transfer=transfer, out_dir=out_dir,
-                         progress=progress, n_jobs=n_jobs, cnn_epochs=cnn_epochs)
+                         progress=progress, n_jobs=n_jobs, cnn_epochs=cnn_epochs,
+                         train_hz=_train_hz(models, train_hz), bar=bar)
+
+
+def _train_hz(models: Sequence[str], given: float | Mapping[str, float] | None
+              ) -> dict[str, float]:
+    """Model -> training-row rate [Hz] (0: every row): ``given`` over the defaults."""
+    out = {m: DEFAULT_TRAIN_HZ.get(m, 0.0) for m in models}
+    if isinstance(given, Mapping):
+        out.update({m: float(v) for m, v in given.items() if m in out})
+    elif given is not None:
+        out = dict.fromkeys(out, float(given))
+    bad = [m for m, v in out.items() if not v >= 0]
+    if bad:
+        raise EvaluateError(f"training-row rate of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
+    return out
 
 
 def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence[str],
               split: str, seed: int, folds: int | None, test_frac: float | None,
               transfer: Mapping[str, pd.DataFrame] | None, out_dir: str | Path | None,
               progress: Callable[[str], None] | None, n_jobs: int,
-              cnn_epochs: int | None) -> dict[str, dict[str, dict[str, Any]]]:
-    say = progress or (lambda s: None)
+              cnn_epochs: int | None, train_hz: dict[str, float], bar: bool | None
+              ) -> dict[str, dict[str, dict[str, Any]]]:
     tables = list(tables) if tables is not None else list(ds.tables)
     unknown = [m for m in models if m not in ALL_MODELS]
     if unknown:
@@ -139,39 +176,150 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
     out = Path(out_dir) if out_dir is not None else None
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for t in tables:
+        t0 = time.perf_counter()
         tab = _Table.build(ds, t, models, split, seed, folds, test_frac,
-                           transfer.get(t) if transfer is not None else None)
-        say(tab.describe())
-        results[t] = {}
-        for name in models:
-            make = partial(make_model, name, n_features=tab.x(name).shape[1], seed=seed,
-                           n_jobs=n_jobs, progress=lambda s, t=t: say(f"[{t}]   {s}"),
-                           cnn_epochs=cnn_epochs)
-            counts, cm, last, fit_s = _fit_folds(tab, name, make, say)
-            r = classification_metrics(cm, class_names(tab.labels))
-            r["labels"] = list(tab.labels)
-            r["split"] = split
-            r.update(counts)
-            if tab.yt is not None:  # transfer rows
-                last = _fit_all(tab, name, make) if len(tab.folds) > 1 else last
-                r["transfer"] = classification_metrics(
-                    confusion_matrix(tab.yt, last.predict(tab.xt(name)), labels=tab.labels),
-                    class_names(tab.labels))
-            results[t][name] = r
-            say(_model_line(t, name, r, fit_s))
-            if out is not None:
-                _plot_model(out, t, name, split, r, cm, last)
-            if hasattr(last, "history_"):
-                r["history"] = last.history_
+                           transfer.get(t) if transfer is not None else None, train_hz)
+        prep_s = time.perf_counter() - t0
+        with _Progress(t, tab, models, progress, bar) as prog:
+            prog.say(tab.describe() + f" (prepared in {prep_s:.1f} s)")
+            results[t] = {}
+            for name in models:
+                prog.start(name)
+                make = partial(make_model, name, n_features=tab.n_inputs(name), seed=seed,
+                               n_jobs=n_jobs, progress=prog.epoch_line, cnn_epochs=cnn_epochs)
+                r, cm, last = _run_model(tab, name, make, prog.say)
+                r["split"] = split
+                results[t][name] = r
+                prog.done(name, r)
+                if out is not None:
+                    _plot_model(out, t, name, split, r, cm, last)
     return results
+
+
+def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
+               ) -> tuple[dict[str, Any], np.ndarray, Any]:
+    """Fit and score model ``name`` on ``tab`` (folds, then the transfer rows); returns (its
+    results, the summed confusion matrix, the model last fitted)."""
+    counts, cm, last = _fit_folds(tab, name, make, say)
+    r = classification_metrics(cm, class_names(tab.labels))
+    r["labels"] = list(tab.labels)
+    r["train_hz"] = tab.train_hz[name]
+    r.update(counts)
+    if tab.yt is not None:  # transfer rows
+        if len(tab.folds) > 1:
+            t0 = time.perf_counter()
+            last = _fit_all(tab, name, make)
+            r["transfer_fit_seconds"] = round(time.perf_counter() - t0, 3)
+        t0 = time.perf_counter()
+        pred = _predict(last, partial(tab.transfer_inputs, name), np.arange(len(tab.yt)))
+        r["transfer_predict_seconds"] = round(time.perf_counter() - t0, 3)
+        r["transfer"] = classification_metrics(
+            confusion_matrix(tab.yt, pred, labels=tab.labels), class_names(tab.labels))
+    if hasattr(last, "history_"):
+        r["history"] = last.history_
+    return r, cm, last
+
+
+#: Relative cost of fitting one training row (per input column) and of predicting one row,
+#: per model (measured with ``benchmarks/bench_evaluate.py``): the weights of the progress
+#: bar, so that its ETA is not fooled by a table's cheap models coming first.
+_COST: Mapping[str, tuple[float, float]] = {
+    "NaiveBayes": (0.02, 0.01), "Logistic": (1.0, 0.01), "SMO": (3.0, 0.05),
+    "KNN": (0.05, 2.0), "AdaBoost": (0.3, 0.05), "OneR": (0.5, 0.01), "ZeroR": (0.0, 0.0),
+    "J48": (0.3, 0.02), "RandomForest": (3.0, 0.2), "RandomTree": (0.1, 0.01),
+    "CNN": (4.0, 0.1), "WindowHGB": (2.0, 0.2), "WindowHGB60": (2.0, 0.2),
+    "CentredHGB": (2.0, 0.2)}
+
+
+class _Progress:
+    """A table's progress: its lines (``say``) and, when ``bar`` is not False, a tqdm bar on
+    stderr (shown only on a terminal when ``bar`` is None) with the model being fitted and
+    an ETA; the bar advances by each model's estimated cost (:data:`_COST`)."""
+
+    def __init__(self, table: str, tab: _Table, models: Sequence[str],
+                 say: Callable[[str], None] | None, bar: bool | None) -> None:
+        self.table = table
+        self._say = say or (lambda s: None)
+        n_pred = sum(len(f.test) for f in tab.folds) + (len(tab.yt) if tab.yt is not None
+                                                        else 0)
+        self.cost = {}
+        for m in models:
+            fit, pred = _COST.get(m, (1.0, 0.1))
+            n_fit = sum(len(tab.fit_rows(m, f.train)) for f in tab.folds)
+            self.cost[m] = 1e-3 * (fit * n_fit * tab.n_inputs(m) + pred * n_pred) + 0.01
+        self.bar = None
+        if bar is not False:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=sum(self.cost.values()), desc=f"[{table}]", unit="",
+                            dynamic_ncols=True, file=sys.stderr, leave=False,
+                            disable=None if bar is None else False,
+                            bar_format="{desc} {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    def say(self, msg: str) -> None:
+        """A progress line (above the bar)."""
+        if self.bar is not None and not self.bar.disable:
+            self.bar.clear()
+        self._say(msg)
+        if self.bar is not None and not self.bar.disable:
+            self.bar.refresh()
+
+    def epoch_line(self, msg: str) -> None:
+        """A model's own progress line (the CNN's epochs)."""
+        self.say(f"[{self.table}]   {msg}")
+
+    def start(self, model: str) -> None:
+        if self.bar is not None:
+            self.bar.set_description_str(f"[{self.table}] {model}")
+
+    def done(self, model: str, r: dict[str, Any]) -> None:
+        self.say(_model_line(self.table, model, r))
+        if self.bar is not None:
+            self.bar.update(self.cost[model])
+
+
+#: Rows predicted per call: bounds the copies (window matrices as float64 inside
+#: scikit-learn) whatever the table's size; every model predicts rows independently.
+PREDICT_CHUNK = 65_536
+
+
+@dataclass
+class _Inputs:
+    """Model inputs of a set of rows (a table's or the transfer rows): ``rows`` (n, d)
+    float64, the matrices of the merged window specs (``win``) over the rows ``pos`` maps
+    to (table row -> matrix row; None: every row, in table order)."""
+
+    rows: np.ndarray
+    win: list[np.ndarray] = field(default_factory=list)
+    pos: np.ndarray | None = None
+
+    def get(self, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
+            ) -> np.ndarray:
+        """Inputs of table rows ``rows``: the rows' features (``which`` None), else the
+        columns ``which[1]`` of window matrix ``which[0]`` (one copy)."""
+        if which is None:
+            return self.rows[rows]
+        i, cols = which
+        at = rows if self.pos is None else self.pos[rows]
+        mat = self.win[i]
+        return mat[at] if cols is None else mat[np.ix_(at, cols)]
 
 
 @dataclass
 class _Table:
-    """One table's rows as every model needs them: labels, flights, features per row and
-    per time window (window models), folds, and the transfer rows (``xt`` None without).
-    ``labels``: the classes of its confusion matrices (``tlm_process.labels.class_labels`` of
-    the table's and the transfer rows' labels)."""
+    """One table's rows as every model needs them, computed once and shared by all models:
+    labels, flights, the feature matrix, the window statistics of every window model (each
+    statistic once: :func:`.temporal.merged_windows`; only for the rows some model is fitted
+    on or predicts), folds, and the transfer rows (``xt`` None without). ``labels``: the
+    classes of its confusion matrices (``tlm_process.labels.class_labels`` of the table's and
+    the transfer rows' labels)."""
 
     name: str
     n_rows: int
@@ -179,20 +327,21 @@ class _Table:
     n_features: int
     y: np.ndarray
     groups: np.ndarray
-    x_rows: np.ndarray
-    x_win: dict[str, np.ndarray]
-    thin: np.ndarray | None  # rows the window models are fitted on
+    x: _Inputs
+    win_of: dict[str, tuple[int, np.ndarray | None]]  # window model -> its columns
+    train_hz: dict[str, float]  # model -> rate its training rows are thinned to [Hz]; 0: all
+    thin: dict[float, np.ndarray]  # rate [Hz] -> mask of the rows kept at that rate
     folds: list[Fold]
     yt: np.ndarray | None = None
-    xt_rows: np.ndarray | None = None
-    xt_win: dict[str, np.ndarray] = field(default_factory=dict)
+    xt: _Inputs | None = None
     labels: list[int] = field(default_factory=list)
 
     @classmethod
     def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
-              folds: int | None, test_frac: float | None,
-              xt: pd.DataFrame | None) -> _Table:
-        """Table ``t`` of ``ds`` (and its transfer rows ``xt``) split into folds."""
+              folds: int | None, test_frac: float | None, xt: pd.DataFrame | None,
+              train_hz: Mapping[str, float]) -> _Table:
+        """Table ``t`` of ``ds`` (and its transfer rows ``xt``) split into folds;
+        ``train_hz``: model -> the rate its training rows are thinned to [Hz] (0: all)."""
         if t not in ds.tables:
             raise EvaluateError(f"table {t} is not loaded")
         df = ds.tables[t]
@@ -201,27 +350,60 @@ class _Table:
             fold_list = _folds(df, split, seed, folds, test_frac)
         except ValueError as exc:
             raise EvaluateError(f"{t}: {exc}") from None
-        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
-        rate = row_rate_hz(df) if specs else None  # measured once for every window model
+        train_hz = {m: float(train_hz.get(m, 0.0)) for m in models}
+        runs = FlightRuns.of(df)
+        rate = row_rate_hz(df, runs)  # measured once for every model
+        thin = {hz: train_rows(df, rate, hz, runs) for hz in set(train_hz.values()) if hz}
         groups = df["flight"].astype(str).to_numpy()
+        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
+        merged, win_of = merged_windows(specs, feats)
+        x = _Inputs(df[feats].to_numpy(np.float64))
+        if merged:
+            need = np.zeros(len(df), dtype=bool)  # rows some window model fits or predicts
+            for f in fold_list:
+                need[f.test] = True
+                for m in specs:
+                    need[f.train[thin[train_hz[m]][f.train]] if train_hz[m] else f.train] = True
+            if len(fold_list) > 1:
+                for m in specs:
+                    need |= thin[train_hz[m]] if train_hz[m] else True
+            rows = np.flatnonzero(need)
+            x.pos = np.full(len(df), -1, dtype=np.int64)
+            x.pos[rows] = np.arange(len(rows))
+            x.win = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
         tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
-                  df["label"].to_numpy(np.int64), groups, df[feats].to_numpy(np.float64),
-                  {m: window_features(df, feats, sp, rate)[0] for m, sp in specs.items()},
-                  train_rows(df, rate) if specs else None, fold_list)
+                  df["label"].to_numpy(np.int64), groups, x, win_of, train_hz, thin, fold_list)
         if xt is not None:
             tab.yt = xt["label"].to_numpy(np.int64)
-            tab.xt_rows = xt[feats].to_numpy(np.float64)
-            tab.xt_win = {m: window_features(xt, feats, sp)[0] for m, sp in specs.items()}
+            xt_runs = FlightRuns.of(xt)
+            xt_rate = row_rate_hz(xt, xt_runs) if merged else None
+            tab.xt = _Inputs(xt[feats].to_numpy(np.float64),
+                             [window_features(xt, feats, sp, xt_rate, None, xt_runs)[0]
+                              for sp in merged])
         tab.labels = class_labels(tab.y, tab.yt if tab.yt is not None else [])
         return tab
 
-    def x(self, model: str) -> np.ndarray:
-        """The model's inputs: window features for a window model, else the rows."""
-        return self.x_win[model] if model in TIME_MODELS else self.x_rows
+    def n_inputs(self, model: str) -> int:
+        """Number of input columns of ``model``."""
+        if model not in self.win_of:
+            return self.x.rows.shape[1]
+        i, cols = self.win_of[model]
+        return self.x.win[i].shape[1] if cols is None else len(cols)
 
-    def xt(self, model: str) -> np.ndarray:
-        """The model's inputs on the transfer rows."""
-        return self.xt_win[model] if model in TIME_MODELS else self.xt_rows
+    def inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
+        """The model's inputs of table rows ``rows``: window features for a window model,
+        else the rows' features."""
+        return self.x.get(self.win_of.get(model), rows)
+
+    def transfer_inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
+        """The model's inputs of transfer rows ``rows``."""
+        assert self.xt is not None
+        return self.xt.get(self.win_of.get(model), rows)
+
+    def fit_rows(self, model: str, train: np.ndarray) -> np.ndarray:
+        """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
+        hz = self.train_hz[model]
+        return train[self.thin[hz][train]] if hz else train
 
     def describe(self) -> str:
         """The progress line of the table."""
@@ -232,13 +414,22 @@ class _Table:
                 + (f"; transfer {len(self.yt):,} rows" if self.yt is not None else ""))
 
 
+def _predict(est: Any, get: Callable[[np.ndarray], np.ndarray], rows: np.ndarray
+             ) -> np.ndarray:
+    """``est.predict`` of rows ``rows`` (``get(rows)``: their inputs), in chunks of
+    :data:`PREDICT_CHUNK` rows."""
+    if not len(rows):
+        return np.empty(0, dtype=np.int64)
+    return np.concatenate([est.predict(get(rows[a:a + PREDICT_CHUNK]))
+                           for a in range(0, len(rows), PREDICT_CHUNK)])
+
+
 def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
-               ) -> tuple[dict[str, Any], np.ndarray, Any, float]:
+               ) -> tuple[dict[str, Any], np.ndarray, Any]:
     """Fit a fresh model ``make()`` on each fold's training rows and predict its test rows.
 
-    Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
-    fit time [s])."""
-    X, y, groups, t = tab.x(name), tab.y, tab.groups, tab.name
+    Returns (counts and timings [s], the summed confusion matrix, the last fold's model)."""
+    y, groups, t = tab.y, tab.groups, tab.name
     cm = np.zeros((len(tab.labels),) * 2, dtype=np.int64)
     fit_s = pred_s = 0.0
     n_train = n_test = n_fit = 0
@@ -246,13 +437,11 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
     per_fold: list[dict[str, Any]] = []
     for fold in tab.folds:
         est = make()
-        fit_rows = fold.train
-        if name in TIME_MODELS:
-            fit_rows = fit_rows[tab.thin[fit_rows]]
+        fit_rows = tab.fit_rows(name, fold.train)
         t0 = time.perf_counter()
-        _fit(est, X[fit_rows], y[fit_rows], groups[fit_rows])
+        _fit(est, tab.inputs(name, fit_rows), y[fit_rows], groups[fit_rows])
         t1 = time.perf_counter()
-        pred = est.predict(X[fold.test])
+        pred = _predict(est, partial(tab.inputs, name), fold.test)
         t2 = time.perf_counter()
         fit_s += t1 - t0
         pred_s += t2 - t1
@@ -273,23 +462,23 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
                          "predict_seconds": round(pred_s, 3)}
     if per_fold:
         r["per_fold"] = per_fold
-    return r, cm, last, fit_s
+    return r, cm, last
 
 
 def _fit_all(tab: _Table, name: str, make: Callable[[], Any]) -> Any:
-    """A fresh model fitted on every row (window models: every training row) of the table:
-    the one tested on the transfer rows after cross-validation."""
+    """A fresh model fitted on every row (thinned to the model's rate) of the table: the one
+    tested on the transfer rows after cross-validation."""
     est = make()
-    every = tab.thin if name in TIME_MODELS else slice(None)
-    X = tab.x(name)
-    _fit(est, X[every], tab.y[every], tab.groups[every])
+    rows = tab.fit_rows(name, np.arange(tab.n_rows))
+    _fit(est, tab.inputs(name, rows), tab.y[rows], tab.groups[rows])
     return est
 
 
-def _model_line(t: str, name: str, r: dict[str, Any], fit_s: float) -> str:
+def _model_line(t: str, name: str, r: dict[str, Any]) -> str:
     """The progress line of one model's result."""
     msg = (f"[{t}] {name}: accuracy {100 * r['accuracy']:.2f}%, macro-F1 "
-           f"{r['macro_f1']:.3f} (fit {fit_s:.1f} s)")
+           f"{r['macro_f1']:.3f} (fit {r['fit_seconds']:.1f} s, predict "
+           f"{r['predict_seconds'] + r.get('transfer_predict_seconds', 0.0):.1f} s)")
     if "transfer" in r:
         msg += (f"; transfer accuracy {100 * r['transfer']['accuracy']:.2f}%, macro-F1 "
                 f"{r['transfer']['macro_f1']:.3f}")

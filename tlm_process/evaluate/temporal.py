@@ -37,10 +37,12 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
+from numba import njit
+from scipy.ndimage import maximum_filter1d
 
-__all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "WindowFeatures", "row_rate_hz",
-           "train_rows", "window_features", "window_hgb", "window_spec_for"]
+__all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "FlightRuns", "WindowFeatures",
+           "merged_windows", "row_rate_hz", "train_rows", "window_features", "window_hgb",
+           "window_spec_for"]
 
 #: Circular features (table -> feature -> period in the raw unit, degrees).
 CIRCULAR_DEG: Mapping[str, Mapping[str, float]] = {"GPS": {"GCrs": 360.0}}
@@ -65,41 +67,57 @@ WINDOW_MODELS: Mapping[str, Mapping[str, Any]] = {
 TRAIN_HZ: float = 5.0
 
 
-def _flight_runs(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Row order of ``df`` by flight, then TimeUS, and the positions in that order where each
-    flight's rows end (the last one is ``len(df)``)."""
-    flights = df["flight"].astype(str).to_numpy()
-    order = np.lexsort((df["TimeUS"].to_numpy(), flights))
-    ordered = flights[order]
-    ends = np.concatenate([np.flatnonzero(ordered[1:] != ordered[:-1]) + 1, [len(df)]])
-    return order, ends
+@dataclass(frozen=True)
+class FlightRuns:
+    """A table's rows in time order per flight: ``order`` (row positions sorted by flight,
+    then ``TimeUS``; stable) and the positions in that order where each flight's rows start
+    and end (``ends[-1] == len(df)``). Computed once per table (:meth:`of`) and shared by
+    :func:`row_rate_hz`, :func:`train_rows` and :func:`window_features`."""
+
+    order: np.ndarray
+    starts: np.ndarray
+    ends: np.ndarray
+
+    @classmethod
+    def of(cls, df: pd.DataFrame) -> FlightRuns:
+        """The runs of ``df`` (columns ``flight`` and ``TimeUS``)."""
+        codes, _ = pd.factorize(df["flight"].astype(str), sort=True)  # string order
+        order = np.lexsort((df["TimeUS"].to_numpy(), codes))
+        ordered = codes[order]
+        ends = np.concatenate([np.flatnonzero(ordered[1:] != ordered[:-1]) + 1, [len(df)]])
+        return cls(order, np.concatenate([[0], ends[:-1]]), ends)
 
 
 def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
-               train_hz: float = TRAIN_HZ) -> np.ndarray:
+               train_hz: float = TRAIN_HZ, runs: FlightRuns | None = None) -> np.ndarray:
     """Boolean mask of the rows of ``df`` a window model is fitted on: in each flight, in
-    time order, every k-th row from the first, k = round(rate / ``train_hz``) (at least 1);
-    ``rate_hz``: the table's logging rate (default: measured, :func:`row_rate_hz`)."""
-    rate = rate_hz if rate_hz is not None else row_rate_hz(df)
-    k = max(1, int(round(rate / train_hz)))
+    time order, every k-th row from the first, k = round(rate / ``train_hz``) (at least 1;
+    every row when ``train_hz`` is 0); ``rate_hz``: the table's logging rate (default:
+    measured, :func:`row_rate_hz`); ``runs``: ``FlightRuns.of(df)`` when already known."""
     keep = np.ones(len(df), dtype=bool)
-    if k == 1 or not len(df):
+    if not train_hz or not len(df):
         return keep
-    order, ends = _flight_runs(df)
-    starts = np.concatenate([[0], ends[:-1]])
-    rank = np.arange(len(df)) - np.repeat(starts, ends - starts)  # position within the flight
-    keep[order] = rank % k == 0
+    runs = runs if runs is not None else FlightRuns.of(df)
+    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
+    k = max(1, int(round(rate / train_hz)))
+    if k == 1:
+        return keep
+    rank = np.arange(len(df)) - np.repeat(runs.starts, runs.ends - runs.starts)
+    keep[runs.order] = rank % k == 0  # rank: position within the flight
     return keep
 
 
-def row_rate_hz(df: pd.DataFrame) -> float:
+def row_rate_hz(df: pd.DataFrame, runs: FlightRuns | None = None) -> float:
     """Logging rate of a table [Hz]: 1e6 / the median TimeUS step within flights."""
-    ordered = df[["flight", "TimeUS"]].sort_values(["flight", "TimeUS"], kind="stable")
-    steps = ordered.groupby("flight", sort=False)["TimeUS"].diff().dropna()
+    runs = runs if runs is not None else FlightRuns.of(df)
+    t = df["TimeUS"].to_numpy()[runs.order].astype(np.float64)
+    steps = np.diff(t)
+    if len(steps):
+        steps[runs.ends[:-1] - 1] = 0.0  # a flight's last row to the next flight's first
     steps = steps[steps > 0]
     if not len(steps):
         return 1.0
-    return float(1e6 / np.median(steps.to_numpy(np.float64)))
+    return float(1e6 / np.median(steps))
 
 
 @dataclass(frozen=True)
@@ -159,9 +177,67 @@ def _trailing_filter(fn, x: np.ndarray, w: int) -> np.ndarray:
     return centred[w // 2: w // 2 + len(x)]
 
 
+@njit(cache=True, nogil=True)
+def _trailing_stats(ve: np.ndarray, w: int, lead: int, n: int) -> np.ndarray:
+    """Statistics of the trailing windows of ``w`` rows of series ``ve`` (its start padded
+    with ``ve[0]``) ending at rows ``lead .. lead + n - 1``: (n, 6) columns mean, standard
+    deviation, minimum, maximum, mean absolute row-to-row change, last minus first value.
+
+    One pass (numba): the sums are differences of running sums accumulated in the order
+    ``np.cumsum`` adds (the results equal the former numpy code's to the bit), the minimum
+    and maximum come from monotonic queues."""
+    m = len(ve)
+    c1 = np.zeros(m + w)
+    c2 = np.zeros(m + w)
+    ca = np.zeros(m + w)
+    for i in range(m + w - 1):  # running sums of the padded series
+        j = i - (w - 1)
+        x = ve[0] if j < 0 else ve[j]
+        a = 0.0 if j <= 0 else abs(ve[j] - ve[j - 1])
+        c1[i + 1] = c1[i] + x
+        c2[i + 1] = c2[i] + x * x
+        ca[i + 1] = ca[i] + a
+    out = np.empty((n, 6))
+    qmin = np.empty(m, dtype=np.int64)  # row indices, values increasing
+    qmax = np.empty(m, dtype=np.int64)  # values decreasing
+    h0 = t0 = h1 = t1 = 0
+    for t in range(lead + n):
+        x = ve[t]
+        while t0 > h0 and ve[qmin[t0 - 1]] >= x:
+            t0 -= 1
+        qmin[t0] = t
+        t0 += 1
+        while t1 > h1 and ve[qmax[t1 - 1]] <= x:
+            t1 -= 1
+        qmax[t1] = t
+        t1 += 1
+        first = t - w + 1
+        while qmin[h0] < first:
+            h0 += 1
+        while qmax[h1] < first:
+            h1 += 1
+        if t < lead:
+            continue
+        r = t - lead
+        mean = (c1[t + w] - c1[t]) / w
+        out[r, 0] = mean
+        out[r, 1] = np.sqrt(max((c2[t + w] - c2[t]) / w - mean * mean, 0.0))
+        lo = ve[qmin[h0]]
+        hi = ve[qmax[h1]]
+        if first < 0:  # the padding repeats ve[0]
+            lo = min(lo, ve[0])
+            hi = max(hi, ve[0])
+        out[r, 2] = lo
+        out[r, 3] = hi
+        out[r, 4] = (ca[t + w] - ca[t]) / w
+        out[r, 5] = x - ve[max(first, 0)]
+    return out
+
+
 def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
                   rows: Sequence[int]) -> np.ndarray:
-    """Window features of one flight's rows (time order), shape (n, n_out).
+    """Window features of one flight's rows (time order), shape (n, n_out); ``rows``: the
+    window lengths in rows.
 
     Centred windows are trailing windows of the series padded at its end with its last value
     and read ``w - 1 - w//2`` rows later."""
@@ -183,18 +259,8 @@ def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
         cols.append(v)
         for w in rows:
             lead = (w - 1 - w // 2) if spec.centred else 0
-            ve = np.concatenate([v, np.full(lead, v[-1])])
-            ade = np.abs(np.diff(ve, prepend=ve[0]))
-            m = len(ve)
-            s1 = _trailing_sum(ve, w)
-            s2 = _trailing_sum(ve * ve, w)
-            mean = s1 / w
-            first = np.concatenate([np.full(min(w - 1, m), ve[0]), ve])[:m]
-            for c in (mean, np.sqrt(np.maximum(s2 / w - mean * mean, 0.0)),
-                      _trailing_filter(minimum_filter1d, ve, w),
-                      _trailing_filter(maximum_filter1d, ve, w),
-                      _trailing_sum(ade, w) / w, ve - first):
-                cols.append(c[lead:lead + n])
+            ve = np.concatenate([v, np.full(lead, v[-1])]) if lead else v
+            cols.extend(_trailing_stats(ve, w, lead, n).T)
         if spec.history:
             cols.append(np.cumsum(v) / np.arange(1, n + 1))
             cols.append(np.minimum.accumulate(v))
@@ -203,22 +269,70 @@ def _flight_block(x: np.ndarray, feats: Sequence[str], spec: WindowFeatures,
 
 
 def window_features(df: pd.DataFrame, features: Sequence[str],
-                    spec: WindowFeatures | None = None,
-                    rate_hz: float | None = None) -> tuple[np.ndarray, list[str]]:
+                    spec: WindowFeatures | None = None, rate_hz: float | None = None,
+                    rows: np.ndarray | None = None, runs: FlightRuns | None = None
+                    ) -> tuple[np.ndarray, list[str]]:
     """Window statistics of every row of ``df`` (columns ``flight``, ``TimeUS`` and
-    ``features``), in ``df``'s row order; returns (matrix, column names). ``rate_hz``: the
-    table's logging rate (default: measured, :func:`row_rate_hz`)."""
+    ``features``), in ``df``'s row order, or with ``rows`` (distinct row positions) of those
+    rows only, in that order (the windows still see every row of the flight); returns
+    (float32 matrix, column names). ``rate_hz``: the table's logging rate (default: measured,
+    :func:`row_rate_hz`); ``runs``: ``FlightRuns.of(df)`` when already known."""
     spec = spec or WindowFeatures()
-    rate = rate_hz if rate_hz is not None else row_rate_hz(df)
-    rows = [max(2, int(round(s * rate))) for s in spec.seconds]
+    runs = runs if runs is not None else FlightRuns.of(df)
+    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
+    width = [max(2, int(round(s * rate))) for s in spec.seconds]
     names = spec.names(features)
-    out = np.empty((len(df), len(names)), dtype=np.float32)
-    order, ends = _flight_runs(df)
+    n_out = len(df) if rows is None else len(rows)
+    out = np.empty((n_out, len(names)), dtype=np.float32)
+    dest = None
+    if rows is not None:  # table row -> output row (-1: not asked for)
+        dest = np.full(len(df), -1, dtype=np.int64)
+        dest[rows] = np.arange(len(rows))
+    order = runs.order
     x = df[list(features)].to_numpy(np.float64)[order]
-    for a, b in zip(np.concatenate([[0], ends[:-1]]), ends, strict=True):
-        if b > a:
-            out[order[a:b]] = _flight_block(x[a:b], features, spec, rows)
+    for a, b in zip(runs.starts, runs.ends, strict=True):
+        if b <= a:
+            continue
+        if dest is None:
+            out[order[a:b]] = _flight_block(x[a:b], features, spec, width)
+            continue
+        d = dest[order[a:b]]
+        want = d >= 0
+        if want.any():
+            out[d[want]] = _flight_block(x[a:b], features, spec, width)[want]
     return out, names
+
+
+def merged_windows(specs: Mapping[str, WindowFeatures], features: Sequence[str]
+                   ) -> tuple[list[WindowFeatures], dict[str, tuple[int, np.ndarray | None]]]:
+    """Window specs that compute every statistic of ``specs`` (model -> spec) once: models
+    whose specs differ only in their window lengths share one spec with every length
+    (``WindowHGB``'s 2 s and 10 s windows are columns of ``WindowHGB60``'s). Returns (the
+    merged specs, model -> (index of its merged spec, the columns of that spec's matrix that
+    are the model's, in its own order; None: all of them))."""
+    merged: list[WindowFeatures] = []
+    keys: list[tuple[Any, ...]] = []
+    for sp in specs.values():
+        key = (tuple(sorted(sp.circular.items())), sp.centred, sp.history)
+        if key in keys:
+            i = keys.index(key)
+            secs = tuple(dict.fromkeys(merged[i].seconds + sp.seconds))
+            merged[i] = WindowFeatures(secs, sp.circular, sp.centred, sp.history)
+        else:
+            keys.append(key)
+            merged.append(sp)
+    which: dict[str, tuple[int, np.ndarray | None]] = {}
+    for m, sp in specs.items():
+        key = (tuple(sorted(sp.circular.items())), sp.centred, sp.history)
+        i = keys.index(key)
+        all_names = merged[i].names(features)
+        own = sp.names(features)
+        if own == all_names:
+            which[m] = (i, None)
+        else:
+            index = {n: j for j, n in enumerate(all_names)}
+            which[m] = (i, np.array([index[n] for n in own], dtype=np.int64))
+    return merged, which
 
 
 def window_hgb(seed: int = 0):
