@@ -469,7 +469,7 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
             kw["epochs"] = cnn_epochs
         return RowImageCNN(**kw)
     if name in TIME_MODELS:
-        from tlm_process.evaluate.temporal import window_hgb
+        from tlm_process.evaluate.temporal import SkipConstantColumns, window_hgb
 
-        return window_hgb(seed=s)
+        return SkipConstantColumns(window_hgb(seed=s))
     raise ValueError(f"unknown model {name!r}; choose from {', '.join(ALL_MODELS)}")
