@@ -11,10 +11,12 @@ does.
 Each table is evaluated by one call of ``tlm_process.evaluate.evaluate`` with every model asked
 for (as ``tlm evaluate`` runs them), and the table prints, per table and model:
 
+* ``train Hz``: the rate the model's training rows were thinned to (``all``: every row);
 * ``fit s``, ``pred s``: wall seconds of fitting and predicting (the runner's own figures,
-  summed over folds; ``pred s`` includes the transfer rows), and ``cpu s``: process CPU
-  seconds (all threads) from the model's start to its end, which a shared machine disturbs
-  far less than wall time;
+  summed over folds; ``pred s`` includes the transfer rows), ``wall s`` the model's whole
+  turn, and ``cpu s``: this process's CPU seconds (all threads; not SMO's worker
+  processes) over it, which a shared machine disturbs less than wall time (but OpenMP
+  threads that wait for a busy core spin and count);
 * ``rows fit`` / ``rows test``: training rows the model was fitted on, test rows predicted;
 * ``peak MiB``: the largest resident-set growth over the level before the model (``/proc``
   sampled every 10 ms: numpy, scikit-learn and torch allocations alike);
@@ -172,8 +174,10 @@ def bench_table(ds: Any, table: str, models: list[str], transfer: Any, args: arg
     for r in rows[1:]:
         m = res[table][r["model"]]
         tr = m.get("transfer") or {}
-        r.update(fit_s=m["fit_seconds"], predict_s=m["predict_seconds"],
-                 n_fit=m.get("n_fit", m["n_train"]), n_test=m["n_test"],
+        r.update(fit_s=m["fit_seconds"] + m.get("transfer_fit_seconds", 0.0),
+                 predict_s=m["predict_seconds"] + m.get("transfer_predict_seconds", 0.0),
+                 train_hz=m.get("train_hz"), n_fit=m.get("n_fit", m["n_train"]),
+                 n_test=m["n_test"],
                  macro_f1=m["macro_f1"], transfer_macro_f1=tr.get("macro_f1"))
     return rows
 
@@ -183,12 +187,15 @@ def _fmt(v: Any, spec: str) -> str:
 
 
 def print_table(records: list[dict[str, Any]]) -> None:
-    head = ("| table | model | fit s | pred s | wall s | cpu s | rows fit | rows test | "
-            "peak MiB | macro-F1 | transfer macro-F1 |")
+    head = ("| table | model | train Hz | fit s | pred s | wall s | cpu s | rows fit | "
+            "rows test | peak MiB | macro-F1 | transfer macro-F1 |")
     print(head)
-    print("|---" * 11 + "|")
+    print("|---" * 12 + "|")
     for r in records:
-        print(f"| {r['table']} | {r['model']} | {_fmt(r.get('fit_s'), '.2f')} | "
+        hz = r.get("train_hz")
+        print(f"| {r['table']} | {r['model']} | "
+              f"{'-' if hz is None else ('all' if not hz else format(hz, 'g'))} | "
+              f"{_fmt(r.get('fit_s'), '.2f')} | "
               f"{_fmt(r.get('predict_s'), '.2f')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | "
               f"{_fmt(r.get('n_fit'), ',')} | {_fmt(r.get('n_test'), ',')} | "
               f"{r['peak_mib']:.0f} | {_fmt(r.get('macro_f1'), '.4f')} | "

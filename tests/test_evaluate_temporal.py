@@ -153,3 +153,26 @@ def test_merged_windows_give_every_model_its_own_features_for_the_rows_asked():
         got = mats[i] if cols is None else mats[i][:, cols]
         assert got.shape == (len(rows), len(names))
         assert np.array_equal(got, own[rows]), m
+
+
+def test_skipping_constant_columns_gives_the_same_model():
+    from threadpoolctl import threadpool_limits
+
+    from tlm_process.evaluate.temporal import SkipConstantColumns
+
+    train, test = _noise_flights(4, 1), _noise_flights(2, 2)
+    Xtr, _ = window_features(train, ["x"], WindowFeatures(seconds=(2.0,)))
+    Xte, _ = window_features(test, ["x"], WindowFeatures(seconds=(2.0,)))
+
+    def spread(X):  # constant columns between the informative ones
+        n = len(X)
+        return np.column_stack([np.full(n, 3.0), X[:, :3], np.full(n, -1.0), X[:, 3:],
+                                np.zeros(n)])
+
+    with threadpool_limits(limits=1):
+        plain = window_hgb(seed=0).set_params(max_iter=30).fit(spread(Xtr), train["label"])
+        skip = SkipConstantColumns(window_hgb(seed=0).set_params(max_iter=30))
+        skip.fit(spread(Xtr), train["label"])
+    assert len(skip.columns_) == Xtr.shape[1]
+    assert np.array_equal(skip.predict_proba(spread(Xte)), plain.predict_proba(spread(Xte)))
+    assert list(skip.classes_) == [0, 1]

@@ -57,6 +57,16 @@ transfer:
                    and, with --out, DIR/feature_shift.csv (per feature and class: KS statistic
                    and percentiles of data set vs transfer rows)
 
+training rows:
+  --train-hz HZ    every model is fitted on each training flight's rows thinned to about
+                   HZ rows per second (every k-th row, k = round(table rate / HZ); 0: every
+                   row); test and transfer rows are never thinned. Default per model, as
+                   measured to score within 0.01 macro-F1 of every row (docs/evaluation.md):
+                   5 Hz (every GPS row, every 2nd RATE/VIBE row, every 5th IMU row) for
+                   NaiveBayes, KNN, AdaBoost, OneR, ZeroR and the window models; 1 Hz for
+                   SMO; every row for Logistic, J48, RandomForest, RandomTree and the CNN
+  --jobs N         threads (default: all cores); the results do not depend on it
+
 outputs:
   stdout           Table 11 per table; confusion matrix and per-class scores (Tables 12-18)
                    of the best model by macro-F1 (all models with --details)
