@@ -156,6 +156,8 @@ def bench_table(ds: Any, table: str, models: list[str], transfer: Any, args: arg
         kw["n_jobs"] = args.jobs
     if args.train_hz is not None:
         kw["train_hz"] = args.train_hz
+    if args.normal_hz is not None:
+        kw["normal_hz"] = args.normal_hz
     try:
         if args.profile:
             import cProfile
@@ -219,6 +221,9 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=None, help="threads (default: the runner's)")
     ap.add_argument("--train-hz", type=float, default=None,
                     help="training-row rate for every model (default: the runner's)")
+    ap.add_argument("--normal-hz", type=float, default=None,
+                    help="Normal training-row rate of the weighted models (default: the "
+                         "runner's)")
     ap.add_argument("--json", help="write the records as JSON here")
     ap.add_argument("--profile", metavar="DIR", help="cProfile each table into DIR")
     ap.add_argument("--verbose", action="store_true", help="show the runner's progress lines")

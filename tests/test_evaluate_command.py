@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
 from tlm_process.cli import main
+from tlm_process.evaluate.data import EvaluateError
 
 FAST = "ZeroR,OneR,J48,RandomTree,WindowHGB"
 
@@ -132,6 +134,40 @@ def test_evaluate_train_hz_thins_training_rows_only(tiny_ds, tmp_path, capsys):
         assert every[m]["train_hz"] == 0 and every[m]["n_fit"] == every[m]["n_train"]
         assert thin[m]["train_hz"] == 1 and thin[m]["n_test"] == every[m]["n_test"]
         assert abs(thin[m]["n_fit"] - thin[m]["n_train"] / 5) <= 2  # 2 training flights
+
+
+def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds):
+    from tlm_process.evaluate import evaluate, load_dataset
+
+    ds = load_dataset(tiny_ds, ["GPS"])
+    models = ["Logistic", "RandomForest", "WindowHGB"]
+    plain = evaluate(ds, tables=["GPS"], models=models, train_hz=0)["GPS"]
+    thin = evaluate(ds, tables=["GPS"], models=models, train_hz=0, normal_hz=1)["GPS"]
+    y = ds.tables["GPS"]["label"]
+    for m in models:
+        assert plain[m]["normal_every"] == 1 and thin[m]["normal_every"] == 5  # 5 Hz -> 1 Hz
+        n_fault = plain[m]["n_fit"] - thin[m]["n_fit"]  # dropped rows: 4 of 5 Normal rows
+        assert abs(n_fault - 0.8 * (y == 0).sum() * plain[m]["n_train"] / len(y)) < 30
+        assert thin[m]["n_test"] == plain[m]["n_test"]
+    with pytest.raises(EvaluateError, match="KNN takes no sample weights"):
+        evaluate(ds, tables=["GPS"], models=["KNN"], normal_hz={"KNN": 1.0})
+
+
+def test_sample_weights_reach_the_final_estimator_of_nested_pipelines():
+    from tlm_process.evaluate.models import WEIGHTED_MODELS, make_model
+    from tlm_process.evaluate.runner import _fit
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(300, 3))
+    y = (X[:, 0] > 0.3).astype(np.int64)
+    for m in WEIGHTED_MODELS:
+        one = _fit(make_model(m, n_features=3), X, y, None, np.ones(len(y)))
+        none = _fit(make_model(m, n_features=3), X, y, None)
+        assert (one.predict(X) == none.predict(X)).all(), m  # unit weights change nothing
+    heavy = np.where(y == 1, 50.0, 1.0)  # weights move the prior: more rows called 1
+    zr = _fit(make_model("ZeroR", n_features=3), X, y, None, heavy)
+    assert (zr.predict(X) == 1).all() and (make_model("ZeroR", n_features=3).fit(X, y)
+                                             .predict(X) == 0).all()
 
 
 def test_evaluate_transfer_to_a_reference_sitl_log(tiny_ds, tmp_path, capsys):

@@ -10,6 +10,7 @@ import pytest
 from tlm_process.evaluate.temporal import (
     WINDOW_MODELS,
     WindowFeatures,
+    normal_rows,
     train_rows,
     window_features,
     window_hgb,
@@ -131,6 +132,23 @@ def test_window_models_fit_on_rows_thinned_per_flight_in_time_order():
         ("a", 0), ("a", 5), ("b", 0), ("b", 5), ("b", 10)]
     assert train_rows(df, rate_hz=5.0).all()  # GPS rate: every row
     assert train_rows(df, rate_hz=10.0).sum() == 6 + 4  # every 2nd row of each flight
+
+
+def test_normal_rows_are_thinned_apart_from_fault_rows_per_flight():
+    t = np.arange(30) * 40_000  # 25 Hz: 5 Hz keeps every 5th row, Normal 1 Hz every 25th
+    label = np.where((np.arange(30) >= 10) & (np.arange(30) < 20), 3, 0)
+    df = pd.DataFrame({"flight": ["b"] * 30 + ["a"] * 30, "TimeUS": np.concatenate([t, t]),
+                       "label": np.concatenate([label, label])})
+    shuffled = df.sample(frac=1.0, random_state=5)
+    keep = normal_rows(shuffled, shuffled["label"].to_numpy(), 5)
+    kept = shuffled[keep].sort_values(["flight", "TimeUS"])
+    per_flight = [(int(r.TimeUS // 40_000), int(r.label)) for r in kept.itertuples()
+                  if r.flight == "a"]
+    assert per_flight == [(0, 0), (10, 3), (15, 3), (25, 0)]  # faults every 5th, Normal 25th
+    assert kept["flight"].value_counts().to_dict() == {"a": 4, "b": 4}
+    # every = 1: exactly train_rows; a subset of train_rows always
+    assert (normal_rows(df, df["label"].to_numpy(), 1) == train_rows(df)).all()
+    assert not (keep & ~train_rows(shuffled)).any()
 
 
 def test_merged_windows_give_every_model_its_own_features_for_the_rows_asked():

@@ -65,6 +65,11 @@ training rows:
                    5 Hz (every GPS row, every 2nd RATE/VIBE row, every 5th IMU row) for
                    NaiveBayes, KNN, AdaBoost, OneR, ZeroR and the window models; 1 Hz for
                    SMO; every row for Logistic, J48, RandomForest, RandomTree and the CNN
+  --normal-hz HZ   the Normal rows (most of every flight) of the models that take sample
+                   weights (NaiveBayes, Logistic, ZeroR, RandomForest, RandomTree and the
+                   window models) are thinned further, to about HZ rows per second, and
+                   weighted back so the class balance stays (0: as the other rows). Default
+                   per model (docs/evaluation.md)
   --jobs N         threads (default: all cores); the results do not depend on it
 
 outputs:
@@ -127,6 +132,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="fit every model on each training flight's rows thinned to about HZ "
                         "rows per second (0: every row; default: per model, see below); "
                         "test rows are never thinned")
+    p.add_argument("--normal-hz", type=_rate_hz, default=None, metavar="HZ",
+                   help="thin the Normal training rows of the models that take sample weights "
+                        "further, to about HZ rows per second, weighted back (0: as the "
+                        "other rows; default: per model, see below)")
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -218,6 +227,7 @@ def _run(args: argparse.Namespace) -> int:
                        folds=args.folds, test_frac=args.test_frac, transfer=transfer,
                        out_dir=out, progress=say, n_jobs=args.jobs,
                        cnn_epochs=args.cnn_epochs, train_hz=args.train_hz,
+                       normal_hz=args.normal_hz,
                        bar=False if quiet else None)
     lines: list[str] = []
     for t, res in results.items():

@@ -49,8 +49,10 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 __all__ = [
     "ALL_MODELS",
+    "DEFAULT_NORMAL_HZ",
     "DEFAULT_TRAIN_HZ",
     "PAPER_MODELS",
+    "WEIGHTED_MODELS",
     "TIME_MODELS",
     "AdaBoostM1",
     "J48",
@@ -81,6 +83,15 @@ DEFAULT_TRAIN_HZ: dict[str, float] = {
     "NaiveBayes": 5.0, "Logistic": 0.0, "SMO": 1.0, "KNN": 5.0, "AdaBoost": 5.0,
     "OneR": 5.0, "ZeroR": 5.0, "J48": 0.0, "RandomForest": 0.0, "RandomTree": 0.0,
     "CNN": 0.0, **{m: 5.0 for m in TIME_MODELS}}
+
+#: Models whose fit takes per-row sample weights, so that their Normal training rows can be
+#: thinned more than the fault rows and weighted back (``tlm evaluate --normal-hz``).
+WEIGHTED_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "ZeroR", "RandomForest",
+                                    "RandomTree", *TIME_MODELS)
+
+#: Rate [Hz] of each model's Normal training rows by default (``--normal-hz``; 0 or missing:
+#: the model's training-row rate), for :data:`WEIGHTED_MODELS`.
+DEFAULT_NORMAL_HZ: dict[str, float] = {}
 
 #: Weka's default ridge of ``weka.classifiers.functions.Logistic``.
 LOGISTIC_RIDGE = 1e-8

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from sklearn.exceptions import ConvergenceWarning
+from sklearn.pipeline import Pipeline
 
 from tlm_process.evaluate.data import EvalDataset, EvaluateError
 from tlm_process.evaluate.metrics import (
@@ -31,15 +32,22 @@ from tlm_process.evaluate.metrics import (
     confusion_matrix,
     plot_confusion,
 )
-from tlm_process.evaluate.models import ALL_MODELS, DEFAULT_TRAIN_HZ, TIME_MODELS, make_model
+from tlm_process.evaluate.models import (
+    ALL_MODELS,
+    DEFAULT_NORMAL_HZ,
+    DEFAULT_TRAIN_HZ,
+    TIME_MODELS,
+    WEIGHTED_MODELS,
+    make_model,
+)
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
     FlightRuns,
     WindowFeatures,
     merged_windows,
+    normal_rows,
     row_rate_hz,
-    train_rows,
     window_features,
     window_spec_for,
 )
@@ -102,12 +110,21 @@ def _folds(df: pd.DataFrame, split: str, seed: int, folds: int | None,
     raise EvaluateError(f"unknown split {split!r}; use {' or '.join(SPLITS)}")
 
 
-def _fit(est: Any, X: np.ndarray, y: np.ndarray, groups: np.ndarray | None) -> Any:
+def _fit(est: Any, X: np.ndarray, y: np.ndarray, groups: np.ndarray | None,
+         weight: np.ndarray | None = None) -> Any:
     """``est.fit``; estimators whose fit takes ``groups`` (the CNN: validation by flight)
-    get the flight ids."""
+    get the flight ids; ``weight``: per-row sample weights (None: all 1), given to the
+    estimator, or to the last step of a pipeline."""
+    kw: dict[str, Any] = {}
     if groups is not None and "groups" in inspect.signature(est.fit).parameters:
-        return est.fit(X, y, groups=groups)
-    return est.fit(X, y)
+        kw["groups"] = groups
+    if weight is not None:
+        key, step = "sample_weight", est
+        while isinstance(step, Pipeline):  # the final estimator of (nested) pipelines
+            name, step = step.steps[-1]
+            key = key.replace("sample_weight", f"{name}__sample_weight")
+        kw[key] = weight
+    return est.fit(X, y, **kw)
 
 
 def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
@@ -117,7 +134,8 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              out_dir: str | Path | None = None,
              progress: Callable[[str], None] | None = None, n_jobs: int | None = None,
              cnn_epochs: int | None = None,
-             train_hz: float | Mapping[str, float] | None = None, bar: bool | None = False
+             train_hz: float | Mapping[str, float] | None = None,
+             normal_hz: float | Mapping[str, float] | None = None, bar: bool | None = False
              ) -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
     ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
@@ -133,7 +151,12 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     machine whose cores other work keeps busy, fewer threads can be faster (OpenMP threads
     wait for each other). ``train_hz``: the rate [Hz] the training rows of every model (a
     number) or of some (model -> rate) are thinned to, 0 for every row; the others'
-    :data:`.models.DEFAULT_TRAIN_HZ`. Test and transfer rows are never thinned. ``bar``: a
+    :data:`.models.DEFAULT_TRAIN_HZ`. ``normal_hz``: likewise the rate of the Normal
+    training rows (0: the model's training-row rate; the others' :data:`.models.
+    DEFAULT_NORMAL_HZ`), for the models that take sample weights
+    (:data:`.models.WEIGHTED_MODELS`; a number leaves the others alone): the kept Normal
+    rows are weighted so the class balance stays. Test and transfer rows are never
+    thinned. ``bar``: a
     progress bar per table on stderr (None: when stderr is a terminal). Convergence
     warnings
     (liblinear for SMO, lbfgs for Logistic) are silenced: those models are used as they
@@ -146,7 +169,8 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
         return _evaluate(ds, tables=tables, models=models, split=split, seed=seed, folds=folds,
                          test_frac=test_frac, transfer=transfer, out_dir=out_dir,
                          progress=progress, n_jobs=n_jobs, cnn_epochs=cnn_epochs,
-                         train_hz=_train_hz(models, train_hz), bar=bar)
+                         train_hz=_train_hz(models, train_hz),
+                         normal_hz=_normal_hz(models, normal_hz), bar=bar)
 
 
 def _train_hz(models: Sequence[str], given: float | Mapping[str, float] | None
@@ -163,11 +187,32 @@ def _train_hz(models: Sequence[str], given: float | Mapping[str, float] | None
     return out
 
 
+def _normal_hz(models: Sequence[str], given: float | Mapping[str, float] | None
+               ) -> dict[str, float]:
+    """Model -> Normal training-row rate [Hz] (0: as the other rows): ``given`` over the
+    defaults, for the models that take sample weights."""
+    out = {m: DEFAULT_NORMAL_HZ.get(m, 0.0) for m in models if m in WEIGHTED_MODELS}
+    if isinstance(given, Mapping):
+        odd = [m for m in given if m in models and m not in WEIGHTED_MODELS]
+        if odd:
+            raise EvaluateError(f"{odd[0]} takes no sample weights, so its Normal rows "
+                                f"cannot be thinned apart (models that can: "
+                                f"{', '.join(WEIGHTED_MODELS)})")
+        out.update({m: float(v) for m, v in given.items() if m in out})
+    elif given is not None:
+        out = dict.fromkeys(out, float(given))
+    bad = [m for m, v in out.items() if not v >= 0]
+    if bad:
+        raise EvaluateError(f"Normal-row rate of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
+    return out
+
+
 def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence[str],
               split: str, seed: int, folds: int | None, test_frac: float | None,
               transfer: Mapping[str, pd.DataFrame] | None, out_dir: str | Path | None,
               progress: Callable[[str], None] | None, n_jobs: int,
-              cnn_epochs: int | None, train_hz: dict[str, float], bar: bool | None
+              cnn_epochs: int | None, train_hz: dict[str, float],
+              normal_hz: dict[str, float], bar: bool | None
               ) -> dict[str, dict[str, dict[str, Any]]]:
     tables = list(tables) if tables is not None else list(ds.tables)
     unknown = [m for m in models if m not in ALL_MODELS]
@@ -178,7 +223,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
     for t in tables:
         t0 = time.perf_counter()
         tab = _Table.build(ds, t, models, split, seed, folds, test_frac,
-                           transfer.get(t) if transfer is not None else None, train_hz)
+                           transfer.get(t) if transfer is not None else None, train_hz,
+                           normal_hz)
         prep_s = time.perf_counter() - t0
         with _Progress(t, tab, models, progress, bar) as prog:
             prog.say(tab.describe() + f" (prepared in {prep_s:.1f} s)")
@@ -204,6 +250,7 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
     r = classification_metrics(cm, class_names(tab.labels))
     r["labels"] = list(tab.labels)
     r["train_hz"] = tab.train_hz[name]
+    r["normal_every"] = tab.normal_every[name]
     r.update(counts)
     if tab.yt is not None:  # transfer rows
         if len(tab.folds) > 1:
@@ -313,6 +360,12 @@ class _Inputs:
         return mat[at] if cols is None else mat[np.ix_(at, cols)]
 
 
+def _normal_every(rate_hz: float, normal_hz: float) -> int:
+    """Keep every n-th Normal training row: n = round(``rate_hz`` / ``normal_hz``) (the
+    model's training-row rate over its Normal-row rate), 1 when ``normal_hz`` is 0."""
+    return max(1, int(round(rate_hz / normal_hz))) if normal_hz else 1
+
+
 @dataclass
 class _Table:
     """One table's rows as every model needs them, computed once and shared by all models:
@@ -331,7 +384,8 @@ class _Table:
     x: _Inputs
     win_of: dict[str, tuple[int, np.ndarray | None]]  # window model -> its columns
     train_hz: dict[str, float]  # model -> rate its training rows are thinned to [Hz]; 0: all
-    thin: dict[float, np.ndarray]  # rate [Hz] -> mask of the rows kept at that rate
+    normal_every: dict[str, int]  # model -> keeps every n-th of those rows that are Normal
+    thin: dict[tuple[float, int], np.ndarray]  # (rate, n) -> mask of the rows kept
     folds: list[Fold]
     yt: np.ndarray | None = None
     xt: _Inputs | None = None
@@ -340,9 +394,12 @@ class _Table:
     @classmethod
     def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
               folds: int | None, test_frac: float | None, xt: pd.DataFrame | None,
-              train_hz: Mapping[str, float]) -> _Table:
+              train_hz: Mapping[str, float], normal_hz: Mapping[str, float] | None = None
+              ) -> _Table:
         """Table ``t`` of ``ds`` (and its transfer rows ``xt``) split into folds;
-        ``train_hz``: model -> the rate its training rows are thinned to [Hz] (0: all)."""
+        ``train_hz``: model -> the rate its training rows are thinned to [Hz] (0: all);
+        ``normal_hz``: model -> the rate of its Normal training rows [Hz] (0 or missing:
+        ``train_hz``; weighted so the class balance stays, :func:`.temporal.normal_rows`)."""
         if t not in ds.tables:
             raise EvaluateError(f"table {t} is not loaded")
         df = ds.tables[t]
@@ -354,7 +411,11 @@ class _Table:
         train_hz = {m: float(train_hz.get(m, 0.0)) for m in models}
         runs = FlightRuns.of(df)
         rate = row_rate_hz(df, runs)  # measured once for every model
-        thin = {hz: train_rows(df, rate, hz, runs) for hz in set(train_hz.values()) if hz}
+        every = {m: _normal_every(train_hz[m] or rate, (normal_hz or {}).get(m, 0.0))
+                 for m in models}
+        y = df["label"].to_numpy(np.int64)
+        thin = {(hz, n): normal_rows(df, y, n, rate, hz, runs)
+                for hz, n in {(train_hz[m], every[m]) for m in models} if hz or n > 1}
         groups = df["flight"].astype(str).to_numpy()
         specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
         merged, win_of = merged_windows(specs, feats)
@@ -364,16 +425,17 @@ class _Table:
             for f in fold_list:
                 need[f.test] = True
                 for m in specs:
-                    need[f.train[thin[train_hz[m]][f.train]] if train_hz[m] else f.train] = True
+                    mask = thin.get((train_hz[m], every[m]))
+                    need[f.train[mask[f.train]] if mask is not None else f.train] = True
             if len(fold_list) > 1:
                 for m in specs:
-                    need |= thin[train_hz[m]] if train_hz[m] else True
+                    need |= thin.get((train_hz[m], every[m]), True)
             rows = np.flatnonzero(need)
             x.pos = np.full(len(df), -1, dtype=np.int64)
             x.pos[rows] = np.arange(len(rows))
             x.win = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
         tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
-                  df["label"].to_numpy(np.int64), groups, x, win_of, train_hz, thin, fold_list)
+                  y, groups, x, win_of, train_hz, every, thin, fold_list)
         if xt is not None:
             tab.yt = xt["label"].to_numpy(np.int64)
             xt_runs = FlightRuns.of(xt)
@@ -403,8 +465,14 @@ class _Table:
 
     def fit_rows(self, model: str, train: np.ndarray) -> np.ndarray:
         """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
-        hz = self.train_hz[model]
-        return train[self.thin[hz][train]] if hz else train
+        mask = self.thin.get((self.train_hz[model], self.normal_every[model]))
+        return train[mask[train]] if mask is not None else train
+
+    def fit_weight(self, model: str, rows: np.ndarray) -> np.ndarray | None:
+        """Sample weights of the fitted rows ``rows`` (None: all 1): ``normal_every`` on the
+        Normal rows where they are thinned more than the others."""
+        n = self.normal_every[model]
+        return np.where(self.y[rows] == 0, float(n), 1.0) if n > 1 else None
 
     def describe(self) -> str:
         """The progress line of the table."""
@@ -440,7 +508,8 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
         est = make()
         fit_rows = tab.fit_rows(name, fold.train)
         t0 = time.perf_counter()
-        _fit(est, tab.inputs(name, fit_rows), y[fit_rows], groups[fit_rows])
+        _fit(est, tab.inputs(name, fit_rows), y[fit_rows], groups[fit_rows],
+             tab.fit_weight(name, fit_rows))
         t1 = time.perf_counter()
         pred = _predict(est, partial(tab.inputs, name), fold.test)
         t2 = time.perf_counter()
@@ -471,7 +540,7 @@ def _fit_all(tab: _Table, name: str, make: Callable[[], Any]) -> Any:
     tested on the transfer rows after cross-validation."""
     est = make()
     rows = tab.fit_rows(name, np.arange(tab.n_rows))
-    _fit(est, tab.inputs(name, rows), tab.y[rows], tab.groups[rows])
+    _fit(est, tab.inputs(name, rows), tab.y[rows], tab.groups[rows], tab.fit_weight(name, rows))
     return est
 
 

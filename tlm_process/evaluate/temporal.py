@@ -41,8 +41,8 @@ from numba import njit
 from scipy.ndimage import maximum_filter1d
 
 __all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "FlightRuns", "SkipConstantColumns",
-           "WindowFeatures", "merged_windows", "row_rate_hz", "train_rows", "window_features",
-           "window_hgb", "window_spec_for"]
+           "WindowFeatures", "merged_windows", "normal_rows", "row_rate_hz", "train_rows",
+           "window_features", "window_hgb", "window_spec_for"]
 
 #: Circular features (table -> feature -> period in the raw unit, degrees).
 CIRCULAR_DEG: Mapping[str, Mapping[str, float]] = {"GPS": {"GCrs": 360.0}}
@@ -105,6 +105,27 @@ def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
     rank = np.arange(len(df)) - np.repeat(runs.starts, runs.ends - runs.starts)
     keep[runs.order] = rank % k == 0  # rank: position within the flight
     return keep
+
+
+def normal_rows(df: pd.DataFrame, labels: np.ndarray, every: int,
+                rate_hz: float | None = None, train_hz: float = TRAIN_HZ,
+                runs: FlightRuns | None = None) -> np.ndarray:
+    """Boolean mask of the rows :func:`train_rows` keeps at ``train_hz``, with only every
+    ``every``-th of its Normal rows (``labels`` == 0): in each flight, in time order, a
+    Normal row is kept when its position is a multiple of ``every`` times the stride at
+    ``train_hz``; fault rows are kept as :func:`train_rows` keeps them. A model fitted on
+    these rows with sample weight ``every`` on the Normal rows and 1 on the others has, in
+    expectation, the loss of the rows at ``train_hz``: the class balance is unchanged."""
+    keep = train_rows(df, rate_hz, train_hz, runs)
+    if every <= 1 or not len(df):
+        return keep
+    runs = runs if runs is not None else FlightRuns.of(df)
+    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
+    k = max(1, int(round(rate / train_hz))) if train_hz else 1
+    rank = np.arange(len(df)) - np.repeat(runs.starts, runs.ends - runs.starts)
+    sparse = np.empty(len(df), dtype=bool)
+    sparse[runs.order] = rank % (k * every) == 0
+    return keep & (sparse | (np.asarray(labels) != 0))
 
 
 def row_rate_hz(df: pd.DataFrame, runs: FlightRuns | None = None) -> float:
@@ -361,7 +382,7 @@ class SkipConstantColumns:
     def __init__(self, estimator: Any) -> None:
         self.estimator = estimator
 
-    def fit(self, X: np.ndarray, y: Any) -> SkipConstantColumns:
+    def fit(self, X: np.ndarray, y: Any, sample_weight: Any = None) -> SkipConstantColumns:
         X = np.asarray(X)
         if len(X):
             same = (X == X[:1]).all(axis=0) | np.isnan(X).all(axis=0)
@@ -369,7 +390,8 @@ class SkipConstantColumns:
             same = np.zeros(X.shape[1], dtype=bool)
         self.columns_ = np.flatnonzero(~same) if (~same).any() else np.arange(X.shape[1])
         keep_all = len(self.columns_) == X.shape[1]
-        self.estimator.fit(X if keep_all else X[:, self.columns_], y)
+        self.estimator.fit(X if keep_all else X[:, self.columns_], y,
+                           sample_weight=sample_weight)
         self.classes_ = self.estimator.classes_
         return self
 
