@@ -31,10 +31,11 @@ from tlm_process.evaluate.metrics import (
     confusion_matrix,
     plot_confusion,
 )
-from tlm_process.evaluate.models import ALL_MODELS, DEFAULT_TRAIN_HZ, TIME_MODELS, make_model
+from tlm_process.evaluate.models import ALL_MODELS, DEFAULT_TRAIN_HZ, SEQUENCE_MODELS, make_model
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
+    WINDOW_MODELS,
     FlightRuns,
     WindowFeatures,
     merged_windows,
@@ -229,7 +230,7 @@ _COST: Mapping[str, tuple[float, float]] = {
     "KNN": (2e-4, 0.012), "AdaBoost": (3e-4, 1e-3), "OneR": (7e-4, 1e-3), "ZeroR": (0.0, 0.0),
     "J48": (1.6e-3, 1e-3), "RandomForest": (0.022, 5e-3), "RandomTree": (7e-4, 1e-3),
     "CNN": (0.034, 5e-3), "WindowHGB": (8e-3, 0.045), "WindowHGB60": (7e-3, 0.04),
-    "CentredHGB": (7e-3, 0.045)}
+    "CentredHGB": (7e-3, 0.045), "SeqCNN": (0.0, 0.0)}
 
 
 class _Progress:
@@ -300,6 +301,12 @@ class _Inputs:
     rows: np.ndarray
     win: list[np.ndarray] = field(default_factory=list)
     pos: np.ndarray | None = None
+    seq: Any = None  # the sequence models' FlightContext
+
+    def of(self, model: str, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
+           ) -> np.ndarray:
+        """Inputs of ``model``: :meth:`get`, or whole flights for a sequence model."""
+        return self.seq.inputs(rows) if model in SEQUENCE_MODELS else self.get(which, rows)
 
     def get(self, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
             ) -> np.ndarray:
@@ -356,7 +363,7 @@ class _Table:
         rate = row_rate_hz(df, runs)  # measured once for every model
         thin = {hz: train_rows(df, rate, hz, runs) for hz in set(train_hz.values()) if hz}
         groups = df["flight"].astype(str).to_numpy()
-        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
+        specs = {m: window_spec(ds, t, m) for m in models if m in WINDOW_MODELS}
         merged, win_of = merged_windows(specs, feats)
         x = _Inputs(df[feats].to_numpy(np.float64))
         if merged:
@@ -381,6 +388,14 @@ class _Table:
             tab.xt = _Inputs(xt[feats].to_numpy(np.float64),
                              [window_features(xt, feats, sp, xt_rate, None, xt_runs)[0]
                               for sp in merged])
+        if any(m in SEQUENCE_MODELS for m in models):
+            from tlm_process.evaluate.sequence import FlightContext
+
+            circ = window_spec(ds, t).circular
+            tab.x.seq = FlightContext.of(df, feats, circ, runs)
+            if xt is not None:
+                assert tab.xt is not None
+                tab.xt.seq = FlightContext.of(xt, feats, circ)
         tab.labels = class_labels(tab.y, tab.yt if tab.yt is not None else [])
         return tab
 
@@ -394,12 +409,12 @@ class _Table:
     def inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
         """The model's inputs of table rows ``rows``: window features for a window model,
         else the rows' features."""
-        return self.x.get(self.win_of.get(model), rows)
+        return self.x.of(model, self.win_of.get(model), rows)
 
     def transfer_inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
         """The model's inputs of transfer rows ``rows``."""
         assert self.xt is not None
-        return self.xt.get(self.win_of.get(model), rows)
+        return self.xt.of(model, self.win_of.get(model), rows)
 
     def fit_rows(self, model: str, train: np.ndarray) -> np.ndarray:
         """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
