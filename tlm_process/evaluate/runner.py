@@ -230,7 +230,9 @@ _COST: Mapping[str, tuple[float, float]] = {
     "KNN": (2e-4, 0.012), "AdaBoost": (3e-4, 1e-3), "OneR": (7e-4, 1e-3), "ZeroR": (0.0, 0.0),
     "J48": (1.6e-3, 1e-3), "RandomForest": (0.022, 5e-3), "RandomTree": (7e-4, 1e-3),
     "CNN": (0.034, 5e-3), "WindowHGB": (8e-3, 0.045), "WindowHGB60": (7e-3, 0.04),
-    "CentredHGB": (7e-3, 0.045), "SeqCNN": (0.0, 0.0)}
+    "CentredHGB": (7e-3, 0.045), "SeqCNN": (0.0, 0.01)}
+#: Seconds per fit that do not grow with the rows (SeqCNN: a fixed number of steps).
+_FIXED_COST: Mapping[str, float] = {"SeqCNN": 20.0}
 
 
 class _Progress:
@@ -248,7 +250,8 @@ class _Progress:
         for m in models:
             fit, pred = _COST.get(m, (0.01, 0.01))
             n_fit = sum(len(tab.fit_rows(m, f.train)) for f in tab.folds)
-            self.cost[m] = 1e-3 * (fit * n_fit * tab.n_inputs(m) + pred * n_pred) + 0.01
+            self.cost[m] = (1e-3 * (fit * n_fit * tab.n_inputs(m) + pred * n_pred) + 0.01
+                            + _FIXED_COST.get(m, 0.0) * len(tab.folds))
         self.bar = None
         if bar is not False:
             from tqdm import tqdm

@@ -67,10 +67,12 @@ from sklearn.utils.validation import check_is_fitted
 from tlm_process.evaluate.cnn import SHARDS, RowImageCNN, _parts, require_torch, torch_pool
 from tlm_process.evaluate.temporal import FlightRuns
 
-__all__ = ["CLIP", "FlightContext", "SeqCNN"]
+__all__ = ["CLIP", "STEPS", "FlightContext", "SeqCNN"]
 
 #: Standardised features are clipped to +-CLIP (a transfer log's outlier cannot blow up).
 CLIP = 10.0
+#: Adam steps of a fit when ``SeqCNN(steps=None)``.
+STEPS = 300
 #: Extra columns of the input matrix after the features: flight, time [s], want.
 EXTRA_COLS = 3
 
@@ -177,8 +179,10 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
     """Causal temporal convolutional network on a table's rows (see the module docstring).
 
     ``coarse_hz``: rate of the coarse sequence [Hz]; ``channels``, ``kernel``,
-    ``dilations``, ``head``: the network; ``steps``, ``batch`` (crops per step), ``crop``
-    (coarse steps with a loss per crop, after the receptive field), ``lr`` (Adam's peak),
+    ``dilations``, ``head``: the network; ``steps`` (None: :data:`STEPS`), ``batch`` (crops
+    per step), ``crop`` (coarse steps with a loss per crop, after the receptive field),
+    ``lr`` (Adam's peak), ``arch`` (``"tcn"``; ``"gru"``: one GRU layer instead of the
+    convolutions, measured and not the default, ``docs/evaluation.md``),
     ``class_weight`` (None, ``"balanced"``: n / (k n_c), ``"sqrt"``: its square root,
     normalised to a mean of 1 over the rows); ``fault_share``: share of crops drawn to end
     shortly after a row of a minority class. ``history_``: per ``steps / 10`` steps the mean
@@ -188,7 +192,7 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
 
     def __init__(self, coarse_hz: float = 5.0, channels: int = 32, kernel: int = 3,
                  dilations: Sequence[int] = (1, 2, 4, 8, 16, 32, 64), head: int = 64,
-                 steps: int = 300, batch: int = 8, crop: int = 192, lr: float = 1e-2,
+                 steps: int | None = None, batch: int = 8, crop: int = 192, lr: float = 1e-2,
                  class_weight: str | None = None, fault_share: float = 0.5,
                  arch: str = "tcn", seed: int = 0, device: str = "auto", n_threads: int | None = 1,
                  progress: Callable[[str], None] | None = None) -> None:
@@ -266,6 +270,7 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
         self.mean_ = np.nan_to_num(self.mean_)
         self.scale_ = np.where(np.isfinite(sd) & (sd > 1e-9), sd, 1.0)
         self.stride_ = self._rate_stride(X)
+        self.steps_ = int(self.steps if self.steps is not None else STEPS)
         flights = [self._flight(x, w) for x, w in self._split(X)]
         labels = [np.where(f.want >= 0, yi[np.maximum(f.want, 0)], -1) for f in flights]
         torch.manual_seed(int(self.seed))
@@ -345,7 +350,7 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
         minority = [np.flatnonzero((lab >= 0) & (lab != major)) for lab in labels]
         params = list(net.parameters())
         opt = torch.optim.Adam(params, lr=float(self.lr))
-        steps = int(self.steps)
+        steps = self.steps_
         warm = max(1, steps // 20)
         sched = torch.optim.lr_scheduler.LambdaLR(
             opt, lambda i: min(1.0, (i + 1) / warm) * 0.5 * (1 + math.cos(math.pi * i / steps)))
@@ -403,7 +408,8 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
                "val_accuracy": math.nan, "seconds": seconds}
         self.history_.append(rec)
         if self.progress is not None:
-            self.progress(f"SeqCNN steps {epoch * max(1, int(self.steps) // 10)}/{self.steps}: "
+            self.progress(f"SeqCNN steps {min(epoch * max(1, self.steps_ // 10), self.steps_)}/"
+                          f"{self.steps_}: "
                           f"loss {loss:.4f}, accuracy {acc:.4f} ({seconds:.1f} s)")
 
     # -- prediction --------------------------------------------------------------------------
