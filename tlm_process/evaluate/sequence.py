@@ -244,7 +244,7 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
         z = np.clip(z, -CLIP, CLIP).astype(np.float32)
         s = self.stride_
         nc = len(z) // s
-        blocks = z[:nc * s].reshape(nc, s, -1)
+        blocks = z[:nc * s].reshape(nc, s, z.shape[1])
         c = blocks.mean(axis=1)
         if s > 1:
             c = np.concatenate([c, blocks.std(axis=1)], axis=1)
@@ -272,6 +272,9 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
         self.stride_ = self._rate_stride(X)
         self.steps_ = int(self.steps if self.steps is not None else STEPS)
         flights = [self._flight(x, w) for x, w in self._split(X)]
+        if not any(len(f.c) for f in flights):
+            raise ValueError(f"SeqCNN: no training flight has {self.stride_} rows (one coarse "
+                             "step)")
         labels = [np.where(f.want >= 0, yi[np.maximum(f.want, 0)], -1) for f in flights]
         torch.manual_seed(int(self.seed))
         d = feats.shape[1]
