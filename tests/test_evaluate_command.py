@@ -98,16 +98,18 @@ def test_evaluate_is_deterministic_given_the_seed(tiny_ds, tmp_path, capsys):
 
 
 def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp_path,
-                                                capsys):
+                                                capsys, monkeypatch):
     """--jobs changes the speed only: RandomForest and KNN (threads), SMO (processes),
-    Logistic (BLAS), the window models (OpenMP) and the CNN (torch) give the same test and
-    transfer confusion matrices and the same CNN training curve on 1 and 2 threads."""
+    Logistic (BLAS), the window models (OpenMP), the CNN and SeqCNN (torch) give the same test
+    and transfer confusion matrices and the same training curves on 1 and 2 threads."""
     pytest.importorskip("torch")
+    monkeypatch.setattr("tlm_process.evaluate.sequence.STEPS", 20)  # a short SeqCNN fit
 
     def once(jobs):
         rj = tmp_path / f"jobs{jobs}.json"
         rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models",
-                          "Logistic,SMO,KNN,RandomForest,CNN,WindowHGB", "--cnn-epochs", "2",
+                          "Logistic,SMO,KNN,RandomForest,CNN,WindowHGB,SeqCNN", "--cnn-epochs",
+                          "2",
                           "--jobs", jobs, "--quiet", "--test-on", tiny_flight_folder,
                           "--json", rj)
         assert rc == 0, err
@@ -117,7 +119,7 @@ def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp
                 for m, r in res.items()}
 
     one, two = once(1), once(2)
-    assert len(one["CNN"][3]) == 2
+    assert len(one["CNN"][3]) == 2 and len(one["SeqCNN"][3]) == 10
     assert one == two
 
 

@@ -28,13 +28,15 @@ from tlm_process.commands.process import report_user_errors
 __all__ = ["MODEL_NAMES", "TABLE_NAMES", "add_parser", "run"]
 
 MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
-               "RandomForest", "RandomTree", "CNN", "WindowHGB", "WindowHGB60", "CentredHGB")
+               "RandomForest", "RandomTree", "CNN", "WindowHGB", "WindowHGB60", "CentredHGB",
+               "SeqCNN")
 TABLE_NAMES = ("GPS", "IMU", "RATE", "VIBE")
 
 DESCRIPTION = """\
 Evaluate fault classifiers on a 'tlm process' data set as the paper's section 5 does, and
 more honestly: the ten Weka classifiers of Table 11 (as scikit-learn estimators), the paper's
-row-image CNN and WindowHGB, a model that sees the last seconds of each flight. Prints the
+row-image CNN, WindowHGB, a model that sees the last seconds of each flight, and SeqCNN, a
+causal convolutional network on each flight's rows. Prints the
 Table 11-style table per data table (Weka's weighted TP rate, FP rate, precision, recall, F1;
 '?' where precision is undefined because a class is never predicted) plus macro-F1.
 """

@@ -34,7 +34,8 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-__all__ = ["SHARDS", "RowImageCNN", "image_side", "require_torch", "rows_to_images"]
+__all__ = ["SHARDS", "RowImageCNN", "image_side", "require_torch", "rows_to_images",
+           "torch_pool"]
 
 #: Parts of a mini-batch computed on separate threads on the CPU (at most this many threads
 #: are used); fixed, so that the sums do not depend on the thread count.
@@ -104,6 +105,26 @@ def _parts(n: int, k: int | None = None) -> list[slice]:
     return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
 
 
+@contextmanager
+def torch_pool(torch: Any, dev: Any, n_threads: int | None
+               ) -> Iterator[Callable[..., list[Any]]]:
+    """``run(fn, items)``: ``[fn(i) for i in items]``, on the CPU each call on one torch
+    thread, spread over ``min(n_threads, SHARDS)`` threads; on a GPU in turn."""
+    threads = torch.get_num_threads()
+    workers = 1 if dev.type != "cpu" else max(1, min(int(n_threads or 1), SHARDS))
+    if dev.type == "cpu":
+        torch.set_num_threads(1)  # this thread's parts too
+    pool = (ThreadPoolExecutor(workers, initializer=torch.set_num_threads, initargs=(1,))
+            if workers > 1 else None)
+    try:
+        yield ((lambda fn, items: list(pool.map(fn, items))) if pool is not None
+               else (lambda fn, items: [fn(i) for i in items]))
+    finally:
+        if pool is not None:
+            pool.shutdown()
+        torch.set_num_threads(threads)
+
+
 class RowImageCNN(ClassifierMixin, BaseEstimator):
     """The paper's row-image CNN as a scikit-learn classifier (see the module docstring).
 
@@ -149,23 +170,9 @@ class RowImageCNN(ClassifierMixin, BaseEstimator):
             mask[rng.choice(n, size=k, replace=False)] = True
         return mask
 
-    @contextmanager
-    def _pool(self, torch: Any, dev: Any) -> Iterator[Callable[..., list[Any]]]:
-        """``run(fn, items)``: ``[fn(i) for i in items]``, on the CPU each call on one torch
-        thread, spread over ``min(n_threads, SHARDS)`` threads; on a GPU in turn."""
-        threads = torch.get_num_threads()
-        workers = 1 if dev.type != "cpu" else max(1, min(int(self.n_threads or 1), SHARDS))
-        if dev.type == "cpu":
-            torch.set_num_threads(1)  # this thread's parts too
-        pool = (ThreadPoolExecutor(workers, initializer=torch.set_num_threads, initargs=(1,))
-                if workers > 1 else None)
-        try:
-            yield ((lambda fn, items: list(pool.map(fn, items))) if pool is not None
-                   else (lambda fn, items: [fn(i) for i in items]))
-        finally:
-            if pool is not None:
-                pool.shutdown()
-            torch.set_num_threads(threads)
+    def _pool(self, torch: Any, dev: Any) -> Any:
+        """:func:`torch_pool` with ``n_threads``."""
+        return torch_pool(torch, dev, self.n_threads)
 
     def fit(self, X: Any, y: Any, groups: Any = None) -> RowImageCNN:
         torch = require_torch()

@@ -36,13 +36,14 @@ from tlm_process.evaluate.models import (
     ALL_MODELS,
     DEFAULT_NORMAL_HZ,
     DEFAULT_TRAIN_HZ,
-    TIME_MODELS,
+    SEQUENCE_MODELS,
     WEIGHTED_MODELS,
     make_model,
 )
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
+    WINDOW_MODELS,
     FlightRuns,
     WindowFeatures,
     merged_windows,
@@ -276,7 +277,9 @@ _COST: Mapping[str, tuple[float, float]] = {
     "KNN": (2e-4, 0.012), "AdaBoost": (3e-4, 1e-3), "OneR": (7e-4, 1e-3), "ZeroR": (0.0, 0.0),
     "J48": (1.6e-3, 1e-3), "RandomForest": (0.022, 5e-3), "RandomTree": (7e-4, 1e-3),
     "CNN": (0.034, 5e-3), "WindowHGB": (8e-3, 0.045), "WindowHGB60": (7e-3, 0.04),
-    "CentredHGB": (7e-3, 0.045)}
+    "CentredHGB": (7e-3, 0.045), "SeqCNN": (0.0, 0.01)}
+#: Seconds per fit that do not grow with the rows (SeqCNN: a fixed number of steps).
+_FIXED_COST: Mapping[str, float] = {"SeqCNN": 20.0}
 
 
 class _Progress:
@@ -294,7 +297,8 @@ class _Progress:
         for m in models:
             fit, pred = _COST.get(m, (0.01, 0.01))
             n_fit = sum(len(tab.fit_rows(m, f.train)) for f in tab.folds)
-            self.cost[m] = 1e-3 * (fit * n_fit * tab.n_inputs(m) + pred * n_pred) + 0.01
+            self.cost[m] = (1e-3 * (fit * n_fit * tab.n_inputs(m) + pred * n_pred) + 0.01
+                            + _FIXED_COST.get(m, 0.0) * len(tab.folds))
         self.bar = None
         if bar is not False:
             from tqdm import tqdm
@@ -347,6 +351,12 @@ class _Inputs:
     rows: np.ndarray
     win: list[np.ndarray] = field(default_factory=list)
     pos: np.ndarray | None = None
+    seq: Any = None  # the sequence models' FlightContext
+
+    def of(self, model: str, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
+           ) -> np.ndarray:
+        """Inputs of ``model``: :meth:`get`, or whole flights for a sequence model."""
+        return self.seq.inputs(rows) if model in SEQUENCE_MODELS else self.get(which, rows)
 
     def get(self, which: tuple[int, np.ndarray | None] | None, rows: np.ndarray
             ) -> np.ndarray:
@@ -417,7 +427,7 @@ class _Table:
         thin = {(hz, n): normal_rows(df, y, n, rate, hz, runs)
                 for hz, n in {(train_hz[m], every[m]) for m in models} if hz or n > 1}
         groups = df["flight"].astype(str).to_numpy()
-        specs = {m: window_spec(ds, t, m) for m in models if m in TIME_MODELS}
+        specs = {m: window_spec(ds, t, m) for m in models if m in WINDOW_MODELS}
         merged, win_of = merged_windows(specs, feats)
         x = _Inputs(df[feats].to_numpy(np.float64))
         if merged:
@@ -443,6 +453,14 @@ class _Table:
             tab.xt = _Inputs(xt[feats].to_numpy(np.float64),
                              [window_features(xt, feats, sp, xt_rate, None, xt_runs)[0]
                               for sp in merged])
+        if any(m in SEQUENCE_MODELS for m in models):
+            from tlm_process.evaluate.sequence import FlightContext
+
+            circ = window_spec(ds, t).circular
+            tab.x.seq = FlightContext.of(df, feats, circ, runs)
+            if xt is not None:
+                assert tab.xt is not None
+                tab.xt.seq = FlightContext.of(xt, feats, circ)
         tab.labels = class_labels(tab.y, tab.yt if tab.yt is not None else [])
         return tab
 
@@ -456,12 +474,12 @@ class _Table:
     def inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
         """The model's inputs of table rows ``rows``: window features for a window model,
         else the rows' features."""
-        return self.x.get(self.win_of.get(model), rows)
+        return self.x.of(model, self.win_of.get(model), rows)
 
     def transfer_inputs(self, model: str, rows: np.ndarray) -> np.ndarray:
         """The model's inputs of transfer rows ``rows``."""
         assert self.xt is not None
-        return self.xt.get(self.win_of.get(model), rows)
+        return self.xt.of(model, self.win_of.get(model), rows)
 
     def fit_rows(self, model: str, train: np.ndarray) -> np.ndarray:
         """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
