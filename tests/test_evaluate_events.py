@@ -131,8 +131,8 @@ def test_summary_per_class_and_the_table():
     assert s["false_alarms_per_hour"] == pytest.approx(180.0)
     assert s["persistence_s"] == PERSISTENCE_S
     text = format_detection_table({"M": s, "Z": {"accuracy": 1.0}}, "title")
-    assert text.splitlines()[1].split() == ["Method", "FA/h", "GPS", "Engine"]
-    assert text.splitlines()[2].split() == ["M", "180.00", "0.5", "(1/2)", "1.5", "(1/1)"]
+    assert text.splitlines()[1].split() == ["Method", "FA", "FA/h", "GPS", "Engine"]
+    assert text.splitlines()[2].split() == ["M", "1", "180.00", "0.5", "(1/2)", "1.5", "(1/1)"]
     assert format_detection_table({"M": s}, transfer=True) == ""
 
 

@@ -303,14 +303,18 @@ def _event_lines(t: str, res: dict, transfer: bool) -> list[str]:
     """The detection-delay and false-alarm tables of the test rows (and transfer rows)."""
     from tlm_process.evaluate.events import PERSISTENCE_S, format_detection_table
 
-    how = (f"(persistence {PERSISTENCE_S:g} s; FA/h: false alarms per hour of normal rows; "
-           "per fault class: median detection delay [s] (detected/events))")
     lines = []
     for xfer, where in ((False, "test rows"), (True, "transfer rows")):
-        if xfer and not transfer:
+        first = next(iter(res.values()))
+        if xfer:
+            first = first.get("transfer") or {}
+        if (xfer and not transfer) or "normal_hours" not in first:
             continue
-        text = format_detection_table(res, f"{t}: detection delay and false alarms on the "
-                                           f"{where} {how}", transfer=xfer)
+        text = format_detection_table(
+            res, f"{t}: detection delay and false alarms on the {where} (persistence "
+                 f"{PERSISTENCE_S:g} s; FA: false alarms in {first['normal_hours']:.2f} h of "
+                 f"normal rows; per fault class: median detection delay [s] "
+                 f"(detected/events))", transfer=xfer)
         if text:
             lines += ["", text]
     return lines

@@ -166,8 +166,9 @@ def _false_alarms(rows: _Rows, persistence_s: float) -> tuple[int, float]:
 
 
 def _quantile(v: np.ndarray, q: float) -> float:
+    """Percentile ``q`` of the finite values [s], to the millisecond; NaN without any."""
     v = v[np.isfinite(v)]
-    return float(np.percentile(v, q)) if len(v) else math.nan
+    return round(float(np.percentile(v, q)), 3) if len(v) else math.nan
 
 
 def detection_summary(flight: Any, time_us: Any, y_true: Any, y_pred: Any,
@@ -206,19 +207,20 @@ def _cell(d: Mapping[str, Any] | None) -> str:
 
 def format_detection_table(results: Mapping[str, Mapping[str, Any]], title: str = "",
                            transfer: bool = False) -> str:
-    """One row per model: false alarms per flight hour, then per fault class the median
-    detection delay [s] and detected/events (``?``: none detected); ``transfer``: of the
-    transfer rows. Empty when no model has event metrics."""
+    """One row per model: false alarms and false alarms per flight hour, then per fault
+    class the median detection delay [s] and detected/events (``?``: none detected);
+    ``transfer``: of the transfer rows. Empty when no model has event metrics."""
     res = {m: (r.get("transfer") or {}) if transfer else r for m, r in results.items()}
     res = {m: r for m, r in res.items() if "detection" in r}
     if not res:
         return ""
     classes = list(dict.fromkeys(c for r in res.values() for c in r["detection"]))
-    head = ["Method", "FA/h", *classes]
+    head = ["Method", "FA", "FA/h", *classes]
     rows = []
     for m, r in res.items():
         fa = r.get("false_alarms_per_hour")
-        rows.append([m, f"{fa:.2f}" if fa is not None and math.isfinite(fa) else "?",
+        rows.append([m, str(r.get("false_alarms", "?")),
+                     f"{fa:.2f}" if fa is not None and math.isfinite(fa) else "?",
                      *(_cell(r["detection"].get(c)) for c in classes)])
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
     lines = [title] if title else []
