@@ -440,7 +440,7 @@ def _predict(est: Any, get: Callable[[np.ndarray], np.ndarray], rows: np.ndarray
 
 
 def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
-               ) -> tuple[dict[str, Any], np.ndarray, Any]:
+               ) -> tuple[dict[str, Any], np.ndarray, Any, np.ndarray]:
     """Fit a fresh model ``make()`` on each fold's training rows and predict its test rows.
 
     Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
