@@ -182,6 +182,15 @@ def test_evaluate_transfer_to_a_reference_sitl_log(tiny_ds, tmp_path, capsys):
     assert t["n"] > 1000 and len(t["confusion"]) == 5
     assert t["per_class"]["GPS"]["support"] > 100  # combined_s21 has a ~29 s GPS fault
     assert "xfer macro-F1" in out and "largest feature distribution differences" in out
+    # event metrics of the test flight and of the SITL log (combined_s21: GPS, Acc, Engine,
+    # RC faults, one each), in the JSON and as tables
+    assert list(t["detection"]) == ["GPS", "Acc", "Engine", "RC"]
+    assert all(d["events"] == 1 for d in t["detection"].values())
+    assert t["normal_hours"] > 0 and t["false_alarms_per_hour"] >= 0
+    r = json.loads(rj.read_text())["GPS"]["OneR"]
+    assert r["detection"] and r["false_alarms"] >= 0 and r["persistence_s"] == 1.0
+    assert "GPS: detection delay and false alarms on the test rows" in out
+    assert "GPS: detection delay and false alarms on the transfer rows" in out
     assert (tmp_path / "o" / "feature_shift.csv").exists()
     assert (tmp_path / "o" / "GPS_OneR_transfer_confusion.png").exists()
 

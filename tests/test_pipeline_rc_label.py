@@ -121,3 +121,21 @@ def test_bad_rc_label_exits_2(tmp_path, capsys):
         main(["process", "x.bin", "--out", str(tmp_path / "x"), "--rc-label", "rtl"])
     assert e.value.code == 2
     assert "--rc-label" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("rc_label", ["window", "failsafe", None])
+def test_evaluate_labels_transfer_logs_as_the_data_set_was_labelled(rc_label):
+    """``tlm evaluate --test-on``: the transfer log gets the data set's RC labelling (a report
+    without ``rc_label``, older than the option, had the paper's window)."""
+    from tlm_process.evaluate.data import EvalDataset, load_transfer
+
+    want = _processed("rc_s15", rc_label or "window").features["GPS"]
+    feats = [c for c in want.columns if c not in ("flight", "TimeUS", "label")]
+    ds = EvalDataset(None, {}, {"GPS": feats}, object(),  # unscaled: the scaler is not used
+                     {"options": {"rc_label": rc_label} if rc_label else {},
+                      "scaling": {"applied": False}})
+    got = load_transfer([reference_path("rc_s15.bin")], ds, ["GPS"])["GPS"]
+    assert got["TimeUS"].tolist() == want["TimeUS"].tolist()
+    assert got["label"].tolist() == want["label"].tolist()
+    other = _processed("rc_s15", "window" if rc_label == "failsafe" else "failsafe")
+    assert (other.features["GPS"]["label"] == 4).sum() != (got["label"] == 4).sum()

@@ -75,11 +75,15 @@ training rows:
   --jobs N         threads (default: all cores); the results do not depend on it
 
 outputs:
-  stdout           Table 11 per table; confusion matrix and per-class scores (Tables 12-18)
-                   of the best model by macro-F1 (all models with --details)
+  stdout           Table 11 per table; per model the false alarms per flight hour and per
+                   fault class the median detection delay (1 s persistence; see
+                   docs/evaluation.md "Detection delay and false alarms"); confusion matrix
+                   and per-class scores (Tables 12-18) of the best model by macro-F1 (all
+                   models with --details)
   --json R.json    {{TABLE: {{MODEL: {{accuracy, macro_f1, weighted_precision, weighted_recall,
                    weighted_f1, weighted_tp_rate, weighted_fp_rate, per_class, confusion,
-                   transfer, ...}}}}}}; undefined values are null
+                   detection, false_alarms_per_hour, transfer, ...}}}}}}; undefined values
+                   are null
   --out DIR        DIR/<TABLE>_<MODEL>_confusion.png (+ _transfer_confusion.png),
                    DIR/<TABLE>_CNN_training.png (Figs. 20-21), DIR/report.txt
 
@@ -221,8 +225,8 @@ def _run(args: argparse.Namespace) -> int:
     ds = load_dataset(args.dataset, tables)
     transfer = None
     if args.test_on:
-        say(f"reading {len(args.test_on)} transfer log(s) with the data set's options and "
-            f"scaler")
+        say(f"reading {len(args.test_on)} transfer log(s) with the data set's options (RC "
+            f"labels: {ds.options.get('rc_label') or 'window'}) and scaler")
         transfer = load_transfer(args.test_on, ds, tables)
     np.seterr(all="ignore")
     results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
@@ -278,6 +282,7 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
              + (f"; transfer: {first['transfer']['n']:,} rows of "
                 f"{len(args.test_on)} log(s)" if "transfer" in first else ""),
         transfer="transfer" in first)]
+    lines += _event_lines(t, res, "transfer" in first)
     for m in details_of:
         r = res[m]
         lines.append("")
@@ -303,6 +308,27 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
     lines.append(format_timing_table(res, f"{t}: time per model (wall seconds, {jobs} "
                                           f"thread(s); training rows thinned to 'train Hz')"))
     lines.append("")
+    return lines
+
+
+def _event_lines(t: str, res: dict, transfer: bool) -> list[str]:
+    """The detection-delay and false-alarm tables of the test rows (and transfer rows)."""
+    from tlm_process.evaluate.events import PERSISTENCE_S, format_detection_table
+
+    lines = []
+    for xfer, where in ((False, "test rows"), (True, "transfer rows")):
+        first = next(iter(res.values()))
+        if xfer:
+            first = first.get("transfer") or {}
+        if (xfer and not transfer) or "normal_hours" not in first:
+            continue
+        text = format_detection_table(
+            res, f"{t}: detection delay and false alarms on the {where} (persistence "
+                 f"{PERSISTENCE_S:g} s; FA: false alarms in {first['normal_hours']:.2f} h of "
+                 f"normal rows; per fault class: median detection delay [s] "
+                 f"(detected/events))", transfer=xfer)
+        if text:
+            lines += ["", text]
     return lines
 
 

@@ -6,7 +6,8 @@ A data set is the folder ``tlm process ... --out DS`` writes: ``DS/report.json``
 
 Transfer logs (``tlm evaluate --test-on``) are any inputs ``tlm process`` reads (``.bin`` +
 sidecar, tlm flight folders, ...). They are processed exactly as the data set's flights were
-(the options in its report: anchoring, phase, sensor instance) and scaled with the data set's
+(the options in its report: anchoring, phase, sensor instance, RC labelling; a report without
+``rc_label``, from a tlm before it, had the paper's "window") and scaled with the data set's
 own scaler (fitted on its training flights), so a model trained on the data set sees them as
 it would see a new flight of its own.
 """
@@ -113,7 +114,8 @@ def load_dataset(path: str | Path, tables: Sequence[str] | None = None) -> EvalD
 def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
                   tables: Sequence[str] | None = None) -> dict[str, pd.DataFrame]:
     """The transfer logs ``paths`` as tables like the data set's (``flight``, ``TimeUS``,
-    ``label``, scaled features), processed with the data set's options and scaler."""
+    ``label``, scaled features), processed with the data set's options (``rc_label``
+    included: the transfer rows are labelled as the data set's were) and scaler."""
     from tlm_process.pipeline.anchoring import DEFAULT_MAX_MATCH_M
     from tlm_process.pipeline.ingest import read_flights
     from tlm_process.pipeline.process import ProcessOptions, process_flight
@@ -127,7 +129,7 @@ def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
         method=opt.get("anchoring", "auto"), phase=opt.get("phase", "armed"),
         instance=opt.get("instance", 0),
         max_match_m=opt.get("max_match_m") or DEFAULT_MAX_MATCH_M,
-        tables=tuple(tables))
+        tables=tuple(tables), rc_label=opt.get("rc_label") or "window")
     flights = read_flights(list(paths))
     frames: dict[str, list[pd.DataFrame]] = {t: [] for t in tables}
     for fl in flights:

@@ -27,6 +27,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.pipeline import Pipeline
 
 from tlm_process.evaluate.data import EvalDataset, EvaluateError
+from tlm_process.evaluate.events import detection_summary
 from tlm_process.evaluate.metrics import (
     classification_metrics,
     confusion_matrix,
@@ -145,7 +146,10 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     ``transfer_predict_seconds`` and, after cross-validation, ``transfer_fit_seconds`` of the
     model refitted on every flight),
     with cross-validation ``per_fold`` (accuracy and macro-F1 of each fold), for the CNN
-    ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows).
+    ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows),
+    and the event metrics of :func:`.events.detection_summary` (``detection`` per fault
+    class, ``false_alarms_per_hour``, ...) of every fold's test rows pooled and, under
+    ``transfer``, of the transfer rows.
     ``out_dir``: confusion matrix PNGs (and the CNN's training curves) are written there.
     ``n_jobs``: threads for every library (BLAS, OpenMP, torch, joblib; default: this
     machine's cores, :func:`default_jobs`); results are the same whatever it is. On a
@@ -247,8 +251,11 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
                ) -> tuple[dict[str, Any], np.ndarray, Any]:
     """Fit and score model ``name`` on ``tab`` (folds, then the transfer rows); returns (its
     results, the summed confusion matrix, the model last fitted)."""
-    counts, cm, last = _fit_folds(tab, name, make, say)
+    counts, cm, last, test_pred = _fit_folds(tab, name, make, say)
     r = classification_metrics(cm, class_names(tab.labels))
+    tested = test_pred >= 0  # every fold's test rows, pooled: their events
+    r.update(detection_summary(tab.groups[tested], tab.time_us[tested], tab.y[tested],
+                               test_pred[tested]))
     r["labels"] = list(tab.labels)
     r["train_hz"] = tab.train_hz[name]
     r["normal_every"] = tab.normal_every[name]
@@ -263,6 +270,7 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
         r["transfer_predict_seconds"] = round(time.perf_counter() - t0, 3)
         r["transfer"] = classification_metrics(
             confusion_matrix(tab.yt, pred, labels=tab.labels), class_names(tab.labels))
+        r["transfer"].update(detection_summary(tab.gt, tab.tt_us, tab.yt, pred))
     if hasattr(last, "history_"):
         r["history"] = last.history_
     return r, cm, last
@@ -400,6 +408,9 @@ class _Table:
     yt: np.ndarray | None = None
     xt: _Inputs | None = None
     labels: list[int] = field(default_factory=list)
+    time_us: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))  # TimeUS
+    gt: np.ndarray | None = None  # flight of each transfer row
+    tt_us: np.ndarray | None = None  # TimeUS of each transfer row
 
     @classmethod
     def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
@@ -446,8 +457,11 @@ class _Table:
             x.win = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
         tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
                   y, groups, x, win_of, train_hz, every, thin, fold_list)
+        tab.time_us = df["TimeUS"].to_numpy(np.int64)
         if xt is not None:
             tab.yt = xt["label"].to_numpy(np.int64)
+            tab.gt = xt["flight"].astype(str).to_numpy()
+            tab.tt_us = xt["TimeUS"].to_numpy(np.int64)
             xt_runs = FlightRuns.of(xt)
             xt_rate = row_rate_hz(xt, xt_runs) if merged else None
             tab.xt = _Inputs(xt[feats].to_numpy(np.float64),
@@ -512,16 +526,18 @@ def _predict(est: Any, get: Callable[[np.ndarray], np.ndarray], rows: np.ndarray
 
 
 def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[str], None]
-               ) -> tuple[dict[str, Any], np.ndarray, Any]:
+               ) -> tuple[dict[str, Any], np.ndarray, Any, np.ndarray]:
     """Fit a fresh model ``make()`` on each fold's training rows and predict its test rows.
 
-    Returns (counts and timings [s], the summed confusion matrix, the last fold's model)."""
+    Returns (counts and timings [s], the summed confusion matrix, the last fold's model, the
+    prediction of every row tested (-1: not tested))."""
     y, groups, t = tab.y, tab.groups, tab.name
     cm = np.zeros((len(tab.labels),) * 2, dtype=np.int64)
     fit_s = pred_s = 0.0
     n_train = n_test = n_fit = 0
     last = None
     per_fold: list[dict[str, Any]] = []
+    test_pred = np.full(len(y), -1, dtype=np.int64)
     for fold in tab.folds:
         est = make()
         fit_rows = tab.fit_rows(name, fold.train)
@@ -537,6 +553,7 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
         n_fit += len(fit_rows)
         n_test += len(fold.test)
         fold_cm = confusion_matrix(y[fold.test], pred, labels=tab.labels)
+        test_pred[fold.test] = pred
         cm += fold_cm
         last = est
         if len(tab.folds) > 1:
@@ -550,7 +567,7 @@ def _fit_folds(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
                          "predict_seconds": round(pred_s, 3)}
     if per_fold:
         r["per_fold"] = per_fold
-    return r, cm, last
+    return r, cm, last, test_pred
 
 
 def _fit_all(tab: _Table, name: str, make: Callable[[], Any]) -> Any:
