@@ -9,7 +9,12 @@ default (``LoopLibrary.privatize = False``, see :mod:`tlm_sim._jit`): the defaul
 the callees private to the loop, where LLVM inlines most of them and perf can no longer tell
 them apart. Needs ``perf`` on PATH; ~1 minute (compile).
 
-    PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20]
+    PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20] [--split-inline]
+
+``--split-inline`` compiles the named sections that numba otherwise inlines into their caller
+(``inline_jit``: the flight loop's ``_read_sensors``, ``_estimate``, ``_log_tick``, ...) as
+functions of their own, so that their time is not counted as ``run_flight``'s. After the table
+of functions a second table sums the shares per subsystem (:data:`SUBSYSTEMS`).
 """
 
 from __future__ import annotations
@@ -37,8 +42,61 @@ def _short(symbol: str) -> str:
     return ".".join(parts) or symbol
 
 
-def child(flights: int) -> None:
+#: subsystem of a jitted function, by the first prefix of its qualified name that matches
+SUBSYSTEMS: tuple[tuple[str, str], ...] = (
+    ("tlm_sim.flight._physics_tick", "physics (1200 Hz: body, motors, wind, battery)"),
+    ("tlm_sim.sensors.imu.imu_sample", "IMU sampling (1200 Hz)"),
+    ("tlm_sim.sensors.imu._", "IMU sampling (1200 Hz)"),
+    ("tlm_sim.rng", "IMU sampling (1200 Hz)"),
+    ("tlm_sim.dynamics.log", "logging"),
+    ("tlm_sim.dynamics", "physics (1200 Hz: body, motors, wind, battery)"),
+    ("tlm_sim.rotation", "physics (1200 Hz: body, motors, wind, battery)"),
+    ("tlm_sim.sensors.log", "logging"),
+    ("tlm_sim.sensors", "sensors (400 Hz: IMU deltas, GPS, baro, compass, RC)"),
+    ("tlm_sim.flight._read_sensors", "sensors (400 Hz: IMU deltas, GPS, baro, compass, RC)"),
+    ("tlm_sim.ekf.gsf", "EKF yaw estimators (GSF)"),
+    ("tlm_sim.ekf.log", "logging"),
+    ("tlm_sim.ekf.core.predict_covariance", "EKF covariance prediction (every 12 ms)"),
+    ("tlm_sim.ekf.core._mirror_and_add_noise", "EKF covariance prediction (every 12 ms)"),
+    ("tlm_sim.ekf.core.propagate", "EKF state propagation + output observer (every tick)"),
+    ("tlm_sim.ekf.core.quat_to_rot", "EKF state propagation + output observer (every tick)"),
+    ("tlm_sim.ekf.core.output_track", "EKF state propagation + output observer (every tick)"),
+    ("tlm_sim.ekf.core.buffer_push", "EKF state propagation + output observer (every tick)"),
+    ("tlm_sim.ekf", "EKF other (lane driver, fusion, selection, outputs)"),
+    ("tlm_sim.flight._estimate", "EKF other (lane driver, fusion, selection, outputs)"),
+    ("tlm_sim.control.dcm", "DCM"),
+    ("tlm_sim.control.log", "logging"),
+    ("tlm_sim.control.events", "logging"),
+    ("tlm_sim.logger", "logging"),
+    ("tlm_sim.flight._log_tick", "logging"),
+    ("tlm_sim.control.arming", "arming / boot texts"),
+    ("tlm_sim.control", "control (modes, navigation, position, attitude, mixer, failsafes)"),
+    ("tlm_sim.flight", "flight loop itself (+ callees LLVM inlined)"),
+)
+
+
+def subsystem(name: str) -> str:
+    """The :data:`SUBSYSTEMS` group of a jitted function's qualified name."""
+    for prefix, group in SUBSYSTEMS:
+        if name.startswith(prefix):
+            return group
+    return "other"
+
+
+def child(flights: int, split_inline: bool) -> None:
     """Fly (under perf), then write the perf map of the loop's jitted functions."""
+    if split_inline:  # before any jitted module imports the decorator, so before the
+        # package's __init__ (which imports them all) runs
+        import importlib.util
+
+        spec = importlib.util.find_spec("tlm_sim")
+        assert spec is not None and spec.loader is not None
+        pkg = importlib.util.module_from_spec(spec)
+        sys.modules["tlm_sim"] = pkg
+        from tlm_sim import _jit
+
+        _jit.inline_jit = _jit.tick_jit
+        spec.loader.exec_module(pkg)
     from tlm_sim._jit_fast import LoopLibrary
 
     # keep the callees' exported names (the perf map needs their addresses); the loop is then
@@ -68,10 +126,12 @@ def child(flights: int) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--flights", type=int, default=20)
+    ap.add_argument("--split-inline", action="store_true",
+                    help="compile the inline_jit sections as functions of their own")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        child(args.flights)
+        child(args.flights, args.split_inline)
         return
     if shutil.which("perf") is None:
         sys.exit("profile_fly: needs Linux perf on PATH")
@@ -79,7 +139,8 @@ def main() -> None:
         data = os.path.join(tmp, "perf.data")
         env = {**os.environ, "NUMBA_CACHE_DIR": os.path.join(tmp, "numba")}
         subprocess.run(["perf", "record", "-q", "-F", "2000", "-o", data, sys.executable,
-                        __file__, "--child", "--flights", str(args.flights)],
+                        __file__, "--child", "--flights", str(args.flights)]
+                       + (["--split-inline"] if args.split_inline else []),
                        check=True, env=env)
         rep = subprocess.run(["perf", "report", "-i", data, "-n", "--no-children",
                               "--sort", "sym", "--stdio"], capture_output=True, text=True,
@@ -99,6 +160,12 @@ def main() -> None:
     for name, n in samples.most_common():
         if n / total >= 0.005:
             print(f"| `{name}` | {100 * n / total:.1f} % |")
+    groups: Counter[str] = Counter()
+    for name, n in samples.items():
+        groups[subsystem(name)] += n
+    print("\n| subsystem | share |\n|---|---|")
+    for group, n in groups.most_common():
+        print(f"| {group} | {100 * n / total:.1f} % |")
 
 
 if __name__ == "__main__":

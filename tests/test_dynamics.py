@@ -836,3 +836,32 @@ def test_rotor_momentum_drag_damps_the_body_rates(frame: np.ndarray) -> None:
     damp = 4.0 * k_m * math.sqrt(thrust) * frame[F.F_DIAG] ** 2 / frame[F.F_IZZ]
     assert damp == pytest.approx(1.92, abs=0.05)
     assert x[X.WZ] == pytest.approx(math.exp(-(damp + frame[F.F_ROT_DAMP]) * n * DT), rel=0.02)
+
+
+def test_wind_settled_step_skip_is_exact() -> None:
+    """A settled slew-filter step is skipped (WIND_STILL_DT) only while it would change
+    nothing: with the cache and with it cleared before every step, the filters, the air
+    velocity and the cache's own trigger agree bit for bit, through settling, a target change
+    in flight (SIM_WIND_DIR, then SIM_WIND_SPD) and a filter state written from outside."""
+    f = build_frame(Params({"SIM_WIND_SPD": 0.0, "SIM_WIND_DIR": 180.0, "SIM_WIND_T": 1.0}))
+    a = wind_state(f, 100.0, settled=False)
+    b = a.copy()
+    fa, fb = f.copy(), f.copy()
+    skipped = 0
+    slots = [X.WIND_SPD_F, X.WIND_DIR_F, X.WIND_DIRZ_F, X.WIND_N, X.WIND_E, X.WIND_D,
+             X.WIND_SLEW_T]
+    for k in range(1, 90000):  # 75 s of 833 us steps: settled after ~35 s
+        t = k * DT
+        if k == 60000:
+            fa[F.F_WIND_DIR] = fb[F.F_WIND_DIR] = 90.0
+        if k == 70000:
+            fa[F.F_WIND_SPD] = fb[F.F_WIND_SPD] = 6.0
+        if k == 80000:
+            a[X.WIND_DIR_F] = b[X.WIND_DIR_F] = 170.0
+        still = a[X.WIND_STILL_DT]
+        update_wind(a, fa, t, RNG)
+        skipped += still > 0.0 and a[X.WIND_STILL_DT] == still
+        b[X.WIND_STILL_DT] = -1.0
+        update_wind(b, fb, t, RNG)
+        assert [a[s] for s in slots] == [b[s] for s in slots], k
+    assert skipped > 10000  # the cache did act

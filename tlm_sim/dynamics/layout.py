@@ -84,5 +84,13 @@ SHOVE_MS = _x.add("SHOVE_MS", 1, "ms",
                   "time the running SIM_SHOVE push has acted (0 when none runs)")
 TWIST_MS = _x.add("TWIST_MS", 1, "ms",
                   "time the running SIM_TWIST angular push has acted (0 when none runs)")
+WIND_STILL_DT = _x.add("WIND_STILL_DT", 1, "s",
+                       "wind model cache: a slew-filter step of exactly this length changed "
+                       "nothing at the targets WIND_STILL_KEY (the filters have settled; the "
+                       "step is skipped while both repeat); -1 when none")
+WIND_STILL_KEY = _x.add("WIND_STILL_KEY", 7, "",
+                        "wind model cache: SIM_WIND_SPD [m/s], SIM_WIND_DIR [deg], "
+                        "SIM_WIND_DIR_Z [deg], SIM_WIND_TC [s] and WIND_SPD_F, WIND_DIR_F, "
+                        "WIND_DIRZ_F when WIND_STILL_DT was found")
 
 N_STATE = STATE.close()

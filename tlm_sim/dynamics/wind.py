@@ -143,6 +143,7 @@ def init_wind(x: np.ndarray, frame: np.ndarray) -> None:
     x[X.GUST_H] = 0.0
     x[X.GUST_V] = 0.0
     x[X.WIND_SLEW_T] = 0.0
+    x[X.WIND_STILL_DT] = -1.0
     _set_direction(x, 0.0, 0.0)
 
 
@@ -152,25 +153,60 @@ def settle_wind(x: np.ndarray, frame: np.ndarray) -> None:
     (-180, 180], SIM_WIND_DIR_Z), as after a long steady wind; for tests and for experiments
     that start in settled wind. Call after :func:`init_wind`."""
     x[X.WIND_SPD_F] = frame[F_WIND_SPD]
+    x[X.WIND_STILL_DT] = -1.0
     _set_direction(x, wrap_180(frame[F_WIND_DIR]), frame[F_WIND_DIR_Z])
 
 
 @tick_jit
 def _slew_filters(x: np.ndarray, frame: np.ndarray, t_s: float) -> None:
     """Advance the speed/direction slew filters to simulated time ``t_s`` [s] if more than
-    ``WIND_SLEW_MIN_DT_S`` has passed since their last update (cut-off 1/TC Hz)."""
+    ``WIND_SLEW_MIN_DT_S`` has passed since their last update (cut-off 1/TC Hz).
+
+    Once the filters have settled (a step changed none of them: they sit at, or within a
+    rounding step of, their targets) a step of the same length at the same targets changes
+    nothing either; it is skipped (``WIND_STILL_DT``, ``WIND_STILL_KEY``), which saves the
+    filter gain's three divisions on almost every step of a flight."""
     dt = t_s - x[X.WIND_SLEW_T]
     if dt <= WIND_SLEW_MIN_DT_S:
         return
     x[X.WIND_SLEW_T] = t_s
+    if dt == x[X.WIND_STILL_DT] and _still(x, frame):
+        return
     alpha = lowpass_alpha(dt, 1.0 / max(frame[F_WIND_TC], WIND_TC_MIN_S))
-    x[X.WIND_SPD_F] += (frame[F_WIND_SPD] - x[X.WIND_SPD_F]) * alpha
+    spd_old = x[X.WIND_SPD_F]
+    spd = spd_old + (frame[F_WIND_SPD] - spd_old) * alpha
+    x[X.WIND_SPD_F] = spd
     dir_old = x[X.WIND_DIR_F]
     dirz_old = x[X.WIND_DIRZ_F]
     dirf = wrap_180(dir_old + wrap_180(frame[F_WIND_DIR] - dir_old) * alpha)
     dirz = dirz_old + (frame[F_WIND_DIR_Z] - dirz_old) * alpha
     if dirf != dir_old or dirz != dirz_old:
         _set_direction(x, dirf, dirz)
+    if _same(spd, spd_old) and _same(dirf, dir_old) and _same(dirz, dirz_old):
+        x[X.WIND_STILL_DT] = dt
+        k = X.WIND_STILL_KEY
+        x[k], x[k + 1] = frame[F_WIND_SPD], frame[F_WIND_DIR]
+        x[k + 2], x[k + 3] = frame[F_WIND_DIR_Z], frame[F_WIND_TC]
+        x[k + 4], x[k + 5], x[k + 6] = spd, dirf, dirz
+    else:
+        x[X.WIND_STILL_DT] = -1.0
+
+
+@tick_jit
+def _same(a: float, b: float) -> bool:
+    """a and b are the same number, zeros of the same sign included (NaN is never the same)."""
+    return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
+
+
+@tick_jit
+def _still(x: np.ndarray, frame: np.ndarray) -> bool:
+    """The targets and the filters are exactly those of the settled step recorded in
+    WIND_STILL_KEY (so a step of the same length would change nothing again)."""
+    k = X.WIND_STILL_KEY
+    return (_same(frame[F_WIND_SPD], x[k]) and _same(frame[F_WIND_DIR], x[k + 1])
+            and _same(frame[F_WIND_DIR_Z], x[k + 2]) and _same(frame[F_WIND_TC], x[k + 3])
+            and _same(x[X.WIND_SPD_F], x[k + 4]) and _same(x[X.WIND_DIR_F], x[k + 5])
+            and _same(x[X.WIND_DIRZ_F], x[k + 6]))
 
 
 @tick_jit
