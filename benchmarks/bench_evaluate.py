@@ -11,7 +11,8 @@ does.
 Each table is evaluated by one call of ``tlm_process.evaluate.evaluate`` with every model asked
 for (as ``tlm evaluate`` runs them), and the table prints, per table and model:
 
-* ``train Hz``: the rate the model's training rows were thinned to (``all``: every row);
+* ``train Hz``: the rate the model's training rows were thinned to (``all``: every row;
+  ``5 (N 1)``: 5 Hz with the Normal rows at 1 Hz, ``--normal-hz``);
 * ``fit s``, ``pred s``: wall seconds of fitting and predicting (the runner's own figures,
   summed over folds; ``pred s`` includes the transfer rows), ``wall s`` the model's whole
   turn, and ``cpu s``: this process's CPU seconds (all threads; not SMO's worker
@@ -48,6 +49,8 @@ import threading
 import time
 from pathlib import Path
 from typing import Any
+
+from tlm_process.evaluate.metrics import train_rate_label
 
 HERE = Path(__file__).resolve().parents[1]
 SITL = HERE.parent / "shared" / "reference" / "sitl"
@@ -178,7 +181,8 @@ def bench_table(ds: Any, table: str, models: list[str], transfer: Any, args: arg
         tr = m.get("transfer") or {}
         r.update(fit_s=m["fit_seconds"] + m.get("transfer_fit_seconds", 0.0),
                  predict_s=m["predict_seconds"] + m.get("transfer_predict_seconds", 0.0),
-                 train_hz=m.get("train_hz"), n_fit=m.get("n_fit", m["n_train"]),
+                 train_hz=m.get("train_hz"), normal_hz=m.get("normal_hz"),
+                 n_fit=m.get("n_fit", m["n_train"]),
                  n_test=m["n_test"],
                  macro_f1=m["macro_f1"], transfer_macro_f1=tr.get("macro_f1"))
     return rows
@@ -194,9 +198,8 @@ def print_table(records: list[dict[str, Any]]) -> None:
     print(head)
     print("|---" * 12 + "|")
     for r in records:
-        hz = r.get("train_hz")
         print(f"| {r['table']} | {r['model']} | "
-              f"{'-' if hz is None else ('all' if not hz else format(hz, 'g'))} | "
+              f"{train_rate_label(r.get('train_hz'), r.get('normal_hz'))} | "
               f"{_fmt(r.get('fit_s'), '.2f')} | "
               f"{_fmt(r.get('predict_s'), '.2f')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | "
               f"{_fmt(r.get('n_fit'), ',')} | {_fmt(r.get('n_test'), ',')} | "

@@ -143,7 +143,7 @@ def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds)
 
     ds = load_dataset(tiny_ds, ["GPS"])
     models = ["Logistic", "RandomForest", "WindowHGB"]
-    plain = evaluate(ds, tables=["GPS"], models=models, train_hz=0)["GPS"]
+    plain = evaluate(ds, tables=["GPS"], models=models, train_hz=0, normal_hz=0)["GPS"]
     thin = evaluate(ds, tables=["GPS"], models=models, train_hz=0, normal_hz=1)["GPS"]
     y = ds.tables["GPS"]["label"]
     for m in models:
@@ -153,6 +153,13 @@ def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds)
         assert thin[m]["n_test"] == plain[m]["n_test"]
     with pytest.raises(EvaluateError, match="KNN takes no sample weights"):
         evaluate(ds, tables=["GPS"], models=["KNN"], normal_hz={"KNN": 1.0})
+    from tlm_process.evaluate.models import DEFAULT_NORMAL_HZ, WEIGHTED_MODELS
+
+    assert set(DEFAULT_NORMAL_HZ) <= set(WEIGHTED_MODELS)
+    default = evaluate(ds, tables=["GPS"], models=["RandomForest", "J48"])["GPS"]
+    assert default["RandomForest"]["normal_hz"] == 1.0  # the default: 5 Hz, Normal 1 Hz
+    assert default["RandomForest"]["normal_every"] == 5
+    assert default["J48"]["normal_every"] == 1 and default["J48"]["normal_hz"] == 0.0
 
 
 def test_sample_weights_reach_the_final_estimator_of_nested_pipelines():

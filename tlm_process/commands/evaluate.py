@@ -65,13 +65,15 @@ training rows:
                    row); test and transfer rows are never thinned. Default per model, as
                    measured to score within 0.01 macro-F1 of every row (docs/evaluation.md):
                    5 Hz (every GPS row, every 2nd RATE/VIBE row, every 5th IMU row) for
-                   NaiveBayes, KNN, AdaBoost, OneR, ZeroR and the window models; 1 Hz for
-                   SMO; every row for Logistic, J48, RandomForest, RandomTree and the CNN
+                   NaiveBayes, Logistic, KNN, AdaBoost, OneR, ZeroR, RandomForest and the
+                   window models; 1 Hz for SMO; every row for J48, RandomTree, the CNN and
+                   SeqCNN
   --normal-hz HZ   the Normal rows (most of every flight) of the models that take sample
                    weights (NaiveBayes, Logistic, ZeroR, RandomForest, RandomTree and the
                    window models) are thinned further, to about HZ rows per second, and
                    weighted back so the class balance stays (0: as the other rows). Default
-                   per model (docs/evaluation.md)
+                   1 Hz for Logistic, RandomForest, WindowHGB60 and CentredHGB, 0 for the
+                   others (docs/evaluation.md)
   --jobs N         threads (default: all cores); the results do not depend on it
 
 outputs:

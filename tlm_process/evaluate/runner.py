@@ -240,6 +240,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                                n_jobs=n_jobs, progress=prog.epoch_line, cnn_epochs=cnn_epochs)
                 r, cm, last = _run_model(tab, name, make, prog.say)
                 r["split"] = split
+                r["normal_hz"] = normal_hz.get(name, 0.0)
                 results[t][name] = r
                 prog.done(name, r)
                 if out is not None:
