@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from tlm_process.evaluate.metrics import aligned_table
 from tlm_process.labels import class_name
 
 __all__ = ["PERSISTENCE_S", "detection_summary", "event_delays", "false_alarms",
@@ -222,9 +223,4 @@ def format_detection_table(results: Mapping[str, Mapping[str, Any]], title: str 
         rows.append([m, str(r.get("false_alarms", "?")),
                      f"{fa:.2f}" if fa is not None and math.isfinite(fa) else "?",
                      *(_cell(r["detection"].get(c)) for c in classes)])
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
-    lines = [title] if title else []
-    for r in [head, *rows]:
-        lines.append("  ".join(c.ljust(widths[0]) if i == 0 else c.rjust(widths[i])
-                               for i, c in enumerate(r)))
-    return "\n".join(lines)
+    return aligned_table(head, rows, title)

@@ -38,6 +38,7 @@ from tlm_process.labels import PAPER_CLASS_NAMES
 
 __all__ = [
     "CLASS_NAMES",
+    "aligned_table",
     "classification_metrics",
     "confusion_matrix",
     "format_cell",
@@ -238,6 +239,12 @@ def format_timing_table(results: Mapping[str, Mapping[str, Any]], title: str = "
                      f"{fit:.2f}", f"{pred:.2f}"])
     rows.append(["total", "", "", f"{sum(float(r[3]) for r in rows):.2f}",
                  f"{sum(float(r[4]) for r in rows):.2f}"])
+    return aligned_table(head, rows, title)
+
+
+def aligned_table(head: Sequence[str], rows: Sequence[Sequence[str]], title: str = "") -> str:
+    """A plain-text table: ``title``, then ``head`` and ``rows`` (strings) in columns two
+    spaces apart, the first left-aligned, the others right-aligned."""
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
     lines = [title] if title else []
     for r in [head, *rows]:

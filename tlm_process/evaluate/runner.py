@@ -178,38 +178,39 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
                          normal_hz=_normal_hz(models, normal_hz), bar=bar)
 
 
-def _train_hz(models: Sequence[str], given: float | Mapping[str, float] | None
-              ) -> dict[str, float]:
-    """Model -> training-row rate [Hz] (0: every row): ``given`` over the defaults."""
-    out = {m: DEFAULT_TRAIN_HZ.get(m, 0.0) for m in models}
+def _rates(models: Sequence[str], given: float | Mapping[str, float] | None,
+           defaults: Mapping[str, float], what: str) -> dict[str, float]:
+    """Model -> rate [Hz] (0: off): ``given`` (one number for every model, or model ->
+    rate) over ``defaults``; ``what`` names the rate in the error of a negative one."""
+    out = {m: defaults.get(m, 0.0) for m in models}
     if isinstance(given, Mapping):
         out.update({m: float(v) for m, v in given.items() if m in out})
     elif given is not None:
         out = dict.fromkeys(out, float(given))
     bad = [m for m, v in out.items() if not v >= 0]
     if bad:
-        raise EvaluateError(f"training-row rate of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
+        raise EvaluateError(f"{what} of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
     return out
+
+
+def _train_hz(models: Sequence[str], given: float | Mapping[str, float] | None
+              ) -> dict[str, float]:
+    """Model -> training-row rate [Hz] (0: every row): ``given`` over the defaults."""
+    return _rates(models, given, DEFAULT_TRAIN_HZ, "training-row rate")
 
 
 def _normal_hz(models: Sequence[str], given: float | Mapping[str, float] | None
                ) -> dict[str, float]:
     """Model -> Normal training-row rate [Hz] (0: as the other rows): ``given`` over the
     defaults, for the models that take sample weights."""
-    out = {m: DEFAULT_NORMAL_HZ.get(m, 0.0) for m in models if m in WEIGHTED_MODELS}
     if isinstance(given, Mapping):
         odd = [m for m in given if m in models and m not in WEIGHTED_MODELS]
         if odd:
             raise EvaluateError(f"{odd[0]} takes no sample weights, so its Normal rows "
                                 f"cannot be thinned apart (models that can: "
                                 f"{', '.join(WEIGHTED_MODELS)})")
-        out.update({m: float(v) for m, v in given.items() if m in out})
-    elif given is not None:
-        out = dict.fromkeys(out, float(given))
-    bad = [m for m, v in out.items() if not v >= 0]
-    if bad:
-        raise EvaluateError(f"Normal-row rate of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
-    return out
+    return _rates([m for m in models if m in WEIGHTED_MODELS], given, DEFAULT_NORMAL_HZ,
+                  "Normal-row rate")
 
 
 def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence[str],
