@@ -205,15 +205,7 @@ def format_results_table(results: Mapping[str, Mapping[str, Any]], title: str = 
             row += [format_cell(t.get("correct_pct"), pct=True) if t else "-",
                     format_cell(t.get("macro_f1")) if t else "-"]
         rows.append(row)
-    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
-              for i, h in enumerate(head)]
-    lines = [title] if title else []
-    lines.append("  ".join(h.ljust(widths[0]) if i == 0 else h.rjust(widths[i])
-                           for i, h in enumerate(head)))
-    for r in rows:
-        lines.append("  ".join(c.ljust(widths[0]) if i == 0 else c.rjust(widths[i])
-                               for i, c in enumerate(r)))
-    return "\n".join(lines)
+    return aligned_table(head, rows, title)
 
 
 def train_rate_label(train_hz: float | None, normal_hz: float | None = None) -> str:
@@ -245,7 +237,7 @@ def format_timing_table(results: Mapping[str, Mapping[str, Any]], title: str = "
 def aligned_table(head: Sequence[str], rows: Sequence[Sequence[str]], title: str = "") -> str:
     """A plain-text table: ``title``, then ``head`` and ``rows`` (strings) in columns two
     spaces apart, the first left-aligned, the others right-aligned."""
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    widths = [max([len(h), *(len(r[i]) for r in rows)]) for i, h in enumerate(head)]
     lines = [title] if title else []
     for r in [head, *rows]:
         lines.append("  ".join(c.ljust(widths[0]) if i == 0 else c.rjust(widths[i])

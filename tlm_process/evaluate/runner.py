@@ -121,11 +121,11 @@ def _fit(est: Any, X: np.ndarray, y: np.ndarray, groups: np.ndarray | None,
     if groups is not None and "groups" in inspect.signature(est.fit).parameters:
         kw["groups"] = groups
     if weight is not None:
-        key, step = "sample_weight", est
+        prefix, step = "", est
         while isinstance(step, Pipeline):  # the final estimator of (nested) pipelines
             name, step = step.steps[-1]
-            key = key.replace("sample_weight", f"{name}__sample_weight")
-        kw[key] = weight
+            prefix += f"{name}__"
+        kw[prefix + "sample_weight"] = weight
     return est.fit(X, y, **kw)
 
 

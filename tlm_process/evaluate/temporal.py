@@ -87,6 +87,27 @@ class FlightRuns:
         ends = np.concatenate([np.flatnonzero(ordered[1:] != ordered[:-1]) + 1, [len(df)]])
         return cls(order, np.concatenate([[0], ends[:-1]]), ends)
 
+    def every(self, k: int) -> np.ndarray:
+        """Boolean mask, in table order, of the rows whose position within their flight (in
+        time order, the first row 0) is a multiple of ``k``."""
+        n = int(self.ends[-1])
+        rank = np.arange(n) - np.repeat(self.starts, self.ends - self.starts)
+        keep = np.empty(n, dtype=bool)
+        keep[self.order] = rank % k == 0
+        return keep
+
+
+def _stride(df: pd.DataFrame, rate_hz: float | None, train_hz: float,
+            runs: FlightRuns | None) -> tuple[FlightRuns, int]:
+    """(``runs`` or ``FlightRuns.of(df)``, k): keeping every k-th row of a flight thins it
+    from the table's rate (``rate_hz``, default: measured) to about ``train_hz`` (k = 1 when
+    ``train_hz`` is 0)."""
+    runs = runs if runs is not None else FlightRuns.of(df)
+    if not train_hz:
+        return runs, 1
+    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
+    return runs, max(1, int(round(rate / train_hz)))
+
 
 def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
                train_hz: float = TRAIN_HZ, runs: FlightRuns | None = None) -> np.ndarray:
@@ -94,17 +115,10 @@ def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
     time order, every k-th row from the first, k = round(rate / ``train_hz``) (at least 1;
     every row when ``train_hz`` is 0); ``rate_hz``: the table's logging rate (default:
     measured, :func:`row_rate_hz`); ``runs``: ``FlightRuns.of(df)`` when already known."""
-    keep = np.ones(len(df), dtype=bool)
     if not train_hz or not len(df):
-        return keep
-    runs = runs if runs is not None else FlightRuns.of(df)
-    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
-    k = max(1, int(round(rate / train_hz)))
-    if k == 1:
-        return keep
-    rank = np.arange(len(df)) - np.repeat(runs.starts, runs.ends - runs.starts)
-    keep[runs.order] = rank % k == 0  # rank: position within the flight
-    return keep
+        return np.ones(len(df), dtype=bool)
+    runs, k = _stride(df, rate_hz, train_hz, runs)
+    return runs.every(k)
 
 
 def normal_rows(df: pd.DataFrame, labels: np.ndarray, every: int,
@@ -116,16 +130,13 @@ def normal_rows(df: pd.DataFrame, labels: np.ndarray, every: int,
     ``train_hz``; fault rows are kept as :func:`train_rows` keeps them. A model fitted on
     these rows with sample weight ``every`` on the Normal rows and 1 on the others has, in
     expectation, the loss of the rows at ``train_hz``: the class balance is unchanged."""
-    keep = train_rows(df, rate_hz, train_hz, runs)
-    if every <= 1 or not len(df):
+    if not len(df):
+        return np.ones(0, dtype=bool)
+    runs, k = _stride(df, rate_hz, train_hz, runs)
+    keep = runs.every(k)
+    if every <= 1:
         return keep
-    runs = runs if runs is not None else FlightRuns.of(df)
-    rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
-    k = max(1, int(round(rate / train_hz))) if train_hz else 1
-    rank = np.arange(len(df)) - np.repeat(runs.starts, runs.ends - runs.starts)
-    sparse = np.empty(len(df), dtype=bool)
-    sparse[runs.order] = rank % (k * every) == 0
-    return keep & (sparse | (np.asarray(labels) != 0))
+    return keep & (runs.every(k * every) | (np.asarray(labels) != 0))
 
 
 def row_rate_hz(df: pd.DataFrame, runs: FlightRuns | None = None) -> float:

@@ -55,12 +55,6 @@ from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
     "mission_from_items",
-    "MAV_CMD_DO_CHANGE_SPEED",
-    "MAV_CMD_NAV_LAND",
-    "MAV_CMD_NAV_LOITER_TIME",
-    "MAV_CMD_NAV_RETURN_TO_LAUNCH",
-    "MAV_CMD_NAV_TAKEOFF",
-    "MAV_CMD_NAV_WAYPOINT",
     "SUPPORTED_COMMANDS",
     "WPL_HEADER",
     "read_wpl",
