@@ -41,3 +41,20 @@ def test_cnn_trains_its_loss_falls_and_it_is_deterministic(tmp_path):
     assert np.array_equal(again.predict_proba(Xt), p)
     png = m.plot_history(tmp_path / "curves.png", "test")
     assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cnn_sample_weights_are_a_weighted_mean_loss():
+    """Unit weights train the same network as none; heavier rows pull the network to
+    their class."""
+    X, y = _data(600)
+    kw = {"epochs": 1, "batch_size": 600, "lr": 3e-3, "seed": 2, "device": "cpu",
+          "val_fraction": 0.0}
+    plain = RowImageCNN(**kw).fit(X, y)
+    ones = RowImageCNN(**kw).fit(X, y, sample_weight=np.ones(len(y)))
+    assert np.allclose(ones.predict_proba(X), plain.predict_proba(X), atol=1e-5)
+    assert np.isclose(ones.history_[0]["loss"], plain.history_[0]["loss"], rtol=1e-5)
+    # weight 5 on the class-0 rows: the network calls class 0 more likely
+    w = np.where(y == 0, 5.0, 1.0)
+    heavy = RowImageCNN(**kw).fit(X, y, sample_weight=w)
+    assert not np.allclose(heavy.predict_proba(X), plain.predict_proba(X), atol=1e-4)
+    assert heavy.predict_proba(X)[:, 0].mean() > plain.predict_proba(X)[:, 0].mean()

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tlm_process.evaluate.temporal import (
     WINDOW_MODELS,
@@ -194,3 +196,80 @@ def test_skipping_constant_columns_gives_the_same_model():
     assert len(skip.columns_) == Xtr.shape[1]
     assert np.array_equal(skip.predict_proba(spread(Xte)), plain.predict_proba(spread(Xte)))
     assert list(skip.classes_) == [0, 1]
+
+
+@settings(max_examples=60, deadline=None)
+@given(sizes=st.lists(st.integers(1, 80), min_size=1, max_size=5),
+       fault_share=st.floats(0.0, 1.0), max_rows=st.integers(1, 300),
+       weighted=st.booleans(), every=st.integers(1, 4))
+def test_row_budget_keeps_at_most_max_rows_with_the_smallest_strides(
+        sizes, fault_share, max_rows, weighted, every):
+    """row_budget: at most max_rows training rows, Normal rows thinned first (weighted), and
+    one step less thinning would keep more than max_rows."""
+    from tlm_process.evaluate.runner import row_budget
+    from tlm_process.evaluate.temporal import FlightRuns
+
+    flight = np.repeat(np.arange(len(sizes)), sizes).astype(str)
+    t = np.concatenate([np.arange(n) for n in sizes]) * 200_000
+    rng = np.random.default_rng(len(flight))
+    y = np.where(rng.random(len(flight)) < fault_share, 2, 0)
+    runs = FlightRuns.of(pd.DataFrame({"flight": flight, "TimeUS": t}))
+    train = np.flatnonzero(rng.random(len(flight)) < 0.8)
+
+    def kept(k, e):
+        keep = runs.every(k) & ((y != 0) | runs.every(k * e))
+        return int(keep[train].sum())
+
+    k, e = row_budget(y, runs, train, 1, every, weighted, max_rows)
+    assert kept(k, e) <= max_rows or k == max(sizes)  # or one row per flight is left
+    assert e >= every if weighted else e == 1
+    if k > 1:  # one step less thinning would keep too many
+        assert kept(k - 1, e) > max_rows
+        assert not weighted or kept(1, len(flight)) > max_rows  # Normal rows went first
+    if e > every:
+        assert kept(k, e - 1) > max_rows
+    assert row_budget(y, runs, train, 1, every, weighted, 0) == (1, every)
+
+
+def test_weighted_binning_gives_scikit_learns_own_edges_trees_and_predictions():
+    """temporal.weighted_binning: the bin edges of a weighted fit from one sort per column
+    are scikit-learn's own, to the bit (ties, NaN, few distinct values, integer weights as
+    the Normal-row thinning gives), and so are the fitted model's probabilities."""
+    from sklearn.ensemble import HistGradientBoostingClassifier
+    from sklearn.utils.stats import _weighted_percentile
+
+    from tlm_process.evaluate.temporal import weighted_binning, weighted_percentiles
+
+    rng = np.random.default_rng(4)
+    n = 3000
+    X = np.column_stack([
+        rng.normal(size=n),                        # continuous
+        np.round(rng.normal(size=n), 1),           # many ties
+        rng.integers(0, 5, n).astype(float),       # five values: midpoints
+        np.where(rng.random(n) < 0.7, 0.0, rng.exponential(size=n)),  # a point mass
+        np.where(rng.random(n) < 0.1, np.nan, rng.normal(size=n)),    # missing values
+        np.full(n, 2.0),                           # constant
+    ])
+    y = (X[:, 0] + X[:, 3] > 0.5).astype(int) + (X[:, 2] > 2)
+    w = np.where(y == 0, 5.0, 1.0)
+    ranks = np.linspace(0, 100, 256)[1:-1]
+    for j in range(4):
+        ref = np.array([_weighted_percentile(np.sort(X[:, j]), w[np.argsort(X[:, j])], r,
+                                             average=True) for r in ranks])
+        got = weighted_percentiles(np.sort(X[:, j]), w[np.argsort(X[:, j])], ranks)
+        assert np.array_equal(got, ref), j
+
+    def fit():
+        return HistGradientBoostingClassifier(max_iter=5, max_leaf_nodes=7,
+                                              random_state=0).fit(X, y, sample_weight=w)
+
+    plain = fit()
+    with weighted_binning():
+        fast = fit()
+    for a, b in zip(plain._bin_mapper.bin_thresholds_, fast._bin_mapper.bin_thresholds_,
+                    strict=True):
+        assert np.array_equal(a, b)
+    assert np.array_equal(plain.predict_proba(X), fast.predict_proba(X))
+    from sklearn.ensemble._hist_gradient_boosting import binning
+
+    assert binning._find_binning_thresholds.__name__ == "_find_binning_thresholds"  # put back

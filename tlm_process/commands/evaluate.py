@@ -74,6 +74,10 @@ training rows:
                    weighted back so the class balance stays (0: as the other rows). Default
                    1 Hz for Logistic, RandomForest, WindowHGB60 and CentredHGB, 0 for the
                    others (docs/evaluation.md)
+  --max-rows N     a model is fitted on at most about N rows per fold: where its rates
+                   keep more, they are lowered evenly in every flight, the Normal rows
+                   first for the models that take sample weights, so a fit costs the same
+                   on 60 flights or 1,000 (0: no limit). DEFAULT_MAX_ROWS_HELP
   --jobs N         threads (default: all cores); the results do not depend on it
 
 outputs:
@@ -144,6 +148,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="thin the Normal training rows of the models that take sample weights "
                         "further, to about HZ rows per second, weighted back (0: as the "
                         "other rows; default: per model, see below)")
+    p.add_argument("--max-rows", type=whole_number, default=None, metavar="N",
+                   help="fit every model on at most about N rows per fold, lowering its "
+                        "rates evenly in every flight where needed (0: no limit; default: "
+                        "per model, see below)")
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -235,7 +243,7 @@ def _run(args: argparse.Namespace) -> int:
                        folds=args.folds, test_frac=args.test_frac, transfer=transfer,
                        out_dir=out, progress=say, n_jobs=args.jobs,
                        cnn_epochs=args.cnn_epochs, train_hz=args.train_hz,
-                       normal_hz=args.normal_hz,
+                       normal_hz=args.normal_hz, max_rows=args.max_rows,
                        bar=False if quiet else None)
     lines: list[str] = []
     for t, res in results.items():

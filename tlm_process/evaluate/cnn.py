@@ -174,15 +174,22 @@ class RowImageCNN(ClassifierMixin, BaseEstimator):
         """:func:`torch_pool` with ``n_threads``."""
         return torch_pool(torch, dev, self.n_threads)
 
-    def fit(self, X: Any, y: Any, groups: Any = None) -> RowImageCNN:
+    def fit(self, X: Any, y: Any, groups: Any = None, sample_weight: Any = None
+            ) -> RowImageCNN:
+        """Train on rows ``X`` with classes ``y``; ``groups``: the flight of each row (the
+        validation share is drawn by flight); ``sample_weight``: a weight per row (the
+        cross-entropy of each mini-batch is their weighted mean; None: all 1)."""
         torch = require_torch()
         dev = self._device(torch)
         with self._pool(torch, dev) as run:
-            return self._fit(torch, dev, run, X, y, groups)
+            return self._fit(torch, dev, run, X, y, groups, sample_weight)
 
     def _fit(self, torch: Any, dev: Any, run: Callable[..., list[Any]], X: Any, y: Any,
-             groups: Any) -> RowImageCNN:
+             groups: Any, sample_weight: Any = None) -> RowImageCNN:
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", dtype=np.float32)
+        weight = None
+        if sample_weight is not None:
+            weight = torch.from_numpy(np.asarray(sample_weight, dtype=np.float32)).to(dev)
         check_classification_targets(y)
         self.classes_, yi = np.unique(y, return_inverse=True)
         torch.manual_seed(self.seed)
@@ -201,8 +208,9 @@ class RowImageCNN(ClassifierMixin, BaseEstimator):
             t0 = time.perf_counter()
             net.train()
             perm = tr_idx[torch.randperm(len(tr_idx), generator=gen)]
-            loss, ok = self._epoch(torch, dev, run, net, opt, img, target, perm, gen)
-            rec = {"epoch": epoch, "loss": loss / max(len(perm), 1),
+            loss, ok, total = self._epoch(torch, dev, run, net, opt, img, target, perm, gen,
+                                          weight)
+            rec = {"epoch": epoch, "loss": loss / max(total, 1),
                    "accuracy": ok / max(len(perm), 1), "val_loss": math.nan,
                    "val_accuracy": math.nan}
             if len(va_idx):
@@ -218,38 +226,52 @@ class RowImageCNN(ClassifierMixin, BaseEstimator):
         return self
 
     def _epoch(self, torch: Any, dev: Any, run: Callable[..., list[Any]], net: Any,
-               opt: Any, img: Any, target: Any, perm: Any, gen: Any) -> tuple[float, int]:
+               opt: Any, img: Any, target: Any, perm: Any, gen: Any, weight: Any = None
+               ) -> tuple[float, int, float]:
         """One pass over the training rows in the order ``perm``; returns (summed loss,
-        correctly classified rows). Each mini-batch's gradient is the sum, in a fixed order,
-        of its parts' gradients (:data:`SHARDS` parts on the CPU, one on a GPU), divided by
-        its rows: the mean cross-entropy's."""
+        correctly classified rows, summed row weight). Each mini-batch's gradient is the
+        sum, in a fixed order, of its parts' gradients (:data:`SHARDS` parts on the CPU, one
+        on a GPU), divided by its rows (with ``weight``: by its summed weight): the
+        (weighted) mean cross-entropy's."""
         params = list(net.parameters())
         f = torch.nn.functional
 
-        def part(xb: Any, yb: Any, keep: Any) -> tuple[Any, ...]:
+        def part(xb: Any, yb: Any, keep: Any, wb: Any = None) -> tuple[Any, ...]:
             out = net(xb, keep)
-            loss = f.cross_entropy(out, yb, reduction="sum")
+            if wb is None:
+                loss = f.cross_entropy(out, yb, reduction="sum")
+            else:
+                loss = (f.cross_entropy(out, yb, reduction="none") * wb).sum()
             grads = torch.autograd.grad(loss, params)
             return grads, loss.detach().double(), (out.argmax(1) == yb).sum()
 
         tot_loss = torch.zeros((), dtype=torch.float64, device=dev)
         tot_ok = torch.zeros((), dtype=torch.int64, device=dev)
+        tot_w = 0.0
         for a in range(0, len(perm), self.batch_size):
             b = perm[a:a + self.batch_size].to(dev)
             keep = (torch.empty((len(b), 128)).bernoulli_(1.0 - DROPOUT, generator=gen)
                     / (1.0 - DROPOUT)).to(dev)
             parts = _parts(len(b)) if dev.type == "cpu" else [slice(0, len(b))]
-            res = run(lambda s, b=b, keep=keep: part(img[b[s]], target[b[s]], keep[s]), parts)
+            if weight is None:
+                res = run(lambda s, b=b, keep=keep: part(img[b[s]], target[b[s]], keep[s]),
+                          parts)
+                norm: Any = len(b)
+            else:
+                res = run(lambda s, b=b, keep=keep: part(img[b[s]], target[b[s]], keep[s],
+                                                         weight[b[s]]), parts)
+                norm = float(weight[b].double().sum())
+            tot_w += float(norm)
             for i, p in enumerate(params):
                 g = res[0][0][i]
                 for r in res[1:]:
                     g = g + r[0][i]
-                p.grad = g / len(b)
+                p.grad = g / norm
             opt.step()
             for r in res:
                 tot_loss += r[1]
                 tot_ok += r[2]
-        return float(tot_loss), int(tot_ok)
+        return float(tot_loss), int(tot_ok), tot_w
 
     def _report(self, rec: dict[str, float], validation: bool) -> None:
         """One progress line per epoch."""

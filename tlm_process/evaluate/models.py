@@ -49,6 +49,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 __all__ = [
     "ALL_MODELS",
+    "DEFAULT_MAX_ROWS",
     "DEFAULT_NORMAL_HZ",
     "DEFAULT_TRAIN_HZ",
     "PAPER_MODELS",
@@ -92,7 +93,7 @@ DEFAULT_TRAIN_HZ: dict[str, float] = {
 
 #: Models whose fit takes per-row sample weights, so that their Normal training rows can be
 #: thinned more than the fault rows and weighted back (``tlm evaluate --normal-hz``).
-WEIGHTED_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "ZeroR", "RandomForest",
+WEIGHTED_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "ZeroR", "RandomForest", "CNN",
                                     "RandomTree", "WindowHGB", "WindowHGB60", "CentredHGB")
 
 #: Rate [Hz] of each model's Normal training rows by default (``--normal-hz``; 0 or missing:
@@ -105,6 +106,12 @@ WEIGHTED_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "ZeroR", "RandomFo
 #: and keeps every 5 Hz row.
 DEFAULT_NORMAL_HZ: dict[str, float] = {"Logistic": 1.0, "RandomForest": 1.0,
                                        "WindowHGB60": 1.0, "CentredHGB": 1.0}
+
+#: The most training rows each model is fitted on per fold by default (``--max-rows``; 0 or
+#: missing: no limit): beyond it its rates are lowered, evenly in every flight, the Normal
+#: rows first for :data:`WEIGHTED_MODELS` (``runner.row_budget``), so that its fit costs the
+#: same on 60 flights or 1,000.
+DEFAULT_MAX_ROWS: dict[str, int] = {}
 
 #: Weka's default ridge of ``weka.classifiers.functions.Logistic``.
 LOGISTIC_RIDGE = 1e-8

@@ -35,6 +35,7 @@ from tlm_process.evaluate.metrics import (
 )
 from tlm_process.evaluate.models import (
     ALL_MODELS,
+    DEFAULT_MAX_ROWS,
     DEFAULT_NORMAL_HZ,
     DEFAULT_TRAIN_HZ,
     SEQUENCE_MODELS,
@@ -137,7 +138,8 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              progress: Callable[[str], None] | None = None, n_jobs: int | None = None,
              cnn_epochs: int | None = None,
              train_hz: float | Mapping[str, float] | None = None,
-             normal_hz: float | Mapping[str, float] | None = None, bar: bool | None = False
+             normal_hz: float | Mapping[str, float] | None = None,
+             max_rows: int | Mapping[str, int] | None = None, bar: bool | None = False
              ) -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
     ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
@@ -160,8 +162,12 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     training rows (0: the model's training-row rate; the others' :data:`.models.
     DEFAULT_NORMAL_HZ`), for the models that take sample weights
     (:data:`.models.WEIGHTED_MODELS`; a number leaves the others alone): the kept Normal
-    rows are weighted so the class balance stays. Test and transfer rows are never
-    thinned. ``bar``: a
+    rows are weighted so the class balance stays. ``max_rows``: the most training rows a
+    model is fitted on per fold (a number for every model, or model -> rows; 0: no limit;
+    the others' :data:`.models.DEFAULT_MAX_ROWS`): where the rows its rates keep are more,
+    they are thinned further, evenly in every flight (the Normal rows first for the models
+    that take sample weights; :func:`row_budget`), so a fit costs the same whatever the
+    number of flights. Test and transfer rows are never thinned. ``bar``: a
     progress bar per table on stderr (None: when stderr is a terminal). Convergence
     warnings
     (liblinear for SMO, lbfgs for Logistic) are silenced: those models are used as they
@@ -175,7 +181,8 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
                          test_frac=test_frac, transfer=transfer, out_dir=out_dir,
                          progress=progress, n_jobs=n_jobs, cnn_epochs=cnn_epochs,
                          train_hz=_train_hz(models, train_hz),
-                         normal_hz=_normal_hz(models, normal_hz), bar=bar)
+                         normal_hz=_normal_hz(models, normal_hz),
+                         max_rows=_max_rows(models, max_rows), bar=bar)
 
 
 def _rates(models: Sequence[str], given: float | Mapping[str, float] | None,
@@ -213,12 +220,59 @@ def _normal_hz(models: Sequence[str], given: float | Mapping[str, float] | None
                   "Normal-row rate")
 
 
+def _max_rows(models: Sequence[str], given: int | Mapping[str, int] | None
+              ) -> dict[str, int]:
+    """Model -> the most rows it is fitted on per fold (0: no limit): ``given`` over the
+    defaults."""
+    out = {m: int(DEFAULT_MAX_ROWS.get(m, 0)) for m in models}
+    if isinstance(given, Mapping):
+        out.update({m: int(v) for m, v in given.items() if m in out})
+    elif given is not None:
+        out = dict.fromkeys(out, int(given))
+    bad = [m for m, v in out.items() if v < 0]
+    if bad:
+        raise EvaluateError(f"row budget of {bad[0]} must be >= 0, got {out[bad[0]]}")
+    return out
+
+
+def row_budget(y: np.ndarray, runs: FlightRuns, train: np.ndarray, stride: int, every: int,
+               weighted: bool, max_rows: int) -> tuple[int, int]:
+    """(stride, every): the row stride per flight and the further stride of the Normal rows
+    (``y`` == 0; :func:`.temporal.normal_rows`) that keep at most ``max_rows`` of the
+    training rows ``train`` (positions), starting from ``stride`` and ``every``. The Normal
+    rows are thinned first where the model takes sample weights (``weighted``), the fault
+    rows only when they alone are more than ``max_rows`` (then every row, by ``stride``);
+    ``max_rows`` 0: no limit. A flight's first row is always kept, so a budget below the
+    number of flights keeps one row per flight."""
+    if not max_rows:
+        return stride, every
+    rank = np.empty(len(y), dtype=np.int64)  # position of each row in its flight
+    rank[runs.order] = np.arange(len(y)) - np.repeat(runs.starts, runs.ends - runs.starts)
+    r = rank[train]
+    fault = np.asarray(y)[train] != 0
+
+    def count(k: int, e: int) -> int:
+        return int(((r % k == 0) & (fault | (r % (k * e) == 0))).sum())
+
+    longest = int((runs.ends - runs.starts).max()) if len(y) else 1
+    k, e = max(1, stride), max(1, every) if weighted else 1
+    if count(k, e) <= max_rows:
+        return k, e
+    if weighted and count(k, longest) <= max_rows:  # Normal rows first
+        while count(k, e) > max_rows:
+            e += 1
+        return k, e
+    while count(k, e) > max_rows and k < longest:  # then every row
+        k += 1
+    return k, e
+
+
 def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence[str],
               split: str, seed: int, folds: int | None, test_frac: float | None,
               transfer: Mapping[str, pd.DataFrame] | None, out_dir: str | Path | None,
               progress: Callable[[str], None] | None, n_jobs: int,
               cnn_epochs: int | None, train_hz: dict[str, float],
-              normal_hz: dict[str, float], bar: bool | None
+              normal_hz: dict[str, float], max_rows: dict[str, int], bar: bool | None
               ) -> dict[str, dict[str, dict[str, Any]]]:
     tables = list(tables) if tables is not None else list(ds.tables)
     unknown = [m for m in models if m not in ALL_MODELS]
@@ -230,7 +284,7 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
         t0 = time.perf_counter()
         tab = _Table.build(ds, t, models, split, seed, folds, test_frac,
                            transfer.get(t) if transfer is not None else None, train_hz,
-                           normal_hz)
+                           normal_hz, max_rows)
         prep_s = time.perf_counter() - t0
         with _Progress(t, tab, models, progress, bar) as prog:
             prog.say(tab.describe() + f" (prepared in {prep_s:.1f} s)")
@@ -241,7 +295,6 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                                n_jobs=n_jobs, progress=prog.epoch_line, cnn_epochs=cnn_epochs)
                 r, cm, last = _run_model(tab, name, make, prog.say)
                 r["split"] = split
-                r["normal_hz"] = normal_hz.get(name, 0.0)
                 results[t][name] = r
                 prog.done(name, r)
                 if out is not None:
@@ -261,6 +314,8 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
     r["labels"] = list(tab.labels)
     r["train_hz"] = tab.train_hz[name]
     r["normal_every"] = tab.normal_every[name]
+    r["normal_hz"] = tab.normal_hz(name)
+    r["max_rows"] = tab.max_rows.get(name, 0)
     r.update(counts)
     if tab.yt is not None:  # transfer rows
         if len(tab.folds) > 1:
@@ -407,6 +462,8 @@ class _Table:
     normal_every: dict[str, int]  # model -> keeps every n-th of those rows that are Normal
     thin: dict[tuple[float, int], np.ndarray]  # (rate, n) -> mask of the rows kept
     folds: list[Fold]
+    rate_hz: float = 0.0  # the table's logging rate [Hz]
+    max_rows: dict[str, int] = field(default_factory=dict)  # model -> row budget; 0: none
     yt: np.ndarray | None = None
     xt: _Inputs | None = None
     labels: list[int] = field(default_factory=list)
@@ -417,12 +474,15 @@ class _Table:
     @classmethod
     def build(cls, ds: EvalDataset, t: str, models: Sequence[str], split: str, seed: int,
               folds: int | None, test_frac: float | None, xt: pd.DataFrame | None,
-              train_hz: Mapping[str, float], normal_hz: Mapping[str, float] | None = None
-              ) -> _Table:
+              train_hz: Mapping[str, float], normal_hz: Mapping[str, float] | None = None,
+              max_rows: Mapping[str, int] | None = None) -> _Table:
         """Table ``t`` of ``ds`` (and its transfer rows ``xt``) split into folds;
         ``train_hz``: model -> the rate its training rows are thinned to [Hz] (0: all);
         ``normal_hz``: model -> the rate of its Normal training rows [Hz] (0 or missing:
-        ``train_hz``; weighted so the class balance stays, :func:`.temporal.normal_rows`)."""
+        ``train_hz``; weighted so the class balance stays, :func:`.temporal.normal_rows`);
+        ``max_rows``: model -> the most rows it is fitted on per fold (0 or missing: no
+        limit; :func:`row_budget`: the rates are lowered where needed, ``train_hz`` and
+        ``normal_every`` hold the rates used)."""
         if t not in ds.tables:
             raise EvaluateError(f"table {t} is not loaded")
         df = ds.tables[t]
@@ -437,6 +497,15 @@ class _Table:
         every = {m: _normal_every(train_hz[m] or rate, (normal_hz or {}).get(m, 0.0))
                  for m in models}
         y = df["label"].to_numpy(np.int64)
+        budget = {m: int((max_rows or {}).get(m, 0)) for m in models}
+        widest = max((f.train for f in fold_list), key=len)
+        for m in models:
+            if budget[m]:
+                k = max(1, int(round(rate / train_hz[m]))) if train_hz[m] else 1
+                k2, every[m] = row_budget(y, runs, widest, k, every[m],
+                                          m in WEIGHTED_MODELS, budget[m])
+                if k2 != k:
+                    train_hz[m] = rate / k2
         thin = {(hz, n): normal_rows(df, y, n, rate, hz, runs)
                 for hz, n in {(train_hz[m], every[m]) for m in models} if hz or n > 1}
         groups = df["flight"].astype(str).to_numpy()
@@ -458,7 +527,8 @@ class _Table:
             x.pos[rows] = np.arange(len(rows))
             x.win = [window_features(df, feats, sp, rate, rows, runs)[0] for sp in merged]
         tab = cls(t, len(df), len(pd.unique(groups)), len(feats),
-                  y, groups, x, win_of, train_hz, every, thin, fold_list)
+                  y, groups, x, win_of, train_hz, every, thin, fold_list, rate_hz=rate,
+                  max_rows=budget)
         tab.time_us = df["TimeUS"].to_numpy(np.int64)
         if xt is not None:
             tab.yt = xt["label"].to_numpy(np.int64)
@@ -501,6 +571,12 @@ class _Table:
         """The training rows ``train`` that ``model`` is fitted on (thinned to its rate)."""
         mask = self.thin.get((self.train_hz[model], self.normal_every[model]))
         return train[mask[train]] if mask is not None else train
+
+    def normal_hz(self, model: str) -> float:
+        """The rate [Hz] ``model``'s Normal training rows were thinned to; 0: as its other
+        rows."""
+        n = self.normal_every[model]
+        return round((self.train_hz[model] or self.rate_hz) / n, 4) if n > 1 else 0.0
 
     def fit_weight(self, model: str, rows: np.ndarray) -> np.ndarray | None:
         """Sample weights of the fitted rows ``rows`` (None: all 1): ``normal_every`` on the
