@@ -161,6 +161,8 @@ def bench_table(ds: Any, table: str, models: list[str], transfer: Any, args: arg
         kw["train_hz"] = args.train_hz
     if args.normal_hz is not None:
         kw["normal_hz"] = args.normal_hz
+    if args.max_rows is not None:
+        kw["max_rows"] = args.max_rows
     try:
         if args.profile:
             import cProfile
@@ -227,6 +229,8 @@ def main() -> None:
     ap.add_argument("--normal-hz", type=float, default=None,
                     help="Normal training-row rate of the weighted models (default: the "
                          "runner's)")
+    ap.add_argument("--max-rows", type=int, default=None,
+                    help="row budget per fit for every model (default: the runner's)")
     ap.add_argument("--json", help="write the records as JSON here")
     ap.add_argument("--profile", metavar="DIR", help="cProfile each table into DIR")
     ap.add_argument("--verbose", action="store_true", help="show the runner's progress lines")

@@ -162,6 +162,36 @@ def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds)
     assert default["J48"]["normal_every"] == 1 and default["J48"]["normal_hz"] == 0.0
 
 
+def test_evaluate_max_rows_caps_the_rows_fitted_normal_rows_first(tiny_ds):
+    from tlm_process.evaluate import evaluate, load_dataset
+    from tlm_process.evaluate.models import DEFAULT_MAX_ROWS
+
+    ds = load_dataset(tiny_ds, ["GPS"])
+    models = ["RandomForest", "J48", "CNN"]
+    free = evaluate(ds, tables=["GPS"], models=models, train_hz=0, normal_hz=0,
+                    max_rows=0, cnn_epochs=1)["GPS"]
+    y = ds.tables["GPS"]["label"]
+    share = float((y != 0).mean())  # fault rows: kept by the weighted models
+    cap = int(free["J48"]["n_fit"] * (share + 1.0) / 2)
+    capped = evaluate(ds, tables=["GPS"], models=models, train_hz=0, normal_hz=0,
+                      max_rows=cap, cnn_epochs=1)["GPS"]
+    for m in models:
+        r = capped[m]
+        assert r["max_rows"] == cap and r["n_fit"] <= cap < free[m]["n_fit"], m
+        assert r["n_test"] == free[m]["n_test"]  # test rows are never thinned
+    assert 0.05 < share < 0.6
+    # RandomForest and the CNN take weights: their Normal rows went, every fault row stayed
+    n_fault = int((y != 0).sum() * free["J48"]["n_train"] / len(y))
+    for m in ("RandomForest", "CNN"):
+        assert capped[m]["normal_every"] > 1 and capped[m]["train_hz"] == 0
+        assert capped[m]["n_fit"] > 0.8 * n_fault
+    assert capped["J48"]["normal_every"] == 1 and capped["J48"]["train_hz"] > 0  # stride
+    assert free["J48"]["max_rows"] == 0
+    assert DEFAULT_MAX_ROWS["RandomForest"] == 100_000 and "J48" not in DEFAULT_MAX_ROWS
+    with pytest.raises(EvaluateError, match="row budget"):
+        evaluate(ds, tables=["GPS"], models=["J48"], max_rows=-1)
+
+
 def test_sample_weights_reach_the_final_estimator_of_nested_pipelines():
     from tlm_process.evaluate.models import WEIGHTED_MODELS, make_model
     from tlm_process.evaluate.runner import _fit

@@ -210,11 +210,12 @@ def format_results_table(results: Mapping[str, Mapping[str, Any]], title: str = 
 
 def train_rate_label(train_hz: float | None, normal_hz: float | None = None) -> str:
     """The training-row rate as the time tables print it: ``all`` (every row), ``5`` [Hz],
-    ``5 (N 1)`` (5 Hz, the Normal rows at 1 Hz)."""
+    ``5 (N 1)`` (5 Hz, the Normal rows at 1 Hz), to 3 significant digits (a row budget,
+    ``--max-rows``, gives rates such as ``all (N 2.5)``)."""
     if train_hz is None:
         return "-"
-    text = "all" if not train_hz else f"{train_hz:g}"
-    return text + (f" (N {normal_hz:g})" if normal_hz else "")
+    text = "all" if not train_hz else f"{train_hz:.3g}"
+    return text + (f" (N {normal_hz:.3g})" if normal_hz else "")
 
 
 def format_timing_table(results: Mapping[str, Mapping[str, Any]], title: str = "") -> str:
