@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -83,6 +84,9 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1, help="threads for the models (default 1)")
     ap.add_argument("--paper", action="store_true",
                     help="paper-style flights only (tlm generate --kinds paper=1)")
+    ap.add_argument("--tables", default="all", help="tables to evaluate (default all)")
+    ap.add_argument("--generate", default="", metavar="ARGS",
+                    help="more tlm generate options, one string (e.g. '--calm-share 0.6')")
     ap.add_argument("--no-env", action="store_true",
                     help="fly as the paper and the reference SITL logs did: '+' frame, no "
                          "wind, no extra sensor noise (tlm generate --no-env --frame +)")
@@ -93,19 +97,21 @@ def main() -> None:
         "generate": _tlm("generate", "--flights", str(args.flights), "--out", str(ds),
                          "--seed", str(args.seed),
                          *(["--kinds", "paper=1"] if args.paper else []),
-                         *(["--no-env", "--frame", "+"] if args.no_env else [])),
+                         *(["--no-env", "--frame", "+"] if args.no_env else []),
+                         *shlex.split(args.generate)),
         "process": _tlm("process", str(ds), "--out", str(dsp), "--test-frac", "0.25",
                         "--seed", str(args.seed), "--quiet"),
     }
     test_on = sorted(str(p) for p in SITL.glob("*.bin")) if SITL.is_dir() else []
-    ev = ["evaluate", str(dsp), "--table", "all", "--models", args.models, "--split", "flight",
+    ev = ["evaluate", str(dsp), "--table", args.tables, "--models", args.models, "--split", "flight",
           "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs)]  # progress on stderr
     times["evaluate"] = _tlm(*ev, *(["--test-on", *test_on] if test_on else []))
     res = json.loads(rj.read_text())
     env = "no wind or extra noise (--no-env)" if args.no_env else "drawn wind and noise"
     kinds = "paper-style" if args.paper else "tlm generate default"
-    print(f"{args.flights} {kinds} flights, {env}, seed {args.seed}; {len(test_on)} SITL "
-          f"logs; work folder {work}")
+    print(f"{args.flights} {kinds} flights, {env}, seed {args.seed}"
+          + (f", generate {args.generate}" if args.generate else "")
+          + f"; {len(test_on)} SITL logs; work folder {work}")
     print(" ".join(f"{k} {v:.1f} s;" for k, v in times.items()))
     print("| table | model | accuracy % | macro-F1 | transfer macro-F1, all labels | "
           "transfer macro-F1, paper's 5 classes | false alarms/h test / SITL | SITL faults "
