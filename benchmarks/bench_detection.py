@@ -103,8 +103,9 @@ def main() -> None:
                         "--seed", str(args.seed), "--quiet"),
     }
     test_on = sorted(str(p) for p in SITL.glob("*.bin")) if SITL.is_dir() else []
+    # progress on stderr
     ev = ["evaluate", str(dsp), "--table", args.tables, "--models", args.models,
-          "--split", "flight", "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs)]  # progress on stderr
+          "--split", "flight", "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs)]
     times["evaluate"] = _tlm(*ev, *(["--test-on", *test_on] if test_on else []))
     res = json.loads(rj.read_text())
     env = "no wind or extra noise (--no-env)" if args.no_env else "drawn wind and noise"
