@@ -138,6 +138,18 @@ def test_evaluate_train_hz_thins_training_rows_only(tiny_ds, tmp_path, capsys):
         assert abs(thin[m]["n_fit"] - thin[m]["n_train"] / 5) <= 2  # 2 training flights
 
 
+def test_evaluate_max_rows_on_the_command_line(tiny_ds, tmp_path, capsys):
+    rj = tmp_path / "cap.json"
+    rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "J48", "--train-hz", "0",
+                      "--max-rows", "300", "--quiet", "--json", rj)
+    assert rc == 0, err
+    r = json.loads(rj.read_text())["GPS"]["J48"]
+    assert r["max_rows"] == 300 and r["n_fit"] <= 300 < r["n_train"]
+    with pytest.raises(SystemExit) as e:
+        _run(capsys, tiny_ds, "--max-rows", "-5")
+    assert e.value.code == 2 and "--max-rows" in capsys.readouterr().err
+
+
 def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds):
     from tlm_process.evaluate import evaluate, load_dataset
 
