@@ -78,8 +78,8 @@ training rows:
                    keep more, they are lowered evenly in every flight, the Normal rows
                    first for the models that take sample weights, so a fit costs the same
                    on 60 flights or 1,000 (0: no limit). Default 100,000 for Logistic, SMO,
-                   KNN, RandomForest, the CNN and the window models, no limit for the
-                   others (docs/evaluation.md "Row budget")
+                   KNN, RandomForest, the CNN and WindowHGB, 30,000 for WindowHGB60 and
+                   CentredHGB, no limit for the others (docs/evaluation.md "Row budget")
   --jobs N         threads (default: all cores); the results do not depend on it
 
 outputs:
