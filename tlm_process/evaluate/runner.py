@@ -51,6 +51,7 @@ from tlm_process.evaluate.temporal import (
     merged_windows,
     normal_rows,
     row_rate_hz,
+    row_stride,
     window_features,
     window_spec_for,
 )
@@ -186,17 +187,19 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
 
 
 def _rates(models: Sequence[str], given: float | Mapping[str, float] | None,
-           defaults: Mapping[str, float], what: str) -> dict[str, float]:
-    """Model -> rate [Hz] (0: off): ``given`` (one number for every model, or model ->
-    rate) over ``defaults``; ``what`` names the rate in the error of a negative one."""
-    out = {m: defaults.get(m, 0.0) for m in models}
+           defaults: Mapping[str, float], what: str, unit: str = " Hz",
+           kind: type = float) -> dict[str, Any]:
+    """Model -> rate [Hz] (0: off), or another setting of ``kind``: ``given`` (one number for
+    every model, or model -> number) over ``defaults``; ``what`` and ``unit`` name it in the
+    error of a negative one."""
+    out = {m: kind(defaults.get(m, 0)) for m in models}
     if isinstance(given, Mapping):
-        out.update({m: float(v) for m, v in given.items() if m in out})
+        out.update({m: kind(v) for m, v in given.items() if m in out})
     elif given is not None:
-        out = dict.fromkeys(out, float(given))
+        out = dict.fromkeys(out, kind(given))
     bad = [m for m, v in out.items() if not v >= 0]
     if bad:
-        raise EvaluateError(f"{what} of {bad[0]} must be >= 0 Hz, got {out[bad[0]]}")
+        raise EvaluateError(f"{what} of {bad[0]} must be >= 0{unit}, got {out[bad[0]]}")
     return out
 
 
@@ -224,15 +227,7 @@ def _max_rows(models: Sequence[str], given: int | Mapping[str, int] | None
               ) -> dict[str, int]:
     """Model -> the most rows it is fitted on per fold (0: no limit): ``given`` over the
     defaults."""
-    out = {m: int(DEFAULT_MAX_ROWS.get(m, 0)) for m in models}
-    if isinstance(given, Mapping):
-        out.update({m: int(v) for m, v in given.items() if m in out})
-    elif given is not None:
-        out = dict.fromkeys(out, int(given))
-    bad = [m for m, v in out.items() if v < 0]
-    if bad:
-        raise EvaluateError(f"row budget of {bad[0]} must be >= 0, got {out[bad[0]]}")
-    return out
+    return _rates(models, given, DEFAULT_MAX_ROWS, "row budget", unit="", kind=int)
 
 
 def row_budget(y: np.ndarray, runs: FlightRuns, train: np.ndarray, stride: int, every: int,
@@ -246,9 +241,7 @@ def row_budget(y: np.ndarray, runs: FlightRuns, train: np.ndarray, stride: int, 
     number of flights keeps one row per flight."""
     if not max_rows:
         return stride, every
-    rank = np.empty(len(y), dtype=np.int64)  # position of each row in its flight
-    rank[runs.order] = np.arange(len(y)) - np.repeat(runs.starts, runs.ends - runs.starts)
-    r = rank[train]
+    r = runs.rank[train]
     fault = np.asarray(y)[train] != 0
 
     def count(k: int, e: int) -> int:
@@ -435,12 +428,6 @@ class _Inputs:
         return mat[at] if cols is None else mat[np.ix_(at, cols)]
 
 
-def _normal_every(rate_hz: float, normal_hz: float) -> int:
-    """Keep every n-th Normal training row: n = round(``rate_hz`` / ``normal_hz``) (the
-    model's training-row rate over its Normal-row rate), 1 when ``normal_hz`` is 0."""
-    return max(1, int(round(rate_hz / normal_hz))) if normal_hz else 1
-
-
 @dataclass
 class _Table:
     """One table's rows as every model needs them, computed once and shared by all models:
@@ -494,14 +481,15 @@ class _Table:
         train_hz = {m: float(train_hz.get(m, 0.0)) for m in models}
         runs = FlightRuns.of(df)
         rate = row_rate_hz(df, runs)  # measured once for every model
-        every = {m: _normal_every(train_hz[m] or rate, (normal_hz or {}).get(m, 0.0))
+        # keep every n-th Normal row: the model's training-row rate over its Normal-row rate
+        every = {m: row_stride(train_hz[m] or rate, (normal_hz or {}).get(m, 0.0))
                  for m in models}
         y = df["label"].to_numpy(np.int64)
         budget = {m: int((max_rows or {}).get(m, 0)) for m in models}
         widest = max((f.train for f in fold_list), key=len)
         for m in models:
             if budget[m]:
-                k = max(1, int(round(rate / train_hz[m]))) if train_hz[m] else 1
+                k = row_stride(rate, train_hz[m])
                 k2, every[m] = row_budget(y, runs, widest, k, every[m],
                                           m in WEIGHTED_MODELS, budget[m])
                 if k2 != k:

@@ -34,6 +34,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -42,8 +43,9 @@ from numba import njit
 from scipy.ndimage import maximum_filter1d
 
 __all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "FlightRuns", "SkipConstantColumns",
-           "WindowFeatures", "merged_windows", "normal_rows", "row_rate_hz", "train_rows",
-           "window_features", "window_hgb", "window_spec_for"]
+           "WindowFeatures", "merged_windows", "normal_rows", "row_rate_hz", "row_stride",
+           "train_rows", "weighted_binning", "weighted_percentiles", "window_features",
+           "window_hgb", "window_spec_for"]
 
 #: Circular features (table -> feature -> period in the raw unit, degrees).
 CIRCULAR_DEG: Mapping[str, Mapping[str, float]] = {"GPS": {"GCrs": 360.0}}
@@ -88,14 +90,25 @@ class FlightRuns:
         ends = np.concatenate([np.flatnonzero(ordered[1:] != ordered[:-1]) + 1, [len(df)]])
         return cls(order, np.concatenate([[0], ends[:-1]]), ends)
 
+    @cached_property
+    def rank(self) -> np.ndarray:
+        """Each row's position within its flight in time order (the first row 0), in table
+        order; computed once."""
+        n = int(self.ends[-1])
+        rank = np.empty(n, dtype=np.int64)
+        rank[self.order] = np.arange(n) - np.repeat(self.starts, self.ends - self.starts)
+        return rank
+
     def every(self, k: int) -> np.ndarray:
         """Boolean mask, in table order, of the rows whose position within their flight (in
         time order, the first row 0) is a multiple of ``k``."""
-        n = int(self.ends[-1])
-        rank = np.arange(n) - np.repeat(self.starts, self.ends - self.starts)
-        keep = np.empty(n, dtype=bool)
-        keep[self.order] = rank % k == 0
-        return keep
+        return self.rank % k == 0
+
+
+def row_stride(rate_hz: float, hz: float) -> int:
+    """k such that keeping every k-th row thins rows logged at ``rate_hz`` to about ``hz``:
+    round(``rate_hz`` / ``hz``), at least 1; 1 when ``hz`` is 0 (every row)."""
+    return max(1, int(round(rate_hz / hz))) if hz else 1
 
 
 def _stride(df: pd.DataFrame, rate_hz: float | None, train_hz: float,
@@ -107,7 +120,7 @@ def _stride(df: pd.DataFrame, rate_hz: float | None, train_hz: float,
     if not train_hz:
         return runs, 1
     rate = rate_hz if rate_hz is not None else row_rate_hz(df, runs)
-    return runs, max(1, int(round(rate / train_hz)))
+    return runs, row_stride(rate, train_hz)
 
 
 def train_rows(df: pd.DataFrame, rate_hz: float | None = None,
