@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.utils.estimator_checks import check_estimator
 
 from tlm_process.evaluate.models import (
@@ -13,6 +15,7 @@ from tlm_process.evaluate.models import (
     J48,
     PAPER_MODELS,
     AdaBoostM1,
+    IBk,
     OneR,
     WekaNaiveBayes,
     c45_added_errors,
@@ -65,6 +68,32 @@ def test_oner_passes_scikit_learns_estimator_checks():
     # a one-feature rule cannot reach the 83% training accuracy one check asks on 2-D blobs
     check_estimator(OneR(), expected_failed_checks={
         "check_classifiers_train": "a rule on one feature separates at most one blob axis"})
+
+# ------------------------------------------------------------------------------------ IBk
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 300), d=st.integers(1, 9), k=st.integers(1, 5), seed=st.integers(0, 99),
+       jobs=st.integers(1, 2))
+def test_ibk_answers_as_scikit_learns_one_nearest_neighbour(n, d, k, seed, jobs):
+    """IBk (SciPy's k-d tree) predicts what KNeighborsClassifier(n_neighbors=1) does, with
+    any number of threads, and its probabilities are the neighbour's class."""
+    from sklearn.neighbors import KNeighborsClassifier
+
+    rng = np.random.default_rng(seed)
+    X, Q = rng.random((n, d)), rng.random((50, d))
+    y = rng.integers(0, k, n) * 10  # labels need not be 0..K-1
+    got = IBk(n_jobs=jobs).fit(X, y)
+    want = KNeighborsClassifier(n_neighbors=1).fit(X, y)
+    assert np.array_equal(got.predict(Q), want.predict(Q))
+    assert np.array_equal(got.predict(X), y)  # a training row is its own neighbour
+    proba = got.predict_proba(Q)
+    assert np.array_equal(got.classes_[proba.argmax(axis=1)], got.predict(Q))
+    assert np.allclose(proba.sum(axis=1), 1.0)
+
+
+def test_ibk_passes_scikit_learns_estimator_checks():
+    check_estimator(IBk())
 
 # ------------------------------------------------------------------- ZeroR, AdaBoost, J48
 

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from tlm_process.evaluate.temporal import (
     WINDOW_MODELS,
+    SkipConstantColumns,
     WindowFeatures,
     normal_rows,
     train_rows,
@@ -98,14 +99,15 @@ def _check_window_hgb() -> None:
     spec = WindowFeatures(seconds=(2.0,))
     Xtr, _ = window_features(train, ["x"], spec)
     Xte, _ = window_features(test, ["x"], spec)
-    model = window_hgb(seed=0).fit(Xtr, train["label"])
+    model = SkipConstantColumns(window_hgb(seed=0)).fit(Xtr, train["label"])
     acc = float((model.predict(Xte) == test["label"].to_numpy()).mean())
     row = HistGradientBoostingClassifier(max_iter=50, random_state=0).fit(train[["x"]],
                                                                           train["label"])
     row_acc = float((row.predict(test[["x"]]) == test["label"].to_numpy()).mean())
     assert acc > 0.9 and row_acc < 0.8, (acc, row_acc)
-    again = window_hgb(seed=0).fit(Xtr, train["label"]).predict_proba(Xte)
-    assert np.array_equal(again, model.predict_proba(Xte))  # seeded: repeats
+    again = SkipConstantColumns(window_hgb(seed=0, n_jobs=2)).fit(Xtr, train["label"])
+    again = again.predict_proba(Xte)
+    assert np.array_equal(again, model.predict_proba(Xte))  # seeded, whatever the threads
 
 
 def test_window_model_specs():
@@ -178,7 +180,6 @@ def test_merged_windows_give_every_model_its_own_features_for_the_rows_asked():
 def test_skipping_constant_columns_gives_the_same_model():
     from threadpoolctl import threadpool_limits
 
-    from tlm_process.evaluate.temporal import SkipConstantColumns
 
     train, test = _noise_flights(4, 1), _noise_flights(2, 2)
     Xtr, _ = window_features(train, ["x"], WindowFeatures(seconds=(2.0,)))
@@ -190,8 +191,11 @@ def test_skipping_constant_columns_gives_the_same_model():
                                 np.zeros(n)])
 
     with threadpool_limits(limits=1):
-        plain = window_hgb(seed=0).set_params(max_iter=30).fit(spread(Xtr), train["label"])
-        skip = SkipConstantColumns(window_hgb(seed=0).set_params(max_iter=30))
+        def booster():  # every column in every tree: the same trees
+            return window_hgb(seed=0).set_params(n_estimators=30, colsample_bytree=1.0)
+
+        plain = booster().fit(spread(Xtr), train["label"])
+        skip = SkipConstantColumns(booster())
         skip.fit(spread(Xtr), train["label"])
     assert len(skip.columns_) == Xtr.shape[1]
     assert np.array_equal(skip.predict_proba(spread(Xte)), plain.predict_proba(spread(Xte)))
@@ -229,47 +233,3 @@ def test_row_budget_keeps_at_most_max_rows_with_the_smallest_strides(
     if e > every:
         assert kept(k, e - 1) > max_rows
     assert row_budget(y, runs, train, 1, every, weighted, 0) == (1, every)
-
-
-def test_weighted_binning_gives_scikit_learns_own_edges_trees_and_predictions():
-    """temporal.weighted_binning: the bin edges of a weighted fit from one sort per column
-    are scikit-learn's own, to the bit (ties, NaN, few distinct values, integer weights as
-    the Normal-row thinning gives), and so are the fitted model's probabilities."""
-    from sklearn.ensemble import HistGradientBoostingClassifier
-    from sklearn.utils.stats import _weighted_percentile
-
-    from tlm_process.evaluate.temporal import weighted_binning, weighted_percentiles
-
-    rng = np.random.default_rng(4)
-    n = 3000
-    X = np.column_stack([
-        rng.normal(size=n),                        # continuous
-        np.round(rng.normal(size=n), 1),           # many ties
-        rng.integers(0, 5, n).astype(float),       # five values: midpoints
-        np.where(rng.random(n) < 0.7, 0.0, rng.exponential(size=n)),  # a point mass
-        np.where(rng.random(n) < 0.1, np.nan, rng.normal(size=n)),    # missing values
-        np.full(n, 2.0),                           # constant
-    ])
-    y = (X[:, 0] + X[:, 3] > 0.5).astype(int) + (X[:, 2] > 2)
-    w = np.where(y == 0, 5.0, 1.0)
-    ranks = np.linspace(0, 100, 256)[1:-1]
-    for j in range(4):
-        ref = np.array([_weighted_percentile(np.sort(X[:, j]), w[np.argsort(X[:, j])], r,
-                                             average=True) for r in ranks])
-        got = weighted_percentiles(np.sort(X[:, j]), w[np.argsort(X[:, j])], ranks)
-        assert np.array_equal(got, ref), j
-
-    def fit():
-        return HistGradientBoostingClassifier(max_iter=5, max_leaf_nodes=7,
-                                              random_state=0).fit(X, y, sample_weight=w)
-
-    plain = fit()
-    with weighted_binning():
-        fast = fit()
-    for a, b in zip(plain._bin_mapper.bin_thresholds_, fast._bin_mapper.bin_thresholds_,
-                    strict=True):
-        assert np.array_equal(a, b)
-    assert np.array_equal(plain.predict_proba(X), fast.predict_proba(X))
-    from sklearn.ensemble._hist_gradient_boosting import binning
-
-    assert binning._find_binning_thresholds.__name__ == "_find_binning_thresholds"  # put back
