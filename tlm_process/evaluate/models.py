@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -352,6 +353,13 @@ class AdaBoostM1(ClassifierMixin, BaseEstimator):
 # J48 (C4.5)
 # ---------------------------------------------------------------------------------------------
 
+@lru_cache(maxsize=8)
+def _upper_z(cf: float) -> float:
+    """The standard normal quantile at 1 - ``cf`` (asked once per confidence: SciPy's
+    ``norm.ppf`` costs 80 µs a call, 6 of J48's 33 s on 1.5 million IMU rows per node)."""
+    return float(norm.ppf(1.0 - cf))
+
+
 def c45_added_errors(n: float, e: float, cf: float = 0.25) -> float:
     """C4.5's pessimistic extra errors for a leaf with ``n`` rows of which ``e`` are
     misclassified: the upper limit of the binomial confidence interval at confidence ``cf``
@@ -365,7 +373,7 @@ def c45_added_errors(n: float, e: float, cf: float = 0.25) -> float:
         return base + e * (c45_added_errors(n, 1.0, cf) - base)
     if e + 0.5 >= n:
         return max(n - e, 0.0)
-    z = float(norm.ppf(1.0 - cf))
+    z = _upper_z(cf)
     f = (e + 0.5) / n
     r = (f + z * z / (2 * n) + z * math.sqrt(f / n - f * f / n + z * z / (4 * n * n))) \
         / (1.0 + z * z / n)

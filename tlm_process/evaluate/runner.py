@@ -331,11 +331,11 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
 #: ``benchmarks/bench_evaluate.py``): the progress bar's weights, so that its ETA is not
 #: fooled by a table's cheap models coming first.
 _COST: Mapping[str, tuple[float, float]] = {
-    "NaiveBayes": (2e-4, 1e-3), "Logistic": (0.02, 1e-3), "SMO": (0.09, 5e-3),
-    "KNN": (2e-4, 0.012), "AdaBoost": (3e-4, 1e-3), "OneR": (7e-4, 1e-3), "ZeroR": (0.0, 0.0),
+    "NaiveBayes": (2e-4, 1e-3), "Logistic": (6e-3, 1e-3), "SMO": (0.02, 5e-3),
+    "KNN": (2e-4, 7e-4), "AdaBoost": (3e-4, 1e-3), "OneR": (7e-4, 1e-3), "ZeroR": (0.0, 0.0),
     "J48": (1.6e-3, 1e-3), "RandomForest": (0.022, 5e-3), "RandomTree": (7e-4, 1e-3),
-    "CNN": (0.034, 5e-3), "WindowHGB": (8e-3, 0.045), "WindowHGB60": (7e-3, 0.04),
-    "CentredHGB": (7e-3, 0.045), "SeqCNN": (0.0, 0.01)}
+    "CNN": (0.034, 5e-3), "WindowHGB": (2e-3, 0.012), "WindowHGB60": (2.2e-3, 0.008),
+    "CentredHGB": (2e-3, 0.01), "SeqCNN": (0.0, 0.01)}
 #: Seconds per fit that do not grow with the rows (SeqCNN: a fixed number of steps).
 _FIXED_COST: Mapping[str, float] = {"SeqCNN": 20.0}
 
