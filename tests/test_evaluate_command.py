@@ -100,7 +100,8 @@ def test_evaluate_is_deterministic_given_the_seed(tiny_ds, tmp_path, capsys):
 def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp_path,
                                                 capsys, monkeypatch):
     """--jobs changes the speed only: RandomForest and KNN (threads), SMO (processes),
-    Logistic (BLAS), the window models (OpenMP), the CNN and SeqCNN (torch) give the same test
+    Logistic (BLAS), the window models (OpenMP), the CNN and SeqCNN (torch), and J48,
+    RandomTree and OneR (one core each, side by side on two threads) give the same test
     and transfer confusion matrices and the same training curves on 1 and 2 threads."""
     pytest.importorskip("torch")
     monkeypatch.setattr("tlm_process.evaluate.sequence.STEPS", 20)  # a short SeqCNN fit
@@ -108,7 +109,8 @@ def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp
     def once(jobs):
         rj = tmp_path / f"jobs{jobs}.json"
         rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models",
-                          "Logistic,SMO,KNN,RandomForest,CNN,WindowHGB,SeqCNN", "--cnn-epochs",
+                          "Logistic,SMO,KNN,J48,RandomForest,RandomTree,OneR,CNN,WindowHGB,"
+                          "SeqCNN", "--cnn-epochs",
                           "2",
                           "--jobs", jobs, "--quiet", "--test-on", tiny_flight_folder,
                           "--json", rj)
