@@ -24,7 +24,11 @@ for (as ``tlm evaluate`` runs them), and the table prints, per table and model:
 * ``macro-F1`` on the test flights and, with transfer logs, on them.
 
 The ``[table]`` row is the table's preparation (features, windows, folds) before its first
-model. ``--profile DIR`` runs every table under cProfile, writes ``DIR/<TABLE>.prof`` and
+model. With two or more threads the one-core models (``runner.SINGLE_CORE_MODELS``: NaiveBayes,
+AdaBoost, OneR, ZeroR, J48, RandomTree) are fitted side by side before the others; their
+shared ``wall s`` and ``cpu s`` go to the first of them in the table, the rest show about 0
+(their ``fit s`` and ``pred s`` are their own).
+``--profile DIR`` runs every table under cProfile, writes ``DIR/<TABLE>.prof`` and
 prints the 25 functions with the most cumulative time (profile one model at a time:
 ``--models WindowHGB60 --profile prof``).
 
