@@ -180,7 +180,6 @@ def test_merged_windows_give_every_model_its_own_features_for_the_rows_asked():
 def test_skipping_constant_columns_gives_the_same_model():
     from threadpoolctl import threadpool_limits
 
-
     train, test = _noise_flights(4, 1), _noise_flights(2, 2)
     Xtr, _ = window_features(train, ["x"], WindowFeatures(seconds=(2.0,)))
     Xte, _ = window_features(test, ["x"], WindowFeatures(seconds=(2.0,)))
