@@ -69,11 +69,11 @@ training rows:
                    window models; 1 Hz for SMO; every row for J48, RandomTree, the CNN and
                    SeqCNN
   --normal-hz HZ   the Normal rows (most of every flight) of the models that take sample
-                   weights (NaiveBayes, Logistic, ZeroR, RandomForest, RandomTree and the
-                   window models) are thinned further, to about HZ rows per second, and
-                   weighted back so the class balance stays (0: as the other rows). Default
-                   1 Hz for Logistic, RandomForest, WindowHGB60 and CentredHGB, 0 for the
-                   others (docs/evaluation.md)
+                   weights (NaiveBayes, Logistic, ZeroR, RandomForest, RandomTree, the CNN
+                   and the window models) are thinned further, to about HZ rows per second,
+                   and weighted back so the class balance stays (0: as the other rows).
+                   Default 1 Hz for Logistic, RandomForest, WindowHGB60 and CentredHGB, 2 Hz
+                   for the CNN, 0 for the others (docs/evaluation.md)
   --max-rows N     a model is fitted on at most about N rows per fold: where its rates
                    keep more, they are lowered evenly in every flight, the Normal rows
                    first for the models that take sample weights, so a fit costs the same
