@@ -323,10 +323,12 @@ def _battery_checks(c, g, txt, r):
     return mask
 
 
-@inline_jit
+@tick_jit
 def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
     """ArduCopter's pre-arm checks now; returns the mask of failing checks (F_*), their
-    details written into text row r (-1: none)."""
+    details written into text row r (-1: none). A function of its own, not an inline_jit
+    section: numba inlined it, with its five inlined check groups, into both its callers, and
+    ``arming_step``'s cold compile took 9.9 s of CPU instead of 2.5 s (same flights)."""
     e = ekf[int(sel[EK.SEL_PRIMARY])]
     mode = c[C.MODE]
     mask = 0
