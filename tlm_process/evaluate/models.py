@@ -156,6 +156,14 @@ def _tags_allow_nan(tags: Any) -> Any:
     return tags
 
 
+def _one_hot(idx: np.ndarray, n_classes: int) -> np.ndarray:
+    """Class probabilities of a model that gives one class per row: 1 at class index ``idx``
+    of each row, 0 elsewhere (rows x ``n_classes``)."""
+    out = np.zeros((len(idx), n_classes))
+    out[np.arange(len(idx)), idx] = 1.0
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # OneR
 # ---------------------------------------------------------------------------------------------
@@ -260,10 +268,7 @@ class OneR(ClassifierMixin, BaseEstimator):
 
     def predict_proba(self, X: Any) -> np.ndarray:
         """One-hot: a rule gives one class (as Weka's OneR distribution)."""
-        idx = self._class_index(X)
-        out = np.zeros((len(idx), len(self.classes_)))
-        out[np.arange(len(idx)), idx] = 1.0
-        return out
+        return _one_hot(self._class_index(X), len(self.classes_))
 
     def rule_text(self, feature_names: list[str] | None = None) -> str:
         """The rule as Weka prints it: ``Spd: < 0.12 -> 3, < 0.5 -> 0, >= 0.5 -> 4``."""
@@ -489,10 +494,8 @@ class IBk(ClassifierMixin, BaseEstimator):
         return self.classes_[near]
 
     def predict_proba(self, X: Any) -> np.ndarray:
-        near = self._nearest(X)
-        proba = np.zeros((len(near), len(self.classes_)))
-        proba[np.arange(len(near)), near] = 1.0
-        return proba
+        """One-hot: the neighbour's class."""
+        return _one_hot(self._nearest(X), len(self.classes_))
 
 
 # ---------------------------------------------------------------------------------------------
