@@ -9,7 +9,10 @@ default (``LoopLibrary.privatize = False``, see :mod:`tlm_sim._jit`): the defaul
 the callees private to the loop, where LLVM inlines most of them and perf can no longer tell
 them apart. Needs ``perf`` on PATH; ~1 minute (compile).
 
-    PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20] [--split-inline]
+    PYTHONPATH=. .venv/bin/python benchmarks/profile_fly.py [--flights 20] [--split-inline] \\
+        [--paper]
+
+``--paper`` flies ``tlm generate``'s paper-style scenarios (run seed 0) instead of mission 1.
 
 ``--split-inline`` compiles the named sections that numba otherwise inlines into their caller
 (``inline_jit``: the flight loop's ``_read_sensors``, ``_estimate``, ``_log_tick``, ...) as
@@ -83,7 +86,22 @@ def subsystem(name: str) -> str:
     return "other"
 
 
-def child(flights: int, split_inline: bool) -> None:
+def _flights(flights: int, paper: bool) -> list[dict]:
+    """The ``fly`` keyword arguments of the profiled flights: mission 1 (seeds 1..flights),
+    or ``tlm generate``'s paper-style scenarios (run seed 0, flights 0..flights-1)."""
+    if not paper:
+        return [{"mission": 1, "seed": k + 1} for k in range(flights)]
+    from tlm_process.generate.scenario import ScenarioConfig, sample_scenario
+
+    out = []
+    for k in range(flights):
+        spec = sample_scenario(0, k, ScenarioConfig(kinds={"paper": 1.0})).realise()
+        out.append({"mission": spec.mission, "faults": spec.schedule, "params": spec.params,
+                    "seed": spec.seed, "profile": spec.profile})
+    return out
+
+
+def child(flights: int, split_inline: bool, paper: bool = False) -> None:
     """Fly (under perf), then write the perf map of the loop's jitted functions."""
     if split_inline:  # before any jitted module imports the decorator, so before the
         # package's __init__ (which imports them all) runs
@@ -105,9 +123,10 @@ def child(flights: int, split_inline: bool) -> None:
     from tlm_sim import fly
     from tlm_sim.flight import run_flight
 
-    fly(1, seed=0)
-    for k in range(flights):
-        fly(1, seed=k + 1)
+    kwargs = _flights(flights, paper)
+    fly(**kwargs[0])  # compile (the profile counts jitted code only)
+    for kw in kwargs:
+        fly(**kw)
     addrs = []
     for cres in run_flight.overloads.values():
         lib = cres.library
@@ -128,10 +147,13 @@ def main() -> None:
     ap.add_argument("--flights", type=int, default=20)
     ap.add_argument("--split-inline", action="store_true",
                     help="compile the inline_jit sections as functions of their own")
+    ap.add_argument("--paper", action="store_true",
+                    help="fly tlm generate's paper-style scenarios (faults, drawn wind and "
+                         "noise) instead of mission 1")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        child(args.flights, args.split_inline)
+        child(args.flights, args.split_inline, args.paper)
         return
     if shutil.which("perf") is None:
         sys.exit("profile_fly: needs Linux perf on PATH")
@@ -140,7 +162,8 @@ def main() -> None:
         env = {**os.environ, "NUMBA_CACHE_DIR": os.path.join(tmp, "numba")}
         subprocess.run(["perf", "record", "-q", "-F", "2000", "-o", data, sys.executable,
                         __file__, "--child", "--flights", str(args.flights)]
-                       + (["--split-inline"] if args.split_inline else []),
+                       + (["--split-inline"] if args.split_inline else [])
+                       + (["--paper"] if args.paper else []),
                        check=True, env=env)
         rep = subprocess.run(["perf", "report", "-i", data, "-n", "--no-children",
                               "--sort", "sym", "--stdio"], capture_output=True, text=True,
@@ -155,7 +178,8 @@ def main() -> None:
     total = sum(samples.values())
     if not total:
         sys.exit("profile_fly: no samples in jitted code (perf map not read?)")
-    print(f"{total} samples in the jitted flight loop ({args.flights} flights of mission 1)")
+    what = "paper-style generate flights" if args.paper else "mission 1"
+    print(f"{total} samples in the jitted flight loop ({args.flights} flights of {what})")
     print("| function | share |\n|---|---|")
     for name, n in samples.most_common():
         if n / total >= 0.005:
