@@ -167,6 +167,8 @@ def bench_table(ds: Any, table: str, models: list[str], transfer: Any, args: arg
         kw["normal_hz"] = args.normal_hz
     if args.max_rows is not None:
         kw["max_rows"] = args.max_rows
+    if args.booster is not None:
+        kw["booster"] = args.booster
     try:
         if args.profile:
             import cProfile
@@ -235,6 +237,8 @@ def main() -> None:
                          "runner's)")
     ap.add_argument("--max-rows", type=int, default=None,
                     help="row budget per fit for every model (default: the runner's)")
+    ap.add_argument("--booster", choices=("xgboost", "sklearn"), default=None,
+                    help="the window models' booster (default: the runner's, xgboost)")
     ap.add_argument("--json", help="write the records as JSON here")
     ap.add_argument("--profile", metavar="DIR", help="cProfile each table into DIR")
     ap.add_argument("--verbose", action="store_true", help="show the runner's progress lines")

@@ -125,6 +125,32 @@ def test_evaluate_results_do_not_depend_on_jobs(tiny_ds, tiny_flight_folder, tmp
     assert one == two
 
 
+def test_evaluate_booster_chooses_the_window_models_boosting(tiny_ds, tmp_path, capsys):
+    """--booster sklearn fits the window models with scikit-learn's booster (recorded as
+    ``booster`` in R.json; the other models are untouched); a bad name is a usage error."""
+    def once(*extra):
+        rj = tmp_path / f"b{len(extra)}.json"
+        rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "J48,WindowHGB",
+                          "--quiet", "--json", rj, *extra)
+        assert rc == 0, err
+        return json.loads(rj.read_text())["GPS"]
+
+    xgb, sk = once(), once("--booster", "sklearn")
+    assert xgb["WindowHGB"]["booster"] == "xgboost" and sk["WindowHGB"]["booster"] == "sklearn"
+    assert "booster" not in sk["J48"] and sk["J48"]["confusion"] == xgb["J48"]["confusion"]
+    assert sk["WindowHGB"]["confusion"] != xgb["WindowHGB"]["confusion"]
+    with pytest.raises(SystemExit) as e:
+        _run(capsys, tiny_ds, "--models", "WindowHGB", "--booster", "lightgbm")
+    assert e.value.code == 2 and "lightgbm" in capsys.readouterr().err
+
+
+def test_command_booster_names_match_the_temporal_module():
+    from tlm_process.commands.evaluate import BOOSTER_NAMES
+    from tlm_process.evaluate.temporal import WINDOW_BOOSTERS
+
+    assert BOOSTER_NAMES == WINDOW_BOOSTERS
+
+
 def test_evaluate_train_hz_thins_training_rows_only(tiny_ds, tmp_path, capsys):
     def once(hz):
         rj = tmp_path / f"hz{hz}.json"
@@ -167,6 +193,8 @@ def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds)
         assert thin[m]["n_test"] == plain[m]["n_test"]
     with pytest.raises(EvaluateError, match="KNN takes no sample weights"):
         evaluate(ds, tables=["GPS"], models=["KNN"], normal_hz={"KNN": 1.0})
+    with pytest.raises(EvaluateError, match="unknown booster 'lightgbm'"):
+        evaluate(ds, tables=["GPS"], models=["WindowHGB"], booster="lightgbm")
     from tlm_process.evaluate.models import DEFAULT_NORMAL_HZ, WEIGHTED_MODELS
 
     assert set(DEFAULT_NORMAL_HZ) <= set(WEIGHTED_MODELS)

@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tlm_process.evaluate.temporal import (
+    WINDOW_BOOSTERS,
     WINDOW_MODELS,
     SkipConstantColumns,
     WindowFeatures,
@@ -108,6 +109,29 @@ def _check_window_hgb() -> None:
     again = SkipConstantColumns(window_hgb(seed=0, n_jobs=2)).fit(Xtr, train["label"])
     again = again.predict_proba(Xte)
     assert np.array_equal(again, model.predict_proba(Xte))  # seeded, whatever the threads
+
+
+def test_window_hgb_sklearn_booster_is_the_former_one_and_learns_the_windows():
+    from sklearn.ensemble import HistGradientBoostingClassifier
+    from threadpoolctl import threadpool_limits
+
+    est = window_hgb(seed=3, booster="sklearn")
+    assert isinstance(est, HistGradientBoostingClassifier)
+    p = est.get_params()
+    assert (p["max_iter"], p["learning_rate"], p["max_leaf_nodes"], p["min_samples_leaf"],
+            p["l2_regularization"], p["early_stopping"], p["random_state"]) == (
+        150, 0.1, 31, 50, 1.0, False, 3)
+    train, test = _noise_flights(6, 1), _noise_flights(3, 2)
+    spec = WindowFeatures(seconds=(2.0,))
+    Xtr, _ = window_features(train, ["x"], spec)
+    Xte, _ = window_features(test, ["x"], spec)
+    with threadpool_limits(limits=1):
+        model = SkipConstantColumns(est).fit(Xtr, train["label"])
+    acc = float((model.predict(Xte) == test["label"].to_numpy()).mean())
+    assert acc > 0.9, acc
+    assert set(WINDOW_BOOSTERS) == {"xgboost", "sklearn"}
+    with pytest.raises(ValueError, match="unknown booster"):
+        window_hgb(booster="lightgbm")
 
 
 def test_window_model_specs():

@@ -25,12 +25,15 @@ from tlm_process.cliutil import (
 )
 from tlm_process.commands.process import report_user_errors
 
-__all__ = ["MODEL_NAMES", "TABLE_NAMES", "add_parser", "run"]
+__all__ = ["BOOSTER_NAMES", "MODEL_NAMES", "TABLE_NAMES", "add_parser", "run"]
 
 MODEL_NAMES = ("NaiveBayes", "Logistic", "SMO", "KNN", "AdaBoost", "OneR", "ZeroR", "J48",
                "RandomForest", "RandomTree", "CNN", "WindowHGB", "WindowHGB60", "CentredHGB",
                "SeqCNN")
 TABLE_NAMES = ("GPS", "IMU", "RATE", "VIBE")
+#: the window models' boosters (``tlm_process.evaluate.temporal.WINDOW_BOOSTERS``, written
+#: out so that ``--help`` does not import numba)
+BOOSTER_NAMES = ("xgboost", "sklearn")
 
 DESCRIPTION = """\
 Evaluate fault classifiers on a 'tlm process' data set as the paper's section 5 does, and
@@ -81,6 +84,13 @@ training rows:
                    KNN, RandomForest, the CNN and WindowHGB, 30,000 for WindowHGB60 and
                    CentredHGB, no limit for the others (docs/evaluation.md "Row budget")
   --jobs N         threads (default: all cores); the results do not depend on it
+
+window models:
+  --booster B      the gradient boosting of WindowHGB, WindowHGB60 and CentredHGB: xgboost
+                   (default) or sklearn, scikit-learn's HistGradientBoostingClassifier as
+                   they had it until 2026-11: three to four times slower, 0.02-0.04 higher
+                   test macro-F1 on 200 flights in three table x model cells
+                   (docs/evaluation.md "The booster")
 
 outputs:
   stdout           Table 11 per table; per model the false alarms per flight hour and per
@@ -154,6 +164,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="fit every model on at most about N rows per fold, lowering its "
                         "rates evenly in every flight where needed (0: no limit; default: "
                         "per model, see below)")
+    p.add_argument("--booster", choices=BOOSTER_NAMES, default="xgboost",
+                   help="gradient boosting of the window models (default xgboost; see below)")
     p.add_argument("--cnn-epochs", type=int_at_least(1), default=None, metavar="N",
                    help="CNN training epochs (default 10)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -246,7 +258,7 @@ def _run(args: argparse.Namespace) -> int:
                        out_dir=out, progress=say, n_jobs=args.jobs,
                        cnn_epochs=args.cnn_epochs, train_hz=args.train_hz,
                        normal_hz=args.normal_hz, max_rows=args.max_rows,
-                       bar=False if quiet else None)
+                       bar=False if quiet else None, booster=args.booster)
     lines: list[str] = []
     for t, res in results.items():
         lines += _table_lines(t, res, args, details_of=_shown(res, args.details,

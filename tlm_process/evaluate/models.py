@@ -542,14 +542,15 @@ def _impute(est: Any) -> Any:
 
 def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
                progress: Callable[[str], None] | None = None,
-               cnn_epochs: int | None = None) -> Any:
+               cnn_epochs: int | None = None, booster: str = "xgboost") -> Any:
     """A fresh estimator for model ``name`` (one of :data:`ALL_MODELS`) on ``n_features``
     features, seeded with ``seed``. ``n_jobs``: threads of RandomForest (trees), KNN
     (queries) and the CNN (torch), worker processes of SMO (its class pairs: liblinear's
     random generator is one per process, so threads would share it) and the window models
     (XGBoost's OpenMP threads). None of them changes a result.
     ``progress`` receives one line per epoch from the neural network; ``cnn_epochs``
-    overrides its epoch count."""
+    overrides its epoch count; ``booster``: the window models' (``temporal.WINDOW_BOOSTERS``,
+    :func:`.temporal.window_hgb`)."""
     s = int(seed)
     k = weka_num_features(n_features)
     builders: dict[str, Callable[[], Any]] = {
@@ -586,5 +587,5 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
     if name in TIME_MODELS:
         from tlm_process.evaluate.temporal import SkipConstantColumns, window_hgb
 
-        return SkipConstantColumns(window_hgb(seed=s, n_jobs=n_jobs))
+        return SkipConstantColumns(window_hgb(seed=s, n_jobs=n_jobs, booster=booster))
     raise ValueError(f"unknown model {name!r}; choose from {', '.join(ALL_MODELS)}")

@@ -46,6 +46,7 @@ from tlm_process.evaluate.models import (
 from tlm_process.evaluate.splits import SPLITS, Fold, flight_folds, random_folds
 from tlm_process.evaluate.temporal import (
     CIRCULAR_DEG,
+    WINDOW_BOOSTERS,
     WINDOW_MODELS,
     FlightRuns,
     WindowFeatures,
@@ -141,8 +142,8 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
              cnn_epochs: int | None = None,
              train_hz: float | Mapping[str, float] | None = None,
              normal_hz: float | Mapping[str, float] | None = None,
-             max_rows: int | Mapping[str, int] | None = None, bar: bool | None = False
-             ) -> dict[str, dict[str, dict[str, Any]]]:
+             max_rows: int | Mapping[str, int] | None = None, bar: bool | None = False,
+             booster: str = "xgboost") -> dict[str, dict[str, dict[str, Any]]]:
     """``{table: {model: metrics}}`` (see :func:`.metrics.classification_metrics`; plus
     ``split``, ``folds``, ``n_train``, ``n_fit`` (training rows the model was fitted on: fewer
     than ``n_train`` where they are thinned, ``train_hz``), ``train_hz``, ``n_test``,
@@ -170,12 +171,17 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     they are thinned further, evenly in every flight (the Normal rows first for the models
     that take sample weights; :func:`row_budget`), so a fit costs the same whatever the
     number of flights. Test and transfer rows are never thinned. ``bar``: a
-    progress bar per table on stderr (None: when stderr is a terminal). Convergence
+    progress bar per table on stderr (None: when stderr is a terminal). ``booster``: the
+    window models' gradient boosting, one of :data:`.temporal.WINDOW_BOOSTERS`
+    (:func:`.temporal.window_hgb`; ``booster`` in their results). Convergence
     warnings
     (liblinear for SMO, lbfgs for Logistic) are silenced: those models are used as they
     stand after their iteration limit (see ``docs/evaluation.md``)."""
     from threadpoolctl import threadpool_limits
 
+    if booster not in WINDOW_BOOSTERS:
+        raise EvaluateError(f"unknown booster {booster!r}; choose from "
+                            f"{', '.join(WINDOW_BOOSTERS)}")
     n_jobs = n_jobs or default_jobs()
     with threadpool_limits(limits=n_jobs), warnings.catch_warnings():
         warnings.simplefilter("ignore", category=ConvergenceWarning)
@@ -184,7 +190,7 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
                          progress=progress, n_jobs=n_jobs, cnn_epochs=cnn_epochs,
                          train_hz=_train_hz(models, train_hz),
                          normal_hz=_normal_hz(models, normal_hz),
-                         max_rows=_max_rows(models, max_rows), bar=bar)
+                         max_rows=_max_rows(models, max_rows), bar=bar, booster=booster)
 
 
 def _rates(models: Sequence[str], given: float | Mapping[str, float] | None,
@@ -266,8 +272,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
               transfer: Mapping[str, pd.DataFrame] | None, out_dir: str | Path | None,
               progress: Callable[[str], None] | None, n_jobs: int,
               cnn_epochs: int | None, train_hz: dict[str, float],
-              normal_hz: dict[str, float], max_rows: dict[str, int], bar: bool | None
-              ) -> dict[str, dict[str, dict[str, Any]]]:
+              normal_hz: dict[str, float], max_rows: dict[str, int], bar: bool | None,
+              booster: str) -> dict[str, dict[str, dict[str, Any]]]:
     tables = list(tables) if tables is not None else list(ds.tables)
     unknown = [m for m in models if m not in ALL_MODELS]
     if unknown:
@@ -287,7 +293,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
             def make_of(name: str, tab: _Table = tab, prog: _Progress = prog
                         ) -> Callable[[], Any]:
                 return partial(make_model, name, n_features=tab.n_inputs(name), seed=seed,
-                               n_jobs=n_jobs, progress=prog.epoch_line, cnn_epochs=cnn_epochs)
+                               n_jobs=n_jobs, progress=prog.epoch_line, cnn_epochs=cnn_epochs,
+                               booster=booster)
 
             side = _side_by_side(tab, [m for m in models if m in SINGLE_CORE_MODELS],
                                  make_of, prog, n_jobs)
@@ -296,6 +303,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                 r, cm, last = side.pop(name, None) or _run_model(tab, name, make_of(name),
                                                                  prog.say)
                 r["split"] = split
+                if name in WINDOW_MODELS:
+                    r["booster"] = booster
                 results[t][name] = r
                 prog.done(name, r)
                 if out is not None:

@@ -41,9 +41,10 @@ import pandas as pd
 from numba import njit
 from scipy.ndimage import maximum_filter1d
 
-__all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_MODELS", "FlightRuns", "SkipConstantColumns",
-           "WindowFeatures", "merged_windows", "normal_rows", "row_rate_hz", "row_stride",
-           "train_rows", "window_features", "window_hgb", "window_spec_for"]
+__all__ = ["CIRCULAR_DEG", "TRAIN_HZ", "WINDOW_BOOSTERS", "WINDOW_MODELS", "FlightRuns",
+           "SkipConstantColumns", "WindowFeatures", "merged_windows", "normal_rows",
+           "row_rate_hz", "row_stride", "train_rows", "window_features", "window_hgb",
+           "window_spec_for"]
 
 #: Circular features (table -> feature -> period in the raw unit, degrees).
 CIRCULAR_DEG: Mapping[str, Mapping[str, float]] = {"GPS": {"GCrs": 360.0}}
@@ -379,9 +380,26 @@ def merged_windows(specs: Mapping[str, WindowFeatures], features: Sequence[str]
     return merged, which
 
 
-def window_hgb(seed: int = 0, n_jobs: int = 1) -> Any:
+#: The boosters a window model can be built on (``tlm evaluate --booster``): ``xgboost``
+#: (the default) and ``sklearn``, the window models' booster until 2026-11 (see
+#: :func:`window_hgb`).
+WINDOW_BOOSTERS: tuple[str, ...] = ("xgboost", "sklearn")
+
+
+def window_hgb(seed: int = 0, n_jobs: int = 1, booster: str = "xgboost") -> Any:
     """The classifier of the window models (fed with :func:`window_features`, wrapped in
-    :class:`SkipConstantColumns`): XGBoost's histogram gradient boosting (``tree_method=
+    :class:`SkipConstantColumns`).
+
+    ``booster`` "sklearn": scikit-learn's ``HistGradientBoostingClassifier`` as the window
+    models had it until 2026-11: 150 rounds, learning rate 0.1, at most 31 leaves grown best
+    first, at least 50 rows a leaf, L2 regularisation 1, every column in every tree, no early
+    stopping (its threads are OpenMP's, as :func:`~tlm_process.evaluate.runner.evaluate`
+    limits them). Three to four times slower than the default; on the 200-flight benchmark set
+    its test macro-F1 is 0.02-0.04 higher in three cells (IMU ``WindowHGB60``, VIBE
+    ``WindowHGB60`` and ``CentredHGB``) and within the seed's spread elsewhere
+    (``docs/evaluation.md``, "The booster").
+
+    ``booster`` "xgboost" (the default): XGBoost's histogram gradient boosting (``tree_method=
     "hist"``, 255 bins per column), 150 rounds of one tree per class, learning rate 0.1,
     trees grown level by level to depth 5 (at most 32 leaves), each tree on a random 30 % of
     the columns (``colsample_bytree``: the window statistics of one signal are near copies
@@ -392,6 +410,16 @@ def window_hgb(seed: int = 0, n_jobs: int = 1) -> Any:
     leaves (the window models' booster until 2026-11) on the 60-flight benchmark set: fits
     2-5 times faster, macro-F1 0.025 higher in-domain and 0.068 higher on the SITL logs on
     average over the 12 table x model cells (``docs/evaluation.md``, "The booster")."""
+    if booster == "sklearn":
+        from sklearn.ensemble import HistGradientBoostingClassifier
+
+        return HistGradientBoostingClassifier(max_iter=150, learning_rate=0.1,
+                                              max_leaf_nodes=31, min_samples_leaf=50,
+                                              l2_regularization=1.0, early_stopping=False,
+                                              random_state=seed)
+    if booster != "xgboost":
+        raise ValueError(f"unknown booster {booster!r}; choose from "
+                         f"{', '.join(WINDOW_BOOSTERS)}")
     from xgboost import XGBClassifier
 
     return XGBClassifier(n_estimators=150, learning_rate=0.1, tree_method="hist", max_bin=255,
