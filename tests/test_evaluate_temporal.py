@@ -12,7 +12,6 @@ from hypothesis import strategies as st
 from tlm_process.evaluate.temporal import (
     WINDOW_BOOSTERS,
     WINDOW_MODELS,
-    WINDOW_TREES,
     SkipConstantColumns,
     WindowFeatures,
     normal_rows,
@@ -133,25 +132,6 @@ def test_window_hgb_sklearn_booster_is_the_former_one_and_learns_the_windows():
     assert set(WINDOW_BOOSTERS) == {"xgboost", "sklearn"}
     with pytest.raises(ValueError, match="unknown booster"):
         window_hgb(booster="lightgbm")
-
-
-def test_window_models_tree_shapes():
-    """WindowHGB grows its trees level by level on 30 % of the columns; WindowHGB60 and
-    CentredHGB best leaf first on every column (scikit-learn's shape), 100 rounds at 0.2."""
-    from tlm_process.evaluate.models import make_model
-
-    assert set(WINDOW_TREES) == set(WINDOW_MODELS)
-    shapes = {}
-    for name in WINDOW_MODELS:
-        p = make_model(name, n_features=10, seed=4).estimator.get_params()
-        shapes[name] = (p["grow_policy"], p["n_estimators"], p["learning_rate"],
-                        p["max_depth"], p["max_leaves"], p["colsample_bytree"],
-                        p["random_state"])
-    assert shapes["WindowHGB"] == ("depthwise", 150, 0.1, 5, None, 0.3, 4)
-    assert shapes["WindowHGB60"] == shapes["CentredHGB"] == (
-        "lossguide", 100, 0.2, 0, 31, 1.0, 4)
-    with pytest.raises(ValueError, match="unknown trees"):
-        window_hgb(trees="oblivious")
 
 
 def test_window_model_specs():

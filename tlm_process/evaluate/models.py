@@ -585,8 +585,7 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
 
         return SeqCNN(seed=s, progress=progress, n_threads=n_jobs)
     if name in TIME_MODELS:
-        from tlm_process.evaluate.temporal import WINDOW_TREES, SkipConstantColumns, window_hgb
+        from tlm_process.evaluate.temporal import SkipConstantColumns, window_hgb
 
-        return SkipConstantColumns(window_hgb(seed=s, n_jobs=n_jobs, booster=booster,
-                                              trees=WINDOW_TREES[name]))
+        return SkipConstantColumns(window_hgb(seed=s, n_jobs=n_jobs, booster=booster))
     raise ValueError(f"unknown model {name!r}; choose from {', '.join(ALL_MODELS)}")
