@@ -21,6 +21,8 @@ the paper's figures for comparison (§5.4: RandomForest 84.08 % on GPS; CNN 85.6
     PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 200 --jobs 2
     PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 60 \\
         --models RandomForest,J48,CNN,WindowHGB
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_detection.py --flights 200 --jobs 2 \\
+        --models WindowHGB60,CentredHGB --evaluate '--booster sklearn'
 """
 
 from __future__ import annotations
@@ -87,6 +89,8 @@ def main() -> None:
     ap.add_argument("--tables", default="all", help="tables to evaluate (default all)")
     ap.add_argument("--generate", default="", metavar="ARGS",
                     help="more tlm generate options, one string (e.g. '--calm-share 0.6')")
+    ap.add_argument("--evaluate", default="", metavar="ARGS",
+                    help="more tlm evaluate options, one string (e.g. '--booster sklearn')")
     ap.add_argument("--no-env", action="store_true",
                     help="fly as the paper and the reference SITL logs did: '+' frame, no "
                          "wind, no extra sensor noise (tlm generate --no-env --frame +)")
@@ -105,7 +109,8 @@ def main() -> None:
     test_on = sorted(str(p) for p in SITL.glob("*.bin")) if SITL.is_dir() else []
     # progress on stderr
     ev = ["evaluate", str(dsp), "--table", args.tables, "--models", args.models,
-          "--split", "flight", "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs)]
+          "--split", "flight", "--seed", "0", "--json", str(rj), "--jobs", str(args.jobs),
+          *shlex.split(args.evaluate)]
     times["evaluate"] = _tlm(*ev, *(["--test-on", *test_on] if test_on else []))
     res = json.loads(rj.read_text())
     env = "no wind or extra noise (--no-env)" if args.no_env else "drawn wind and noise"
