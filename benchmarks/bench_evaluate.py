@@ -54,6 +54,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from tlm_process.commands.evaluate import BOOSTER_NAMES
 from tlm_process.evaluate.metrics import train_rate_label
 
 HERE = Path(__file__).resolve().parents[1]
@@ -237,7 +238,7 @@ def main() -> None:
                          "runner's)")
     ap.add_argument("--max-rows", type=int, default=None,
                     help="row budget per fit for every model (default: the runner's)")
-    ap.add_argument("--booster", choices=("xgboost", "sklearn"), default=None,
+    ap.add_argument("--booster", choices=BOOSTER_NAMES, default=None,
                     help="the window models' booster (default: the runner's, xgboost)")
     ap.add_argument("--json", help="write the records as JSON here")
     ap.add_argument("--profile", metavar="DIR", help="cProfile each table into DIR")

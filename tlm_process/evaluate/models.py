@@ -547,7 +547,8 @@ def make_model(name: str, *, n_features: int, seed: int = 0, n_jobs: int = 1,
     features, seeded with ``seed``. ``n_jobs``: threads of RandomForest (trees), KNN
     (queries) and the CNN (torch), worker processes of SMO (its class pairs: liblinear's
     random generator is one per process, so threads would share it) and the window models
-    (XGBoost's OpenMP threads). None of them changes a result.
+    (XGBoost's OpenMP threads). The results do not depend on them (tested), though XGBoost's
+    probabilities can move in the 7th digit with its thread count.
     ``progress`` receives one line per epoch from the neural network; ``cnn_epochs``
     overrides its epoch count; ``booster``: the window models' (``temporal.WINDOW_BOOSTERS``,
     :func:`.temporal.window_hgb`)."""
