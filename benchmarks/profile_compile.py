@@ -15,9 +15,10 @@ numba links every callee's code into its caller's module and optimises and emits
 module again (``tlm_sim._jit_fast`` explains why tlm keeps it that way), so LLVM's work grows
 with the depth of the call tree. Two more tables: the functions whose type inference and
 lowering took longest (an ``inline_jit`` section counts in its caller), and the code libraries
-with the most LLVM time, with the number of functions each one's final module defines. Plain numba hooks, no ``perf``; ~2-3
-minutes on the 2-core VM. The phases wrap numba's private methods: a numba that renamed one
-fails loudly here, nothing else changes.
+with the most LLVM time, with the number of functions each one's final module defines. Plain
+numba hooks, no ``perf``; ~2-3 minutes on the 2-core VM. The phases wrap numba's private
+methods: a numba that renamed one fails loudly here (``tests/test_profile_compile.py`` checks
+them), nothing else changes.
 
     PYTHONPATH=. .venv/bin/python benchmarks/profile_compile.py [--top 15]
 """
@@ -52,6 +53,17 @@ LLVM_PHASES = [label for label, _ in PHASES if label.startswith("LLVM")]
 PER_FUNCTION = ["numba: type inference", "numba: lowering to LLVM IR"]
 
 
+def resolve(target: str) -> tuple[type, str]:
+    """(class, method name) of ``module:Class.method``; AttributeError when numba lacks it."""
+    import importlib
+
+    module, qual = target.split(":")
+    cls_name, meth = qual.split(".")
+    cls = getattr(importlib.import_module(module), cls_name)
+    getattr(cls, meth)
+    return cls, meth
+
+
 class PhaseClock:
     """Exclusive CPU time per phase: a stack of the active phases, the time between two
     switches charged to the phase on top (``outside`` when none is active)."""
@@ -73,11 +85,10 @@ class PhaseClock:
 
     def wrap(self, label: str, target: str) -> None:
         """Charge the method ``module:Class.method`` to ``label`` while it runs."""
-        import importlib
+        self.wrap_method(label, *resolve(target))
 
-        module, qual = target.split(":")
-        cls_name, meth = qual.split(".")
-        cls = getattr(importlib.import_module(module), cls_name)
+    def wrap_method(self, label: str, cls: type, meth: str) -> None:
+        """Charge ``cls.meth`` to ``label`` while it runs (replaces the class attribute)."""
         orig: Callable[..., Any] = getattr(cls, meth)
         clock = self
 
