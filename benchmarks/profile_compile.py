@@ -75,7 +75,8 @@ class PhaseClock:
         self._stack: list[tuple[str, str | None]] = [("outside", None)]
         self._t = time.process_time()
 
-    def _switch(self) -> None:
+    def switch(self) -> None:
+        """Charge the time since the last switch to the phase on top (call once at the end)."""
         now = time.process_time()
         label, library = self._stack[-1]
         self.total[label] += now - self._t
@@ -100,12 +101,12 @@ class PhaseClock:
                 library = args[0].func_id.func_qualname
             else:
                 library = None
-            clock._switch()
+            clock.switch()
             clock._stack.append((label, library))
             try:
                 return orig(obj, *args, **kwargs)
             finally:
-                clock._switch()
+                clock.switch()
                 clock._stack.pop()
                 if label == LLVM_PHASES[1] and library is not None:
                     clock.functions[library] = sum(
@@ -116,7 +117,8 @@ class PhaseClock:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--top", type=int, default=15, help="libraries to list (default 15)")
+    ap.add_argument("--top", type=int, default=15,
+                    help="rows of the per-function and per-library tables (default 15)")
     args = ap.parse_args()
     os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="tlm-profile-compile-")
     os.environ["TLM_COMPILE_PROCS"] = "1"
@@ -128,7 +130,7 @@ def main() -> None:
     from tlm_sim import fly
 
     log = fly(1, seed=0)
-    clock._switch()
+    clock.switch()
     cpu, wall = time.process_time() - t0, time.perf_counter() - w0
     print(f"import + cold compile + one flight of mission 1 ({log.meta['duration_s']:.0f} s "
           f"simulated), one process: {cpu:.1f} CPU s, {wall:.1f} s wall, "

@@ -46,7 +46,6 @@ def test_nested_phases_are_charged_exclusively(pc):
     clock.wrap_method("outer", Compiler, "outer")
     clock.wrap_method("inner", Compiler, "inner")
     Compiler().outer()
-    clock._switch()
+    clock.switch()
     assert clock.total["inner"] == pytest.approx(0.1, abs=0.03)
     assert clock.total["outer"] == pytest.approx(0.1, abs=0.03)
-    assert clock._stack == [("outside", None)]
