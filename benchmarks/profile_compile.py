@@ -70,7 +70,8 @@ class PhaseClock:
 
     def __init__(self) -> None:
         self.total: dict[str, float] = defaultdict(float)
-        self.per_library: dict[str, dict[str, float]] = defaultdict(lambda: defaultdict(float))
+        #: phase times by name: the code library's (LLVM phases) or the function's (PER_FUNCTION)
+        self.by_name: dict[str, dict[str, float]] = defaultdict(lambda: defaultdict(float))
         self.functions: dict[str, int] = {}
         self._stack: list[tuple[str, str | None]] = [("outside", None)]
         self._t = time.process_time()
@@ -81,7 +82,7 @@ class PhaseClock:
         label, library = self._stack[-1]
         self.total[label] += now - self._t
         if library is not None:
-            self.per_library[library][label] += now - self._t
+            self.by_name[library][label] += now - self._t
         self._t = now
 
     def wrap(self, label: str, target: str) -> None:
@@ -145,14 +146,14 @@ def main() -> None:
     print(f"{'numba in all':48s} {numba:7.1f} {numba / cpu:6.1%}")
     print(f"{'LLVM in all':48s} {llvm:7.1f} {llvm / cpu:6.1%}")
 
-    funcs = sorted(clock.per_library.items(),
+    funcs = sorted(clock.by_name.items(),
                    key=lambda kv: -sum(kv[1][p] for p in PER_FUNCTION))
     print(f"\nnumba's type inference and lowering by function compiled, top {args.top}")
     print(f"{'function':32s} {'typing':>7s} {'lower':>7s}")
     for name, t in funcs[:args.top]:
         print(f"{name[:32]:32s} {t[PER_FUNCTION[0]]:7.2f} {t[PER_FUNCTION[1]]:7.2f}")
 
-    libs = sorted(clock.per_library.items(),
+    libs = sorted(clock.by_name.items(),
                   key=lambda kv: -sum(kv[1][p] for p in LLVM_PHASES))
     print(f"\nLLVM time by code library, top {args.top} (fn: function passes, mod: module "
           "passes, mc: machine code; defs: functions its final module defines)")
@@ -160,9 +161,9 @@ def main() -> None:
     for name, t in libs[:args.top]:
         print(f"{name[:32]:32s} {t[LLVM_PHASES[0]]:6.2f} {t[LLVM_PHASES[1]]:6.2f} "
               f"{t[LLVM_PHASES[2]]:6.2f} {clock.functions.get(name, 0):5d}")
-    below = {p: sum(t[p] for n, t in libs if n != "run_flight") for p in LLVM_PHASES[1:]}
+    below = sum(t[p] for n, t in libs if n != "run_flight" for p in LLVM_PHASES[1:])
     print(f"module passes + machine code in libraries other than run_flight's (their callees' "
-          f"code again at every level): {sum(below.values()):.1f} CPU s")
+          f"code again at every level): {below:.1f} CPU s")
 
 
 if __name__ == "__main__":
