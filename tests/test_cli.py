@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tlm_process.cli import COMMANDS, main
 from tlm_process.cli import _fault_lines as summary_lines
-from tlm_process.cli import main
 from tlm_sim import builtin_mission
 from tlm_sim.faults import FaultSchedule
 from tlm_sim.flightlog import SCHEMAS
@@ -80,6 +80,21 @@ def test_help_runs_as_a_console_command():
                  "wpN", '"faults": [{"fault": "gps"'):
         assert text in r.stdout
 
+
+@pytest.mark.parametrize("command", [[], *([c] for c in COMMANDS)], ids=["tlm", *COMMANDS])
+def test_every_help_is_plain_text(command, capsys):
+    """``tlm --help`` says what tlm is and lists every command; no help shows docstring markup
+    (reST roles or double backquotes)."""
+    with pytest.raises(SystemExit) as done:
+        main([*command, "--help"])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    assert text.startswith(f"usage: tlm {' '.join(command)}".rstrip())
+    for markup in ("``", ":func:", ":class:", ":mod:", ":data:", ":meth:"):
+        assert markup not in text
+    if not command:
+        assert "ArduPilot" in text and "'tlm COMMAND --help'" in text
+        assert all(name in text for name in COMMANDS)
 
 # --------------------------------------------------------------------------------------------
 # Faults

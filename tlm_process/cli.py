@@ -32,7 +32,10 @@ def command_module(name: str) -> ModuleType:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argparse tree of ``tlm``."""
-    ap = argparse.ArgumentParser(prog="tlm", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="tlm", description="Labelled UAV fault flights without ArduPilot: fly a simulated "
+        "ArduCopter with SITL's faults, write ArduPilot logs, and run the Time Line Modeling "
+        "pipeline on them.", epilog="'tlm COMMAND --help' describes each command.")
     ap.add_argument("--version", action="version", version="tlm 0.1.0")
     sub = ap.add_subparsers(dest="command", required=True)
     for name in COMMANDS:
