@@ -65,6 +65,20 @@ def test_user_mistakes_are_one_line_errors(tmp_path, capsys, argv, needle):
     assert needle in err and len(err.splitlines()) == 1
 
 
+@pytest.mark.parametrize("argv", [["fly"], ["demo"], ["generate", "--flights", "1"],
+                                  ["convert", "x.bin"], ["process", "x"], ["evaluate", "x"],
+                                  ["crosscheck", "x.bin"]], ids=lambda a: a[0])
+def test_an_empty_out_is_refused_not_the_current_folder(tmp_path, monkeypatch, capsys, argv):
+    """``--out "$DIR"`` with DIR unset: refused, nothing written in the current folder."""
+    monkeypatch.chdir(tmp_path)
+    for empty in ("", " "):
+        with pytest.raises(SystemExit) as done:
+            main([*argv, "--out", empty])
+        assert done.value.code == 2
+        assert "argument --out: an empty path" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_unwritable_output_folder(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("x")

@@ -57,6 +57,14 @@ def positive_number(text: str) -> float:
     return v
 
 
+def folder(text: str) -> str:
+    """An output folder's path, not empty: an empty ``--out "$DIR"`` (DIR unset) would
+    otherwise mean the current folder."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path (give a folder)")
+    return text
+
+
 def int_at_least(low: int) -> Callable[[str], int]:
     """A converter to a whole number >= ``low`` (``low`` >= 1)."""
     def convert(text: str) -> int:

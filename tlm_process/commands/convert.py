@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from tlm_process.binlog import CONVERT_FORMATS, check_types, open_log, write_tables
-from tlm_process.cliutil import UsageError, add_overwrite, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, folder, prepare_out
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "them; instances as rows with their I/IMU/C column) plus meta.json, or "
                     "with --format log to Mission Planner's text log DIR/<name>.log.")
     c.add_argument("log", help="the .bin file")
-    c.add_argument("--out", required=True, help="output folder")
+    c.add_argument("--out", type=folder, required=True, help="output folder")
     c.add_argument("--format", default="csv", metavar="csv|parquet|log",
                    help="csv (default), parquet, or log (Mission Planner text log)")
     c.add_argument("--types", metavar="GPS,IMU,...",

@@ -17,6 +17,7 @@ from tlm_process.cliutil import (
     UsageError,
     add_overwrite,
     check_writable_file,
+    folder,
     parse_param_args,
     prepare_out,
 )
@@ -46,7 +47,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "TLM_BOOT_PHASE=1: then the pre-arm and EKF start-up texts are compared "
                         "too)")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
-    c.add_argument("--out", metavar="DIR",
+    c.add_argument("--out", type=folder, metavar="DIR",
                    help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "
                         "here")
     c.add_argument("--max-flight-time-diff", type=float, default=None, metavar="FRAC",

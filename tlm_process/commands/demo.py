@@ -7,7 +7,7 @@ import argparse
 import time
 from pathlib import Path
 
-from tlm_process.cliutil import OUT_MARK, add_overwrite, prepare_out
+from tlm_process.cliutil import OUT_MARK, add_overwrite, folder, prepare_out
 from tlm_process.commands import process
 from tlm_process.commands.fly import FORMATS, fault_lines, write_faults
 
@@ -18,7 +18,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``demo`` to ``tlm``'s subcommands; returns its parser."""
     d = sub.add_parser("demo", help="fly mission 1 with the paper's fault sequence, write its "
                                     "log and run the TLM pipeline on it")
-    d.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
+    d.add_argument("--out", type=folder, default="demo-out",
+                   help="output folder (default demo-out)")
     d.add_argument("--seed", type=int, default=1,
                    help="seed of the flight and of its fault sequence (default 1)")
     add_overwrite(d)

@@ -17,6 +17,7 @@ from tlm_process.cliutil import (
     UsageError,
     add_overwrite,
     check_writable_file,
+    folder,
     fraction,
     int_at_least,
     number,
@@ -145,8 +146,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--test-on", nargs="+", action="extend", default=[], metavar="LOG",
                    help="transfer test: also test on these logs (.bin + sidecar, tlm fly "
                         "folders, ...)")
-    p.add_argument("--out", metavar="DIR", help="write confusion-matrix PNGs, the CNN's "
-                                                "training curves and report.txt here")
+    p.add_argument("--out", type=folder, metavar="DIR",
+                   help="write confusion-matrix PNGs, the CNN's training curves and report.txt "
+                        "here")
     p.add_argument("--details", action="store_true",
                    help="print every model's confusion matrix and per-class scores")
     p.add_argument("--jobs", type=int_at_least(1), default=None, metavar="N",

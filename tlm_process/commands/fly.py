@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tlm_process.cliutil import UsageError, add_overwrite, parse_param_args, prepare_out
+from tlm_process.cliutil import UsageError, add_overwrite, folder, parse_param_args, prepare_out
 
 if TYPE_CHECKING:  # tlm_sim takes seconds to import: only where a command needs it
     from tlm_sim.faults import FaultSchedule, Trigger
@@ -266,7 +266,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "LAND; anything else is refused (docs/missions.md)")
     f.add_argument("--seed", type=int, default=0,
                    help="random seed of the flight and of --faults paper (default 0)")
-    f.add_argument("--out", required=True, help="output folder")
+    f.add_argument("--out", type=folder, required=True, help="output folder")
     f.add_argument("--format", default="csv,parquet",
                    help="any of csv,parquet,bin (default csv,parquet); bin writes the flight as "
                         "an ArduPilot DataFlash log DIR/flight.bin")

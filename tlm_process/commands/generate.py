@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from tlm_process.cliutil import UsageError, parse_param_args
+from tlm_process.cliutil import UsageError, folder, parse_param_args
 
 __all__ = ["add_parser", "build_config", "run"]
 
@@ -219,7 +219,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--flights", type=int, required=True,
                    help="number of flights N (0..N-1), at most 100000000")
-    p.add_argument("--out", required=True, help="data set folder (new, empty, or one to continue)")
+    p.add_argument("--out", type=folder, required=True,
+                   help="data set folder (new, empty, or one to continue)")
     p.add_argument("--seed", type=int, default=0, help="run seed: every draw comes from it "
                                                        "(default 0)")
     ex = p.add_argument_group("where flights run")

@@ -15,6 +15,7 @@ from pathlib import Path
 from tlm_process.cliutil import (
     UsageError,
     add_overwrite,
+    folder,
     fraction,
     is_one_of,
     positive_number,
@@ -89,7 +90,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="flight folders, .bin logs with sidecars, CSV folders, datasets")
-    p.add_argument("--out", required=True, metavar="DS", help="output folder")
+    p.add_argument("--out", type=folder, required=True, metavar="DS", help="output folder")
     p.add_argument("--anchor", choices=("auto", "time", "position"), default="auto",
                    help="fault window anchoring (default auto: recorded times when present)")
     p.add_argument("--max-match-m", type=positive_number, default=None, metavar="M",
