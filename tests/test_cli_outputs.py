@@ -297,3 +297,34 @@ def test_process_reads_fault_records_from_the_log_itself(tmp_path, capsys):
         counts[name] = json.loads((out / "report.json").read_text())["counts"]["GPS"]
     assert counts["with"] == counts["lone"] and counts["sitl"] == counts["sidecar"]
     assert all(int(counts["lone"][str(k)]) > 50 for k in (1, 2, 3, 4))
+
+
+@pytest.mark.parametrize("command", ["fly", "convert", "process", "crosscheck", "evaluate",
+                                     "evaluate --test-on"])
+def test_overwrite_never_deletes_an_input_inside_the_output_folder(tmp_path, capsys, command):
+    """An input that is the output folder or lies in it is refused (one line, exit 2) before
+    --overwrite empties the folder; the input is still there afterwards."""
+    import shutil
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / OUT_MARK).write_text(f"{command.split()[0]}\n")  # a folder tlm wrote
+    log = out / "rc_s15.bin"
+    shutil.copy(reference_path("rc_s15.bin"), log)
+    shutil.copy(reference_path("rc_s15.json"), out / "rc_s15.json")
+    parm = out / "p.parm"
+    parm.write_text("WPNAV_SPEED 600\n")
+    (out / "report.json").write_text("{}")
+    argv = {"fly": ["fly", "--params", str(parm)],
+            "convert": ["convert", str(log)],
+            "process": ["process", str(log)],
+            "crosscheck": ["crosscheck", str(log)],
+            "evaluate": ["evaluate", str(out)],
+            "evaluate --test-on": ["evaluate", str(tmp_path / "elsewhere"), "--test-on",
+                                   str(log)]}[command]
+    (tmp_path / "elsewhere").mkdir()
+    before = sorted(p.name for p in out.iterdir())
+    assert main([*argv, "--out", str(out), "--overwrite"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds an input of this command" in err[0], err
+    assert sorted(p.name for p in out.iterdir()) == before

@@ -91,9 +91,14 @@ def fraction(*, zero: bool) -> Callable[[str], float]:
 
 # ------------------------------------------------------------------ output folder --------
 def prepare_out(out: str | os.PathLike, command: str | None = None,
-                overwrite: bool = False) -> Path:
+                overwrite: bool = False,
+                inputs: Iterable[str | os.PathLike | None] = ()) -> Path:
     """Create output folder ``out`` (and its parents) and check that a file can be written
     in it (an empty probe file, removed at once).
+
+    ``inputs``: the command's input files and folders (``None`` and paths that do not exist
+    are skipped). An output folder that is one of them or holds one is refused before
+    anything is written or removed: ``--overwrite`` would delete the input first.
 
     With ``command`` (the subcommand's name) the folder is that command's alone: a folder
     that holds anything (hidden entries aside) is refused unless ``overwrite``, and then only
@@ -106,6 +111,10 @@ def prepare_out(out: str | os.PathLike, command: str | None = None,
             without ``overwrite``, or one that tlm did not write.
     """
     d = Path(out)
+    held_input = input_inside(d, inputs)
+    if held_input is not None:
+        raise UsageError(f"output folder {d} holds an input of this command ({held_input}); "
+                         f"choose another folder")
     if command is not None and d.exists():
         if not d.is_dir():
             raise UsageError(f"output folder {d} is a file")
@@ -168,13 +177,28 @@ def add_overwrite(parser: argparse.ArgumentParser) -> None:
     """The ``--overwrite`` flag of a command that writes a folder (see :func:`prepare_out`)."""
     parser.add_argument("--overwrite", action="store_true",
                         help="replace the output folder whole if an earlier tlm run wrote it "
-                             "(default: refuse a folder that is not empty)")
+                             "and it holds none of this command's inputs (default: refuse a "
+                             "folder that is not empty)")
 
 
 def foreign_entries(d: Path) -> list[str]:
     """Sorted names of what folder ``d`` holds, hidden entries (``.name``) left out: a folder
     with any is not empty for a command that refuses to mix its output with other files."""
     return sorted(p.name for p in d.iterdir() if not p.name.startswith("."))
+
+
+def input_inside(out: str | os.PathLike,
+                 paths: Iterable[str | os.PathLike | None]) -> str | None:
+    """The first of ``paths`` (existing ones; compared resolved) that is folder ``out`` or lies
+    inside it, else ``None``."""
+    target = Path(out).resolve()
+    for p in paths:
+        if p is None or not Path(p).exists():
+            continue
+        rp = Path(p).resolve()
+        if rp == target or target in rp.parents:
+            return str(p)
+    return None
 
 
 def is_one_of(out: str | os.PathLike, paths: Iterable[str | os.PathLike]) -> bool:

@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     log, tables, damage = open_log(args.log)
     names = check_types(log, types)
     # only once the log is known to be readable
-    out = prepare_out(args.out, "convert", args.overwrite)
+    out = prepare_out(args.out, "convert", args.overwrite, inputs=[args.log])
     files, rows = write_tables(log, tables, names, out, fmt, Path(args.log).stem, damage)
     print(f"converted          {args.log} -> {out}/ ({len(files)} files, {fmt}, "
           f"{len(rows)} message types, {sum(rows.values())} messages)")

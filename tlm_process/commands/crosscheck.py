@@ -71,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
     overrides = parse_param_args(args.param or [])
     if args.json:
         check_writable_file(args.json, "--json")
-    out = prepare_out(args.out, "crosscheck", args.overwrite) if args.out else None
+    out = prepare_out(args.out, "crosscheck", args.overwrite,
+                      inputs=[args.log, args.sidecar]) if args.out else None
     try:
         r = crosscheck(args.log, args.sidecar, args.seed, params=overrides or None)
     except ScenarioError as e:

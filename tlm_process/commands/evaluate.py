@@ -247,7 +247,8 @@ def _run(args: argparse.Namespace) -> int:
         if not quiet:
             print(msg, file=sys.stderr, flush=True)
 
-    out = prepare_out(args.out, "evaluate", args.overwrite) if args.out else None
+    out = prepare_out(args.out, "evaluate", args.overwrite,
+                      inputs=[args.dataset, *args.test_on]) if args.out else None
     ds = load_dataset(args.dataset, tables)
     transfer = None
     if args.test_on:

@@ -318,7 +318,8 @@ def run(args: argparse.Namespace) -> int:
         profile = _check_profile(args.profile)
         schedule = _load_schedule(args, mission, profile_params(profile, params))
         seed = args.seed
-    out = prepare_out(args.out, "fly", args.overwrite)
+    out = prepare_out(args.out, "fly", args.overwrite,
+                      inputs=[args.mission_file, args.params, args.faults, args.from_manifest])
     t0 = time.perf_counter()
     faults = schedule if schedule is not None else (changes or None)
     log = fly(mission, faults=faults, params=params, seed=seed, profile=profile)

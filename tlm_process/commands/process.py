@@ -212,7 +212,8 @@ def _run(args: argparse.Namespace) -> int:
     if is_one_of(out, (p for _, p in sources)):
         raise PipelineError("the output folder is one of the inputs", source=str(out))
     t0 = time.perf_counter()
-    prepare_out(out, "process", getattr(args, "overwrite", False))
+    prepare_out(out, "process", getattr(args, "overwrite", False),
+                inputs=[p for _, p in sources])
     processed = []
     plots: list[str] = []
     seen: dict[str, int] = {}
