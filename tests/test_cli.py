@@ -56,6 +56,10 @@ def test_fly_csv_only_and_param_and_in_flight_change(tmp_path):
         (["fly", "--out", "X", "--format", "xlsx"], "unknown format"),
         (["fly", "--out", "X", "--mission-file", "/nonexistent/m.waypoints"], "No such file"),
         (["fly", "--out", "X", "--seed", "-3"], "seed"),
+        (["fly", "--out", "X", "--set", "1e308:SIM_GPS1_ENABLE=0"], "the longest this flight"),
+        (["fly", "--out", "X", "--set", "nan:SIM_GPS1_ENABLE=0"], "between 0 and"),
+        (["fly", "--out", "X", "--set", "99999:SIM_GPS1_ENABLE=0"], "between 0 and"),
+        (["fly", "--out", "X", "--set", "100:FRAME_CLASS=2"], "cannot change in flight"),
     ],
 )
 def test_user_mistakes_are_one_line_errors(tmp_path, capsys, argv, needle):

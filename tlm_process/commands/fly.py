@@ -101,15 +101,26 @@ def _load_mission(args: argparse.Namespace):
     return builtin_mission(args.mission)
 
 
-def _parse_changes(items: Sequence[str]) -> list[tuple[float, str, float]]:
+def _parse_changes(items: Sequence[str], max_time_s: float) -> list[tuple[float, str, float]]:
+    """``--set TIME_S:NAME=VALUE`` changes, each at a time within the flight (0 to
+    ``max_time_s``, the longest it can last) and of a parameter that may change in flight."""
+    from tlm_sim.flight import BOOT_ONLY_PARAMS
+
     out = []
     for it in items:
         try:
             t, rest = it.split(":", 1)
             name, val = rest.split("=", 1)
-            out.append((float(t), name.strip().upper(), float(val)))
+            change = (float(t), name.strip().upper(), float(val))
         except ValueError:
             raise UsageError(f"--set expects TIME_S:NAME=VALUE, got {it!r}") from None
+        if not 0.0 <= change[0] <= max_time_s:  # also refuses nan
+            raise UsageError(f"--set {it!r}: the time must be between 0 and {max_time_s:g} s, "
+                             f"the longest this flight can last")
+        if change[1] in BOOT_ONLY_PARAMS:
+            raise UsageError(f"--set {it!r}: {change[1]} cannot change in flight (ArduPilot "
+                             f"reads it at boot); give it with --param")
+        out.append(change)
     return out
 
 
@@ -305,6 +316,7 @@ def run(args: argparse.Namespace) -> int:
     """Fly one mission (with an optional fault schedule) and write its tables and faults.json."""
     from tlm_process.summary import flight_summary, format_summary, plot_trajectory
     from tlm_sim import fly
+    from tlm_sim.flight import max_duration_s
     from tlm_sim.profiles import profile_params
 
     fmts = _parse_formats(args.format)
@@ -314,8 +326,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         params = _load_params(args)
         mission = _load_mission(args)
-        changes = _parse_changes(args.set or [])
         profile = _check_profile(args.profile)
+        changes = _parse_changes(args.set or [], float(math.floor(max_duration_s(
+            mission, profile_params(profile, params)))))
         schedule = _load_schedule(args, mission, profile_params(profile, params))
         seed = args.seed
     out = prepare_out(args.out, "fly", args.overwrite,
