@@ -328,3 +328,40 @@ def test_overwrite_never_deletes_an_input_inside_the_output_folder(tmp_path, cap
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "holds an input of this command" in err[0], err
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+@pytest.mark.parametrize("command", ["fly --faults", "generate --config", "process sidecar",
+                                     "crosscheck --sidecar"])
+def test_json_nested_too_deeply_is_one_line(tmp_path, capsys, command):
+    """A JSON file nested past Python's recursion limit is a user mistake, not a traceback."""
+    import shutil
+
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    log = tmp_path / "x.bin"
+    shutil.copy(reference_path("rc_s15.bin"), log)
+    argv = {"fly --faults": ["fly", "--faults", str(deep), "--out", str(tmp_path / "o")],
+            "generate --config": ["generate", "--flights", "1", "--config", str(deep),
+                                  "--out", str(tmp_path / "o")],
+            "process sidecar": ["process", str(log), "--out", str(tmp_path / "o")],
+            "crosscheck --sidecar": ["crosscheck", str(log), "--sidecar", str(deep)]}[command]
+    if command == "process sidecar":
+        shutil.copy(deep, tmp_path / "x.json")
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tlm: error: ") and "deep" in err[0], err
+
+
+@pytest.mark.parametrize("content, needle", [(None, "no such file"),
+                                             ("{", "is not a sidecar JSON"),
+                                             ('{"faults": []}', "names no mission")])
+def test_crosscheck_refuses_a_sidecar_it_cannot_use(tmp_path, capsys, content, needle):
+    """An explicit --sidecar is used or refused, never silently replaced by the log's own
+    scenario."""
+    side = tmp_path / "side.json"
+    if content is not None:
+        side.write_text(content)
+    argv = ["crosscheck", str(reference_path("rc_s15.bin")), "--sidecar", str(side)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0], err

@@ -167,7 +167,7 @@ def _config_file(path: str) -> dict[str, Any]:
         raise UsageError(f"--config: cannot read {p}: {exc}") from None
     try:
         doc = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as exc:
+    except (json.JSONDecodeError, yaml.YAMLError, RecursionError) as exc:
         msg = str(exc).splitlines()[0]
         raise UsageError(f"--config: {p} is not valid JSON/YAML: {msg}") from None
     if not isinstance(doc, dict):

@@ -354,6 +354,30 @@ def _held_notes(faults: list[dict[str, Any]], t: Mapping[str, pd.DataFrame]) -> 
             "tlm's flight)" for f in held]
 
 
+def _read_sidecar(path: Path, explicit: bool) -> dict[str, Any] | None:
+    """The sidecar JSON object at ``path``; ``None`` when there is none beside the log.
+
+    Raises:
+        ScenarioError: an ``explicit`` sidecar (``--sidecar``) that is missing or names no
+            mission; any sidecar that is not a JSON object.
+    """
+    if not path.is_file():
+        if explicit:
+            raise ScenarioError(f"--sidecar {path}: no such file")
+        return None
+    try:
+        doc = json.loads(path.read_bytes().decode("utf-8"))
+    except (ValueError, RecursionError) as exc:  # JSON, UTF-8, nesting
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ScenarioError(f"{path} is not a sidecar JSON ({why})") from None
+    if not isinstance(doc, dict):
+        raise ScenarioError(f"{path} is not a sidecar JSON (not an object)")
+    if explicit and "mission" not in doc:
+        raise ScenarioError(f"--sidecar {path} names no mission (a SITL sidecar has "
+                            f"'mission'); leave --sidecar out to take the scenario from the log")
+    return doc
+
+
 def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
                 seed: int | None = None) -> SitlScenario:
     """The scenario of a SITL ``.bin`` (and its sidecar, when given or found beside it).
@@ -378,7 +402,7 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
     if not len(armed):
         raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10)")
     side_path = Path(sidecar) if sidecar else bin_path.with_suffix(".json")
-    doc = json.loads(side_path.read_text()) if side_path.is_file() else None
+    doc = _read_sidecar(side_path, explicit=bool(sidecar))
     from tlm_sim.params import ParamError
 
     initial = _initial_params(t["PARM"])

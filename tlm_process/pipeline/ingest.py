@@ -228,6 +228,8 @@ def _read_json(path: Path) -> Any:
         raise IngestError(f"cannot read: {exc}", source=str(path)) from None
     except json.JSONDecodeError as exc:
         raise IngestError(f"invalid JSON: {exc}", source=str(path)) from None
+    except RecursionError:
+        raise IngestError("invalid JSON: nested too deeply", source=str(path)) from None
 
 
 # --------------------------------------------------------------------------------------------

@@ -352,6 +352,9 @@ class FaultSchedule:
             raise FaultScheduleError(f"invalid JSON: {exc}", source=str(path)) from None
         except yaml.YAMLError as exc:
             raise FaultScheduleError(f"invalid YAML: {exc}", source=str(path)) from None
+        except RecursionError:
+            raise FaultScheduleError("nested too deeply to be a fault schedule",
+                                     source=str(path)) from None
         try:
             return cls.from_dict(data, n_waypoints=n_waypoints, max_time_s=max_time_s)
         except FaultScheduleError as exc:

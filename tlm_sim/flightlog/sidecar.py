@@ -57,7 +57,7 @@ def read_sidecar_faults(sidecar: str | os.PathLike) -> list[dict[str, Any]]:
     p = Path(sidecar)
     try:
         doc = json.loads(p.read_bytes().decode("utf-8"))
-    except ValueError as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+    except (ValueError, RecursionError) as exc:  # JSON, UTF-8 (ValueErrors) or nesting
         why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ValueError(f"{p} is not a fault sidecar JSON ({why})") from None
     faults = doc.get("faults") if isinstance(doc, Mapping) else doc
