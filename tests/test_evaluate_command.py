@@ -178,6 +178,19 @@ def test_evaluate_max_rows_on_the_command_line(tiny_ds, tmp_path, capsys):
     assert e.value.code == 2 and "--max-rows" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("option", ["--train-hz", "--normal-hz"])
+@pytest.mark.parametrize("value", ["-1", "nan", "inf", "1e-308", "0.0009"])
+def test_evaluate_rates_are_0_or_at_least_a_millihertz(capsys, option, value):
+    """A rate too small to thin by (1e-308 Hz overflowed) is refused like a negative one."""
+    from tlm_process.commands.evaluate import _rate_hz
+
+    assert _rate_hz("0") == 0 and _rate_hz("0.001") == 0.001
+    with pytest.raises(SystemExit) as e:
+        main(["evaluate", "ds", option, value])
+    assert e.value.code == 2
+    assert f"argument {option}: must be 0 (every row)" in capsys.readouterr().err
+
+
 def test_evaluate_normal_hz_thins_normal_training_rows_and_weights_them(tiny_ds):
     from tlm_process.evaluate import evaluate, load_dataset
 

@@ -66,8 +66,9 @@ transfer:
 training rows:
   --train-hz HZ    every model is fitted on each training flight's rows thinned to about
                    HZ rows per second (every k-th row, k = round(table rate / HZ); 0: every
-                   row); test and transfer rows are never thinned. Default per model, as
-                   measured to score within 0.01 macro-F1 of every row (docs/evaluation.md):
+                   row; at least 0.001 otherwise); test and transfer rows are never
+                   thinned. Default per model, as measured to score within 0.01 macro-F1 of
+                   every row (docs/evaluation.md):
                    5 Hz (every GPS row, every 2nd RATE/VIBE row, every 5th IMU row) for
                    NaiveBayes, Logistic, KNN, AdaBoost, OneR, ZeroR, RandomForest and the
                    window models; 1 Hz for SMO; every row for J48, RandomTree, the CNN and
@@ -113,11 +114,18 @@ examples:
 """
 
 
+#: the lowest positive ``--train-hz`` / ``--normal-hz`` [Hz]: one row in 1000 s, already
+#: less than one a flight (a smaller one overflowed the thinning step)
+MIN_RATE_HZ = 1e-3
+
+
 def _rate_hz(text: str) -> float:
-    """A finite rate >= 0 [Hz] (``--train-hz``)."""
+    """0 (every row) or a finite rate >= :data:`MIN_RATE_HZ` [Hz] (``--train-hz``,
+    ``--normal-hz``)."""
     v = number(text)
-    if not (v >= 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError("must be a finite number >= 0")
+    if not (v == 0 or (v >= MIN_RATE_HZ and math.isfinite(v))):
+        raise argparse.ArgumentTypeError(f"must be 0 (every row) or a finite rate >= "
+                                         f"{MIN_RATE_HZ:g} Hz")
     return v
 
 
