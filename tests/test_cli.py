@@ -60,6 +60,14 @@ def test_fly_csv_only_and_param_and_in_flight_change(tmp_path):
         (["fly", "--out", "X", "--set", "nan:SIM_GPS1_ENABLE=0"], "between 0 and"),
         (["fly", "--out", "X", "--set", "99999:SIM_GPS1_ENABLE=0"], "between 0 and"),
         (["fly", "--out", "X", "--set", "100:FRAME_CLASS=2"], "cannot change in flight"),
+        (["fly", "--out", "X", "--from-manifest", "ds", "--flight", "0", "--seed", "5"],
+         "drop --seed"),
+        (["fly", "--out", "X", "--from-manifest", "ds", "--flight", "0", "--mission", "3"],
+         "drop --mission"),
+        (["fly", "--out", "X", "--from-manifest", "ds", "--flight", "0", "--profile", "paper"],
+         "drop --profile"),
+        (["fly", "--out", "X", "--flight", "2"], "--flight N picks a flight of --from-manifest"),
+        (["fly", "--out", "X", "--mission", "2", "--mission-file", "m.txt"], "exclusive"),
     ],
 )
 def test_user_mistakes_are_one_line_errors(tmp_path, capsys, argv, needle):

@@ -245,6 +245,18 @@ def write_faults(out: Path, log: FlightLog) -> Path:
     return path
 
 
+def _take_defaults(args: argparse.Namespace) -> None:
+    """Refuse options that do nothing here, then fill in the defaults of --mission, --seed
+    and --profile (``None`` until now, so that --from-manifest can refuse them when given)."""
+    if args.flight is not None:
+        raise UsageError("--flight N picks a flight of --from-manifest DS; give both")
+    if args.mission is not None and args.mission_file:
+        raise UsageError("--mission and --mission-file are exclusive: give one")
+    args.mission = 1 if args.mission is None else args.mission
+    args.seed = 0 if args.seed is None else args.seed
+    args.profile = "current" if args.profile is None else args.profile
+
+
 def _from_manifest(args: argparse.Namespace):
     """(mission, schedule, params, seed, profile) of ``--from-manifest DS --flight N``."""
     from tlm_process.generate.manifest import scenario_from_manifest
@@ -254,7 +266,10 @@ def _from_manifest(args: argparse.Namespace):
     clash = [opt for opt, v in (("--mission-file", args.mission_file), ("--faults", args.faults),
                                 ("--fault", args.fault), ("--set", args.set),
                                 ("--param", args.param), ("--params", args.params),
-                                ("--frame", args.frame), ("--lambda", args.lam)) if v]
+                                ("--frame", args.frame), ("--lambda", args.lam),
+                                ("--mission", args.mission is not None),
+                                ("--seed", args.seed is not None),
+                                ("--profile", args.profile is not None)) if v]
     if clash:
         raise UsageError(f"--from-manifest flies the data set's own scenario: drop "
                          f"{', '.join(clash)}")
@@ -269,13 +284,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                                    "their Parquet twins), meta.json, summary.json and "
                                    "faults.json.",
                        epilog=FAULTS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    f.add_argument("--mission", type=int, default=1, choices=(1, 2, 3, 4),
+    f.add_argument("--mission", type=int, default=None, choices=(1, 2, 3, 4),
                    help="built-in mission number (default 1)")
     f.add_argument("--mission-file",
                    help="QGC WPL 110 mission file instead of a built-in one: waypoints (with "
                         "hold times), LOITER_TIME, DO_CHANGE_SPEED, TAKEOFF, RTL or a final "
                         "LAND; anything else is refused (docs/missions.md)")
-    f.add_argument("--seed", type=int, default=0,
+    f.add_argument("--seed", type=int, default=None,
                    help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", type=folder, required=True, help="output folder")
     f.add_argument("--format", default="csv,parquet",
@@ -287,7 +302,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     f.add_argument("--frame", metavar="NAME",
                    help="airframe: + (default), x, hexa, hexax or octa; sets FRAME_CLASS and "
                         "FRAME_TYPE (as --param FRAME_TYPE=1 for x; over a --params file's)")
-    f.add_argument("--profile", default="current", metavar="current|paper",
+    f.add_argument("--profile", default=None, metavar="current|paper",
                    help="ArduPilot semantics: current (as the reference SITL logs, default) or "
                         "paper (the paper's ArduPilot 4.1/4.2)")
     f.add_argument("--faults", metavar="paper|FILE",
@@ -324,6 +339,7 @@ def run(args: argparse.Namespace) -> int:
         mission, schedule, params, seed, profile = _from_manifest(args)
         changes = []
     else:
+        _take_defaults(args)
         params = _load_params(args)
         mission = _load_mission(args)
         profile = _check_profile(args.profile)
