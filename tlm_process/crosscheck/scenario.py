@@ -19,7 +19,6 @@ Faults are moved to tlm's time line by keeping their offset from arming.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -365,11 +364,12 @@ def _read_sidecar(path: Path, explicit: bool) -> dict[str, Any] | None:
         if explicit:
             raise ScenarioError(f"--sidecar {path}: no such file")
         return None
+    from tlm_sim.flightlog.sidecar import load_sidecar_json
+
     try:
-        doc = json.loads(path.read_bytes().decode("utf-8"))
-    except (ValueError, RecursionError) as exc:  # JSON, UTF-8, nesting
-        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ScenarioError(f"{path} is not a sidecar JSON ({why})") from None
+        doc = load_sidecar_json(path)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
     if not isinstance(doc, dict):
         raise ScenarioError(f"{path} is not a sidecar JSON (not an object)")
     if explicit and "mission" not in doc:

@@ -25,7 +25,7 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["FAULTS_JSON", "SidecarWarning", "fault_sidecar", "log_faults",
+__all__ = ["FAULTS_JSON", "SidecarWarning", "fault_sidecar", "load_sidecar_json", "log_faults",
            "read_sidecar_faults"]
 
 #: The fault-records file ``tlm fly`` writes beside its ``flight.bin``.
@@ -46,6 +46,22 @@ def fault_sidecar(path: str | os.PathLike) -> Path | None:
     return None
 
 
+def load_sidecar_json(path: str | os.PathLike, what: str = "sidecar") -> Any:
+    """The JSON document of sidecar ``path``.
+
+    Raises:
+        ValueError: ``PATH is not a WHAT JSON (why)``, one line: not UTF-8, not JSON, or
+            nested past Python's recursion limit.
+        OSError: the file cannot be read.
+    """
+    p = Path(path)
+    try:
+        return json.loads(p.read_bytes().decode("utf-8"))
+    except (ValueError, RecursionError) as exc:  # JSON, UTF-8 (ValueErrors) or nesting
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"{p} is not a {what} JSON ({why})") from None
+
+
 def read_sidecar_faults(sidecar: str | os.PathLike) -> list[dict[str, Any]]:
     """The fault list of a sidecar (``{"faults": [...]}``, or a bare list), as dicts.
 
@@ -55,11 +71,7 @@ def read_sidecar_faults(sidecar: str | os.PathLike) -> list[dict[str, Any]]:
         OSError: the file cannot be read.
     """
     p = Path(sidecar)
-    try:
-        doc = json.loads(p.read_bytes().decode("utf-8"))
-    except (ValueError, RecursionError) as exc:  # JSON, UTF-8 (ValueErrors) or nesting
-        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"{p} is not a fault sidecar JSON ({why})") from None
+    doc = load_sidecar_json(p, "fault sidecar")
     faults = doc.get("faults") if isinstance(doc, Mapping) else doc
     if faults is None:
         return []
