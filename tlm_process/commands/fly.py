@@ -343,9 +343,10 @@ def run(args: argparse.Namespace) -> int:
         params = _load_params(args)
         mission = _load_mission(args)
         profile = _check_profile(args.profile)
-        changes = _parse_changes(args.set or [], float(math.floor(max_duration_s(
-            mission, profile_params(profile, params)))))
-        schedule = _load_schedule(args, mission, profile_params(profile, params))
+        flown = profile_params(profile, params)  # what sizes the flight
+        changes = _parse_changes(args.set or [],
+                                 float(math.floor(max_duration_s(mission, flown))))
+        schedule = _load_schedule(args, mission, flown)
         seed = args.seed
     out = prepare_out(args.out, "fly", args.overwrite,
                       inputs=[args.mission_file, args.params, args.faults, args.from_manifest])
