@@ -49,8 +49,9 @@ EXECUTORS: tuple[str, ...] = ("auto", "process", "thread")
 AUTO_THREADS_MAX = 4
 #: How long closing the client of a lost Dask scheduler may take [s].
 DASK_CLOSE_TIMEOUT_S = 2.0
-#: The logger quieted while a Dask client is open (it logs its lost connection as an error).
-QUIET_LOGGER = "distributed.client"
+#: The loggers quieted while a Dask client is open: the client logs its lost connection as
+#: an error, its batched stream the closed connection with a traceback (seen once in a test).
+QUIET_LOGGERS = ("distributed.client", "distributed.batched")
 
 
 #: How often a worker process checks that the process that started it is alive [s].
@@ -263,8 +264,9 @@ def _open_dask(scheduler: str | None, dask_local: int | None,
         raise GenerateError(f"cannot reach {where}: {exc}") from None
     # a lost scheduler is reported by generate in one line; the client's own log of its
     # failed reconnection would come first, on stderr
-    log_levels = {QUIET_LOGGER: logging.getLogger(QUIET_LOGGER).level}
-    logging.getLogger(QUIET_LOGGER).setLevel(logging.CRITICAL)
+    log_levels = {name: logging.getLogger(name).level for name in QUIET_LOGGERS}
+    for name in QUIET_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     info = client.scheduler_info()
     workers = info.get("workers", {})
     slots = sum(int(w.get("nthreads", 1)) for w in workers.values()) or 1
