@@ -305,6 +305,10 @@ def _read_bin(path: Path) -> list[Flight]:
     _require_gps(tables, str(path))
     home = _home((doc.get("sitl") or {}).get("home")) if isinstance(doc, Mapping) else None
     meta = {k: doc.get(k) for k in ("scenario", "seed")} if isinstance(doc, Mapping) else {}
+    # where the fault labels came from: the sidecar, the log's own fault records, or None
+    # when neither holds any (taken as a normal flight; tlm evaluate --test-on asks first)
+    meta["labels_source"] = str(sidecar) if sidecar is not None else (
+        "log" if doc["faults"] else None)
     return [Flight(path.stem, str(path), "bin", tables, parse_records(doc, source), home,
                    meta)]
 
