@@ -311,6 +311,10 @@ def test_evaluate_cross_validation_refits_on_every_flight_for_transfer(
     (["{ds}", "--models", "J48,C4.5"], "unknown model 'C4.5'"),
     (["{ds}", "--test-frac", "0.3"], "--split random only"),
     (["{ds}", "--test-on", "{missing}"], "no such file or folder"),
+    (["{ds}", "--drop-features", "RATE.Nope"], "unknown feature 'RATE.Nope'"),
+    (["{ds}", "--drop-features", "BARO.Alt"], "no table BARO"),
+    (["{ds}", "--drop-features", "AOutSlew"], "'AOutSlew' is not TABLE.COL"),
+    (["{ds}", "--assume-normal"], "--assume-normal applies to --test-on"),
 ])
 def test_evaluate_user_errors_are_one_line_exit_2(tiny_ds, tmp_path, capsys, args, message):
     (tmp_path / "empty").mkdir()
@@ -324,9 +328,104 @@ def test_evaluate_user_errors_are_one_line_exit_2(tiny_ds, tmp_path, capsys, arg
     assert len(errors) == 1 and message in errors[0]
 
 
+@pytest.fixture(scope="session")
+def unlabelled_bin(tmp_path_factory):
+    """A normal tlm flight (mission 1, seed 0) as a lone ``normal.bin``: no sidecar, no
+    faults.json, no fault MSG lines or SIM_* parameter changes in it."""
+    from tests.conftest import flown
+    from tlm_sim.flightlog.binwriter import write_bin
+
+    return write_bin(flown(1, 0), tmp_path_factory.mktemp("bare") / "normal.bin")
+
+
+def test_evaluate_refuses_a_transfer_log_without_fault_labels(tiny_ds, unlabelled_bin,
+                                                              tmp_path, capsys):
+    rc, out, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "ZeroR",
+                        "--test-on", unlabelled_bin, "--quiet")
+    assert rc == 2 and out == ""
+    errors = [line for line in err.splitlines() if line.startswith("tlm: error: ")]
+    assert len(errors) == 1 and errors == err.splitlines()
+    assert f"{unlabelled_bin}: no fault labels found (no sidecar normal.json" in errors[0]
+    assert "faults.json" in errors[0] and "--assume-normal" in errors[0]
+    # --assume-normal: a normal flight, as before, and said so in R.json and the table
+    rj = tmp_path / "r.json"
+    rc, out, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "ZeroR",
+                        "--test-on", unlabelled_bin, "--assume-normal", "--json", rj)
+    assert rc == 0, err
+    assert "without fault labels taken as normal flights (--assume-normal)" in err
+    assert "logs without labels taken as normal" in out
+    r = json.loads(rj.read_text())["GPS"]["ZeroR"]
+    assert r["assume_normal"] is True
+    assert r["transfer"]["n"] > 100 and r["transfer"]["accuracy"] == 1.0  # all Normal
+
+
+@pytest.mark.parametrize("sidecar", ["normal.json", "faults.json"])
+def test_evaluate_a_log_labelled_without_faults_is_not_refused(tiny_ds, unlabelled_bin,
+                                                               tmp_path, capsys, sidecar):
+    log = tmp_path / "normal.bin"
+    log.write_bytes(unlabelled_bin.read_bytes())
+    (tmp_path / sidecar).write_text('{"faults": []}')
+    rj = tmp_path / "r.json"
+    rc, _, err = _run(capsys, tiny_ds, "--table", "GPS", "--models", "ZeroR", "--quiet",
+                      "--test-on", log, "--json", rj)
+    assert rc == 0, err
+    assert json.loads(rj.read_text())["GPS"]["ZeroR"]["assume_normal"] is False
+
+
+def test_evaluate_drop_features_for_a_log_that_lacks_one(tiny_ds, tiny_flight_folder,
+                                                         tmp_path, capsys):
+    """A transfer log without RATE.AOutSlew (as Copter 4.0/4.1 logs): refused with the
+    --drop-features that avoids it, which then drops it from training and transfer."""
+    old = tmp_path / "old_fw"  # a CSV-kind folder: tables and faults.json
+    old.mkdir()
+    for name in ("GPS", "RATE", "POS", "EV"):
+        df = pd.read_parquet(tiny_flight_folder / f"{name}.parquet")
+        if name == "RATE":
+            df = df.drop(columns="AOutSlew")
+        df.to_parquet(old / f"{name}.parquet")
+    meta = json.loads((tiny_flight_folder / "meta.json").read_text())
+    (old / "faults.json").write_text(json.dumps({"faults": meta["faults"]}))
+    rc, _, err = _run(capsys, tiny_ds, "--table", "RATE", "--models", "ZeroR", "--quiet",
+                      "--test-on", old)
+    assert rc == 2
+    assert err.splitlines() == [
+        f"tlm: error: {old}: RATE lacks the data set's feature(s) AOutSlew (older firmware "
+        "may not log it): add --drop-features RATE.AOutSlew"]
+    rj = tmp_path / "r.json"
+    rc, out, err = _run(capsys, tiny_ds, "--table", "RATE", "--models", "ZeroR,J48",
+                        "--quiet", "--test-on", old, "--drop-features", "rate.AOutSlew",
+                        "--json", rj, "--out", tmp_path / "o")
+    assert rc == 0, err
+    assert "dropped RATE.AOutSlew" in out
+    res = json.loads(rj.read_text())["RATE"]
+    assert res["J48"]["dropped_features"] == ["RATE.AOutSlew"]
+    m3 = pd.read_parquet(tiny_ds / "RATE.parquet").query("flight == 'm3'")
+    assert res["J48"]["transfer"]["n"] == len(m3)  # the same flight
+    shift = pd.read_csv(tmp_path / "o" / "feature_shift.csv")
+    assert "AOutSlew" not in set(shift["feature"]) and "AOut" in set(shift["feature"])
+
+
+def test_drop_features_leaves_the_data_set_consistent(tiny_ds):
+    from tlm_process.evaluate.data import drop_features, load_dataset, parse_drop_features
+
+    ds = load_dataset(tiny_ds, ["GPS", "RATE"])
+    drop = parse_drop_features(["RATE.AOutSlew,RATE.AOut", "IMU.AccX", "RATE.AOut"], ds)
+    assert drop == {"RATE": ["AOutSlew", "AOut"], "IMU": ["AccX"]}  # IMU: known, not loaded
+    d = drop_features(ds, drop)
+    assert d.dropped == {"RATE": ["AOutSlew", "AOut"]}
+    assert d.features["GPS"] == ds.features["GPS"]
+    assert d.features["RATE"] == [c for c in ds.features["RATE"] if c not in drop["RATE"]]
+    assert not {"AOutSlew", "AOut"} & set(d.tables["RATE"].columns)
+    assert list(d.scaler.ranges["RATE"]) == d.features["RATE"]
+    assert "AOut" in ds.scaler.ranges["RATE"] and "AOut" in ds.tables["RATE"]  # a copy
+    with pytest.raises(EvaluateError, match="leaves table GPS without features"):
+        drop_features(ds, {"GPS": list(ds.features["GPS"])})
+
+
 def test_evaluate_help_lists_models_and_splits(capsys):
     with pytest.raises(SystemExit) as e:
         main(["evaluate", "--help"])
     assert e.value.code == 0
     out = capsys.readouterr().out
     assert "WindowHGB" in out and "--split" in out and "--test-on" in out
+    assert "--assume-normal" in out and "--drop-features" in out

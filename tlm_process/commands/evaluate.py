@@ -61,7 +61,13 @@ transfer:
                    the reference SITL logs, tlm fly folders, ...), processed with the data
                    set's options and scaled with its scaler; adds a 'transfer' entry per model
                    and, with --out, DIR/feature_shift.csv (per feature and class: KS statistic
-                   and percentiles of data set vs transfer rows)
+                   and percentiles of data set vs transfer rows). A log without fault labels
+                   (no sidecar LOG.json, no faults.json, no fault records in the log) is
+                   refused: a faulty flight would count as normal
+  --assume-normal  the logs without fault labels are normal flights (recorded in R.json)
+  --drop-features TABLE.COL[,TABLE.COL...]
+                   leave these features out of training and the transfer logs, e.g.
+                   RATE.AOutSlew, which Copter 4.0/4.1 logs lack
 
 training rows:
   --train-hz HZ    every model is fitted on each training flight's rows thinned to about
@@ -154,6 +160,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--test-on", nargs="+", action="extend", default=[], metavar="LOG",
                    help="transfer test: also test on these logs (.bin + sidecar, tlm fly "
                         "folders, ...)")
+    p.add_argument("--assume-normal", action="store_true",
+                   help="--test-on logs without fault labels are normal flights (default: "
+                        "refused)")
+    p.add_argument("--drop-features", action="append", default=[],
+                   metavar="TABLE.COL[,TABLE.COL...]",
+                   help="leave these features out of training and the transfer logs (e.g. "
+                        "RATE.AOutSlew, which older firmware does not log)")
     p.add_argument("--out", type=folder, metavar="DIR",
                    help="write confusion-matrix PNGs, the CNN's training curves and report.txt "
                         "here")
@@ -223,6 +236,8 @@ def _check(args: argparse.Namespace, models: list[str]) -> None:
                             "uses the data set's test flights or --folds)")
     if args.split == "random" and args.test_frac is not None and args.folds is not None:
         raise EvaluateError("--test-frac and --folds exclude each other")
+    if args.assume_normal and not args.test_on:
+        raise EvaluateError("--assume-normal applies to --test-on logs only")
     if args.json:
         try:
             check_writable_file(args.json, "--json")
@@ -245,7 +260,12 @@ def _run(args: argparse.Namespace) -> int:
     _check(args, models)
     import numpy as np
 
-    from tlm_process.evaluate.data import load_dataset, load_transfer
+    from tlm_process.evaluate.data import (
+        drop_features,
+        load_dataset,
+        load_transfer,
+        parse_drop_features,
+    )
     from tlm_process.evaluate.runner import evaluate
 
     t_start = time.perf_counter()
@@ -258,11 +278,14 @@ def _run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out, "evaluate", args.overwrite,
                       inputs=[args.dataset, *args.test_on]) if args.out else None
     ds = load_dataset(args.dataset, tables)
+    if args.drop_features:
+        ds = drop_features(ds, parse_drop_features(args.drop_features, ds))
     transfer = None
     if args.test_on:
         say(f"reading {len(args.test_on)} transfer log(s) with the data set's options (RC "
             f"labels: {ds.options.get('rc_label') or 'window'}) and scaler")
-        transfer = load_transfer(args.test_on, ds, tables)
+        transfer = load_transfer(args.test_on, ds, tables, assume_normal=args.assume_normal,
+                                 progress=say)
     np.seterr(all="ignore")
     results = evaluate(ds, tables=tables, models=models, split=args.split, seed=args.seed,
                        folds=args.folds, test_frac=args.test_frac, transfer=transfer,
@@ -270,6 +293,10 @@ def _run(args: argparse.Namespace) -> int:
                        cnn_epochs=args.cnn_epochs, train_hz=args.train_hz,
                        normal_hz=args.normal_hz, max_rows=args.max_rows,
                        bar=False if quiet else None, booster=args.booster)
+    if transfer is not None:
+        for res in results.values():
+            for r in res.values():
+                r["assume_normal"] = bool(args.assume_normal)
     lines: list[str] = []
     for t, res in results.items():
         lines += _table_lines(t, res, args, details_of=_shown(res, args.details,
@@ -315,7 +342,10 @@ def _table_lines(t: str, res: dict, args: argparse.Namespace, details_of: list[s
         res, f"{t}: {first['n_test']:,} test rows, {first['n_train'] // first['folds']:,}"
              f" training rows per fold ({how}, seed {args.seed})"
              + (f"; transfer: {first['transfer']['n']:,} rows of "
-                f"{len(args.test_on)} log(s)" if "transfer" in first else ""),
+                f"{len(args.test_on)} log(s)" if "transfer" in first else "")
+             + ("; logs without labels taken as normal" if args.assume_normal else "")
+             + (f"; dropped {', '.join(first['dropped_features'])}"
+                if first.get("dropped_features") else ""),
         transfer="transfer" in first)]
     lines += _event_lines(t, res, "transfer" in first)
     for m in details_of:

@@ -151,7 +151,9 @@ def evaluate(ds: EvalDataset, *, tables: Sequence[str] | None = None,
     ``transfer_predict_seconds`` and, after cross-validation, ``transfer_fit_seconds`` of the
     model refitted on every flight),
     with cross-validation ``per_fold`` (accuracy and macro-F1 of each fold), for the CNN
-    ``history``, and with ``transfer``, ``transfer``: the metrics on the transfer rows),
+    ``history``, where :func:`.data.drop_features` took features out of the table
+    ``dropped_features`` (``TABLE.COL``), and with ``transfer``, ``transfer``: the metrics
+    on the transfer rows),
     and the event metrics of :func:`.events.detection_summary` (``detection`` per fault
     class, ``false_alarms_per_hour``, ...) of every fold's test rows pooled and, under
     ``transfer``, of the transfer rows.
@@ -303,6 +305,8 @@ def _evaluate(ds: EvalDataset, *, tables: Sequence[str] | None, models: Sequence
                 r, cm, last = side.pop(name, None) or _run_model(tab, name, make_of(name),
                                                                  prog.say)
                 r["split"] = split
+                if ds.dropped.get(t):
+                    r["dropped_features"] = [f"{t}.{c}" for c in ds.dropped[t]]
                 if name in WINDOW_MODELS:
                     r["booster"] = booster
                 results[t][name] = r
