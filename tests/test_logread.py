@@ -1,0 +1,270 @@
+"""tlm_process.logread: real ArduPilot logs (Copter 3.x TimeMS, numbered instances, text
+logs, logs that start at arming) read into normalised tables, and the arming rule."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tests.conftest import REPO, reference_path
+from tlm_process.logread import (
+    LogReadError,
+    arming_time_us,
+    disarm_time_us,
+    is_text_log,
+    motor_idle_pwm,
+    read_log_tables,
+)
+
+REAL = REPO.parent / "shared" / "reference" / "real"
+REAL_LOGS = ("log171.bin", "backend_log_80k.bin", "nan.log", "mechanical_fail.log")
+
+
+def real_path(name: str) -> Path:
+    """Path of a real log; skips the test when the reference logs are absent."""
+    p = REAL / name
+    if not p.exists():
+        pytest.skip(f"real reference logs not found at {REAL}")
+    return p
+
+
+# --------------------------------------------------------------------------- a text log -----
+TEXT_LOG = """\
+ArduCopter V3.1 (test)
+FMT, 128, 89, FMT, BBnNZ, Type,Length,Name,Format
+FMT, 129, 23, PARM, Nf, Name,Value
+FMT, 131, 31, IMU, Iffffff, TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ
+FMT, 135, 31, IMU2, Iffffff, TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ
+FMT, 136, 31, IMU3, Iffffff, TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ
+FMT, 13, 4, EV, B, Id
+FMT, 3, 6, MODE, Mh, Mode,ThrCrs
+PARM, RC3_MIN, 1000
+PARM, RC3_MAX, 2000
+MODE, Stabilize, 0
+IMU, 1000, 0.1, 0, 0, 0, 0, -9.8
+IMU2, 1000, 0.2, 0, 0, 0, 0, -9.8
+IMU3, 1000, 0.3, 0, 0, 0, 0, -9.8
+EV, 10
+IMU, 1020, NaN, 0, 0, 0, 0, -9.8
+IMU3, 1020, 0.3, 0, 0, 0, 0, -9.8
+IMU2, 1020, 0.2, 0, 0, 0, 0, -9.8
+EV, 11
+IMU, 1040, 0.1, 0, 0, 0, 0, -9.8
+"""
+
+
+@pytest.fixture
+def text_log(tmp_path: Path) -> Path:
+    p = tmp_path / "old.log"
+    p.write_text(TEXT_LOG.replace("\n", "\r\n"), newline="")
+    return p
+
+
+def test_text_log_timems_to_timeus(text_log: Path) -> None:
+    assert is_text_log(text_log)
+    lt = read_log_tables(text_log)
+    assert lt.kind == "text"
+    imu = lt.tables["IMU"]
+    assert imu["TimeUS"].dtype == np.int64
+    assert (imu["TimeUS"] == imu["TimeMS"] * 1000).all()  # TimeMS kept beside it
+    assert list(imu.columns[:3]) == ["TimeUS", "I", "TimeMS"]
+    assert any("TimeMS x 1000" in n for n in lt.notes)
+    assert lt.params == {"RC3_MIN": 1000.0, "RC3_MAX": 2000.0}
+    # a mode written as a name becomes its number
+    assert lt.tables["MODE"]["Mode"].tolist() == [0]
+    # a message without a time column: the time of the stamped message before it
+    ev = lt.tables["EV"]
+    assert ev["TimeUS"].tolist() == [1_000_000, 1_020_000]
+    assert any("log order" in n and "EV" in n for n in lt.notes)
+    assert any("not messages" in n for n in lt.notes)  # the firmware line
+
+
+def test_imu2_imu3_folded_into_imu_instances(text_log: Path) -> None:
+    lt = read_log_tables(text_log)
+    assert "IMU2" not in lt.tables and "IMU3" not in lt.tables
+    imu = lt.tables["IMU"]
+    assert imu.groupby("I").size().to_dict() == {0: 3, 1: 2, 2: 2}
+    # GyrX tells the instance; sorted by time, instance order at equal times
+    assert imu["TimeUS"].is_monotonic_increasing
+    first = imu[imu.TimeUS == 1_000_000]
+    assert first["I"].tolist() == [0, 1, 2]
+    np.testing.assert_allclose(first["GyrX"], [0.1, 0.2, 0.3], rtol=1e-6)
+    np.testing.assert_allclose(imu.loc[imu.I == 2, "GyrX"], 0.3, rtol=1e-6)
+    assert imu["GyrX"].isna().sum() == 1  # NaN kept
+    assert any("IMU2, IMU3 folded into IMU" in n for n in lt.notes)
+    # names: IMU brings its instances; other tables left out
+    only = read_log_tables(text_log, ["IMU", "EV"])
+    assert sorted(only.tables) == ["EV", "IMU"]
+    assert len(only.tables["IMU"]) == 7
+    assert only.tables["EV"]["TimeUS"].tolist() == [1_000_000, 1_020_000]
+    assert only.params == lt.params  # the parameters come along anyway
+    assert arming_time_us(lt.tables) == (1_000_000, "EV 10")
+    assert disarm_time_us(lt.tables) == (1_020_000, "EV 11")
+
+
+def test_not_a_log(tmp_path: Path) -> None:
+    p = tmp_path / "x.log"
+    p.write_text("hello\n")
+    with pytest.raises(LogReadError):
+        read_log_tables(p)
+    with pytest.raises(FileNotFoundError):
+        read_log_tables(tmp_path / "missing.bin")
+
+
+# --------------------------------------------------------------------------- arming rules ---
+def _rcou(times_s: list[float], c1: list[int], prefix: str = "C") -> pd.DataFrame:
+    n = len(times_s)
+    df = pd.DataFrame({"TimeUS": (np.asarray(times_s) * 1e6).astype(np.int64)})
+    df[f"{prefix}1"] = c1
+    for k in (2, 3, 4):
+        df[f"{prefix}{k}"] = [1000] * n
+    df[f"{prefix}5"] = [1900] * n  # not a motor on a quad
+    return df
+
+
+def test_arming_from_ev() -> None:
+    tables = {
+        "EV": pd.DataFrame({"TimeUS": [5, 10, 20, 30, 40], "Id": [62, 10, 11, 10, 11]}),
+        "ARM": pd.DataFrame({"TimeUS": [3], "ArmState": [1]}),
+    }
+    assert arming_time_us(tables) == (10, "EV 10")
+    assert disarm_time_us(tables) == (20, "EV 11")
+
+
+def test_arming_from_arm_message() -> None:
+    tables = {
+        "EV": pd.DataFrame({"TimeUS": [5], "Id": [62]}),
+        "ARM": pd.DataFrame({"TimeUS": [12, 50], "ArmState": [1, 0]}),
+        "GPS": pd.DataFrame({"TimeUS": [0, 100]}),
+    }
+    assert arming_time_us(tables) == (12, "ARM ArmState 1")
+    assert disarm_time_us(tables) == (50, "ARM ArmState 0")
+    # no disarm: the log's end
+    tables["ARM"] = tables["ARM"].iloc[:1]
+    assert disarm_time_us(tables) == (100, "log end")
+
+
+def test_arming_from_rcou_rise() -> None:
+    params = {"MOT_PWM_MIN": 1000.0, "MOT_PWM_MAX": 2000.0, "MOT_SPIN_ARM": 0.1}
+    idle, thr = motor_idle_pwm(params)
+    assert (idle, thr) == (1100.0, 1050.0)
+    # a logged-from-boot log without EV/ARM: disarmed at 1000, armed idle 1100 at 20 s
+    tables = {"RCOU": _rcou([0, 10, 20, 30], [1000, 1000, 1100, 1300]),
+              "GPS": pd.DataFrame({"TimeUS": [0, 50_000_000]})}
+    t, src = arming_time_us(tables, params)
+    assert t == 20_000_000 and src.startswith("RCOU")
+    assert disarm_time_us(tables, params) == (50_000_000, "log end")
+    # a rise within the arming delay (3 s) of the log's start: the log started at arming
+    tables["RCOU"] = _rcou([0, 1, 2.5, 3], [1000, 1000, 1100, 1300])
+    t, src = arming_time_us(tables, params)
+    assert t == 0 and src.startswith("log start")
+    # the fifth channel (not a motor of a quad) does not arm it
+    tables["RCOU"] = _rcou([0, 1], [1000, 1000])
+    assert arming_time_us(tables, params) == (None, "never armed")
+    assert disarm_time_us(tables, params) == (None, "never armed")
+    # a hexa's fifth channel is a motor
+    assert arming_time_us(tables, {**params, "FRAME_CLASS": 2})[0] == 0
+
+
+def test_arming_at_log_start_when_rcou_starts_armed() -> None:
+    # LOG_DISARMED 0: the log starts at arming, the motors already at idle in the first row;
+    # 3.x names: RC3_MIN/MAX range, MOT_SPIN_ARMED on the 0-1000 scale, Chan columns
+    params = {"RC3_MIN": 1022.0, "RC3_MAX": 1997.0, "MOT_SPIN_ARMED": 100.0}
+    idle, thr = motor_idle_pwm(params)
+    assert idle == pytest.approx(1022 + 97.5) and thr == pytest.approx(1022 + 48.75)
+    tables = {"RCOU": _rcou([1.0, 1.1], [1122, 1300], prefix="Chan"),
+              "IMU": pd.DataFrame({"TimeUS": [900_000, 2_000_000]})}
+    t, src = arming_time_us(tables, params)
+    assert t == 900_000 and src.startswith("log start")
+    # no parameters at all: 1000-2000 us and MOT_SPIN_ARM 0.1
+    assert motor_idle_pwm({}) == (1100.0, 1050.0)
+    assert arming_time_us({}, {}) == (None, "never armed")
+
+
+# --------------------------------------------------------------------------- real logs ------
+@pytest.mark.parametrize("name", REAL_LOGS)
+def test_every_real_log_reads(name: str) -> None:
+    lt = read_log_tables(real_path(name))
+    assert lt.tables and lt.notes
+    for n, df in lt.tables.items():
+        assert len(df), n
+        assert df["TimeUS"].dtype == np.int64, n
+        assert df["TimeUS"].is_monotonic_increasing, n
+        assert n not in ("IMU2", "IMU3", "BAR2", "BAR3", "MAG2", "MAG3", "GPS2", "GPA2")
+    if "IMU" in lt.tables:
+        assert "I" in lt.tables["IMU"].columns
+    arming_time_us(lt.tables, lt.params)
+    disarm_time_us(lt.tables, lt.params)
+
+
+def test_log171_copter33() -> None:
+    lt = read_log_tables(real_path("log171.bin"))
+    imu = lt.tables["IMU"]
+    assert imu.groupby("I").size().to_dict() == {0: 11916, 1: 11916, 2: 11916}
+    assert set(lt.tables["BARO"]["I"]) == {0, 1} and set(lt.tables["MAG"]["I"]) == {0, 1, 2}
+    assert (imu["TimeUS"] == imu["TimeMS"] * 1000).all()
+    # GPS's TimeMS is the GPS time of week in 3.3: the boot time is T
+    gps = lt.tables["GPS"]
+    assert (gps["TimeUS"] == gps["T"] * 1000).all()
+    t, src = arming_time_us(lt.tables, lt.params)
+    assert src == "EV 10"
+    # the motors rise to the armed idle (MOT_SPIN_ARMED 50: 1049 us) 2 s after EV 10
+    rcou = lt.tables["RCOU"]
+    rise = int(rcou.loc[(rcou[["Ch1", "Ch2", "Ch3", "Ch4"]] > 1000).any(axis=1),
+                        "TimeUS"].iloc[0])
+    assert 0 <= rise - t <= 3_000_000
+    # without its EV table, the RCOU rule finds that rise
+    tables = {n: df for n, df in lt.tables.items() if n != "EV"}
+    t2, src2 = arming_time_us(tables, lt.params)
+    assert t2 == rise and src2.startswith("RCOU")
+    assert disarm_time_us(lt.tables, lt.params) == (int(gps["TimeUS"].iloc[-1]), "log end")
+
+
+def test_text_logs_copter31() -> None:
+    nan = read_log_tables(real_path("nan.log"))
+    assert set(nan.tables["IMU"]["I"]) == {0, 1}
+    assert arming_time_us(nan.tables, nan.params) == (95_890_000, "EV 10")
+    assert disarm_time_us(nan.tables, nan.params) == (100_080_000, "EV 11")
+    mech = read_log_tables(real_path("mechanical_fail.log"))
+    assert "IMU" not in mech.tables
+    assert arming_time_us(mech.tables, mech.params)[1] == "EV 10"
+
+
+def test_sitl_log_arming_equals_ev10() -> None:
+    from tlm_sim.flightlog import read_bin
+
+    path = reference_path("normal_s11.bin")
+    ev = read_bin(path, ["EV"])["EV"]
+    t_ev = int(ev.loc[ev.Id == 10, "TimeUS"].iloc[0])
+    lt = read_log_tables(path)
+    assert arming_time_us(lt.tables, lt.params) == (t_ev, "EV 10")
+    # the ARM message says the same
+    no_ev = {n: df for n, df in lt.tables.items() if n != "EV"}
+    assert arming_time_us(no_ev, lt.params) == (t_ev, "ARM ArmState 1")
+    # a 4.x log keeps its TimeUS and instance column untouched
+    imu = lt.tables["IMU"]
+    raw = read_bin(path, ["IMU"])["IMU"]
+    assert len(imu) == len(raw) and set(imu["I"]) == {0, 1}
+    assert imu["TimeUS"].is_monotonic_increasing
+
+
+def test_sitl_log_cut_at_arming() -> None:
+    """A log that starts at arming (LOG_DISARMED 0), made by cutting a SITL log's tables
+    just after its EV 10: its motors spin up 2.2 s later, within the arming delay."""
+    lt = read_log_tables(reference_path("normal_s11.bin"))
+    t_ev, _ = arming_time_us(lt.tables, lt.params)
+    cut = {n: df[df.TimeUS > t_ev].reset_index(drop=True) for n, df in lt.tables.items()}
+    cut = {n: df for n, df in cut.items() if len(df)}
+    t, src = arming_time_us(cut, lt.params)
+    assert src.startswith("log start")
+    assert t == min(int(df.TimeUS.iloc[0]) for df in cut.values())
+    assert 0 < t - t_ev < 200_000
+    # cut later, at the motors' spin-up: the first RCOU row is already armed
+    late = {n: df[df.TimeUS > t_ev + 2_300_000] for n, df in lt.tables.items()}
+    t, src = arming_time_us(late, lt.params)
+    assert src.startswith("log start (the first RCOU row")
+    d, dsrc = disarm_time_us(cut, lt.params)
+    assert dsrc == "EV 11" and d == disarm_time_us(lt.tables, lt.params)[0]
