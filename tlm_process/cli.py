@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from types import ModuleType
@@ -54,8 +55,8 @@ def _show_compile_notices() -> None:
         lg.setLevel(logging.INFO)
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``tlm`` console script."""
+def _main_body(argv: Sequence[str] | None) -> int:
+    """:func:`main` but for a closed stdout."""
     ap = build_parser()
     args = ap.parse_args(argv)  # before importing tlm_sim (seconds): --help stays instant
     from tlm_process.binlog import LogError
@@ -86,6 +87,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("tlm: interrupted", file=sys.stderr)
         return 130
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``tlm`` console script.
+
+    When stdout's reader goes away (``tlm params | head -5``, a closed pager), the command
+    stops quietly: no traceback, stdout is pointed at /dev/null so that the flush at exit
+    cannot fail again, and the exit status is 141, what a shell reports for a program ended by
+    SIGPIPE (128 + 13), so a pipeline under ``set -o pipefail`` sees it as cut short.
+    SIGPIPE itself keeps Python's disposition (ignored): a Dask worker's lost socket must stay
+    an exception, not end the process.
+    """
+    try:
+        try:
+            return _main_body(argv)
+        finally:  # a closed pipe surfaces here (and for --help), not in the flush at exit
+            sys.stdout.flush()
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return 141
 
 
 if __name__ == "__main__":
