@@ -246,11 +246,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                      help="choose lambda = G / alpha, alpha measured on pilot flights, so about "
                           "a share G of the rows is in fault windows")
     sc.add_argument("--faults", metavar="paper|all|new|single|TYPE,TYPE,...",
-                    help="which fault types are drawn: paper (default: the paper's four, "
-                         "labels 1-4), all (every type: single faults, the paper sequence and "
-                         "sequences of new faults), new (labels 5-13), single (single faults "
-                         "of every type), or a list of types (single faults and sequences of "
-                         "them); --kinds overrides the mix it sets")
+                    help="which fault types are drawn: all (the default: every type, "
+                         "labels 1-13: single faults, the paper sequence and sequences of new "
+                         "faults), paper (the paper's four, labels 1-4), new (labels 5-13), "
+                         "single (single faults of every type), or a list of types (single "
+                         "faults and sequences of them); --kinds overrides the mix it sets")
     sc.add_argument("--kinds", metavar="none=A,single=B,paper=C,sequence=D",
                     help="shares of no-fault, single-fault, paper-style (all four faults) "
                          "and sequence (several faults of sequence_types) flights")
