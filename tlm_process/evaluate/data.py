@@ -19,7 +19,7 @@ log as a normal flight would report a detector that never fires as perfect. A lo
 labels say "no faults" (a sidecar with an empty list) is labelled.
 
 :func:`drop_features` takes features out of a data set (``tlm evaluate --drop-features``),
-e.g. those an older firmware's logs lack (``RATE.AOutSlew`` before Copter 4.2), so that a
+e.g. those an older firmware's logs lack (``RATE.AOutSlew``: Copter 4.0/4.1), so that a
 model trained on it can be tested on them.
 """
 
