@@ -268,3 +268,91 @@ def test_sitl_log_cut_at_arming() -> None:
     assert src.startswith("log start (the first RCOU row")
     d, dsrc = disarm_time_us(cut, lt.params)
     assert dsrc == "EV 11" and d == disarm_time_us(lt.tables, lt.params)[0]
+
+
+# --------------------------------------------------------------------------- tlm info/convert
+def _cli(argv: list[str], capsys) -> tuple[int, str, str]:  # noqa: ANN001 - pytest fixture
+    from tlm_process.cli import main
+
+    rc = main(argv)
+    out, err = capsys.readouterr()
+    assert "Traceback" not in out + err
+    return rc, out, err
+
+
+@pytest.mark.parametrize("name, armed", [
+    ("log171.bin", "72.61 - 254.07 s (181.5 s)  [armed: EV 10; disarmed: log end]"),
+    ("nan.log", "95.89 - 100.08 s (4.2 s)  [armed: EV 10; disarmed: EV 11] (the first of 2"),
+    ("mechanical_fail.log", "66.94 - 177.08 s (110.1 s)  [armed: EV 10; disarmed: EV 11]"),
+    ("backend_log_80k.bin", "- (never armed)"),
+])
+def test_info_on_real_logs(name: str, armed: str, tmp_path: Path, capsys) -> None:
+    import json
+
+    path = real_path(name)
+    rc, out, err = _cli(["info", str(path), "--json", str(tmp_path / "i.json")], capsys)
+    assert rc == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("armed"))
+    assert armed in line
+    info = json.loads((tmp_path / "i.json").read_text())
+    assert info["time_span_s"] is not None
+    if name != "backend_log_80k.bin":
+        assert info["normalised"]  # what was normalised is said
+        assert "IMU2" not in info["messages"]
+    # messages logged once or in a start-up burst have no rate (no "FMTU 19373.5 Hz")
+    for m in info["messages"].values():
+        assert m["rate_hz"] is None or m["rate_hz"] < 1000
+    if name == "log171.bin":
+        assert info["messages"]["IMU"]["instances"] == 3
+        assert info["messages"]["IMU"]["rate_hz"] == pytest.approx(49.1, abs=0.5)
+        assert info["messages"]["PARM"]["rate_hz"] is None
+        assert [m["name"] for m in info["modes"]] == ["LOITER", "LOITER", "ACRO"]
+    if name == "backend_log_80k.bin":
+        for n in ("FMTU", "MULT", "UNIT", "PARM"):
+            assert info["messages"][n]["rate_hz"] is None
+            assert info["messages"][n]["logged"] == "at start"
+        assert " 80000.0" not in out and "at start" in out
+
+
+def test_info_rates_of_a_sitl_log(tmp_path: Path, capsys) -> None:
+    import json
+
+    path = reference_path("normal_s11.bin")
+    rc, out, _ = _cli(["info", str(path), "--json", str(tmp_path / "i.json")], capsys)
+    assert rc == 0
+    info = json.loads((tmp_path / "i.json").read_text())
+    assert info["messages"]["IMU"]["rate_hz"] == pytest.approx(25.0, abs=0.5)
+    assert info["messages"]["GPS"]["rate_hz"] == pytest.approx(5.0, abs=0.2)
+    assert info["messages"]["VER"]["logged"] == "once"
+    assert info["messages"]["FMTU"]["rate_hz"] is None  # written as each type first appears
+    assert info["armed_source"] == "EV 10" and info["disarm_source"] == "EV 11"
+    assert "[armed: EV 10; disarmed: EV 11]" in out
+
+
+@pytest.mark.parametrize("name", REAL_LOGS)
+@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+def test_convert_real_logs(name: str, fmt: str, tmp_path: Path, capsys) -> None:
+    from tlm_sim.flightlog import FlightLog
+
+    path = real_path(name)
+    rc, out, err = _cli(["convert", str(path), "--out", str(tmp_path / "o"), "--format", fmt],
+                        capsys)
+    assert rc == 0, err
+    assert "converted" in out
+    back = FlightLog.read(tmp_path / "o")
+    lt = read_log_tables(path)
+    assert sorted(back.tables) == sorted(lt.tables)
+    for n, df in back.tables.items():
+        assert len(df) == len(lt.tables[n]), n
+        if "TimeUS" not in df.columns:  # a 4.x log's FMT, written as logged
+            continue
+        # a 4.x log is written in log order, read_log_tables sorts by time
+        assert (np.sort(df["TimeUS"].to_numpy())
+                == lt.tables[n]["TimeUS"].to_numpy()).all(), n
+
+
+def test_convert_old_log_to_text_is_refused(tmp_path: Path, capsys) -> None:
+    rc, _, err = _cli(["convert", str(real_path("nan.log")), "--out", str(tmp_path / "o"),
+                       "--format", "log"], capsys)
+    assert rc == 2 and "--format log" in err and "csv or parquet" in err
+    assert not (tmp_path / "o").exists()

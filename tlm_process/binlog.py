@@ -1,5 +1,10 @@
-"""ArduPilot DataFlash ``.bin`` logs: tables written out (``tlm convert``) and a summary (``tlm
+"""ArduPilot DataFlash logs: tables written out (``tlm convert``) and a summary (``tlm
 info``); the commands themselves are :mod:`tlm_process.commands.convert` and ``.info``.
+
+A 4.x ``.bin`` is streamed table by table. A DataFlash text ``.log`` or a ``.bin`` of older
+firmware (Copter 3.x: rows stamped ``TimeMS``, ``IMU2``/``IMU3`` messages) is read whole and
+normalised by :mod:`tlm_process.logread` (``TimeUS`` on every table, numbered instances folded
+into ``I``); ``--format log`` is refused for those.
 
 ``convert(IN.bin, DIR, csv|parquet|log)``: one file per message type
 (``DIR/GPS.csv``, ``DIR/IMU.parquet``, ... every message of that type, ArduPilot column names,
@@ -7,10 +12,12 @@ values as pymavlink and Mission Planner show them), or ``log``: Mission Planner'
 ``DIR/<stem>.log`` (the paper's "convert to text" step, §5.7). ``meta.json`` beside the tables
 holds the log's parameters, so ``FlightLog.read(DIR)`` reads the folder back.
 
-``log_info(LOG.bin)``: time span and armed time, firmware, every message type with its count,
-instances and rate, the flight modes, the parameters changed in flight, and the faults found
-(from SIM_* parameter changes, tlm's fault MSG lines, and a sidecar ``LOG.json`` or tlm fly's
-``faults.json`` if present), each fault once with every source that shows it.
+``log_info(LOG)``: time span and armed time (:func:`tlm_process.logread.arming_time_us`, with
+the rule that found it), firmware, every message type with its count, instances and rate (for
+messages logged regularly over at least 1 s), the flight modes, the parameters changed in
+flight, and the faults found (from SIM_* parameter changes, tlm's fault MSG lines, and a
+sidecar ``LOG.json`` or tlm fly's ``faults.json`` if present), each fault once with every
+source that shows it.
 """
 
 from __future__ import annotations
@@ -26,9 +33,10 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from tlm_sim.flightlog import BinLog, FlightLog
+    from tlm_sim.flightlog.schema import MessageSchema
 
-__all__ = ["CONVERT_FORMATS", "LogError", "check_types", "convert", "format_info", "log_info",
-           "open_log", "write_tables"]
+__all__ = ["CONVERT_FORMATS", "LogError", "check_format", "check_types", "convert",
+           "format_info", "log_info", "open_log", "write_tables"]
 
 CONVERT_FORMATS = ("csv", "parquet", "log")
 
@@ -37,6 +45,8 @@ CONVERT_FORMATS = ("csv", "parquet", "log")
 _HOUSEKEEPING = ("STAT_", "MIS_TOTAL", "BARO1_GND", "BARO2_GND", "BARO3_GND",
                  "MOT_THST_HOVER", "EK3_SRC1_POSXY")
 ARMED, DISARMED = 10, 11
+#: messages whose ``I`` column is the instance (4.x, and folded numbered instances)
+_I_TABLES = ("IMU", "BARO", "MAG", "GPS", "GPA")
 
 
 class LogError(Exception):
@@ -46,15 +56,25 @@ class LogError(Exception):
 def open_log(path: str | Path) -> tuple[BinLog, Iterator[tuple[str, pd.DataFrame]], list[str]]:
     """Index a log: (context, its tables one at a time, what was damaged: one line each).
 
+    A 4.x ``.bin`` (every timed message has ``TimeUS``, instances in an instance column) is
+    streamed as it is. A DataFlash text ``.log``, and a ``.bin`` of older firmware (rows
+    stamped ``TimeMS``, numbered instances such as ``IMU2``), are read whole through
+    :func:`tlm_process.logread.read_log_tables` and come back normalised: ``TimeUS`` on every
+    table, ``IMU2``/``IMU3`` as ``IMU`` rows with ``I`` 1/2, and so on;
+    ``context.info["notes"]`` says what was normalised.
+
     Raises:
         FileNotFoundError: no such file.
         LogError: not a regular file, not a DataFlash log, unreadable, or no messages.
     """
+    from tlm_process.logread import is_text_log
     from tlm_sim.flightlog.binreader import BinLogWarning, iter_log
 
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(2, "no such log", str(p))
+    if p.is_file() and is_text_log(p):
+        return _open_normalised(p)
     try:
         with warnings.catch_warnings(record=True) as caught, \
                 contextlib.redirect_stdout(io.StringIO()):
@@ -72,7 +92,122 @@ def open_log(path: str | Path) -> tuple[BinLog, Iterator[tuple[str, pd.DataFrame
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if not any(log.info["messages"].values()):
         raise LogError(f"{p}: not an ArduPilot DataFlash log (no messages found)")
+    if _needs_normalising(log):
+        return _open_normalised(p)
+    log.info["notes"] = []
     return log, tables, damage
+
+
+def _needs_normalising(log: BinLog) -> bool:
+    """Whether a ``.bin`` is of older firmware: a message with rows is stamped ``TimeMS``
+    without ``TimeUS``, or a numbered instance (``IMU2``, ``BAR2``, ...) has rows."""
+    from tlm_process.logread import FOLDS
+
+    present = [n for n, c in log.info["messages"].items() if c]
+    return any(n in FOLDS or ("TimeMS" in log.schemas[n].columns
+                              and "TimeUS" not in log.schemas[n].columns)
+               for n in present if n in log.schemas)
+
+
+def _open_normalised(p: Path) -> tuple[BinLog, Iterator[tuple[str, pd.DataFrame]], list[str]]:
+    """``open_log`` of a text log or an old-firmware ``.bin``: the normalised tables of
+    :func:`tlm_process.logread.read_log_tables` and a context built from them."""
+    import pandas as pd
+
+    from tlm_process.logread import LogReadError, read_log_tables
+    from tlm_sim.flightlog import SCHEMAS, BinLog
+    from tlm_sim.flightlog.binreader import (
+        MISSION_FIELDS,
+        empty_table,
+        mission_from_cmd,
+        modes_with_names,
+        param_changes_from_parm,
+    )
+
+    try:
+        lt = read_log_tables(p)
+    except LogReadError as e:
+        raise LogError(str(e)) from None
+    except OSError as e:
+        raise LogError(f"{p}: cannot read: {e.strerror or e}") from None
+    tables = lt.tables
+    damage = [n.removeprefix("damage: ") for n in lt.notes if n.startswith("damage: ")]
+    notes = [n for n in lt.notes if not n.startswith("damage: ")]
+    msg = tables.get("MSG")
+    if msg is None or "Message" not in msg.columns:
+        msg = empty_table(SCHEMAS["MSG"])
+    mode = tables.get("MODE")
+    if mode is not None and {"ModeNum", "Mode"} & set(mode.columns):
+        num = mode["ModeNum" if "ModeNum" in mode.columns else "Mode"]
+        rsn = mode["Rsn"] if "Rsn" in mode.columns else -1  # 3.x logs no reason
+        mode = pd.DataFrame({"TimeUS": mode["TimeUS"],
+                             "ModeNum": pd.to_numeric(num, errors="coerce").fillna(-1)
+                             .astype("int64"), "Rsn": rsn})
+    else:
+        mode = pd.DataFrame({"TimeUS": pd.Series([], dtype="int64"),
+                             "ModeNum": pd.Series([], dtype="int64"),
+                             "Rsn": pd.Series([], dtype="int64")})
+    parm = tables.get("PARM")
+    changes = (param_changes_from_parm(parm) if parm is not None
+               and {"Name", "Value"} <= set(parm.columns) else param_changes_from_parm(
+                   empty_table(SCHEMAS["PARM"])))
+    cmd = tables.get("CMD")
+    mission = (mission_from_cmd(cmd) if cmd is not None
+               and {"CTot", *MISSION_FIELDS} <= set(cmd.columns) else [])
+    info = {
+        "size_bytes": p.stat().st_size,
+        "messages": {n: len(df) for n, df in tables.items()},
+        "skipped_bytes": 0,
+        "tail_bytes": 0,
+        "lost_messages": {},
+        "issues": damage,
+        "cut_off": False,
+        "notice": None,
+        "notes": notes,
+        "log_kind": lt.kind,
+    }
+    log = BinLog(str(p), {}, _normalised_schemas(tables), lt.params, changes, mission, msg,
+                 modes_with_names(mode), info)
+    return log, iter(list(tables.items())), damage
+
+
+def _normalised_schemas(tables: dict[str, pd.DataFrame]) -> dict[str, MessageSchema]:
+    """Schemas of normalised tables: each column's format character from the log's FMT
+    (``TimeUS`` q, ``I`` B; a folded instance's columns from its own FMT), ``d`` for an
+    integer column that holds NaN (a text log's damaged value), ``Z`` for text."""
+    from tlm_process.logread import _INSTANCED, FOLDS
+    from tlm_sim.flightlog.schema import FORMAT_CHARS, schema_from_fmt
+
+    chars: dict[str, dict[str, str]] = {}
+    fmt = tables.get("FMT")
+    if fmt is not None and {"Name", "Format", "Columns"} <= set(fmt.columns):
+        for name, f, cols in zip(fmt["Name"], fmt["Format"], fmt["Columns"], strict=True):
+            cols = [c for c in str(cols).split(",") if c]
+            base = FOLDS.get(str(name), (str(name), 0))[0]
+            if len(cols) == len(str(f)):
+                for c, ch in zip(cols, str(f), strict=True):
+                    chars.setdefault(base, {}).setdefault(c, ch)
+    out = {}
+    for name, df in tables.items():
+        known = chars.get(name, {})
+        fmt_chars = []
+        for c in df.columns:
+            ch = "q" if c == "TimeUS" else "B" if c == "I" and name in _INSTANCED else \
+                known.get(c)
+            kind = df[c].dtype.kind
+            if ch is None or ch not in FORMAT_CHARS:
+                ch = "q" if kind in "iu" else "d" if kind == "f" else "Z"
+            elif FORMAT_CHARS[ch].kind == "int" and kind not in "iu":
+                ch = "d" if kind == "f" else "Z"
+            elif FORMAT_CHARS[ch].kind in ("str", "array") and kind != "O":
+                ch = "d" if kind == "f" else "q"
+            elif FORMAT_CHARS[ch].kind == "array":
+                ch = "Z"  # a text log's array: its text
+            elif FORMAT_CHARS[ch].kind in ("float", "scaled") and kind == "O":
+                ch = "Z"
+            fmt_chars.append(ch)
+        out[name] = schema_from_fmt(name, "".join(fmt_chars), tuple(df.columns))
+    return out
 
 
 def _usable(tables: dict[str, pd.DataFrame], name: str, cols: tuple[str, ...],
@@ -97,7 +232,52 @@ def _usable(tables: dict[str, pd.DataFrame], name: str, cols: tuple[str, ...],
 #: tables ``tlm info`` keeps (besides the context ``read_log`` gives) and the columns it uses
 _INFO_TABLES: dict[str, tuple[str, ...]] = {
     "VER": ("FWS",), "EV": ("TimeUS", "Id"), "PARM": ("TimeUS", "Name", "Value"),
+    "ARM": ("TimeUS", "ArmState"), "RCOU": ("TimeUS",),
 }
+#: a message rate is given only for messages logged over a real time span: at least this many
+#: rows per instance, spanning at least ``_RATE_MIN_SPAN_US``
+_RATE_MIN_ROWS = 3
+_RATE_MIN_SPAN_US = 1_000_000
+#: ... and logged regularly: the median interval at least 1/4 of the mean one (events and
+#: start-up bursts, FMTU as each type first appears, have no rate)
+_IRREGULAR = 4
+
+
+def _table_summary(df: pd.DataFrame, inst: str | None
+                   ) -> tuple[dict[str, Any], tuple[int, int] | None]:
+    """({count, instances, rate_hz, logged}, (first, last TimeUS) or None) of one table.
+
+    ``rate_hz``: mean per-instance rate [Hz] over the instances logged at least
+    ``_RATE_MIN_ROWS`` times over at least 1 s at regular intervals (median interval at least
+    a quarter of the mean); None otherwise, and ``logged`` then says why: "once" (one row per
+    instance), "at start" (a burst in the log's first second, as FMTU, UNIT, MULT and PARM
+    are written at start-up), "burst" (a few rows close together) or "irregular" (events,
+    mode changes, formats written as each type first appears)."""
+    import numpy as np
+
+    info: dict[str, Any] = {"count": len(df), "instances": None, "rate_hz": None,
+                            "logged": None}
+    if not len(df) or "TimeUS" not in df.columns:
+        return info, None
+    t = df["TimeUS"].to_numpy()
+    groups = [t] if inst is None or inst not in df.columns else [
+        g["TimeUS"].to_numpy() for _, g in df.groupby(inst, sort=True)]
+    info["instances"] = len(groups)
+    spread = [g for g in groups if len(g) >= _RATE_MIN_ROWS
+              and g.max() - g.min() >= _RATE_MIN_SPAN_US]
+    dts = [np.diff(np.sort(g)) for g in spread]
+    regular = [g for g, dt in zip(spread, dts, strict=True)
+               if np.median(dt) * _IRREGULAR >= dt.mean()]
+    if regular:
+        info["rate_hz"] = float(np.mean([(len(g) - 1) / ((g.max() - g.min()) * 1e-6)
+                                         for g in regular]))
+    elif all(len(g) == 1 for g in groups):
+        info["logged"] = "once"
+    elif spread:
+        info["logged"] = "irregular"
+    else:  # log_info tells "at start" from the log's first row
+        info["logged"] = "burst"
+    return info, (int(t.min()), int(t.max()))
 
 
 # --------------------------------------------------------------------------- info ----------
@@ -155,22 +335,32 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     Raises:
         FileNotFoundError, LogError: as ``open_log``.
     """
+    import pandas as pd
+
+    from tlm_process.logread import arming_time_us, disarm_time_us
     from tlm_sim.faults.detect import faults_from_messages, faults_from_param_changes
     from tlm_sim.flightlog.binreader import COPTER_MODES, MODE_REASONS, param_changes_from_parm
-    from tlm_sim.flightlog.flightlog import table_summary
 
     p = Path(path)
     log, tables, damage = open_log(p)
     kept: dict[str, pd.DataFrame] = {}
     summaries: dict[str, dict[str, Any]] = {}
-    t0 = t1 = None
+    spans: dict[str, tuple[int, int]] = {}
     for name, df in tables:
-        summaries[name], span = table_summary(df, log.schemas[name])
+        schema = log.schemas[name]
+        inst = schema.instance_field or ("I" if "I" in df.columns and name in _I_TABLES
+                                         else None)
+        summaries[name], span = _table_summary(df, inst)
         if span is not None:
-            t0 = span[0] if t0 is None else min(t0, span[0])
-            t1 = span[1] if t1 is None else max(t1, span[1])
+            spans[name] = span
         if name in _INFO_TABLES:
             kept[name] = df
+    t0 = min((a for a, _ in spans.values()), default=None)
+    t1 = max((b for _, b in spans.values()), default=None)
+    for name, (_, b) in spans.items():  # "at start" needs the log's start
+        if summaries[name]["logged"] == "burst" and t0 is not None \
+                and b - t0 < _RATE_MIN_SPAN_US:
+            summaries[name]["logged"] = "at start"
     info: dict[str, Any] = {
         "file": str(path),
         "size_bytes": log.info["size_bytes"],
@@ -182,22 +372,29 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     info["firmware"] = (str(ver["FWS"].iloc[0]) if len(ver) else
                         next((m for m in msg["Message"] if "Copter" in str(m)), None))
     ev = _usable(kept, "EV", _INFO_TABLES["EV"], p, damage)
-    armed = ev[ev.Id == ARMED].TimeUS
-    disarmed = ev[ev.Id == DISARMED].TimeUS
-    if len(armed):
-        a = float(armed.iloc[0])
-        d = float(disarmed[disarmed > a].iloc[-1]) if (disarmed > a).any() else None
+    arming = {"EV": ev, **{n: kept[n] for n in ("ARM", "RCOU") if n in kept
+                           and "TimeUS" in kept[n].columns}}
+    if t0 is not None:  # the log's first and last row, for "log start" / "log end"
+        arming["_span"] = pd.DataFrame({"TimeUS": [t0, t1]})
+    a, a_src = arming_time_us(arming, log.params)
+    info["armed_source"] = a_src
+    if a is not None:
+        d, d_src = disarm_time_us(arming, log.params, a)
         info["armed_s"] = [a * 1e-6, None if d is None else d * 1e-6]
+        info["disarm_source"] = d_src
         info["flight_time_s"] = None if d is None else (d - a) * 1e-6
+        info["arming_periods"] = max(1, int((ev.Id == ARMED).sum()))
     info["messages"] = {
-        n: {"count": t["rows"], "instances": t.get("instances"), "rate_hz": t.get("rate_hz")}
+        n: {"count": t["count"], "instances": t["instances"], "rate_hz": t["rate_hz"],
+            "logged": t["logged"]}
         for n, t in sorted(summaries.items())
     }
+    info["normalised"] = list(log.info.get("notes", []))
     mode = log.modes
     info["modes"] = [
         {"time_s": int(t) * 1e-6, "mode": int(m),
          "name": COPTER_MODES.get(int(m), str(int(m))),
-         "reason": MODE_REASONS.get(int(r), str(int(r)))}
+         "reason": None if int(r) < 0 else MODE_REASONS.get(int(r), str(int(r)))}
         for t, m, r in zip(mode.TimeUS, mode.ModeNum, mode.Rsn, strict=True)
     ]
     changes = param_changes_from_parm(_usable(kept, "PARM", _INFO_TABLES["PARM"], p, damage),
@@ -233,16 +430,27 @@ def format_info(info: dict[str, Any]) -> str:
     if "armed_s" in info:
         a, d = info["armed_s"]
         ft = info.get("flight_time_s")
+        periods = info.get("arming_periods", 1)
         lines.append(f"armed              {_fmt_s(a)} - {_fmt_s(d)} s"
-                     + ("" if ft is None else f" ({ft:.1f} s)"))
+                     + ("" if ft is None else f" ({ft:.1f} s)")
+                     + f"  [armed: {info['armed_source']}; disarmed: {info['disarm_source']}]"
+                     + (f" (the first of {periods} arming periods)" if periods > 1 else ""))
+    elif info.get("armed_source"):
+        lines.append(f"armed              - ({info['armed_source']})")
+    for k, note in enumerate(info.get("normalised", [])):
+        lines.append(f"{'normalised' if k == 0 else '':<19}{note}")
     lines.append("messages           name   count  inst  rate/inst [Hz]")
     for n, m in info["messages"].items():
-        rate = "" if m["rate_hz"] is None else f"{m['rate_hz']:.1f}"
+        r = m["rate_hz"]
+        rate = (f"{r:.1f}" if r >= 0.1 else f"{r:.3f}") if r is not None else {
+            "once": "once", "at start": "at start", "irregular": "irregular"}.get(
+                m.get("logged"), "-")
         inst = "" if m["instances"] is None else str(m["instances"])
         lines.append(f"                   {n:<5} {m['count']:>7} {inst:>5}  {rate:>8}")
     lines.append("modes")
     for m in info["modes"]:
-        lines.append(f"  {m['time_s']:9.2f} s  {m['name']} ({m['mode']}), reason {m['reason']}")
+        reason = "" if m["reason"] is None else f", reason {m['reason']}"
+        lines.append(f"  {m['time_s']:9.2f} s  {m['name']} ({m['mode']}){reason}")
     hidden = info["params_changed_hidden"]
     lines.append("parameters changed in flight"
                  + (f" ({hidden} housekeeping changes hidden; --all-params)" if hidden else ""))
@@ -290,6 +498,18 @@ def check_types(log: BinLog, types: list[str] | None) -> list[str]:
     return list(types or present)
 
 
+def check_format(log: BinLog, fmt: str) -> None:
+    """Refuse ``--format log`` for a normalised log (a text log or an old-firmware ``.bin``,
+    ``open_log``): its tables (``TimeUS`` and instance columns added, instances folded) no
+    longer fit DataFlash's FMT limits, and a text log is already text."""
+    if fmt == "log" and log.info.get("log_kind"):
+        what = "a DataFlash text log" if log.info["log_kind"] == "text" else \
+            "an old-firmware log (TimeMS stamps or numbered instances)"
+        raise LogError(f"--format log: {Path(log.path).name} is {what}; its normalised tables "
+                       "(TimeUS, instances as rows) do not fit a DataFlash text log: convert "
+                       "it to csv or parquet")
+
+
 def convert(path: str | Path, out: Path, fmt: str,
             types: list[str] | None = None) -> tuple[list[Path], dict[str, int], list[str]]:
     """Write a log's tables to ``out`` as ``fmt`` (csv, parquet or log).
@@ -305,6 +525,7 @@ def convert(path: str | Path, out: Path, fmt: str,
     """
     log, tables, damage = open_log(path)
     names = check_types(log, types)
+    check_format(log, fmt)
     files, rows = write_tables(log, tables, names, out, fmt, Path(path).stem, damage)
     return files, rows, damage
 

@@ -218,6 +218,7 @@ def _stamp_all(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
             how[col].append(name)
         if name in order:
             stamps.append((order[name], t))
+    late = 0
     if unstamped:
         o, t = _order_times(stamps)
         for name in unstamped:
@@ -225,6 +226,7 @@ def _stamp_all(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
             stamped[name] = _times_from_order(at, o, t)
             if len(raw[name]) and not name.startswith(_HELPER):
                 how["order"].append(name)
+                late += int((at > o[-1]).sum()) if len(o) else 0
     if how["TimeMS"]:
         notes.append(f"TimeUS = TimeMS x 1000 (rows stamped in ms): {', '.join(how['TimeMS'])}")
     if how["T"]:
@@ -233,6 +235,9 @@ def _stamp_all(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
     if how["order"]:
         notes.append("TimeUS from the last stamped message before each row (log order; the "
                      f"message has no time column): {', '.join(how['order'])}")
+    if late:
+        notes.append(f"{late} row(s) without a time column come after the last stamped "
+                     "message: their time is not known (they take the last stamp)")
     return stamped
 
 

@@ -1,4 +1,4 @@
-"""``tlm info LOG.bin``: the summary of a DataFlash log (:func:`tlm_process.binlog.log_info`)."""
+"""``tlm info LOG``: the summary of a DataFlash log (:func:`tlm_process.binlog.log_info`)."""
 
 from __future__ import annotations
 
@@ -15,12 +15,16 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``info`` to ``tlm``'s subcommands; returns its parser."""
     i = sub.add_parser(
-        "info", help="summarise a DataFlash .bin log: messages, modes, changes, faults",
-        description="Summarise an ArduPilot DataFlash .bin log: time span and armed time, "
-                    "firmware, each message type's count, instances and rate, flight modes "
+        "info", help="summarise a DataFlash log: messages, modes, changes, faults",
+        description="Summarise an ArduPilot DataFlash .bin or text .log: time span, armed "
+                    "time and how it was found (EV 10, ARM, or the motor outputs of a log "
+                    "that starts at arming), firmware, each message type's count, instances "
+                    "and rate (messages logged regularly over at least 1 s), flight modes "
                     "with reasons, parameters changed in flight, and faults found (SIM_* "
-                    "parameter changes, tlm fault MSG lines, a sidecar LOG.json).")
-    i.add_argument("log", help="the .bin file")
+                    "parameter changes, tlm fault MSG lines, a sidecar LOG.json). Logs of "
+                    "older firmware are normalised first (TimeMS, IMU2/IMU3: "
+                    "docs/log-messages.md).")
+    i.add_argument("log", help="the .bin or text .log file")
     i.add_argument("--json", metavar="R.json", help="also write the summary as JSON")
     i.add_argument("--all-params", action="store_true",
                    help="list housekeeping parameter changes too (STAT_*, MIS_TOTAL, ...)")
@@ -29,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the summary of one .bin log (and optionally write it as JSON)."""
+    """Print the summary of one log (and optionally write it as JSON)."""
     if args.json:
         check_writable_file(args.json, "--json")
     info = log_info(args.log, all_params=args.all_params)
