@@ -356,3 +356,92 @@ def test_convert_old_log_to_text_is_refused(tmp_path: Path, capsys) -> None:
                        "--format", "log"], capsys)
     assert rc == 2 and "--format log" in err and "csv or parquet" in err
     assert not (tmp_path / "o").exists()
+
+
+# --------------------------------------------------------------------------- tlm process ----
+def _cut_at_arming(src: Path, out: Path) -> tuple[Path, int]:
+    """A copy of SITL log ``src`` that starts just after its EV 10, as a vehicle logging
+    with LOG_DISARMED 0 writes it (no arming event, no ARM 1), written by tlm's writer, with
+    the sidecar beside it; returns (path, the EV 10 time)."""
+    import shutil
+
+    from tlm_sim.flightlog import FlightLog, read_bin
+    from tlm_sim.flightlog.binreader import read_params, read_schemas
+    from tlm_sim.flightlog.binwriter import write_bin
+
+    tables = read_bin(src)
+    ev = tables["EV"]
+    t_ev = int(ev.loc[ev.Id == 10, "TimeUS"].iloc[0])
+    schemas = read_schemas(src)
+    cut = {n: df[df.TimeUS > t_ev].reset_index(drop=True) for n, df in tables.items()
+           if n not in ("FMT", "FMTU", "UNIT", "MULT", "FILE") and "TimeUS" in df.columns}
+    cut = {n: df for n, df in cut.items() if len(df)}
+    out.mkdir(parents=True, exist_ok=True)
+    path = write_bin(FlightLog(cut, params=read_params(src),
+                               schemas={n: schemas[n] for n in cut}), out / f"{src.stem}.bin")
+    shutil.copy(src.with_suffix(".json"), out / f"{src.stem}.json")
+    return path, t_ev
+
+
+def test_process_log_that_starts_at_arming(tmp_path: Path) -> None:
+    from tlm_process.pipeline.ingest import read_flights
+    from tlm_process.pipeline.process import process_flight
+
+    src = reference_path("gps_s12.bin")
+    path, t_ev = _cut_at_arming(src, tmp_path / "cut")
+    flight = read_flights([path])[0]
+    assert flight.meta["armed_source"].startswith("log start")
+    assert flight.meta["disarm_source"] == "EV 11"
+    done = process_flight(flight)
+    first = min(int(df.TimeUS.iloc[0]) for df in flight.tables.values())
+    assert done.phase == "armed" and done.span_us[0] == first
+    assert 0 < first - t_ev < 100_000
+    # the same armed rows and fault labels as the whole log (armed from its EV 10)
+    whole = process_flight(read_flights([src])[0])
+    assert whole.span_us[1] == done.span_us[1]  # EV 11: rows after disarm not kept
+    for name, df in whole.features.items():
+        assert len(done.features[name]) == len(df), name
+        assert (done.features[name]["label"].to_numpy() == df["label"].to_numpy()).all()
+    assert "armed_span_us" not in read_flights([src])[0].meta  # EV 10 logs: as before
+
+
+def test_process_log_with_arm_messages_only(tmp_path: Path) -> None:
+    """Rows after the disarm are not kept when the arming comes from ARM messages."""
+    from tlm_process.pipeline.ingest import Flight
+    from tlm_process.pipeline.process import process_flight
+
+    lt = read_log_tables(reference_path("normal_s11.bin"),
+                         ["GPS", "IMU", "RATE", "VIBE", "ARM", "EV"])
+    tables = {n: df for n, df in lt.tables.items() if n not in ("EV", "ARM")}
+    no_ev = {n: df for n, df in lt.tables.items() if n != "EV"}
+    t0, src = arming_time_us(no_ev, lt.params)
+    t1, end = disarm_time_us(no_ev, lt.params, t0)
+    assert (src, end) == ("ARM ArmState 1", "ARM ArmState 0")
+    flight = Flight("n", "n", "bin", tables, [], meta={"armed_span_us": [t0, t1]})
+    done = process_flight(flight)
+    assert done.span_us == (t0, t1)
+    assert done.features["IMU"]["TimeUS"].max() <= t1
+    assert lt.tables["IMU"]["TimeUS"].max() > t1 + 1_000_000  # there were rows after it
+
+
+@pytest.mark.parametrize("name, span", [("log171.bin", (72_606_000, 254_071_000)),
+                                        ("nan.log", (95_890_000, 100_080_000))])
+def test_tlm_process_real_logs(name: str, span: tuple[int, int], tmp_path: Path,
+                               capsys) -> None:
+    import json
+
+    rc, out, err = _cli(["process", str(real_path(name)), "--out", str(tmp_path / "ds"),
+                         "--tables", "IMU,GPS", "--plots", "0", "--quiet"], capsys)
+    assert rc == 0, err
+    report = json.loads((tmp_path / "ds" / "report.json").read_text())
+    (flight,) = report["flights"]
+    assert flight["phase"] == "armed" and tuple(flight["span_us"]) == span
+    imu = pd.read_parquet(tmp_path / "ds" / "IMU.parquet")
+    assert imu["TimeUS"].between(*span).all()
+    assert "TimeMS" not in imu.columns  # a time column, dropped by Algorithm 2
+
+
+def test_process_refuses_a_real_log_without_imu(tmp_path: Path, capsys) -> None:
+    rc, _, err = _cli(["process", str(real_path("mechanical_fail.log")), "--out",
+                       str(tmp_path / "ds"), "--tables", "IMU,GPS"], capsys)
+    assert rc == 2 and "no IMU table" in err

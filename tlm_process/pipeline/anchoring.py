@@ -55,6 +55,7 @@ __all__ = [
     "anchor_by_time",
     "anchor_flight",
     "armed_span_us",
+    "flight_armed_span_us",
     "RC_LABELS",
     "check_windows",
     "compare_methods",
@@ -179,6 +180,17 @@ def armed_span_us(tables: Mapping[str, pd.DataFrame]) -> tuple[int, int] | None:
     return t0, t1
 
 
+def flight_armed_span_us(flight: Flight) -> tuple[int, int] | None:
+    """The armed phase of a flight [µs]: ``flight.meta["armed_span_us"]`` when the reader
+    found it without an EV 10 event (a log that starts at arming, or one with only ARM
+    messages: :func:`tlm_process.logread.arming_time_us`), else :func:`armed_span_us` (EV
+    10 to the first EV 11 after it or the log's end); None when the flight never armed."""
+    span = flight.meta.get("armed_span_us") if flight.meta else None
+    if span is not None and len(span) == 2 and span[0] is not None and span[1] is not None:
+        return int(span[0]), int(span[1])
+    return armed_span_us(flight.tables)
+
+
 def home_altitude(flight: Flight) -> tuple[float, str]:
     """Home altitude AMSL [m] and where it came from.
 
@@ -194,7 +206,7 @@ def home_altitude(flight: Flight) -> tuple[float, str]:
         return float(flight.home[2]), "source home"
     gps = _gps(flight.tables, flight.id)
     ok = gps[gps["Status"] >= 3] if "Status" in gps.columns else gps
-    armed = armed_span_us(flight.tables)
+    armed = flight_armed_span_us(flight)
     if armed is not None:
         after = ok[ok["TimeUS"] >= armed[0]]
         ok = after if len(after) else ok
@@ -287,7 +299,7 @@ def match_positions(flight: Flight, records: Sequence[FaultRecord] | None = None
     xyz, lat0, lon0 = _gps_enu(gps, home_alt)
     t = gps["TimeUS"].to_numpy(np.int64)
     allowed = np.ones(len(t), dtype=bool)
-    span = armed_span_us(flight.tables) if armed_only else None
+    span = flight_armed_span_us(flight) if armed_only else None
     if span is not None:
         allowed = (t >= span[0]) & (t <= span[1])
     points = []

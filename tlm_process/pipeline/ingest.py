@@ -6,7 +6,10 @@ Kinds of input (:func:`detect_kind` decides from the path):
   and ``DIR/<NAME>.parquet`` / ``.csv``; records from ``meta.json`` (``DIR/faults.json`` holds
   the same).
 * ``"bin"`` — an ArduPilot DataFlash ``X.bin`` with its sidecar ``X.json`` beside it (the
-  reference SITL layout: ``{"faults": [...], "sitl": {"home": [lat, lon, alt, hdg]}}``).
+  reference SITL layout: ``{"faults": [...], "sitl": {"home": [lat, lon, alt, hdg]}}``), of
+  any firmware: read through :mod:`tlm_process.logread` (Copter 3.x's ``TimeMS`` as
+  ``TimeUS``, ``IMU2``/``IMU3`` as ``IMU`` rows with ``I`` 1/2). ``"log"`` — the same as a
+  DataFlash text log ``X.log``.
 * ``"csv"`` — a folder of per-message CSVs with ArduPilot column names (``DIR/GPS.csv``,
   ``DIR/IMU.csv``, ...; a leading ``timestamp`` column as ``mavlogdump.py --format csv``
   writes is allowed) and ``DIR/faults.json`` (``{"faults": [...]}`` or a bare list; ``[]`` for
@@ -285,18 +288,40 @@ def _records_in_log(raw: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
                        for f in faults_in_log(raw.get("MSG"), changes)]}
 
 
+#: tables read for the armed phase of a log without an arming event (EV 10), besides EV
+_ARMING_TABLES: tuple[str, ...] = ("ARM", "RCOU")
+
+
 def _read_bin(path: Path) -> list[Flight]:
-    """A DataFlash log. Its fault records: the sidecar ``LOG.json`` beside it, else tlm fly's
-    ``faults.json`` in the same folder, else what the log holds itself (tlm's fault MSG
-    lines, or a SITL log's SIM_* parameter changes); none found: a normal flight."""
-    from tlm_sim.flightlog import read_bin
+    """A DataFlash log: a ``.bin`` of any firmware or a DataFlash text ``.log``, read through
+    :func:`tlm_process.logread.read_log_tables` (Copter 3.x's TimeMS as TimeUS, IMU2/IMU3 as
+    IMU rows with I 1/2; a 4.x log's tables exactly as logged). Its fault records: the sidecar
+    ``LOG.json`` beside it, else tlm fly's ``faults.json`` in the same folder, else what the
+    log holds itself (tlm's fault MSG lines, or a SITL log's SIM_* parameter changes); none
+    found: a normal flight.
+
+    A log without an EV 10 (ARMED) event, e.g. one that starts at arming (``LOG_DISARMED
+    0``), takes its armed phase from :func:`tlm_process.logread.arming_time_us` (ARM, or the
+    motor outputs) and :func:`~tlm_process.logread.disarm_time_us`: ``meta["armed_span_us"]``
+    and ``meta["armed_source"]`` (:func:`tlm_process.pipeline.anchoring.flight_armed_span_us`
+    reads them)."""
+    from tlm_process.logread import (
+        ARMED_EV,
+        LogReadError,
+        arming_time_us,
+        disarm_time_us,
+        read_log_tables,
+    )
     from tlm_sim.flightlog.sidecar import fault_sidecar
 
     sidecar = fault_sidecar(path)
     try:
-        raw = read_bin(path, DATA_TABLES + AUX_TABLES + ("MSG", "PARM"))
+        lt = read_log_tables(path, DATA_TABLES + AUX_TABLES + ("MSG", "PARM") + _ARMING_TABLES)
     except (OSError, ValueError, KeyError, IndexError) as exc:
-        raise IngestError(f"cannot read the DataFlash log: {exc}", source=str(path)) from None
+        reason = str(exc).removeprefix(f"{path}: ") if isinstance(exc, LogReadError) else exc
+        raise IngestError(f"cannot read the DataFlash log: {reason}",
+                          source=str(path)) from None
+    raw = lt.tables
     if sidecar is not None:
         doc, source = _read_json(sidecar), str(sidecar)
     else:
@@ -309,8 +334,19 @@ def _read_bin(path: Path) -> list[Flight]:
     # when neither holds any (taken as a normal flight; tlm evaluate --test-on asks first)
     meta["labels_source"] = str(sidecar) if sidecar is not None else (
         "log" if doc["faults"] else None)
-    return [Flight(path.stem, str(path), "bin", tables, parse_records(doc, source), home,
-                   meta)]
+    ev = raw.get("EV")
+    if ev is None or "Id" not in ev.columns or not (ev["Id"] == ARMED_EV).any():
+        t0, src = arming_time_us(raw, lt.params)
+        meta["armed_source"] = src
+        if t0 is not None:
+            t1, end_src = disarm_time_us(raw, lt.params, t0)
+            meta["armed_span_us"] = [t0, t1]
+            meta["disarm_source"] = end_src
+    notes = [n for n in lt.notes if not n.startswith("damage: ")]
+    if notes:  # what logread normalised (Copter 3.x, text logs)
+        meta["normalised"] = notes
+    return [Flight(path.stem, str(path), "log" if lt.kind == "text" else "bin", tables,
+                   parse_records(doc, source), home, meta)]
 
 
 def _read_table_file(path: Path) -> pd.DataFrame:
@@ -429,7 +465,7 @@ def _is_missing(v: Any) -> bool:
     return v is None or (isinstance(v, float) and math.isnan(v))
 
 
-_READERS = {"tlm": _read_tlm, "bin": _read_bin, "csv": _read_csv_folder,
+_READERS = {"tlm": _read_tlm, "bin": _read_bin, "log": _read_bin, "csv": _read_csv_folder,
             "dataset": _read_dataset}
 
 
@@ -438,11 +474,17 @@ _READERS = {"tlm": _read_tlm, "bin": _read_bin, "csv": _read_csv_folder,
 # --------------------------------------------------------------------------------------------
 
 def detect_kind(path: str | Path) -> str | None:
-    """The input kind of ``path`` ("tlm", "bin", "csv", "dataset"), "folder" for a folder of
-    inputs, or None when it is none of these (see the module docstring)."""
+    """The input kind of ``path`` ("tlm", "bin", "log", "csv", "dataset"), "folder" for a
+    folder of inputs, or None when it is none of these (see the module docstring)."""
     p = Path(path)
     if p.is_file():
-        return "bin" if p.suffix.lower() == ".bin" else None
+        if p.suffix.lower() == ".bin":
+            return "bin"
+        if p.suffix.lower() == ".log":
+            from tlm_process.logread import is_text_log
+
+            return "log" if is_text_log(p) else None
+        return None
     if not p.is_dir():
         return None
     meta = p / "meta.json"
@@ -483,7 +525,8 @@ def expand_inputs(paths: Iterable[str | Path]) -> list[tuple[str, Path]]:
                               source=str(p))
         kind = detect_kind(p)
         if kind is None:
-            raise IngestError("not a .bin log, a flight folder or a dataset", source=str(p))
+            raise IngestError("not a .bin log, a flight folder or a dataset (nor a DataFlash "
+                              "text .log)", source=str(p))
         if kind != "folder":
             out.append((kind, p))
             continue
@@ -493,8 +536,9 @@ def expand_inputs(paths: Iterable[str | Path]) -> list[tuple[str, Path]]:
             if k in _READERS and not (child.is_dir() and _is_processed(child)):
                 found.append((k, child))
         if not found:
-            raise IngestError("no flights found: expected *.bin logs with sidecars, tlm fly "
-                              "folders, CSV folders with faults.json, or datasets",
+            raise IngestError("no flights found: expected *.bin (or DataFlash text *.log) logs "
+                              "with sidecars, tlm fly folders, CSV folders with faults.json, "
+                              "or datasets",
                               source=str(p))
         out.extend(found)
     return out

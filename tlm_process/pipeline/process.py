@@ -19,9 +19,9 @@ from typing import Any
 
 from tlm_process.pipeline.anchoring import (
     anchor_flight,
-    armed_span_us,
     compare_methods,
     extend_rc_failsafe,
+    flight_armed_span_us,
     home_altitude,
     label_tables,
 )
@@ -51,7 +51,7 @@ def process_flight(flight: Flight, options: ProcessOptions | None = None) -> Pro
         home_alt, home_src = home_altitude(flight)
     comparison = compare_methods(flight, home_alt) if home_alt is not None else []
     labelled = label_tables(flight.tables, windows)
-    span = armed_span_us(flight.tables) if opt.phase == "armed" else None
+    span = flight_armed_span_us(flight) if opt.phase == "armed" else None
     phase = opt.phase if span is not None or opt.phase == "all" else "all (no arming event)"
     labelled = trim_to_span(labelled, span)
     features = {t: feature_table(t, labelled[t], flight.id, opt.instance) for t in opt.tables}
