@@ -213,22 +213,8 @@ def _tables(text: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``tlm evaluate``; 0 on success, 2 on a user error (one line on stderr). A closed
-    stdout (``| head``) is raised past the user errors' OSError, for ``tlm``'s ``main`` to
-    end quietly."""
-    closed: list[BrokenPipeError] = []
-
-    def body(a: argparse.Namespace) -> int:
-        try:
-            return _run(a)
-        except BrokenPipeError as e:
-            closed.append(e)
-            return 141
-
-    rc = report_user_errors(body, args)
-    if closed:
-        raise closed[0]
-    return rc
+    """Run ``tlm evaluate``; 0 on success, 2 on a user error (one line on stderr)."""
+    return report_user_errors(_run, args)
 
 
 def _best(results: dict, key: str = "macro_f1", transfer: bool = False) -> str | None:

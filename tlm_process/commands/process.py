@@ -133,13 +133,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def report_user_errors(body: Callable[[argparse.Namespace], int],
                        args: argparse.Namespace) -> int:
     """``body(args)``, turning a PipelineError (and its subclasses), a UsageError or an OSError
-    into one line on stderr and exit code 2 (shared by ``tlm process`` and ``tlm evaluate``)."""
+    into one line on stderr and exit code 2 (shared by ``tlm process``, ``evaluate``, ``train``
+    and ``detect``). A closed stdout (``BrokenPipeError``, ``| head``) is not a user error: it
+    goes on to ``tlm``'s ``main``, which ends quietly."""
     from tlm_process.pipeline.errors import PipelineError
 
     try:
         return body(args)
     except (PipelineError, UsageError) as e:
         msg = str(e)
+    except BrokenPipeError:
+        raise
     except OSError as e:
         msg = f"{e.filename or ''}: {e.strerror or e}".lstrip(": ")
     print(f"tlm: error: {msg}", file=sys.stderr)

@@ -1,0 +1,190 @@
+"""Logs for the whole-log detector: every table it reads, the log's parameters, its armed span
+and (for training, or a log with a sidecar) its fault windows.
+
+Training reads any input ``tlm process`` reads (a ``tlm generate`` data set, ``.bin`` logs
+with their sidecars, ``tlm fly`` folders, folders of these); fault windows are anchored by
+the pipeline's own rules (:func:`tlm_process.pipeline.anchoring.anchor_flight`), so a
+detector's labels are the data set's. ``tlm detect`` reads any ArduPilot log
+(:func:`read_log`), with or without a sidecar.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tlm_process.detect.channels import align, source_tables
+from tlm_process.pipeline.anchoring import FaultWindow, anchor_flight, log_span_us
+from tlm_process.pipeline.errors import PipelineError
+
+__all__ = ["DetectError", "LogData", "armed_span", "read_log", "read_training"]
+
+
+class DetectError(PipelineError):
+    """A bad model, log or request for ``tlm train`` / ``tlm detect``: one line, exit 2."""
+
+
+@dataclass
+class LogData:
+    """One log as the detector sees it: ``tables`` (ArduPilot names, TimeUS µs since boot,
+    instances as rows), ``params`` (the log's PARM, or the flight's drawn parameters),
+    ``span_us`` (armed: arming to disarming or the log's end) with where the arming time came
+    from, and ``windows``: the fault windows (None when nothing labels the log)."""
+
+    id: str
+    source: str
+    tables: dict[str, pd.DataFrame]
+    params: dict[str, float]
+    span_us: tuple[int, int]
+    arming: str
+    windows: list[FaultWindow] | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def armed_span(tables: Mapping[str, pd.DataFrame], params: Mapping[str, float]
+               ) -> tuple[tuple[int, int], str]:
+    """((arming, disarming or the log's end) [µs], where the arming time came from). The
+    arming rule is :func:`tlm_process.logread.arming_time_us` (EV 10, ARM, motors above idle);
+    a log that never armed spans the whole log ("never armed: whole log")."""
+    from tlm_process.logread import arming_time_us, disarm_time_us
+
+    t0, how = arming_time_us(tables, params)
+    lo, hi = log_span_us(tables)
+    if t0 is None:
+        return (lo, hi), "never armed: whole log"
+    t1, _ = disarm_time_us(tables, params, t0)
+    return (int(t0), int(t1 if t1 is not None else hi)), how
+
+
+def _windows(flight: Any) -> list[FaultWindow]:
+    return anchor_flight(flight, "auto")
+
+
+def _generated(path: Path, partial: bool) -> Iterator[LogData]:
+    """Flights of a ``tlm generate`` data set (or a plain multi-flight data set): every
+    table the detector reads, by flight; parameters from the flight's scenario."""
+    from tlm_process.generate.errors import GenerateError
+    from tlm_process.generate.reader import index_dataset, read_dataset_table
+    from tlm_process.pipeline.ingest import _dataset_flights
+
+    want = [*source_tables(), "MODE", "EV"]
+    params: dict[int, dict[str, float]] = {}
+    try:
+        if (path / "manifest.json").exists():
+            idx = index_dataset(path, partial=partial)
+            faults = read_dataset_table(idx, "faults")
+            frames = {n: read_dataset_table(idx, n) for n in dict.fromkeys(want)
+                      if n in idx.tables}
+            jl = path / "flights.jsonl"
+            for line in jl.read_text().splitlines() if jl.exists() else ():
+                try:
+                    rec = json.loads(line)
+                    params[int(rec["flight"])] = {
+                        k: float(v) for k, v in (rec["scenario"].get("params") or {}).items()}
+                except (ValueError, KeyError, TypeError, AttributeError):
+                    continue
+        else:
+            faults = pd.read_parquet(path / "faults.parquet")
+            frames = {n: pd.read_parquet(path / f"{n}.parquet") for n in dict.fromkeys(want)
+                      if (path / f"{n}.parquet").exists()}
+    except (GenerateError, OSError, ValueError) as exc:
+        raise DetectError(str(exc), source=str(path)) from None
+    for fl in _dataset_flights(path, faults, frames):
+        fid = fl.id.rsplit(":", 1)[1]
+        p = params.get(int(fid), {}) if fid.isdigit() else {}
+        tables = align(fl.tables)
+        span, how = armed_span(tables, p)
+        yield LogData(fl.id, fl.source, tables, p, span, how, _windows(fl))
+
+
+def _single(kind: str, path: Path) -> Iterator[LogData]:
+    """A ``.bin`` log or a ``tlm fly`` folder, its fault records as ``tlm process`` finds
+    them (sidecar, faults.json, the log's own)."""
+    from tlm_process.pipeline.ingest import read_flight
+
+    for fl in read_flight(kind, path):
+        if kind == "bin":
+            data = read_log(path, labels=False)
+            tables, params = data.tables, data.params
+        else:
+            from tlm_sim.flightlog import FlightLog
+
+            log = FlightLog.read(path)
+            tables = align({n: df for n, df in log.tables.items() if len(df)})
+            params = {k: float(v) for k, v in (log.meta.get("params") or {}).items()
+                      if isinstance(v, int | float)}
+        fl.tables = {**tables, **fl.tables}
+        span, how = armed_span(tables, params)
+        yield LogData(fl.id, fl.source, tables, params, span, how, _windows(fl))
+
+
+def read_training(paths: Sequence[str | Path], *, partial: bool = False) -> Iterator[LogData]:
+    """Every labelled flight named by ``paths`` (any ``tlm process`` input), one at a time."""
+    from tlm_process.pipeline.ingest import expand_inputs, unique_ids
+
+    seen: dict[str, int] = {}
+    for kind, p in expand_inputs(paths):
+        if kind == "csv":
+            raise DetectError("a CSV folder lacks most tables the detector reads: train on "
+                              "tlm generate data sets, .bin logs or tlm fly folders",
+                              source=str(p))
+        it = _generated(p, partial) if kind == "dataset" else _single(kind, p)
+        for log in it:
+            unique_ids([log], seen)  # type: ignore[list-item]  # only .id is used
+            yield log
+
+
+def read_log(path: str | Path, *, labels: bool = True) -> LogData:
+    """Any ArduPilot log (``.bin``, or a text ``.log``) for detection: every table the
+    detector reads, normalised (:mod:`tlm_process.logread`: TimeMS, IMU2/IMU3, ...), its
+    armed span, and with ``labels`` its fault windows when a sidecar ``LOG.json`` (or tlm's
+    ``faults.json``, or tlm's fault MSG lines / SITL's SIM_* changes in the log) says them."""
+    from tlm_process.logread import read_log_tables
+
+    p = Path(path)
+    if not p.exists():
+        raise DetectError("no such log", source=str(p))
+    if not p.is_file():
+        raise DetectError("not a file (expected an ArduPilot .bin or .log)", source=str(p))
+    try:
+        lt = read_log_tables(p, [*source_tables(), "MODE", "EV", "ARM", "MSG", "PARM"])
+    except (OSError, ValueError, KeyError, IndexError) as exc:
+        raise DetectError(f"cannot read the log: {exc}", source=str(p)) from None
+    tables = align({n: df for n, df in lt.tables.items() if len(df)})
+    if not tables:
+        raise DetectError("the log holds no rows", source=str(p))
+    params = dict(lt.params)
+    span, how = armed_span(tables, params)
+    windows = _log_windows(p, tables) if labels else None
+    return LogData(p.stem, str(p), tables, params, span, how, windows, list(lt.notes))
+
+
+def _log_windows(p: Path, tables: dict[str, pd.DataFrame]) -> list[FaultWindow] | None:
+    """The fault windows a sidecar gives (None without one): ``LOG.json``, or tlm's
+    ``faults.json`` beside a ``tlm fly --format bin`` log. A log's own MSG/PARM evidence is
+    not used (the detector is to find faults, not read them from SITL's parameters)."""
+    from tlm_process.pipeline.ingest import Flight, parse_records
+    from tlm_sim.flightlog.sidecar import fault_sidecar, load_sidecar_json
+
+    side = fault_sidecar(p)
+    if side is None:
+        return None
+    doc = load_sidecar_json(side)
+    recs = parse_records(doc, str(side))
+    if "GPS" not in tables:
+        return None
+    fl = Flight(p.stem, str(p), "bin", tables, recs)
+    return anchor_flight(fl, "auto")
+
+
+def window_labels(time_us: np.ndarray, windows: Sequence[FaultWindow] | None) -> np.ndarray:
+    """Label per time (0 outside every window)."""
+    from tlm_process.pipeline.anchoring import label_rows
+
+    return label_rows(time_us, windows or [])

@@ -1,0 +1,217 @@
+"""Fit the whole-log detector on labelled flights (``tlm train``).
+
+Every flight is read (:func:`.data.read_training`), turned into its grid rows and features
+(:func:`.predict.log_features`) and labelled by its fault windows; training uses every
+flight's rows thinned to :data:`TRAIN_HZ` (rows a tenth of a second apart have near-identical
+window statistics). Flights can be held out (``holdout``: a fraction, drawn with ``seed``;
+``holdout_flights``: name patterns); the held-out flights are scored on every grid row: row
+macro-F1 over the labels present, detection delay per class and false alarms per flight hour
+(:mod:`tlm_process.evaluate.events`), and these scores go into the manifest.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tlm_process.detect.channels import CHANNELS, GRID_HZ, drop_channels, needed_columns
+from tlm_process.detect.data import DetectError, read_training, window_labels
+from tlm_process.detect.features import WINDOW_S, feature_names
+from tlm_process.detect.model import Detector
+from tlm_process.detect.predict import log_features
+
+__all__ = ["TRAIN_HZ", "TrainOptions", "TrainResult", "check_drop", "manifest", "train_detector"]
+
+#: Rows per second of each flight the detector is fitted on (every 5th grid row).
+TRAIN_HZ: float = 2.0
+
+
+@dataclass(frozen=True)
+class TrainOptions:
+    """``drop``: channels, groups, tables or log columns not to use
+    (:func:`.channels.drop_channels`); ``holdout``: share of flights held out for scoring;
+    ``holdout_flights``: flight-id patterns held out (fnmatch); ``seed``: the hold-out draw
+    and the booster's; ``rounds``: boosting rounds; ``n_jobs``: threads; ``train_hz``: rows
+    per second fitted; ``partial``: read an unfinished ``tlm generate`` data set."""
+
+    drop: tuple[str, ...] = ()
+    holdout: float = 0.0
+    holdout_flights: tuple[str, ...] = ()
+    seed: int = 0
+    rounds: int = 100
+    n_jobs: int = 2
+    train_hz: float = TRAIN_HZ
+    partial: bool = False
+
+
+@dataclass
+class TrainResult:
+    """The fitted :class:`~.model.Detector`, the flights used and held out, the held-out
+    scores (empty without held-out flights) and timings [s]."""
+
+    detector: Detector
+    train: list[str]
+    held_out: list[str]
+    scores: dict[str, Any] = field(default_factory=dict)
+    times: dict[str, float] = field(default_factory=dict)
+    rows: dict[str, int] = field(default_factory=dict)
+
+
+def check_drop(drop: Sequence[str]) -> list[str]:
+    """The channels left after ``drop`` (:func:`.channels.drop_channels`); raises
+    :class:`DetectError` for an entry that names nothing, or when none is left."""
+    channels, unknown = drop_channels(drop)
+    if unknown:
+        raise DetectError(f"--drop-features: {', '.join(unknown)} names no channel, group, "
+                          f"table or column the detector reads (see tlm train --list-channels)")
+    if not channels:
+        raise DetectError("--drop-features leaves no channel to train on")
+    return channels
+
+
+def _held_out(ids: Sequence[str], opt: TrainOptions) -> set[str]:
+    from tlm_process.pipeline.scaling import split_flights
+
+    if not opt.holdout and not opt.holdout_flights:
+        return set()
+    _, test = split_flights(list(ids), opt.holdout, opt.seed, list(opt.holdout_flights))
+    return set(test)
+
+
+def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
+                   progress: Callable[[int, str], None] | None = None) -> TrainResult:
+    """Read the flights of ``paths``, fit the detector, score the held-out flights."""
+    t_start = time.perf_counter()
+    channels = check_drop(opt.drop)
+    features = feature_names(channels)
+    stride = max(1, int(round(GRID_HZ / opt.train_hz))) if opt.train_hz else 1
+    blocks: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = []
+    lacking: dict[str, list[str]] = {}
+    labels_seen: set[int] = set()
+    n = 0
+    for log in read_training(paths, partial=opt.partial):
+        grid, X, lack = log_features(log, channels)
+        for col in lack:
+            lacking.setdefault(col, []).append(log.id)
+        y = window_labels(grid, log.windows).astype(np.int16)
+        labels_seen |= {int(v) for v in np.unique(y)}
+        blocks.append((log.id, grid, X, y))
+        n += 1
+        if progress is not None:
+            progress(n, log.id)
+    if not blocks:
+        raise DetectError("no flights to train on")
+    if lacking:
+        need = needed_columns(channels)
+        first = sorted(lacking)[0]
+        raise DetectError(f"{len(lacking)} log column(s) the detector reads are missing in "
+                          f"training flights, e.g. {first} (flight {lacking[first][0]}; "
+                          f"channels {', '.join(need.get(first, [])[:3])}): add "
+                          f"--drop-features {','.join(sorted(lacking))}")
+    t_read = time.perf_counter()
+    ids = [b[0] for b in blocks]
+    held = _held_out(ids, opt)
+    if held and len(held) == len(ids):
+        raise DetectError("every flight is held out: nothing left to train on")
+    fit_X, fit_y = [], []
+    for fid, _, X, y in blocks:
+        if fid in held:
+            continue
+        fit_X.append(X[::stride])
+        fit_y.append(y[::stride])
+    Xf = np.concatenate(fit_X)
+    yf = np.concatenate(fit_y)
+    det = Detector.fit(Xf, yf, channels, features, rounds=opt.rounds, seed=opt.seed,
+                       n_jobs=opt.n_jobs)
+    t_fit = time.perf_counter()
+    scores = _score(det, [b for b in blocks if b[0] in held]) if held else {}
+    t_end = time.perf_counter()
+    return TrainResult(det, [i for i in ids if i not in held], sorted(held), scores,
+                       {"read_s": t_read - t_start, "fit_s": t_fit - t_read,
+                        "score_s": t_end - t_fit, "total_s": t_end - t_start},
+                       {"fit_rows": len(yf), "flights": len(ids),
+                        **{f"rows_label_{k}": int((yf == k).sum())
+                           for k in sorted(labels_seen)}})
+
+
+def _score(det: Detector, blocks: Sequence[tuple[str, np.ndarray, np.ndarray, np.ndarray]]
+           ) -> dict[str, Any]:
+    """Row macro-F1 over the labels present, accuracy, detection delays and false alarms of
+    ``det`` on ``blocks`` (every grid row)."""
+    from sklearn.metrics import f1_score
+
+    from tlm_process.evaluate.events import detection_summary
+    from tlm_process.labels import class_name
+
+    flights, times, true, pred = [], [], [], []
+    for fid, grid, X, y in blocks:
+        p = det.predict_proba(X)
+        flights.append(np.full(len(y), fid, dtype=object))
+        times.append(grid)
+        true.append(y)
+        pred.append(np.asarray(det.classes)[p.argmax(axis=1)])
+    f = np.concatenate(flights)
+    t = np.concatenate(times)
+    yt = np.concatenate(true)
+    yp = np.concatenate(pred)
+    present = sorted({int(v) for v in np.unique(yt)})
+    out: dict[str, Any] = {
+        "flights": len(blocks), "rows": len(yt),
+        "accuracy": float((yt == yp).mean()),
+        "macro_f1": float(f1_score(yt, yp, labels=present, average="macro",
+                                   zero_division=0)),
+        "f1": {class_name(c): float(v) for c, v in zip(
+            present, f1_score(yt, yp, labels=present, average=None, zero_division=0),
+            strict=True)},
+        "labels": present,
+    }
+    out["events"] = _jsonable(detection_summary(f, t, yt, yp))
+    return out
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def manifest(result: TrainResult, opt: TrainOptions, inputs: Sequence[str],
+             command: str) -> dict[str, Any]:
+    """What ``tlm train`` records beside the weights (:class:`~.model.Detector.save` adds
+    the channels, features, classes and the weights' hash)."""
+    from tlm_process.labels import class_name
+
+    by = {c.name: c for c in CHANNELS}
+    det = result.detector
+    return {
+        "tlm_version": "0.1.0",
+        "command": command,
+        "model": "whole-log",
+        "inputs": list(inputs),
+        "grid_hz": GRID_HZ, "window_s": list(WINDOW_S), "train_hz": opt.train_hz,
+        "channel_info": {c: {"kind": by[c].kind, "unit": by[c].unit,
+                             "needs": list(by[c].needs)} for c in det.channels},
+        "class_names": {str(c): class_name(c) for c in det.classes},
+        "options": {"drop": list(opt.drop), "holdout": opt.holdout,
+                    "holdout_flights": list(opt.holdout_flights), "seed": opt.seed,
+                    "rounds": opt.rounds},
+        "n_jobs": opt.n_jobs,
+        "data": {"flights": result.rows.get("flights"), "train_flights": len(result.train),
+                 "held_out_flights": result.held_out, "fit_rows": result.rows.get("fit_rows"),
+                 "rows_per_label": {k.rsplit("_", 1)[1]: v for k, v in result.rows.items()
+                                    if k.startswith("rows_label_")}},
+        "held_out_scores": result.scores,
+        "times_s": {k: round(v, 2) for k, v in result.times.items()},
+    }
