@@ -445,3 +445,39 @@ def test_process_refuses_a_real_log_without_imu(tmp_path: Path, capsys) -> None:
     rc, _, err = _cli(["process", str(real_path("mechanical_fail.log")), "--out",
                        str(tmp_path / "ds"), "--tables", "IMU,GPS"], capsys)
     assert rc == 2 and "no IMU table" in err
+
+
+# --------------------------------------------------------------------------- tlm crosscheck -
+@pytest.mark.filterwarnings("ignore::tlm_sim.params.UnmodelledParamWarning")
+def test_crosscheck_scenario_of_a_log_that_starts_at_arming(tmp_path: Path) -> None:
+    from tlm_process.crosscheck.metrics import armed_span_us
+    from tlm_process.crosscheck.scenario import reconstruct
+
+    src = reference_path("gps_s12.bin")
+    path, t_ev = _cut_at_arming(src, tmp_path / "cut")
+    sc = reconstruct(path)
+    first = min(int(df.TimeUS.iloc[0]) for df in sc.tables.values() if len(df))
+    assert sc.sitl_arm_us == first and 0 < first - t_ev < 100_000
+    whole = reconstruct(src)
+    assert whole.sitl_arm_us == t_ev  # EV 10 as before
+    assert armed_span_us(sc.tables)[1] == armed_span_us(whole.tables)[1]  # EV 11
+    # ARM messages alone give the span too
+    no_ev = {n: df for n, df in whole.tables.items() if n != "EV"}
+    a, d = armed_span_us(no_ev)
+    arm = whole.tables["ARM"]
+    assert (a, d) == tuple(float(arm.TimeUS[arm.ArmState == s].iloc[0]) for s in (1, 0))
+
+
+@pytest.mark.parametrize("name, error", [
+    ("log171.bin", "the log has no mission"),
+    ("mechanical_fail.log", "the log has no mission"),
+    ("nan.log", "LOG_BITMASK"),
+    ("backend_log_80k.bin", "never armed"),
+])
+def test_crosscheck_refuses_real_logs_in_one_line(name: str, error: str, tmp_path: Path,
+                                                  capsys) -> None:
+    rc, _, err = _cli(["crosscheck", str(real_path(name)), "--out", str(tmp_path / "c")],
+                      capsys)
+    assert rc == 2
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("tlm: error:") and error in last

@@ -1,6 +1,7 @@
 """Per-channel comparison of a tlm flight with a SITL log of the same scenario.
 
-Both flights are aligned at arming (EV 10): ``t = TimeUS - armed`` on each side. Truth comes
+Both flights are aligned at arming (EV 10, or ``logread.arming_time_us``'s ARM or motor rule
+for a log without it): ``t = TimeUS - armed`` on each side. Truth comes
 from the SIM table on both sides (SITL logs its simulator state there; tlm logs its own).
 Fault windows are each side's own (SITL: the sidecar/PARM times; tlm: its fault records).
 
@@ -105,12 +106,27 @@ def signature_rows(tlm: Mapping[str, float], sitl: Mapping[str, float],
 
 
 def armed_span_us(tables: Mapping[str, pd.DataFrame]) -> tuple[float, float]:
-    """(first EV 10, last EV 11 after it) TimeUS; the log's end when never disarmed."""
-    ev = tables["EV"]
-    a = float(ev[ev.Id == ARMED].TimeUS.iloc[0])
-    d = ev[(ev.Id == DISARMED) & (ev.TimeUS > a)].TimeUS
-    end = float(d.iloc[-1]) if len(d) else float(tables["GPS"].TimeUS.max())
-    return a, end
+    """(arming, last EV 11 after it) TimeUS [µs]: the arming time of
+    :func:`tlm_process.logread.arming_time_us` (the first EV 10, else ARM ArmState 1, else
+    the motor outputs of a log that starts at arming); the end: the last EV 11 after it, else
+    the first ARM ArmState 0 after it, else the last GPS row.
+
+    Raises:
+        ValueError: the log never armed.
+    """
+    from tlm_process.logread import arming_time_us, disarm_time_us
+
+    a_us, how = arming_time_us(dict(tables))
+    if a_us is None:
+        raise ValueError(f"the log never armed ({how}: no EV 10, ARM or motor output rise)")
+    a = float(a_us)
+    ev = tables.get("EV")
+    d = ev[(ev.Id == DISARMED) & (ev.TimeUS > a)].TimeUS if ev is not None and len(ev) \
+        else pd.Series([], dtype=float)
+    if len(d):
+        return a, float(d.iloc[-1])
+    end, how = disarm_time_us({"ARM": tables["ARM"]} if "ARM" in tables else {}, None, a_us)
+    return a, float(end) if how.startswith("ARM") else float(tables["GPS"].TimeUS.max())
 
 
 def true_ne(sim: pd.DataFrame, home: Sequence[float]) -> np.ndarray:

@@ -4,7 +4,10 @@ From the log alone: the mission from its CMD messages (the last upload), home fr
 1, the AHRS home set at arming) or the first 3D GPS fix, the parameters from PARM (the values
 at log start of the parameters tlm knows, loaded as a whole set: those tlm does not model are
 carried, reported in one warning and in the flight's meta, and change nothing), the arming
-time from EV 10, and the faults from the SIM_* parameter changes (``tlm_sim.faults.detect``).
+time from :func:`tlm_process.logread.arming_time_us` (EV 10, else the ARM message, else the
+motor outputs of a log that starts at arming), and the faults from the SIM_* parameter changes
+(``tlm_sim.faults.detect``). The log is read through :func:`tlm_process.logread.read_log_tables`
+(a 4.x log's tables as logged; older logs normalised).
 A sidecar JSON (the reference logs' ``.json``) is preferred where it is given: its mission
 (with Algorithm 1's raw points), SITL home, seed and fault records (Eq. 4, with the parameters
 set).
@@ -38,6 +41,10 @@ TYPES = tuple(dict.fromkeys((
     "CMD", "PARM", "ORGN", "MSG", *SIGNATURE_MESSAGES)))  # + what the fault signatures read
 
 
+#: what the arming time needs besides EV (:func:`tlm_process.logread.arming_time_us`)
+_ARMING_TYPES = ("ARM", "RCOU")
+
+
 class ScenarioError(ValueError):
     """The log lacks what a scenario needs (no mission, never armed, ...)."""
 
@@ -59,7 +66,7 @@ class SitlScenario:
             faults, or flown as raw ``changes``).
         changes: the faults as raw ``(time_s, name, value)`` parameter changes on tlm's time
             line when a fault's type is not in ``FAULT_TYPES`` (else None).
-        sitl_arm_us: SITL's arming time (EV 10) [us].
+        sitl_arm_us: SITL's arming time (EV 10; ``logread.arming_time_us``) [us].
         tlm_arm_s: tlm's arming time [s].
         seed: seed for tlm's flight (the sidecar's, else 0).
         source: where mission and faults came from ("sidecar" or "log").
@@ -124,10 +131,15 @@ def mission_from_cmd(cmd: pd.DataFrame, home: tuple[float, float, float], name: 
     and a final NAV_LAND are flown, RTL ends the mission; an item or parameter tlm does not fly
     is a ScenarioError naming it, never dropped.
     """
+    from tlm_sim.flightlog.binreader import MISSION_FIELDS
     from tlm_sim.flightlog.binreader import mission_from_cmd as cmd_items
     from tlm_sim.mission import MissionError
     from tlm_sim.mission.wpl import mission_from_items
 
+    missing = [c for c in ("CTot", *MISSION_FIELDS) if c not in cmd.columns]
+    if missing:  # an older firmware's CMD (Copter 3.x: no Frame, Prm2-4)
+        raise ScenarioError(f"the log has no mission (no CMD messages with "
+                            f"{', '.join(missing)}: an older firmware's layout)")
     items = cmd_items(cmd)
     if not items:
         raise ScenarioError("the log has no mission (no CMD messages)")
@@ -378,6 +390,25 @@ def _read_sidecar(path: Path, explicit: bool) -> dict[str, Any] | None:
     return doc
 
 
+def _read_tables(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, float]]:
+    """The ``TYPES`` tables (and ARM, RCOU for the arming time) of a log, normalised by
+    :func:`tlm_process.logread.read_log_tables` (a 4.x log's exactly as logged), each type
+    tlm knows present (empty when the log has none, as ``read_bin`` gives them), and the
+    log's parameters."""
+    from tlm_process.logread import LogReadError, read_log_tables
+    from tlm_sim.flightlog import SCHEMAS
+    from tlm_sim.flightlog.binreader import empty_table
+
+    names = (*TYPES, *_ARMING_TYPES)
+    try:
+        lt = read_log_tables(path, names)
+    except LogReadError as exc:
+        raise ScenarioError(str(exc)) from None
+    tables = {n: lt.tables[n] if n in lt.tables else empty_table(SCHEMAS[n])
+              for n in names if n in lt.tables or n in SCHEMAS}
+    return tables, lt.params
+
+
 def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
                 seed: int | None = None) -> SitlScenario:
     """The scenario of a SITL ``.bin`` (and its sidecar, when given or found beside it).
@@ -391,16 +422,16 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
             a value tlm does not simulate (e.g. FRAME_CLASS 4), or its SITL model and its
             FRAME_CLASS / FRAME_TYPE name different frames.
     """
+    from tlm_process.logread import arming_time_us
     from tlm_sim import Mission
-    from tlm_sim.flightlog import read_bin
     from tlm_sim.params import Params
 
     bin_path = Path(bin_path)
-    t = read_bin(bin_path, TYPES)
-    ev = t["EV"]
-    armed = ev[ev.Id == ARMED].TimeUS
-    if not len(armed):
-        raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10)")
+    t, log_params = _read_tables(bin_path)
+    arm_us, _ = arming_time_us(t, log_params)
+    if arm_us is None:
+        raise ScenarioError(f"{bin_path.name}: the vehicle never armed (no EV 10, no ARM "
+                            "message, no motor output rise)")
     side_path = Path(sidecar) if sidecar else bin_path.with_suffix(".json")
     doc = _read_sidecar(side_path, explicit=bool(sidecar))
     from tlm_sim.params import ParamError
@@ -412,7 +443,7 @@ def reconstruct(bin_path: str | Path, sidecar: str | Path | None = None,
     except ParamError as exc:
         raise ScenarioError(f"tlm cannot fly this log's parameters: {exc}") from None
     tlm_arm_s = float(params["TLM_ARM_TIME"])
-    sitl_arm_us = float(armed.iloc[0])
+    sitl_arm_us = float(arm_us)
 
     def to_tlm_s(us: float) -> float:
         return (us - sitl_arm_us) * 1e-6 + tlm_arm_s
