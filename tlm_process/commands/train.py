@@ -69,8 +69,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                         "tlm fly folders")
     p.add_argument("--out", type=folder, metavar="MODEL", help="the model folder to write")
     p.add_argument("--holdout", type=fraction(zero=True), default=0.0, metavar="F",
-                   help="hold out this share of the flights (drawn with --seed) and score the "
-                        "detector on them (default 0: train on all)")
+                   help="hold out each flight with probability F (a hash of --seed and its "
+                        "id) and score the detector on them (default 0: train on all)")
     p.add_argument("--holdout-flight", action="append", default=[], metavar="PATTERN",
                    help="hold out the flights whose id matches PATTERN (fnmatch; repeatable)")
     p.add_argument("--drop-features", action="append", default=[],

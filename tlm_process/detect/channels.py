@@ -220,7 +220,9 @@ def _ctun(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
 
 
 def _mode(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
-    return {"ModeNum": _col(df, "ModeNum"), "Rsn": _col(df, "Rsn")}
+    """Mode number and reason (NaN where the firmware logs none: Rsn is 3.5 and later)."""
+    nan = np.full(len(df), np.nan)
+    return {c: _col(df, c) if c in df.columns else nan for c in ("ModeNum", "Rsn")}
 
 
 def _ch(group: str, specs: Sequence[tuple[str, str, str]], needs: Mapping[str, Sequence[str]],
@@ -305,6 +307,8 @@ def _sources() -> tuple[_Source, ...]:
 
 def _err(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
     """Per followed subsystem, its last error code (0 before its first ERR row): a step."""
+    if not {"Subsys", "ECode"} <= set(df.columns):
+        return {f"S{s}": np.zeros(len(df)) for s in ERR_SUBSYSTEMS}
     sub, code = _col(df, "Subsys"), _col(df, "ECode")
     out = {}
     for s in ERR_SUBSYSTEMS:

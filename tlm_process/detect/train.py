@@ -3,14 +3,17 @@
 Every flight is read (:func:`.data.read_training`), turned into its grid rows and features
 (:func:`.predict.log_features`) and labelled by its fault windows; training uses every
 flight's rows thinned to :data:`TRAIN_HZ` (rows a tenth of a second apart have near-identical
-window statistics). Flights can be held out (``holdout``: a fraction, drawn with ``seed``;
-``holdout_flights``: name patterns); the held-out flights are scored on every grid row: row
-macro-F1 over the labels present, detection delay per class and false alarms per flight hour
-(:mod:`tlm_process.evaluate.events`), and these scores go into the manifest.
+window statistics). Flights can be held out: ``holdout`` holds out each flight with that
+probability, by a hash of ``seed`` and its id (:func:`held_out_draw`); ``holdout_flights``
+by name pattern. The held-out flights are scored on every grid row: row macro-F1 over the
+labels present, detection delay per class and false alarms per flight hour
+(:mod:`tlm_process.evaluate.events`); the scores go into the manifest.
 """
 
 from __future__ import annotations
 
+import fnmatch
+import hashlib
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -35,7 +38,8 @@ TRAIN_HZ: float = 2.0
 @dataclass(frozen=True)
 class TrainOptions:
     """``drop``: channels, groups, tables or log columns not to use
-    (:func:`.channels.drop_channels`); ``holdout``: share of flights held out for scoring;
+    (:func:`.channels.drop_channels`); ``holdout``: probability that a flight is held out for
+    scoring (:func:`held_out_draw`);
     ``holdout_flights``: flight-id patterns held out (fnmatch); ``seed``: the hold-out draw
     and the booster's; ``rounds``: boosting rounds; ``n_jobs``: threads; ``train_hz``: rows
     per second fitted; ``partial``: read an unfinished ``tlm generate`` data set."""
@@ -75,13 +79,17 @@ def check_drop(drop: Sequence[str]) -> list[str]:
     return channels
 
 
-def _held_out(ids: Sequence[str], opt: TrainOptions) -> set[str]:
-    from tlm_process.pipeline.scaling import split_flights
+def held_out_draw(flight_id: str, seed: int) -> float:
+    """The flight's hold-out draw in [0, 1): a hash of (``seed``, its id), so whether a flight
+    is held out depends on nothing else (not on the other flights, their order or number)."""
+    h = hashlib.sha256(f"{seed}:{flight_id}".encode()).digest()
+    return int.from_bytes(h[:8], "big") / 2.0**64
 
-    if not opt.holdout and not opt.holdout_flights:
-        return set()
-    _, test = split_flights(list(ids), opt.holdout, opt.seed, list(opt.holdout_flights))
-    return set(test)
+
+def _is_held_out(flight_id: str, opt: TrainOptions) -> bool:
+    if any(fnmatch.fnmatchcase(flight_id, p) for p in opt.holdout_flights):
+        return True
+    return held_out_draw(flight_id, opt.seed) < opt.holdout
 
 
 def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
@@ -91,21 +99,27 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
     channels = check_drop(opt.drop)
     features = feature_names(channels)
     stride = max(1, int(round(GRID_HZ / opt.train_hz))) if opt.train_hz else 1
-    blocks: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = []
+    fit_X: list[np.ndarray] = []
+    fit_y: list[np.ndarray] = []
+    held: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = []
+    ids: list[str] = []
     lacking: dict[str, list[str]] = {}
     labels_seen: set[int] = set()
-    n = 0
     for log in read_training(paths, partial=opt.partial):
         grid, X, lack = log_features(log, channels)
         for col in lack:
             lacking.setdefault(col, []).append(log.id)
         y = window_labels(grid, log.windows).astype(np.int16)
-        labels_seen |= {int(v) for v in np.unique(y)}
-        blocks.append((log.id, grid, X, y))
-        n += 1
+        ids.append(log.id)
+        if _is_held_out(log.id, opt):
+            held.append((log.id, grid, X, y))
+        else:
+            labels_seen |= {int(v) for v in np.unique(y)}
+            fit_X.append(X[::stride])
+            fit_y.append(y[::stride])
         if progress is not None:
-            progress(n, log.id)
-    if not blocks:
+            progress(len(ids), log.id)
+    if not ids:
         raise DetectError("no flights to train on")
     if lacking:
         need = needed_columns(channels)
@@ -114,25 +128,24 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
                           f"training flights, e.g. {first} (flight {lacking[first][0]}; "
                           f"channels {', '.join(need.get(first, [])[:3])}): add "
                           f"--drop-features {','.join(sorted(lacking))}")
-    t_read = time.perf_counter()
-    ids = [b[0] for b in blocks]
-    held = _held_out(ids, opt)
-    if held and len(held) == len(ids):
+    unmatched = [p for p in opt.holdout_flights
+                 if not any(fnmatch.fnmatchcase(i, p) for i in ids)]
+    if unmatched:
+        raise DetectError(f"--holdout-flight {unmatched[0]!r} matches no flight (flights: "
+                          f"{', '.join(ids[:4])}{' ...' if len(ids) > 4 else ''})")
+    if not fit_X:
         raise DetectError("every flight is held out: nothing left to train on")
-    fit_X, fit_y = [], []
-    for fid, _, X, y in blocks:
-        if fid in held:
-            continue
-        fit_X.append(X[::stride])
-        fit_y.append(y[::stride])
+    t_read = time.perf_counter()
     Xf = np.concatenate(fit_X)
     yf = np.concatenate(fit_y)
+    del fit_X, fit_y
     det = Detector.fit(Xf, yf, channels, features, rounds=opt.rounds, seed=opt.seed,
                        n_jobs=opt.n_jobs)
     t_fit = time.perf_counter()
-    scores = _score(det, [b for b in blocks if b[0] in held]) if held else {}
+    scores = _score(det, held) if held else {}
     t_end = time.perf_counter()
-    return TrainResult(det, [i for i in ids if i not in held], sorted(held), scores,
+    held_ids = {h[0] for h in held}
+    return TrainResult(det, [i for i in ids if i not in held_ids], sorted(held_ids), scores,
                        {"read_s": t_read - t_start, "fit_s": t_fit - t_read,
                         "score_s": t_end - t_fit, "total_s": t_end - t_start},
                        {"fit_rows": len(yf), "flights": len(ids),
