@@ -151,20 +151,32 @@ def test_features_are_causal(cut, seed):
 # Findings
 # --------------------------------------------------------------------------------------------
 
+def _pred(lab: np.ndarray) -> pd.DataFrame:
+    p = np.where(lab[:, None] == np.arange(4), 0.9, 0.1 / 3)
+    return pd.DataFrame({"TimeUS": np.arange(len(lab)) * 100_000, "p_Normal": p[:, 0],
+                         "p_GPS": p[:, 1], "p_Acc": p[:, 2], "p_Engine": p[:, 3],
+                         "label": lab})
+
+
 def test_find_faults_keeps_sustained_runs_and_merges_close_ones():
-    t = np.arange(400) * 100_000
-    lab = np.zeros(400, dtype=int)
+    lab = np.zeros(500, dtype=int)
     lab[50:53] = 1     # 0.3 s: flicker, dropped
     lab[100:120] = 3   # 2 s
-    lab[140:160] = 3   # 2 s, 0.2 s... 2 s later: merged
-    lab[300:330] = 2
-    p = np.where(lab[:, None] == np.arange(4), 0.9, 0.1 / 3)
-    pred = pd.DataFrame({"TimeUS": t, "p_Normal": p[:, 0], "p_GPS": p[:, 1], "p_Acc": p[:, 2],
-                         "p_Engine": p[:, 3], "label": lab})
-    found = find_faults(pred, [0, 1, 2, 3])
-    assert [(f.name, f.start_s, f.end_s) for f in found] == [
-        ("Engine", 10.0, pytest.approx(16.0)), ("Acc", 30.0, pytest.approx(33.0))]
+    lab[140:160] = 3   # 2 s, 2 s later: merged
+    lab[300:330] = 2   # 15 s later: another fault
+    found = find_faults(_pred(lab), [0, 1, 2, 3])
+    assert [(f.name, f.start_s, f.end_s, f.also) for f in found] == [
+        ("Engine", 10.0, pytest.approx(16.0), ()), ("Acc", 30.0, pytest.approx(33.0), ())]
     assert found[0].peak == pytest.approx(0.9)
+
+
+def test_runs_of_two_classes_that_touch_are_one_fault_named_by_the_main_class():
+    lab = np.zeros(400, dtype=int)
+    lab[100:115] = 1   # 1.5 s of GPS at the onset ...
+    lab[115:200] = 2   # ... of 8.5 s of Acc
+    found = find_faults(_pred(lab), [0, 1, 2, 3])
+    assert [(f.name, f.start_s, f.end_s, f.also) for f in found] == [
+        ("Acc", 10.0, pytest.approx(20.0), (1,))]
 
 
 # --------------------------------------------------------------------------------------------
@@ -279,7 +291,8 @@ def test_detect_writes_summary_predictions_and_timeline(small_model, tmp_path, c
     assert main(["detect", str(small_model), str(log), str(reference_path("normal_s11.bin")),
                  "--out", str(out), "--quiet"]) == 0
     summary = pd.read_csv(out / "summary.csv")
-    assert list(summary.columns) == ["log", "class", "label", "start_s", "end_s", "peak_p"]
+    assert list(summary.columns) == ["log", "class", "label", "start_s", "end_s", "peak_p",
+                                     "also"]
     comb = summary[summary["log"] == str(log)]
     gps = comb[comb["class"] == "GPS"]
     assert len(gps) and abs(gps["start_s"].iloc[0] - 71.7) < 3.0  # sidecar: 71.7 s

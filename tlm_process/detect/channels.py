@@ -167,7 +167,19 @@ def _bat(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
     return {"VoltCell": volt / cells}
 
 
-_XKF3 = ("IVN", "IVE", "IVD", "IPN", "IPE", "IPD", "IMX", "IMY", "IMZ", "IYAW", "IVT")
+
+
+def _xkf3(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
+    """The EKF's innovations without a direction that depends on the route or the place:
+    horizontal velocity and position innovations as magnitudes (IVH, IPH), vertical ones
+    signed (IVD, IPD: down), the magnetometer innovation's magnitude (IMag) and the yaw
+    innovation's size (IYAW)."""
+    return {"IVH": np.hypot(_col(df, "IVN"), _col(df, "IVE")), "IVD": _col(df, "IVD"),
+            "IPH": np.hypot(_col(df, "IPN"), _col(df, "IPE")), "IPD": _col(df, "IPD"),
+            "IMag": np.sqrt(_col(df, "IMX") ** 2 + _col(df, "IMY") ** 2
+                            + _col(df, "IMZ") ** 2),
+            "IYAW": np.abs(_col(df, "IYAW"))}
+
 _XKF4 = ("SV", "SP", "SH", "SM", "SVT", "errRP", "FS", "TS", "SS", "GPS", "PI")
 
 
@@ -214,9 +226,12 @@ def _rcin(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
 
 
 def _ctun(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
-    alt, crt = _col(df, "Alt"), _col(df, "CRt")
-    return {"ThO": _col(df, "ThO"), "ThH": _col(df, "ThH"), "AltErr": _col(df, "DAlt") - alt,
-            "CRt": crt, "CRtErr": _col(df, "DCRt") - crt}
+    """Throttle out, and its excess over the learned hover throttle (ThH itself is the
+    vehicle's, not the flight's: a heavier copter hovers higher), altitude and climb-rate
+    errors, climb rate."""
+    alt, crt, tho = _col(df, "Alt"), _col(df, "CRt"), _col(df, "ThO")
+    return {"ThO": tho, "ThOverHover": tho - _col(df, "ThH"),
+            "AltErr": _col(df, "DAlt") - alt, "CRt": crt, "CRtErr": _col(df, "DCRt") - crt}
 
 
 def _mode(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
@@ -268,16 +283,17 @@ def _sources() -> tuple[_Source, ...]:
          "YawErr": ("DesYaw", "Yaw")}, "ATT"), _att))
     for i in (0, 1):
         src.append(_Source("BARO", f"BARO{i}", ("I", i), _ch(f"BARO{i}", [
-            ("Alt", L, "m"), ("CRt", L, "m/s"), ("H", L, "healthy")], {}, "BARO"), _baro))
+            ("Alt", D, "m"), ("CRt", L, "m/s"), ("H", L, "healthy")], {}, "BARO"), _baro))
         src.append(_Source("MAG", f"MAG{i}", ("I", i), _ch(f"MAG{i}", [
             ("Norm", D, "mGauss"), ("Health", L, "healthy")],
             {"Norm": ("MagX", "MagY", "MagZ")}, "MAG"), _mag))
     src.append(_Source("BAT", "BAT", ("Inst", 0), _ch("BAT", [("VoltCell", L, "V")],
                                                       {"VoltCell": ("Volt",)}, "BAT"), _bat))
     src.append(_Source("XKF3", "XKF3L0", ("C", 0), _ch("XKF3L0", [
-        (q, L, "m/s" if q.startswith("IV") else "m" if q.startswith("IP") else
-         "mGauss" if q.startswith("IM") else "deg" if q == "IYAW" else "-") for q in _XKF3],
-        {}, "XKF3"), _plain(_XKF3)))
+        ("IVH", L, "m/s"), ("IVD", L, "m/s"), ("IPH", L, "m"), ("IPD", L, "m"),
+        ("IMag", L, "mGauss"), ("IYAW", L, "deg")],
+        {"IVH": ("IVN", "IVE"), "IPH": ("IPN", "IPE"), "IMag": ("IMX", "IMY", "IMZ")},
+        "XKF3"), _xkf3))
     src.append(_Source("XKF4", "XKF4L0", ("C", 0), _ch("XKF4L0", [
         (q, L, "-") for q in _XKF4], {}, "XKF4"), _plain(_XKF4)))
     src.append(_Source("XKF4", "XKF4L1", ("C", 1), _ch("XKF4L1", [
@@ -293,8 +309,9 @@ def _sources() -> tuple[_Source, ...]:
     src.append(_Source("RCIN", "RCIN", None, _ch("RCIN", [
         (c, L, "us") for c in ("C1", "C2", "C3", "C4")], {}, "RCIN"), _rcin))
     src.append(_Source("CTUN", "CTUN", None, _ch("CTUN", [
-        ("ThO", L, "-"), ("ThH", L, "-"), ("AltErr", L, "m"), ("CRt", L, "cm/s"),
-        ("CRtErr", L, "cm/s")], {"AltErr": ("DAlt", "Alt"), "CRtErr": ("DCRt", "CRt")},
+        ("ThO", L, "-"), ("ThOverHover", L, "-"), ("AltErr", L, "m"), ("CRt", L, "cm/s"),
+        ("CRtErr", L, "cm/s")], {"ThOverHover": ("ThO", "ThH"), "AltErr": ("DAlt", "Alt"),
+                                 "CRtErr": ("DCRt", "CRt")},
         "CTUN"), _ctun))
     src.append(_Source("MODE", "MODE", None, (
         Channel("MODE.ModeNum", S, "mode", ("MODE",)),

@@ -6,7 +6,8 @@ user's log as it saw its training flights). :func:`predict_log`: probabilities p
 the predicted label on every grid row. :func:`find_faults`: the faults a log holds by the
 predictions: runs of one fault class that last at least :data:`MIN_FAULT_S` (a persistence
 filter, as :data:`tlm_process.evaluate.events.PERSISTENCE_S`), merged across gaps shorter than
-:data:`MERGE_GAP_S`.
+:data:`MERGE_GAP_S`, and runs of several classes that touch taken as one fault named by its
+main class.
 """
 
 from __future__ import annotations
@@ -28,8 +29,9 @@ __all__ = ["MERGE_GAP_S", "MIN_FAULT_S", "Finding", "find_faults", "log_features
 
 #: A fault class must be predicted on consecutive rows covering this long to be reported [s].
 MIN_FAULT_S: float = PERSISTENCE_S
-#: Runs of one class closer than this are one fault [s].
-MERGE_GAP_S: float = 3.0
+#: Runs closer than this are one fault [s] (a jammed GPS regains its fix for a few seconds at
+#: a time; faults that follow each other in tlm generate's sequences are 15 s apart or more).
+MERGE_GAP_S: float = 5.0
 
 
 def log_features(log: LogData, channels: Sequence[str]
@@ -63,37 +65,31 @@ def predict_log(detector: object, log: LogData) -> pd.DataFrame:
 class Finding:
     """One fault the detector reports: its class ``label``, ``start_s`` / ``end_s`` (log time,
     s since boot; end = the last row predicted + one grid step) and the highest probability
-    of the class inside (``peak``)."""
+    of the class inside (``peak``); ``also``: other classes predicted for a shorter time
+    within the same event (:func:`find_faults`)."""
 
     label: int
     start_s: float
     end_s: float
     peak: float
+    also: tuple[int, ...] = ()
 
     @property
     def name(self) -> str:
         return class_name(self.label)
 
 
-def find_faults(pred: pd.DataFrame, classes: Sequence[int],
-                min_s: float = MIN_FAULT_S, gap_s: float = MERGE_GAP_S) -> list[Finding]:
-    """The faults in ``pred`` (:func:`predict_log`'s table): per fault class, the runs of
-    consecutive rows predicted as it that cover at least ``min_s`` (shorter ones are
-    flicker), runs of a class closer than ``gap_s`` merged into one; in order of start."""
-    t = pred["TimeUS"].to_numpy(np.float64) * 1e-6
-    if not len(t):
-        return []
+def _runs(t: np.ndarray, lab: np.ndarray, prob: dict[int, np.ndarray], classes: Sequence[int],
+          min_s: float, gap_s: float) -> list[tuple[int, np.ndarray]]:
+    """Per fault class, (class, row indices) of its runs of consecutive predicted rows that
+    cover ``min_s``, runs of one class less than ``gap_s`` apart merged."""
     dt = 1.0 / GRID_HZ
-    lab = pred["label"].to_numpy()
-    out: list[Finding] = []
+    out: list[tuple[int, np.ndarray]] = []
     for c in classes:
         if int(c) == 0:
             continue
         rows = np.flatnonzero(lab == c)
-        if not len(rows):
-            continue
-        prob = pred[f"p_{class_name(int(c))}"].to_numpy()
-        runs = np.split(rows, np.flatnonzero(np.diff(rows) > 1) + 1)
+        runs = np.split(rows, np.flatnonzero(np.diff(rows) > 1) + 1) if len(rows) else []
         runs = [r for r in runs if len(r) * dt >= min_s - dt / 2]
         merged: list[list[np.ndarray]] = []
         for r in runs:
@@ -101,8 +97,45 @@ def find_faults(pred: pd.DataFrame, classes: Sequence[int],
                 merged[-1].append(r)
             else:
                 merged.append([r])
-        for grp in merged:
-            idx = np.concatenate(grp)
-            out.append(Finding(int(c), float(t[idx[0]]), float(t[idx[-1]] + dt),
-                               float(prob[idx].max())))
-    return sorted(out, key=lambda f: (f.start_s, f.label))
+        out += [(int(c), np.concatenate(g)) for g in merged]
+    return sorted(out, key=lambda x: t[x[1][0]])
+
+
+def find_faults(pred: pd.DataFrame, classes: Sequence[int],
+                min_s: float = MIN_FAULT_S, gap_s: float = MERGE_GAP_S) -> list[Finding]:
+    """The faults in ``pred`` (:func:`predict_log`'s table), in order of start.
+
+    Per fault class, the runs of consecutive rows predicted as it that cover at least
+    ``min_s`` (shorter ones are flicker), runs of a class less than ``gap_s`` apart merged.
+    Runs of different classes that overlap or lie less than ``gap_s`` apart are one event
+    (one fault at a time: a fault's onset often resembles another class for a second, a
+    weak motor that brings the copter down ends looking like a dead one): it starts at its
+    first run, ends at its last, and is named by the class predicted on most of its rows;
+    the other classes go to :attr:`Finding.also`."""
+    t = pred["TimeUS"].to_numpy(np.float64) * 1e-6
+    if not len(t):
+        return []
+    dt = 1.0 / GRID_HZ
+    lab = pred["label"].to_numpy()
+    prob = {int(c): pred[f"p_{class_name(int(c))}"].to_numpy() for c in classes}
+    runs = _runs(t, lab, prob, classes, min_s, gap_s)
+    events: list[list[tuple[int, np.ndarray]]] = []
+    end = -np.inf
+    for c, idx in runs:
+        if events and t[idx[0]] - end < gap_s:
+            events[-1].append((c, idx))
+        else:
+            events.append([(c, idx)])
+        end = max(end if len(events[-1]) > 1 else -np.inf, t[idx[-1]] + dt)
+    out = []
+    for ev in events:
+        rows: dict[int, int] = {}
+        for c, idx in ev:
+            rows[c] = rows.get(c, 0) + len(idx)
+        main = max(rows, key=lambda c: (rows[c], -c))
+        first = min(int(idx[0]) for _, idx in ev)
+        last = max(int(idx[-1]) for _, idx in ev)
+        peak = max(float(prob[main][idx].max()) for c, idx in ev if c == main)
+        out.append(Finding(main, float(t[first]), float(t[last] + dt), peak,
+                           tuple(sorted(c for c in rows if c != main))))
+    return out

@@ -3,9 +3,10 @@
 For each log: ``DIR/<log>/predictions.parquet`` (``TimeUS``, ``p_<class>`` per class,
 ``label``, and ``true_label`` when the log has a sidecar), ``DIR/<log>/timeline.png``
 (:mod:`.plots`); one row per fault found in ``DIR/summary.csv`` (``log``, ``class``,
-``label``, ``start_s``, ``end_s``, ``peak_p``; a row with class ``none`` for a log where
-nothing was found) and, for logs with sidecars, their scores (row macro-F1 over the labels
-present, per true fault whether it was found with the right class and how late).
+``label``, ``start_s``, ``end_s``, ``peak_p``, ``also``: other classes predicted briefly
+within the same fault; a row with class ``none`` for a log where nothing was found) and, for
+logs with sidecars, their scores (row macro-F1 over the labels present, per true fault
+whether it was found with the right class and how late).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from tlm_process.pipeline.errors import PipelineError
 
 __all__ = ["LogResult", "SUMMARY_COLUMNS", "check_columns", "detect_log", "log_folder_name"]
 
-SUMMARY_COLUMNS = ("log", "class", "label", "start_s", "end_s", "peak_p")
+SUMMARY_COLUMNS = ("log", "class", "label", "start_s", "end_s", "peak_p", "also")
 #: A true fault counts as found when a finding of its class starts within this of its
 #: start [s] (the issue's "start within 3 s"), or inside the window.
 FOUND_WITHIN_S: float = 3.0
@@ -47,10 +48,11 @@ class LogResult:
     def summary_rows(self) -> list[dict[str, Any]]:
         if not self.findings:
             return [{"log": self.log.source, "class": "none", "label": 0,
-                     "start_s": np.nan, "end_s": np.nan, "peak_p": np.nan}]
+                     "start_s": np.nan, "end_s": np.nan, "peak_p": np.nan, "also": ""}]
         return [{"log": self.log.source, "class": f.name, "label": f.label,
                  "start_s": round(f.start_s, 2), "end_s": round(f.end_s, 2),
-                 "peak_p": round(f.peak, 3)} for f in self.findings]
+                 "peak_p": round(f.peak, 3),
+                 "also": " ".join(class_name(c) for c in f.also)} for f in self.findings]
 
 
 def log_folder_name(log: LogData, taken: set[str]) -> str:
