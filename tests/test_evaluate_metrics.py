@@ -116,3 +116,15 @@ def test_text_and_png_outputs(tmp_path):
     assert per.splitlines()[2].split()[0] == "GPS"
     p = plot_confusion(TABLE_13, tmp_path / "cm.png", "RF")
     assert p.exists() and p.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_visible_scores_leave_out_the_classes_a_table_cannot_see():
+    from tlm_process.evaluate.visible import VISIBLE, visible_scores
+
+    assert all(0 in v for v in VISIBLE.values())
+    y = np.array([0, 0, 1, 1, 7, 7])          # compass (7): GPS cannot see it
+    p = np.array([0, 0, 1, 0, 0, 0])
+    s = visible_scores("GPS", y, p)
+    assert s["labels"] == [0, 1] and s["rows"] == 4
+    assert s["macro_f1"] == pytest.approx((0.8 + 2 / 3) / 2)  # Normal 2/(2+.5), GPS 1/(1+.5)
+    assert visible_scores("BARO", y, p) is None

@@ -57,6 +57,7 @@ from tlm_process.evaluate.temporal import (
     window_features,
     window_spec_for,
 )
+from tlm_process.evaluate.visible import visible_scores
 from tlm_process.labels import class_labels, class_names
 
 __all__ = ["default_jobs", "evaluate", "resolve_models", "window_spec"]
@@ -364,6 +365,9 @@ def _run_model(tab: _Table, name: str, make: Callable[[], Any], say: Callable[[s
         r["transfer"] = classification_metrics(
             confusion_matrix(tab.yt, pred, labels=tab.labels), class_names(tab.labels))
         r["transfer"].update(detection_summary(tab.gt, tab.tt_us, tab.yt, pred))
+        vis = visible_scores(tab.name, tab.yt, pred)
+        if vis is not None:
+            r["transfer"]["visible"] = vis
     if hasattr(last, "history_"):
         r["history"] = last.history_
     return r, cm, last
@@ -696,6 +700,9 @@ def _model_line(t: str, name: str, r: dict[str, Any]) -> str:
     if "transfer" in r:
         msg += (f"; transfer accuracy {100 * r['transfer']['accuracy']:.2f}%, macro-F1 "
                 f"{r['transfer']['macro_f1']:.3f}")
+        vis = (r["transfer"].get("visible") or {}).get("macro_f1")
+        if vis is not None:
+            msg += f" ({vis:.3f} over the classes {t} sees)"
     return msg
 
 
