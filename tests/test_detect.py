@@ -365,3 +365,15 @@ def test_logdata_span_from_motor_outputs_when_the_log_starts_at_arming():
     assert t1 == 9_500_000 and how != "never armed: whole log"
     assert t0 in (500_000, 3_000_000)
     assert isinstance(LogData("x", "x", {}, {}, (t0, t1), how), LogData)
+
+
+def test_training_reads_tlm_fly_folders_with_their_parameters(normal_flight, tmp_path):
+    """A tlm fly folder is a training input: its tables, its parameters (FRAME_CLASS for the
+    motor channels) and its (empty) fault list."""
+    from tlm_process.detect.data import read_training
+
+    normal_flight.write(tmp_path / "f1", formats=("parquet",))
+    (log,) = list(read_training([tmp_path / "f1"]))
+    assert log.windows == [] and log.arming == "EV 10"
+    assert log.params.get("FRAME_CLASS") == 1.0
+    assert {"GPS", "IMU", "XKF4", "RCOU", "ERR"} <= set(log.tables)

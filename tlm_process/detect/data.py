@@ -117,7 +117,7 @@ def _single(kind: str, path: Path) -> Iterator[LogData]:
 
             log = FlightLog.read(path)
             tables = align({n: df for n, df in log.tables.items() if len(df)})
-            params = {k: float(v) for k, v in (log.meta.get("params") or {}).items()
+            params = {k: float(v) for k, v in (log.params or {}).items()
                       if isinstance(v, int | float)}
         fl.tables = {**tables, **fl.tables}
         span, how = armed_span(tables, params)
