@@ -45,14 +45,12 @@ def _tlm(*args: str, quiet: bool = True) -> float:
     return time.perf_counter() - t0
 
 
-def _windows(sidecar: Path, log: Path) -> list[tuple[int, float, float]]:
-    """(label, start s, end s) of the sidecar's faults, anchored as tlm process does."""
-    from tlm_process.detect.data import _log_windows
-    from tlm_process.logread import read_log_tables
+def _windows(log: Path) -> list[tuple[int, float, float]]:
+    """(label, start s, end s) of the faults of ``log``'s sidecar, anchored as tlm process
+    anchors them."""
+    from tlm_process.detect.data import read_log
 
-    tables = read_log_tables(log, ["GPS", "EV", "MODE"]).tables
-    ws = _log_windows(log, tables) or []
-    del sidecar
+    ws = read_log(log).windows or []
     return [(w.label, w.start_us * 1e-6, w.end_us * 1e-6) for w in ws]
 
 
@@ -60,9 +58,7 @@ def reference_check(model: Path, work: Path) -> None:
     """tlm detect on the reference SITL logs without their sidecars; a table per log."""
     from sklearn.metrics import f1_score
 
-    from tlm_process.detect.predict import GRID_HZ  # noqa: F401 (the grid the rows are on)
-    from tlm_process.pipeline.anchoring import label_rows
-    from tlm_process.pipeline.anchoring import FaultWindow
+    from tlm_process.pipeline.anchoring import FaultWindow, label_rows
 
     blind = work / "sitl-blind"
     if blind.exists():
@@ -80,8 +76,9 @@ def reference_check(model: Path, work: Path) -> None:
     print("|---|---|---|---|---|")
     ok_all = 0
     f1s = []
+    pooled: dict[str, list[np.ndarray]] = {"flight": [], "t": [], "true": [], "pred": []}
     for p in logs:
-        truth = _windows(p.with_suffix(".json"), p)
+        truth = _windows(p)
         rows = summary[summary["log"] == str(blind / p.name)]
         found = [(int(r.label), float(r.start_s)) for r in rows.itertuples() if r.label != 0]
         named = [any(lab == t_lab and abs(s - t_s) <= 3.0 for lab, s in found)
@@ -95,10 +92,35 @@ def reference_check(model: Path, work: Path) -> None:
         present = sorted({int(v) for v in np.unique(yt)})
         f1 = f1_score(yt, pred["label"], labels=present, average="macro", zero_division=0)
         f1s.append(f1)
+        pooled["flight"].append(np.full(len(yt), p.stem, dtype=object))
+        pooled["t"].append(pred["TimeUS"].to_numpy())
+        pooled["true"].append(yt)
+        pooled["pred"].append(pred["label"].to_numpy())
         tf = ", ".join(f"{lab}@{s:.1f}" for lab, s, _ in truth) or "none"
         ff = ", ".join(f"{lab}@{s:.1f}" for lab, s in found) or "none"
         print(f"| {p.stem} | {tf} | {ff} | {'yes' if ok else 'NO'} | {f1:.3f} |")
     print(f"logs passed: {ok_all}/{len(logs)}; mean row macro-F1 {np.mean(f1s):.3f}")
+    _pooled({k: np.concatenate(v) for k, v in pooled.items()})
+
+
+def _pooled(rows: dict[str, np.ndarray]) -> None:
+    """Row macro-F1 over every label present, median detection delay per fault class and
+    false alarms per hour of normal flight, over every row of every log
+    (:mod:`tlm_process.evaluate.events`: 1 s persistence)."""
+    from sklearn.metrics import f1_score
+
+    from tlm_process.evaluate.events import detection_summary
+
+    yt, yp = rows["true"], rows["pred"]
+    present = sorted({int(v) for v in np.unique(yt)})
+    f1 = f1_score(yt, yp, labels=present, average="macro", zero_division=0)
+    ev = detection_summary(rows["flight"], rows["t"], yt, yp)
+    print(f"pooled: row macro-F1 {f1:.3f} over {len(present)} labels; false alarms "
+          f"{ev['false_alarms']} in {ev['normal_hours']:.2f} h of normal rows "
+          f"({ev['false_alarms_per_hour']:.2f}/h)")
+    for name, d in ev["detection"].items():
+        print(f"  {name:<14} detected {d['detected']}/{d['events']}, median delay "
+              f"{d['delay_median_s']:.2f} s")
 
 
 def speed_check(model: Path, work: Path, n: int) -> None:

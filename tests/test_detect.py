@@ -377,3 +377,12 @@ def test_training_reads_tlm_fly_folders_with_their_parameters(normal_flight, tmp
     assert log.windows == [] and log.arming == "EV 10"
     assert log.params.get("FRAME_CLASS") == 1.0
     assert {"GPS", "IMU", "XKF4", "RCOU", "ERR"} <= set(log.tables)
+
+
+def test_class_weights_give_every_fault_class_the_same_total():
+    from tlm_process.detect.train import class_weights
+
+    y = np.array([0] * 10 + [3] * 6 + [9] * 2)
+    w = class_weights(y, 4)
+    assert (w[y == 0] == 4).all()
+    assert w[y == 3].sum() == pytest.approx(w[y == 9].sum()) == pytest.approx(4.0)

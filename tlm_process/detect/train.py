@@ -29,7 +29,8 @@ from tlm_process.detect.features import WINDOW_S, feature_names
 from tlm_process.detect.model import Detector
 from tlm_process.detect.predict import log_features
 
-__all__ = ["TRAIN_HZ", "TrainOptions", "TrainResult", "check_drop", "manifest", "train_detector"]
+__all__ = ["NORMAL_HZ", "TRAIN_HZ", "TrainOptions", "TrainResult", "check_drop", "class_weights",
+           "manifest", "train_detector"]
 
 #: Rows per second of each flight the detector is fitted on (every 5th grid row).
 TRAIN_HZ: float = 2.0
@@ -148,7 +149,7 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
     Xf = np.concatenate(fit_X)
     yf = np.concatenate(fit_y)
     del fit_X, fit_y
-    weight = np.where(yf == 0, float(every), 1.0).astype(np.float32)
+    weight = class_weights(yf, every)
     det = Detector.fit(Xf, yf, channels, features, sample_weight=weight, rounds=opt.rounds,
                        seed=opt.seed, n_jobs=opt.n_jobs)
     t_fit = time.perf_counter()
@@ -161,6 +162,24 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
                        {"fit_rows": len(yf), "flights": len(ids),
                         **{f"rows_label_{k}": int((yf == k).sum())
                            for k in sorted(labels_seen)}})
+
+
+def class_weights(y: np.ndarray, normal_every: int) -> np.ndarray:
+    """Sample weights of the fitted rows: Normal rows ``normal_every`` (they were thinned by
+    that factor), every fault class the same total weight (the mean row count of the fault
+    classes over its own count): the paper's four faults are in every paper-style flight and
+    have twice the rows of the others, which tipped a weak motor (label 9) that brings the
+    copter down towards the engine fault (3) and left a GPS glitch (8) under-weighted. Measured
+    on the 17 reference SITL logs, trained on 200 default flights (generate seed 1), booster
+    seeds 0 / 1: logs whose every fault is named (class right, start within 3 s) 17 / 16 of
+    17 instead of 15 / 15, mean row macro-F1 0.973 / 0.963 instead of 0.963 / 0.948."""
+    w = np.where(y == 0, float(normal_every), 1.0).astype(np.float32)
+    faults, counts = np.unique(y[y != 0], return_counts=True)
+    if len(faults):
+        mean = counts.mean()
+        for c, n in zip(faults, counts, strict=True):
+            w[y == c] = mean / n
+    return w
 
 
 def _score(det: Detector, blocks: Sequence[tuple[str, np.ndarray, np.ndarray, np.ndarray]]
