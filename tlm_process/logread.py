@@ -54,8 +54,10 @@ __all__ = [
     "log_start_us",
     "motor_columns",
     "motor_idle_pwm",
+    "pwm_range",
     "ARMING_DELAY_US",
     "read_log_tables",
+    "warn_damage",
 ]
 
 #: ArduCopter LogEvent ids (EV.Id) of arming and disarming.
@@ -163,6 +165,18 @@ def read_log_tables(path: str | os.PathLike, names: list[str] | tuple[str, ...] 
         keep = {FOLDS.get(n, (n, 0))[0] for n in wanted}
         tables = {n: df for n, df in tables.items() if n in keep}
     return LogTables(tables, params, notes, str(p), kind)
+
+
+def warn_damage(lt: LogTables) -> None:
+    """Re-issue the reader's damage notes (``damage: ...``: a cut-off or corrupt log) as the
+    ``BinLogWarning``s ``read_bin`` gives, for the commands that print them as one
+    ``tlm: warning:`` line (``tlm process``, ``tlm crosscheck``, ``tlm detect``); ``tlm info``
+    lists them itself."""
+    from tlm_sim.flightlog.binreader import BinLogWarning
+
+    for n in lt.notes:
+        if n.startswith("damage: "):
+            warnings.warn(n.removeprefix("damage: "), BinLogWarning, stacklevel=2)
 
 
 def _stamp(df: pd.DataFrame) -> tuple[np.ndarray | None, str | None]:
@@ -559,7 +573,7 @@ def motor_columns(rcou: pd.DataFrame, params: dict[str, float] | None = None) ->
     return []
 
 
-def _pwm_range(params: dict[str, float]) -> tuple[float, float]:
+def pwm_range(params: dict[str, float]) -> tuple[float, float]:
     """(PWM min, PWM max) of the motor outputs [µs]: MOT_PWM_MIN/MAX when set (> 0), else
     RC3_MIN/RC3_MAX (the throttle channel, as ArduCopter falls back to), else 1000/2000."""
     lo = params.get("MOT_PWM_MIN", 0.0) or 0.0
@@ -591,7 +605,7 @@ def motor_idle_pwm(params: dict[str, float] | None = None) -> tuple[float, float
     least 1 % of the range above the minimum, for MOT_SPIN_ARM 0).
     """
     params = params or {}
-    lo, hi = _pwm_range(params)
+    lo, hi = pwm_range(params)
     spin = min(max(_spin_arm(params), 0.0), 1.0)
     return lo + spin * (hi - lo), lo + max(spin / 2, 0.01) * (hi - lo)
 

@@ -395,7 +395,7 @@ def _read_tables(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, float]]
     :func:`tlm_process.logread.read_log_tables` (a 4.x log's exactly as logged), each type
     tlm knows present (empty when the log has none, as ``read_bin`` gives them), and the
     log's parameters."""
-    from tlm_process.logread import LogReadError, read_log_tables
+    from tlm_process.logread import LogReadError, read_log_tables, warn_damage
     from tlm_sim.flightlog import SCHEMAS
     from tlm_sim.flightlog.binreader import empty_table
 
@@ -404,6 +404,7 @@ def _read_tables(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, float]]
         lt = read_log_tables(path, names)
     except LogReadError as exc:
         raise ScenarioError(str(exc)) from None
+    warn_damage(lt)
     tables = {n: lt.tables[n] if n in lt.tables else empty_table(SCHEMAS[n])
               for n in names if n in lt.tables or n in SCHEMAS}
     return tables, lt.params

@@ -183,37 +183,16 @@ def _xkf3(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
 _XKF4 = ("SV", "SP", "SH", "SM", "SVT", "errRP", "FS", "TS", "SS", "GPS", "PI")
 
 
-def _pwm_range(p: Mapping[str, float]) -> tuple[float, float]:
-    lo = p.get("MOT_PWM_MIN") or p.get("RC3_MIN") or 1000.0
-    hi = p.get("MOT_PWM_MAX") or p.get("RC3_MAX") or 2000.0
-    if not hi > lo:
-        lo, hi = 1000.0, 2000.0
-    return float(lo), float(hi)
-
-
-#: Motors per FRAME_CLASS (1 quad, 2 hexa, 3 octa, 4 octa-quad, 5 Y6, 7 tri, 10 ... default 4).
-_MOTORS = {1: 4, 2: 6, 3: 8, 4: 8, 5: 6, 7: 3, 12: 6, 14: 10, 15: 12}
-
-
-def _motor_cols(df: Rows, p: Mapping[str, float], lo: float, hi: float) -> list[str]:
-    """The motor channels: C1..Cn, n from FRAME_CLASS when the log's parameters have it,
-    else the leading channels that rise above 5 % of the PWM range somewhere in the log."""
-    if "FRAME_CLASS" in p:
-        n = _MOTORS.get(int(p["FRAME_CLASS"]), 4)
-    else:
-        n = 0
-        while f"C{n + 1}" in df.columns and df[f"C{n + 1}"].max() > lo + 0.05 * (hi - lo):
-            n += 1
-        n = max(n, 1)
-    return [f"C{i}" for i in range(1, n + 1) if f"C{i}" in df.columns]
-
-
 def _rcou(df: Rows, p: Mapping[str, float]) -> dict[str, np.ndarray]:
-    """Motor outputs as fractions of the PWM range (MOT_PWM_MIN..MAX): their mean, their
-    spread, and the largest excess and deficit of one motor against the mean (a lost or weak
-    motor: the controller drives it up, or its opposite down)."""
-    lo, hi = _pwm_range(p)
-    cols = _motor_cols(df, p, lo, hi)
+    """Motor outputs as fractions of the PWM range (MOT_PWM_MIN..MAX,
+    :func:`tlm_process.logread.pwm_range`; the motors: :func:`~tlm_process.logread.motor_columns`
+    by FRAME_CLASS): their mean, their spread, and the largest excess and deficit of one
+    motor against the mean (a lost or weak motor: the controller drives it up, or its
+    opposite down)."""
+    from tlm_process.logread import motor_columns, pwm_range
+
+    lo, hi = pwm_range(dict(p))
+    cols = motor_columns(df, dict(p))
     m = (df[cols].to_numpy(np.float64) - lo) / (hi - lo)
     mean = m.mean(axis=1)
     dev = m - mean[:, None]
@@ -462,9 +441,19 @@ def _event_defaults(src: _Source, n: int) -> dict[str, np.ndarray]:
 
 def align(tables: Mapping[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
     """The tables with Copter 4.0's EKF2 messages read as their EKF3 twins (``NKF1`` ->
-    ``XKF1``, ... same columns) where the log has no ``XKF*``."""
+    ``XKF1``, ... same columns) where the log has no ``XKF*``, and Copter 3.x's RC channel
+    columns (``Ch1``, 3.1's ``Chan1``) named as 4.x names them (``C1``)."""
     out = dict(tables)
     for k in ("1", "3", "4"):
         if f"XKF{k}" not in out and f"NKF{k}" in out:
             out[f"XKF{k}"] = out[f"NKF{k}"]
+    for name in ("RCOU", "RCIN"):
+        df = out.get(name)
+        if df is not None and "C1" not in df.columns:
+            for prefix in ("Ch", "Chan"):
+                if f"{prefix}1" in df.columns:
+                    ren = {c: "C" + c[len(prefix):] for c in df.columns
+                           if c.startswith(prefix) and c[len(prefix):].isdigit()}
+                    out[name] = df.rename(columns=ren)
+                    break
     return out

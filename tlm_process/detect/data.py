@@ -145,7 +145,7 @@ def read_log(path: str | Path, *, labels: bool = True) -> LogData:
     detector reads, normalised (:mod:`tlm_process.logread`: TimeMS, IMU2/IMU3, ...), its
     armed span, and with ``labels`` its fault windows when a sidecar ``LOG.json`` (or tlm's
     ``faults.json``, or tlm's fault MSG lines / SITL's SIM_* changes in the log) says them."""
-    from tlm_process.logread import read_log_tables
+    from tlm_process.logread import read_log_tables, warn_damage
 
     p = Path(path)
     if not p.exists():
@@ -156,6 +156,7 @@ def read_log(path: str | Path, *, labels: bool = True) -> LogData:
         lt = read_log_tables(p, [*source_tables(), "MODE", "EV", "ARM", "MSG", "PARM"])
     except (OSError, ValueError, KeyError, IndexError) as exc:
         raise DetectError(f"cannot read the log: {exc}", source=str(p)) from None
+    warn_damage(lt)
     tables = align({n: df for n, df in lt.tables.items() if len(df)})
     if not tables:
         raise DetectError("the log holds no rows", source=str(p))

@@ -229,6 +229,25 @@ def _jsonable(x: Any) -> Any:
     return x
 
 
+def _source_card(path: str) -> dict[str, Any]:
+    """What a training input was: for a ``tlm generate`` data set its seed, flights and
+    drawing settings (from its ``manifest.json``), else just the path."""
+    import json
+
+    card: dict[str, Any] = {"path": str(path)}
+    mp = Path(path) / "manifest.json"
+    if mp.is_file():
+        try:
+            m = json.loads(mp.read_text())
+        except (OSError, ValueError):
+            return card
+        if isinstance(m, dict) and m.get("format") == "tlm.dataset":
+            card.update({"kind": "tlm generate", "seed": m.get("seed"),
+                         "flights": m.get("flights"), "tlm_version": m.get("tlm_version"),
+                         "settings": m.get("settings")})
+    return card
+
+
 def manifest(result: TrainResult, opt: TrainOptions, inputs: Sequence[str],
              command: str) -> dict[str, Any]:
     """What ``tlm train`` records beside the weights (:class:`~.model.Detector.save` adds
@@ -247,6 +266,8 @@ def manifest(result: TrainResult, opt: TrainOptions, inputs: Sequence[str],
         "channel_info": {c: {"kind": by[c].kind, "unit": by[c].unit,
                              "needs": list(by[c].needs)} for c in det.channels},
         "class_names": {str(c): class_name(c) for c in det.classes},
+        "scaler": None,  # trees split on raw values: nothing to scale, nothing to refit
+        "sources": [_source_card(p) for p in inputs],
         "options": {"drop": list(opt.drop), "holdout": opt.holdout,
                     "holdout_flights": list(opt.holdout_flights), "seed": opt.seed,
                     "rounds": opt.rounds},

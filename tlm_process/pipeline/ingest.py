@@ -311,6 +311,7 @@ def _read_bin(path: Path) -> list[Flight]:
         arming_time_us,
         disarm_time_us,
         read_log_tables,
+        warn_damage,
     )
     from tlm_sim.flightlog.sidecar import fault_sidecar
 
@@ -321,6 +322,7 @@ def _read_bin(path: Path) -> list[Flight]:
         reason = str(exc).removeprefix(f"{path}: ") if isinstance(exc, LogReadError) else exc
         raise IngestError(f"cannot read the DataFlash log: {reason}",
                           source=str(path)) from None
+    warn_damage(lt)  # a cut-off or corrupt log: one "tlm: warning:" line, as read_bin gave
     raw = lt.tables
     if sidecar is not None:
         doc, source = _read_json(sidecar), str(sidecar)
