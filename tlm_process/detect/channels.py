@@ -180,7 +180,21 @@ def _xkf3(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
                             + _col(df, "IMZ") ** 2),
             "IYAW": np.abs(_col(df, "IYAW"))}
 
-_XKF4 = ("SV", "SP", "SH", "SM", "SVT", "errRP", "FS", "TS", "SS", "GPS", "PI")
+
+
+def _xkf4(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
+    """Test ratios of velocity, position, height and magnetometer (SV, SP, SH, SM), the
+    primary lane (PI) and the EKF's timeout bits as 0/1 (TS bit 0 position, 1 velocity,
+    2 height, 3 magnetometer). Not the airspeed and drag timeout bits (4, 5: a copter without
+    an airspeed sensor sets them always in SITL, never in tlm), nor the fault, solution and
+    GPS-check status words (FS, SS, GPS) or SVT and errRP: tlm's EKF does not produce them
+    (constant 0), so a model trained on tlm could only learn them as noise."""
+    ts = df["TS"].to_numpy(np.int64) if "TS" in df.columns else np.zeros(len(df), np.int64)
+    out = {c: _col(df, c) for c in ("SV", "SP", "SH", "SM", "PI")}
+    for bit, name in enumerate(("Pos", "Vel", "Hgt", "Mag")):
+        out[f"TS{name}"] = ((ts >> bit) & 1).astype(np.float64)
+    return out
+
 
 
 def _rcou(df: Rows, p: Mapping[str, float]) -> dict[str, np.ndarray]:
@@ -274,7 +288,10 @@ def _sources() -> tuple[_Source, ...]:
         {"IVH": ("IVN", "IVE"), "IPH": ("IPN", "IPE"), "IMag": ("IMX", "IMY", "IMZ")},
         "XKF3"), _xkf3))
     src.append(_Source("XKF4", "XKF4L0", ("C", 0), _ch("XKF4L0", [
-        (q, L, "-") for q in _XKF4], {}, "XKF4"), _plain(_XKF4)))
+        ("SV", L, "-"), ("SP", L, "-"), ("SH", L, "-"), ("SM", L, "-"), ("PI", L, "lane"),
+        ("TSPos", L, "timeout"), ("TSVel", L, "timeout"), ("TSHgt", L, "timeout"),
+        ("TSMag", L, "timeout")], {f"TS{b}": ("TS",) for b in ("Pos", "Vel", "Hgt", "Mag")},
+        "XKF4"), _xkf4))
     src.append(_Source("XKF4", "XKF4L1", ("C", 1), _ch("XKF4L1", [
         (q, L, "-") for q in ("SV", "SP", "SH", "SM")], {}, "XKF4"),
         _plain(("SV", "SP", "SH", "SM"))))
