@@ -41,8 +41,8 @@ def plot_timeline(log: LogData, pred: pd.DataFrame, classes: Sequence[int],
     for w in log.windows or []:
         end = w.end_us * 1e-6 if np.isfinite(w.end_us) else (t[-1] if len(t) else 0.0)
         ax.axvspan(w.start_us * 1e-6, end, color=label_colour(w.label), alpha=0.15, lw=0)
-        ax.text(w.start_us * 1e-6, 1.005, f"true: {long_name(w.label)}", fontsize=7,
-                color=label_colour(w.label), va="bottom", rotation=0,
+        ax.text(w.start_us * 1e-6, 0.42, f" true: {long_name(w.label)}", fontsize=7,
+                color=label_colour(w.label), va="bottom", ha="left",
                 transform=ax.get_xaxis_transform())
     for c in classes:
         col = f"p_{class_name(int(c))}"
