@@ -411,3 +411,15 @@ def test_older_firmware_names_are_read_as_4x_names():
     assert out["XKF4"] is ekf2
     assert list(out["RCOU"].columns) == ["TimeUS", "C1", "C2"]
     assert list(out["RCIN"].columns) == ["TimeUS", "C1"]
+
+
+def test_training_refuses_a_log_without_fault_labels(tmp_path):
+    """A log with no sidecar and no fault records would be learnt as a normal flight."""
+    from tlm_process.detect.data import read_training
+
+    (tmp_path / "n.bin").symlink_to(reference_path("normal_s11.bin"))
+    with pytest.raises(DetectError, match="no fault labels"):
+        list(read_training([tmp_path / "n.bin"]))
+    (tmp_path / "n.json").write_text('{"faults": []}')
+    (log,) = list(read_training([tmp_path / "n.bin"]))
+    assert log.windows == []

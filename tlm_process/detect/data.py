@@ -14,7 +14,6 @@ import json
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -62,10 +61,6 @@ def armed_span(tables: Mapping[str, pd.DataFrame], params: Mapping[str, float]
     return (int(t0), int(t1 if t1 is not None else hi)), how
 
 
-def _windows(flight: Any) -> list[FaultWindow]:
-    return anchor_flight(flight, "auto")
-
-
 def _generated(path: Path, partial: bool) -> Iterator[LogData]:
     """Flights of a ``tlm generate`` data set (or a plain multi-flight data set): every
     table the detector reads, by flight; parameters from the flight's scenario."""
@@ -100,16 +95,21 @@ def _generated(path: Path, partial: bool) -> Iterator[LogData]:
         p = params.get(int(fid), {}) if fid.isdigit() else {}
         tables = align(fl.tables)
         span, how = armed_span(tables, p)
-        yield LogData(fl.id, fl.source, tables, p, span, how, _windows(fl))
+        yield LogData(fl.id, fl.source, tables, p, span, how, anchor_flight(fl, "auto"))
 
 
 def _single(kind: str, path: Path) -> Iterator[LogData]:
-    """A ``.bin`` log or a ``tlm fly`` folder, its fault records as ``tlm process`` finds
-    them (sidecar, faults.json, the log's own)."""
+    """A ``.bin`` or text ``.log`` log or a ``tlm fly`` folder, its fault records as ``tlm
+    process`` finds them (sidecar, faults.json, the log's own). A log with no fault labels
+    at all is refused: taken as a normal flight it would teach a faulty one as normal."""
     from tlm_process.pipeline.ingest import read_flight
 
     for fl in read_flight(kind, path):
-        if kind == "bin":
+        if kind in ("bin", "log") and fl.meta.get("labels_source", "") is None:
+            raise DetectError("no fault labels (no sidecar LOG.json, no faults.json, no fault "
+                              "records in the log): give a normal flight a sidecar with "
+                              '{"faults": []}', source=str(path))
+        if kind in ("bin", "log"):
             data = read_log(path, labels=False)
             tables, params = data.tables, data.params
         else:
@@ -121,7 +121,7 @@ def _single(kind: str, path: Path) -> Iterator[LogData]:
                       if isinstance(v, int | float)}
         fl.tables = {**tables, **fl.tables}
         span, how = armed_span(tables, params)
-        yield LogData(fl.id, fl.source, tables, params, span, how, _windows(fl))
+        yield LogData(fl.id, fl.source, tables, params, span, how, anchor_flight(fl, "auto"))
 
 
 def read_training(paths: Sequence[str | Path], *, partial: bool = False) -> Iterator[LogData]:
