@@ -10,6 +10,7 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tlm_process.cliutil import (
     add_overwrite,
@@ -20,6 +21,9 @@ from tlm_process.cliutil import (
     whole_number,
 )
 from tlm_process.commands.process import report_user_errors
+
+if TYPE_CHECKING:
+    from tlm_process.detect.train import TrainResult
 
 __all__ = ["add_parser", "run"]
 
@@ -161,19 +165,18 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print(res: object, out: Path) -> None:
+def _print(res: TrainResult, out: Path) -> None:
     from tlm_process.labels import class_name
 
-    det = res.detector  # type: ignore[attr-defined]
-    t = res.times  # type: ignore[attr-defined]
+    det = res.detector
+    t = res.times
     print(f"model              {out}")
-    print(f"flights            {len(res.train)} trained on"  # type: ignore[attr-defined]
-          f", {len(res.held_out)} held out")  # type: ignore[attr-defined]
+    print(f"flights            {len(res.train)} trained on, {len(res.held_out)} held out")
     print(f"channels           {len(det.channels)} ({len(det.features)} features, "
           f"{len(det.columns)} used)")
     print(f"classes            {', '.join(class_name(c) for c in det.classes)}")
     print(f"time               read {t['read_s']:.1f} s, fit {t['fit_s']:.1f} s")
-    s = res.scores  # type: ignore[attr-defined]
+    s = res.scores
     if s:
         ev = s["events"]
         print(f"held out           row macro-F1 {s['macro_f1']:.3f} over {len(s['labels'])} "

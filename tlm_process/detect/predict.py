@@ -21,6 +21,7 @@ import pandas as pd
 from tlm_process.detect.channels import GRID_HZ, armed_grid, channel_table
 from tlm_process.detect.data import LogData
 from tlm_process.detect.features import feature_matrix
+from tlm_process.detect.model import Detector
 from tlm_process.evaluate.events import PERSISTENCE_S
 from tlm_process.labels import class_name
 
@@ -43,15 +44,15 @@ def log_features(log: LogData, channels: Sequence[str]
     return grid, feature_matrix(table, channels, GRID_HZ), lacking
 
 
-def predict_log(detector: object, log: LogData) -> pd.DataFrame:
+def predict_log(detector: Detector, log: LogData) -> pd.DataFrame:
     """Per grid row of ``log``'s armed span: ``TimeUS``, ``p_<class>`` (one per class of the
     detector, named by :func:`tlm_process.labels.class_name`), ``label`` (the most probable
     class) and ``true_label`` when the log has fault windows."""
     from tlm_process.detect.data import window_labels
 
-    grid, X, _ = log_features(log, detector.channels)  # type: ignore[attr-defined]
-    p = detector.predict_proba(X)  # type: ignore[attr-defined]
-    classes = np.asarray(detector.classes)  # type: ignore[attr-defined]
+    grid, X, _ = log_features(log, detector.channels)
+    p = detector.predict_proba(X)
+    classes = np.asarray(detector.classes)
     out = pd.DataFrame({"TimeUS": grid})
     for j, c in enumerate(classes):
         out[f"p_{class_name(int(c))}"] = p[:, j].astype(np.float32)
