@@ -267,7 +267,8 @@ def small_model(tmp_path_factory):
         for ext in (".bin", ".json"):
             (d / f"{name}{ext}").symlink_to(reference_path(name + ext))
     out = d / "model"
-    rc = main(["train", str(d), "--out", str(out), "--rounds", "8", "--quiet",
+    rc = main(["train", str(d), "--out", str(out), "--rounds", "8", "--min-child-weight", "1",
+               "--quiet",
                "--tables", "GPS,IMU,ERR,MODE", "--drop-features", "IMU1", "--holdout-flight",
                "accel_s13"])
     assert rc == 0

@@ -17,6 +17,7 @@ from tlm_process.cliutil import (
     folder,
     fraction,
     int_at_least,
+    positive_number,
     prepare_out,
     whole_number,
 )
@@ -84,6 +85,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="use only the channels of these log tables (default: all)")
     p.add_argument("--rounds", type=int_at_least(1), default=100, metavar="N",
                    help="boosting rounds (default 100)")
+    p.add_argument("--min-child-weight", type=positive_number, default=20.0, metavar="W",
+                   help="least summed hessian of a leaf (XGBoost's min_child_weight; default "
+                        "20: no leaf for a handful of rows of one rare event; a training set "
+                        "of a few flights needs 1)")
     p.add_argument("--seed", type=whole_number, default=0,
                    help="seed of the hold-out draw and the booster (default 0)")
     p.add_argument("--jobs", type=int_at_least(1), default=None, metavar="N",
@@ -144,7 +149,8 @@ def _run(args: argparse.Namespace) -> int:
         raise UsageError("tlm train: --out MODEL is required")
     opt = TrainOptions(drop=tuple(_drops(args)), holdout=args.holdout,
                        holdout_flights=tuple(args.holdout_flight), seed=args.seed,
-                       rounds=args.rounds, n_jobs=args.jobs or os.cpu_count() or 1,
+                       rounds=args.rounds, min_child_weight=args.min_child_weight,
+                       n_jobs=args.jobs or os.cpu_count() or 1,
                        partial=args.partial)
     check_drop(opt.drop)  # before the folder is made
     out = prepare_out(args.out, "train", args.overwrite, inputs=args.inputs)

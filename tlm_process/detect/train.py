@@ -46,7 +46,8 @@ class TrainOptions:
     (:func:`.channels.drop_channels`); ``holdout``: probability that a flight is held out for
     scoring (:func:`held_out_draw`);
     ``holdout_flights``: flight-id patterns held out (fnmatch); ``seed``: the hold-out draw
-    and the booster's; ``rounds``: boosting rounds; ``n_jobs``: threads; ``train_hz``: rows
+    and the booster's; ``rounds``: boosting rounds; ``min_child_weight``: the least summed
+    hessian of a leaf (:meth:`.model.Detector.fit`); ``n_jobs``: threads; ``train_hz``: rows
     per second fitted; ``normal_hz``: Normal rows per second fitted (weighted back);
     ``partial``: read an unfinished ``tlm generate`` data set."""
 
@@ -55,6 +56,7 @@ class TrainOptions:
     holdout_flights: tuple[str, ...] = ()
     seed: int = 0
     rounds: int = 100
+    min_child_weight: float = 20.0
     n_jobs: int = 2
     train_hz: float = TRAIN_HZ
     normal_hz: float = NORMAL_HZ
@@ -151,7 +153,8 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
     del fit_X, fit_y
     weight = class_weights(yf, every)
     det = Detector.fit(Xf, yf, channels, features, sample_weight=weight, rounds=opt.rounds,
-                       seed=opt.seed, n_jobs=opt.n_jobs)
+                       min_child_weight=opt.min_child_weight, seed=opt.seed,
+                       n_jobs=opt.n_jobs)
     t_fit = time.perf_counter()
     scores = _score(det, held) if held else {}
     t_end = time.perf_counter()
@@ -270,7 +273,7 @@ def manifest(result: TrainResult, opt: TrainOptions, inputs: Sequence[str],
         "sources": [_source_card(p) for p in inputs],
         "options": {"drop": list(opt.drop), "holdout": opt.holdout,
                     "holdout_flights": list(opt.holdout_flights), "seed": opt.seed,
-                    "rounds": opt.rounds},
+                    "rounds": opt.rounds, "min_child_weight": opt.min_child_weight},
         "n_jobs": opt.n_jobs,
         "data": {"flights": result.rows.get("flights"), "train_flights": len(result.train),
                  "held_out_flights": result.held_out, "fit_rows": result.rows.get("fit_rows"),
