@@ -89,7 +89,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         description=DESCRIPTION, epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="flight folders, .bin logs with sidecars, CSV folders, datasets")
+                   help="flight folders, .bin or text .log logs with sidecars, CSV folders, "
+                        "datasets")
     p.add_argument("--out", type=folder, required=True, metavar="DS", help="output folder")
     p.add_argument("--anchor", choices=("auto", "time", "position"), default="auto",
                    help="fault window anchoring (default auto: recorded times when present)")
