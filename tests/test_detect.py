@@ -424,3 +424,62 @@ def test_training_refuses_a_log_without_fault_labels(tmp_path):
     (tmp_path / "n.json").write_text('{"faults": []}')
     (log,) = list(read_training([tmp_path / "n.bin"]))
     assert log.windows == []
+
+
+# --------------------------------------------------------------------------------------------
+# The paper's per-table view: tlm train --models on a tlm process data set
+# --------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def table_model(tmp_path_factory):
+    d = tmp_path_factory.mktemp("table")
+    for name in _TRAIN_LOGS:
+        for ext in (".bin", ".json"):
+            (d / f"{name}{ext}").symlink_to(reference_path(name + ext))
+    ds = d / "ds-tlm"
+    assert main(["process", *[str(d / f"{n}.bin") for n in _TRAIN_LOGS], "--out", str(ds),
+                 "--quiet", "--plots", "0"]) == 0
+    out = d / "model"
+    assert main(["train", str(ds), "--models", "WindowHGB", "--tables", "GPS", "--out",
+                 str(out), "--rounds", "8", "--min-child-weight", "1", "--quiet",
+                 "--drop-features", "GPS.HDop"]) == 0
+    return ds, out
+
+
+def test_a_per_table_model_saves_its_table_window_and_scaler(table_model):
+    ds, out = table_model
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["model"] == "WindowHGB" and m["table"] == "GPS"
+    assert "GPS.HDop" not in m["channels"] and "GPS.Spd" in m["channels"]
+    assert set(m["scaler"]["ranges"]) == {c.split(".")[1] for c in m["channels"]}
+    assert m["window"]["seconds"] == [2.0, 10.0] and not m["window"]["centred"]
+    assert m["sources"][0]["kind"] == "tlm process"
+    det = load_detector(out)
+    assert det.kind == "WindowHGB"
+
+
+def test_a_per_table_model_detects_on_a_log(table_model, tmp_path):
+    _, out = table_model
+    log = reference_path("combined_s21.bin")
+    assert main(["detect", str(out), str(log), "--out", str(tmp_path / "f"), "--quiet"]) == 0
+    pred = pd.read_parquet(tmp_path / "f" / "combined_s21" / "predictions.parquet")
+    steps = np.diff(pred["TimeUS"].to_numpy())
+    assert np.median(steps) == pytest.approx(200_000, rel=0.05)  # the GPS rows, 5 Hz
+    summary = pd.read_csv(tmp_path / "f" / "summary.csv")
+    gps = summary[summary["class"] == "GPS"]
+    assert len(gps) and abs(gps["start_s"].iloc[0] - 71.7) < 3.0
+
+
+def test_train_models_refuses_what_it_cannot_save(table_model, tmp_path, capsys):
+    ds, _ = table_model
+    assert main(["train", str(ds), "--models", "RandomForest", "--tables", "GPS", "--out",
+                 str(tmp_path / "a")]) == 2
+    assert "pickles" in capsys.readouterr().err and not (tmp_path / "a").exists()
+    assert main(["train", str(ds), "--out", str(tmp_path / "b")]) == 2
+    assert "--models" in capsys.readouterr().err  # the whole-log detector needs raw flights
+    assert main(["train", str(ds), "--models", "WindowHGB", "--tables", "GPS,IMU", "--out",
+                 str(tmp_path / "c")]) == 2
+    assert "one window model and one table" in capsys.readouterr().err
+    assert main(["train", str(ds), "--models", "WindowHGB", "--tables", "GPS", "--out",
+                 str(tmp_path / "d"), "--drop-features", "GPS.Nope"]) == 2
+    assert "GPS.Nope is no feature" in capsys.readouterr().err

@@ -82,7 +82,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    metavar="NAME[,NAME...]",
                    help="channels, groups, tables or log columns not to use (see below)")
     p.add_argument("--tables", default=None, metavar="TABLE[,TABLE...]",
-                   help="use only the channels of these log tables (default: all)")
+                   help="use only the channels of these log tables (default: all); with "
+                        "--models, the one table of the tlm process data set")
+    p.add_argument("--models", default=None, metavar="MODEL",
+                   help="instead of the whole-log detector, the paper's per-table view: "
+                        "window model WindowHGB, WindowHGB60 or CentredHGB on one table "
+                        "(--tables) of a 'tlm process' data set")
     p.add_argument("--rounds", type=int_at_least(1), default=100, metavar="N",
                    help="boosting rounds (default 100)")
     p.add_argument("--min-child-weight", type=positive_number, default=20.0, metavar="W",
@@ -147,6 +152,9 @@ def _run(args: argparse.Namespace) -> int:
         raise UsageError("tlm train: name the labelled flights (DS...), or --list-channels")
     if not args.out:
         raise UsageError("tlm train: --out MODEL is required")
+    if args.models is not None:
+        return _run_table(args)
+    _refuse_processed(args.inputs)
     opt = TrainOptions(drop=tuple(_drops(args)), holdout=args.holdout,
                        holdout_flights=tuple(args.holdout_flight), seed=args.seed,
                        rounds=args.rounds, min_child_weight=args.min_child_weight,
@@ -163,12 +171,69 @@ def _run(args: argparse.Namespace) -> int:
         res = train_detector(args.inputs, opt, progress)
     finally:
         bar.close()
-    cmd = "tlm train " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
-        if len(sys.argv) > 1 and sys.argv[1] == "train" else "tlm train"
-    res.detector.manifest = manifest(res, opt, [str(Path(p)) for p in args.inputs], cmd)
+    res.detector.manifest = manifest(res, opt, [str(Path(p)) for p in args.inputs],
+                                     _command())
     res.detector.save(out)
     _print(res, out)
     return 0
+
+
+def _is_processed(path: str) -> bool:
+    from tlm_process.pipeline.ingest import _is_processed as processed
+
+    return Path(path).is_dir() and processed(Path(path))
+
+
+def _refuse_processed(inputs: list[str]) -> None:
+    from tlm_process.detect.data import DetectError
+
+    for p in inputs:
+        if _is_processed(p):
+            raise DetectError("a 'tlm process' data set holds the paper's four tables only: "
+                              "the whole-log detector trains on raw flights (tlm generate "
+                              "data sets, logs); for a per-table detector give --models "
+                              "WindowHGB60 --tables GPS", source=p)
+
+
+def _run_table(args: argparse.Namespace) -> int:
+    """``--models``: one window model on one table of a ``tlm process`` data set."""
+    import os
+
+    from tlm_process.cliutil import UsageError
+    from tlm_process.detect.table_model import train_table
+    from tlm_process.detect.table_spec import TABLE_MODELS
+    from tlm_process.detect.train import TrainOptions, manifest
+
+    models = _split([args.models])
+    tables = _split([args.tables]) if args.tables else []
+    if len(models) != 1 or len(tables) != 1:
+        raise UsageError("tlm train --models: one window model and one table (--tables) per "
+                         "model folder, e.g. --models WindowHGB60 --tables GPS")
+    if models[0] not in TABLE_MODELS:
+        raise UsageError(f"tlm train --models: {models[0]} cannot be saved; choose from "
+                         f"{', '.join(TABLE_MODELS)} (the paper's other classifiers are "
+                         "scikit-learn estimators that save only as pickles)")
+    if len(args.inputs) != 1 or not _is_processed(args.inputs[0]):
+        raise UsageError("tlm train --models: name one 'tlm process' data set (tlm process "
+                         "DS --out DS-tlm)")
+    if not args.out:
+        raise UsageError("tlm train: --out MODEL is required")
+    opt = TrainOptions(drop=tuple(_split(args.drop_features)), holdout=args.holdout,
+                       holdout_flights=tuple(args.holdout_flight), seed=args.seed,
+                       rounds=args.rounds, min_child_weight=args.min_child_weight,
+                       n_jobs=args.jobs or os.cpu_count() or 1)
+    out = prepare_out(args.out, "train", args.overwrite, inputs=args.inputs)
+    res = train_table(args.inputs[0], tables[0], models[0], opt)
+    res.detector.manifest = manifest(res, opt, list(args.inputs), _command())
+    res.detector.save(out)
+    _print(res, out)
+    return 0
+
+
+def _command() -> str:
+    if len(sys.argv) > 1 and sys.argv[1] == "train":
+        return "tlm train " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    return "tlm train"
 
 
 def _print(res: TrainResult, out: Path) -> None:
@@ -178,6 +243,9 @@ def _print(res: TrainResult, out: Path) -> None:
     t = res.times
     print(f"model              {out}")
     print(f"flights            {len(res.train)} trained on, {len(res.held_out)} held out")
+    table = det.channels[0].split(".")[0]
+    what = "whole-log detector" if det.kind == "whole-log" else f"{det.kind} on {table}"
+    print(f"model kind         {what}")
     print(f"channels           {len(det.channels)} ({len(det.features)} features, "
           f"{len(det.columns)} used)")
     print(f"classes            {', '.join(class_name(c) for c in det.classes)}")

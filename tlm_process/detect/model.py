@@ -87,6 +87,12 @@ class Detector:
         return cls(list(channels), list(features), columns, [int(c) for c in classes],
                    booster)
 
+    @property
+    def kind(self) -> str:
+        """``"whole-log"`` (:mod:`.channels`), or the window model of a per-table detector
+        (:mod:`.table_model`)."""
+        return str(self.manifest.get("model", "whole-log"))
+
     def predict_proba(self, X: np.ndarray) -> np.ndarray:
         """Class probabilities (rows x :attr:`classes`)."""
         import xgboost as xgb
@@ -165,17 +171,24 @@ def load_detector(folder: str | os.PathLike) -> Detector:
     if hashlib.sha256(raw).hexdigest() != w.get("sha256"):
         raise DetectError(f"{WEIGHTS_FILE} does not match the manifest's SHA-256 (changed "
                           "after training)", source=str(d))
-    known = {c.name for c in CHANNELS}
     channels = list(man.get("channels") or [])
-    unknown = [c for c in channels if c not in known]
-    if unknown or not channels:
-        raise DetectError(f"the model reads channel(s) this tlm does not know: "
-                          f"{', '.join(unknown[:5]) or '(none listed)'}", source=str(d))
-    features = feature_names(channels)
-    if features != list(man.get("features") or []):
-        raise DetectError("the model's feature columns differ from this tlm's for its "
-                          "channels (trained by another tlm version: train it again)",
-                          source=str(d))
+    features = list(man.get("features") or [])
+    if man.get("model", "whole-log") == "whole-log":
+        known = {c.name for c in CHANNELS}
+        unknown = [c for c in channels if c not in known]
+        if unknown or not channels:
+            raise DetectError(f"the model reads channel(s) this tlm does not know: "
+                              f"{', '.join(unknown[:5]) or '(none listed)'}", source=str(d))
+        if feature_names(channels) != features:
+            raise DetectError("the model's feature columns differ from this tlm's for its "
+                              "channels (trained by another tlm version: train it again)",
+                              source=str(d))
+    else:
+        from tlm_process.detect.table_spec import check_table_manifest
+
+        why = check_table_manifest(man, features)
+        if why is not None:
+            raise DetectError(f"manifest.json: {why}", source=str(d))
     columns = np.asarray(man.get("columns") or [], dtype=np.int64)
     classes = [int(c) for c in man.get("classes") or []]
     if not classes or (len(columns) and (columns.min() < 0 or columns.max() >= len(features))):

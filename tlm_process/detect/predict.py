@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -26,7 +27,7 @@ from tlm_process.evaluate.events import PERSISTENCE_S
 from tlm_process.labels import class_name
 
 __all__ = ["MERGE_GAP_S", "MIN_FAULT_S", "Finding", "find_faults", "log_features",
-           "predict_log"]
+           "predict_log", "predict_rows"]
 
 #: A fault class must be predicted on consecutive rows covering this long to be reported [s].
 MIN_FAULT_S: float = PERSISTENCE_S
@@ -44,22 +45,29 @@ def log_features(log: LogData, channels: Sequence[str]
     return grid, feature_matrix(table, channels, GRID_HZ), lacking
 
 
+def predict_rows(detector: Detector, time_us: np.ndarray, X: np.ndarray,
+                 windows: Sequence[Any] | None) -> pd.DataFrame:
+    """``TimeUS``, ``p_<class>``, ``label`` (and ``true_label`` when ``windows`` is not
+    None) of rows at ``time_us`` with features ``X``."""
+    from tlm_process.detect.data import window_labels
+
+    p = detector.predict_proba(X)
+    classes = np.asarray(detector.classes)
+    out = pd.DataFrame({"TimeUS": np.asarray(time_us, dtype=np.int64)})
+    for j, c in enumerate(classes):
+        out[f"p_{class_name(int(c))}"] = p[:, j].astype(np.float32)
+    out["label"] = classes[p.argmax(axis=1)].astype(np.int16)
+    if windows is not None:
+        out["true_label"] = window_labels(out["TimeUS"].to_numpy(), windows).astype(np.int16)
+    return out
+
+
 def predict_log(detector: Detector, log: LogData) -> pd.DataFrame:
     """Per grid row of ``log``'s armed span: ``TimeUS``, ``p_<class>`` (one per class of the
     detector, named by :func:`tlm_process.labels.class_name`), ``label`` (the most probable
     class) and ``true_label`` when the log has fault windows."""
-    from tlm_process.detect.data import window_labels
-
     grid, X, _ = log_features(log, detector.channels)
-    p = detector.predict_proba(X)
-    classes = np.asarray(detector.classes)
-    out = pd.DataFrame({"TimeUS": grid})
-    for j, c in enumerate(classes):
-        out[f"p_{class_name(int(c))}"] = p[:, j].astype(np.float32)
-    out["label"] = classes[p.argmax(axis=1)].astype(np.int16)
-    if log.windows is not None:
-        out["true_label"] = window_labels(grid, log.windows).astype(np.int16)
-    return out
+    return predict_rows(detector, grid, X, log.windows)
 
 
 @dataclass(frozen=True)
@@ -80,11 +88,11 @@ class Finding:
         return class_name(self.label)
 
 
-def _runs(t: np.ndarray, lab: np.ndarray, prob: dict[int, np.ndarray], classes: Sequence[int],
-          min_s: float, gap_s: float) -> list[tuple[int, np.ndarray]]:
+def _runs(t: np.ndarray, lab: np.ndarray, classes: Sequence[int], min_s: float,
+          gap_s: float, dt: float) -> list[tuple[int, np.ndarray]]:
     """Per fault class, (class, row indices) of its runs of consecutive predicted rows that
-    cover ``min_s``, runs of one class less than ``gap_s`` apart merged."""
-    dt = 1.0 / GRID_HZ
+    cover ``min_s`` (rows ``dt`` apart), runs of one class less than ``gap_s`` apart
+    merged."""
     out: list[tuple[int, np.ndarray]] = []
     for c in classes:
         if int(c) == 0:
@@ -104,7 +112,9 @@ def _runs(t: np.ndarray, lab: np.ndarray, prob: dict[int, np.ndarray], classes: 
 
 def find_faults(pred: pd.DataFrame, classes: Sequence[int],
                 min_s: float = MIN_FAULT_S, gap_s: float = MERGE_GAP_S) -> list[Finding]:
-    """The faults in ``pred`` (:func:`predict_log`'s table), in order of start.
+    """The faults in ``pred`` (:func:`predict_log`'s table: rows on the 10 Hz grid, or a
+    table's rows for a per-table detector; the row interval is their median step), in order
+    of start.
 
     Per fault class, the runs of consecutive rows predicted as it that cover at least
     ``min_s`` (shorter ones are flicker), runs of a class less than ``gap_s`` apart merged.
@@ -116,10 +126,11 @@ def find_faults(pred: pd.DataFrame, classes: Sequence[int],
     t = pred["TimeUS"].to_numpy(np.float64) * 1e-6
     if not len(t):
         return []
-    dt = 1.0 / GRID_HZ
+    steps = np.diff(t)
+    dt = float(np.median(steps[steps > 0])) if (steps > 0).any() else 1.0 / GRID_HZ
     lab = pred["label"].to_numpy()
     prob = {int(c): pred[f"p_{class_name(int(c))}"].to_numpy() for c in classes}
-    runs = _runs(t, lab, prob, classes, min_s, gap_s)
+    runs = _runs(t, lab, classes, min_s, gap_s, dt)
     events: list[list[tuple[int, np.ndarray]]] = []
     end = -np.inf
     for c, idx in runs:

@@ -87,7 +87,19 @@ def check_columns(det: Detector, log: LogData, allow_missing: bool) -> list[str]
 
 
 def detect_log(det: Detector, path: str | Path, *, allow_missing: bool = False) -> LogResult:
-    """Read ``path`` and run ``det`` on its armed span."""
+    """Read ``path`` and run ``det`` on its armed span (a per-table detector: on the rows of
+    its table, processed as its data set's flights were)."""
+    if det.kind != "whole-log":
+        from tlm_process.detect.predict import predict_rows
+        from tlm_process.detect.table_model import table_log_features
+
+        log, rows, X = table_log_features(det, path)
+        pred = predict_rows(det, rows["TimeUS"].to_numpy(), X, log.windows)
+        findings = find_faults(pred, det.classes)
+        res = LogResult(log, findings, pred, [])
+        if log.windows is not None:
+            res.scores = score_log(pred, findings, log)
+        return res
     log = read_log(path)
     if log.span_us[1] <= log.span_us[0]:
         raise DetectError("the log's armed span is empty", source=log.source)

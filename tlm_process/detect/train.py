@@ -234,10 +234,22 @@ def _jsonable(x: Any) -> Any:
 
 def _source_card(path: str) -> dict[str, Any]:
     """What a training input was: for a ``tlm generate`` data set its seed, flights and
-    drawing settings (from its ``manifest.json``), else just the path."""
+    drawing settings (from its ``manifest.json``), for a ``tlm process`` data set its flights,
+    options, features and class counts (``report.json``), else just the path."""
     import json
 
     card: dict[str, Any] = {"path": str(path)}
+    rp = Path(path) / "report.json"
+    if rp.is_file():  # a tlm process data set
+        try:
+            r = json.loads(rp.read_text())
+        except (OSError, ValueError):
+            return card
+        if isinstance(r, dict) and r.get("format") == "tlm.process":
+            card.update({"kind": "tlm process", "flights": len(r.get("flights") or []),
+                         "options": r.get("options"), "features": r.get("features"),
+                         "counts": r.get("counts")})
+        return card
     mp = Path(path) / "manifest.json"
     if mp.is_file():
         try:
@@ -259,17 +271,22 @@ def manifest(result: TrainResult, opt: TrainOptions, inputs: Sequence[str],
 
     by = {c.name: c for c in CHANNELS}
     det = result.detector
+    whole = det.kind == "whole-log"
     return {
+        **det.manifest,  # a per-table model's table, window, scaler and processing options
         "tlm_version": "0.1.0",
         "command": command,
-        "model": "whole-log",
+        "model": det.kind,
         "inputs": list(inputs),
-        "grid_hz": GRID_HZ, "window_s": list(WINDOW_S), "train_hz": opt.train_hz,
-        "normal_hz": opt.normal_hz,
+        "grid_hz": GRID_HZ if whole else None, "window_s": list(WINDOW_S) if whole else None,
+        "train_hz": opt.train_hz if whole else 5.0,
+        "normal_hz": opt.normal_hz if whole else 1.0,
         "channel_info": {c: {"kind": by[c].kind, "unit": by[c].unit,
-                             "needs": list(by[c].needs)} for c in det.channels},
+                             "needs": list(by[c].needs)} for c in det.channels} if whole
+        else {c: {"kind": "table feature (min-max scaled)", "needs": [c]}
+              for c in det.channels},
         "class_names": {str(c): class_name(c) for c in det.classes},
-        "scaler": None,  # trees split on raw values: nothing to scale, nothing to refit
+        "scaler": None if whole else det.manifest.get("scaler"),  # whole-log: raw values
         "sources": [_source_card(p) for p in inputs],
         "options": {"drop": list(opt.drop), "holdout": opt.holdout,
                     "holdout_flights": list(opt.holdout_flights), "seed": opt.seed,
