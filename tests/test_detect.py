@@ -256,16 +256,21 @@ def test_no_model_folder(tmp_path):
 # tlm train / tlm detect end to end (reference SITL logs: no simulation needed)
 # --------------------------------------------------------------------------------------------
 
-#: A small, fast detector: the GPS, ERR and MODE channels, on three single-fault logs.
+#: A small, fast detector: the GPS, IMU 0, ERR and MODE channels, on four reference logs.
 _TRAIN_LOGS = ("gps_s12", "rc_s15", "normal_s11", "accel_s13")
+
+
+def _linked_logs(d: Path) -> Path:
+    """``d`` holding links to the _TRAIN_LOGS reference logs and their sidecars."""
+    for name in _TRAIN_LOGS:
+        for ext in (".bin", ".json"):
+            (d / f"{name}{ext}").symlink_to(reference_path(name + ext))
+    return d
 
 
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
-    d = tmp_path_factory.mktemp("train")
-    for name in _TRAIN_LOGS:
-        for ext in (".bin", ".json"):
-            (d / f"{name}{ext}").symlink_to(reference_path(name + ext))
+    d = _linked_logs(tmp_path_factory.mktemp("train"))
     out = d / "model"
     rc = main(["train", str(d), "--out", str(out), "--rounds", "8", "--min-child-weight", "1",
                "--quiet",
@@ -432,10 +437,7 @@ def test_training_refuses_a_log_without_fault_labels(tmp_path):
 
 @pytest.fixture(scope="module")
 def table_model(tmp_path_factory):
-    d = tmp_path_factory.mktemp("table")
-    for name in _TRAIN_LOGS:
-        for ext in (".bin", ".json"):
-            (d / f"{name}{ext}").symlink_to(reference_path(name + ext))
+    d = _linked_logs(tmp_path_factory.mktemp("table"))
     ds = d / "ds-tlm"
     assert main(["process", *[str(d / f"{n}.bin") for n in _TRAIN_LOGS], "--out", str(ds),
                  "--quiet", "--plots", "0"]) == 0
