@@ -23,11 +23,12 @@ import pandas as pd
 from tlm_process.detect.channels import needed_columns
 from tlm_process.detect.data import DetectError, LogData, read_log
 from tlm_process.detect.model import Detector
-from tlm_process.detect.predict import Finding, find_faults, log_features, predict_log
+from tlm_process.detect.predict import Finding, find_faults, predict_log, predict_rows
 from tlm_process.labels import class_name
 from tlm_process.pipeline.errors import PipelineError
 
-__all__ = ["LogResult", "SUMMARY_COLUMNS", "check_columns", "detect_log", "log_folder_name"]
+__all__ = ["SUMMARY_COLUMNS", "LogResult", "check_columns", "detect_log", "log_folder_name",
+           "run_detect", "score_log", "write_log_outputs"]
 
 SUMMARY_COLUMNS = ("log", "class", "label", "start_s", "end_s", "peak_p", "also")
 #: A true fault counts as found when a finding of its class starts within this of its
@@ -90,7 +91,6 @@ def detect_log(det: Detector, path: str | Path, *, allow_missing: bool = False) 
     """Read ``path`` and run ``det`` on its armed span (a per-table detector: on the rows of
     its table, processed as its data set's flights were)."""
     if det.kind != "whole-log":
-        from tlm_process.detect.predict import predict_rows
         from tlm_process.detect.table_model import table_log_features
 
         log, rows, X = table_log_features(det, path)
@@ -177,5 +177,3 @@ def run_detect(det: Detector, paths: Sequence[str | Path], out: Path, *,
     pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS)).to_csv(out / "summary.csv", index=False)
     return results, errors
 
-
-__all__ += ["log_features", "run_detect", "score_log", "write_log_outputs"]
