@@ -19,15 +19,18 @@ Run a detector saved by 'tlm train' on ArduPilot logs: tlm's, SITL's or a real v
 .bin or text .log, Copter 3.x to 4.7, with or without a fault sidecar. Each log is read
 from arming (EV 10, ARM, or the first motor output above idle for a log that starts at
 arming) to disarming, on the detector's 10 Hz grid; every row gets a probability per class.
-A fault is reported when one class is predicted for at least 1 s (runs of a class less than
-3 s apart are one fault).
+A fault is reported when one class is predicted for at least 1 s; runs less than 5 s apart
+are one fault, named by the class predicted on most of its rows. A per-table model (tlm train
+--models) predicts every row of its table instead, the log processed as its data set's
+flights were.
 """
 
 EPILOG = """\
 outputs:
   DIR/summary.csv              one row per fault found: log, class, label, start_s, end_s
-                               (log time, s since boot), peak_p; class 'none' for a log
-                               where nothing was found
+                               (log time, s since boot), peak_p, also (other classes
+                               predicted briefly within it); class 'none' for a log where
+                               nothing was found
   DIR/<log>/predictions.parquet  TimeUS, p_<class> per class, label (the most probable);
                                true_label when the log has a sidecar
   DIR/<log>/timeline.png       class probabilities over time, the faults reported, the log's

@@ -35,7 +35,8 @@ holds evidence (GPS, GPA, IMU and VIBE of both IMUs, RATE, ATT, BARO, MAG, BAT, 
 innovations and test ratios (XKF1/3/4), motor outputs RCOU, RCIN, CTUN, MODE and ERR), aligned
 on one 10 Hz grid from arming to disarming, summarised over trailing 2 s and 10 s windows:
 causal, each decision uses only rows up to its time. The classifier is XGBoost; the weights
-are saved in XGBoost's own UBJSON format (no pickle) beside manifest.json.
+are saved in XGBoost's own UBJSON format (no pickle) beside manifest.json. With --models, one
+of tlm evaluate's window models on one table of a 'tlm process' data set instead.
 """
 
 EPILOG = """\
@@ -57,6 +58,8 @@ channels: --list-channels prints them. --drop-features removes channels: a chann
 
 examples:
   tlm generate --flights 200 --out ds --seed 1
+  tlm process ds --out ds-tlm
+  tlm train ds-tlm --models WindowHGB60 --tables GPS --out model-gps
   tlm train ds --out model --holdout 0.2
   tlm train ds --out model-41 --drop-features RATE.AOutSlew
   tlm detect model flight.bin --out found
