@@ -22,8 +22,8 @@ Three kinds (how :mod:`.features` summarises them):
 
 Real logs differ in what they log: Copter 4.0 names its EKF messages ``NKF*`` (read as their
 ``XKF*`` twins: same columns), logs before 4.2 lack ``RATE.AOutSlew``, a one-IMU board has no
-IMU instance 1. :func:`needed_columns` says which log columns each channel needs so
-:mod:`.detector` can name what a log lacks.
+IMU instance 1. :func:`needed_columns` says which log columns each channel needs so ``tlm detect``
+(:mod:`.run`) can name what a log lacks.
 """
 
 from __future__ import annotations
@@ -167,8 +167,6 @@ def _bat(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
     return {"VoltCell": volt / cells}
 
 
-
-
 def _xkf3(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
     """The EKF's innovations without a direction that depends on the route or the place:
     horizontal velocity and position innovations as magnitudes (IVH, IPH), vertical ones
@@ -179,7 +177,6 @@ def _xkf3(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
             "IMag": np.sqrt(_col(df, "IMX") ** 2 + _col(df, "IMY") ** 2
                             + _col(df, "IMZ") ** 2),
             "IYAW": np.abs(_col(df, "IYAW"))}
-
 
 
 def _xkf4(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
@@ -194,7 +191,6 @@ def _xkf4(df: Rows, _p: Mapping[str, float]) -> dict[str, np.ndarray]:
     for bit, name in enumerate(("Pos", "Vel", "Hgt", "Mag")):
         out[f"TS{name}"] = ((ts >> bit) & 1).astype(np.float64)
     return out
-
 
 
 def _rcou(df: Rows, p: Mapping[str, float]) -> dict[str, np.ndarray]:
@@ -337,7 +333,8 @@ _BY_NAME = {c.name: c for c in CHANNELS}
 
 
 def source_tables() -> tuple[str, ...]:
-    """The log tables the channels read (plus EV, for the flight phase)."""
+    """The log tables the channels read, plus EV and ARM (the armed span: arming_time_us
+    reads them, and RCOU, which is a channel source)."""
     return tuple(dict.fromkeys([s.table for s in _SOURCES] + ["EV", "ARM"]))
 
 
@@ -346,7 +343,7 @@ def drop_channels(drop: Sequence[str]) -> tuple[list[str], list[str]]:
     the channels it names: a channel (``IMU1.GyrX``), a group (``IMU1``, ``XKF4L1``), a table
     (``XKF3``: every lane) or a log column (``RATE.AOutSlew``, ``GPS.GCrs``: every channel
     computed from it)."""
-    kept, unknown = [], []
+    kept: list[str] = []
     hit = dict.fromkeys(drop, False)
     for c in CHANNELS:
         gone = False

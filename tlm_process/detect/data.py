@@ -62,40 +62,37 @@ def armed_span(tables: Mapping[str, pd.DataFrame], params: Mapping[str, float]
 
 
 def _generated(path: Path, partial: bool) -> Iterator[LogData]:
-    """Flights of a ``tlm generate`` data set (or a plain multi-flight data set): every
-    table the detector reads, by flight; parameters from the flight's scenario."""
-    from tlm_process.generate.errors import GenerateError
-    from tlm_process.generate.reader import index_dataset, read_dataset_table
-    from tlm_process.pipeline.ingest import _dataset_flights
+    """Flights of a ``tlm generate`` data set (or a plain multi-flight data set), read by the
+    pipeline's reader (:func:`tlm_process.pipeline.ingest.read_dataset`) with every table
+    the detector reads; parameters from each flight's scenario in ``flights.jsonl``."""
+    from tlm_process.pipeline.ingest import read_dataset
 
-    want = [*source_tables(), "MODE", "EV"]
-    params: dict[int, dict[str, float]] = {}
-    try:
-        if (path / "manifest.json").exists():
-            idx = index_dataset(path, partial=partial)
-            faults = read_dataset_table(idx, "faults")
-            frames = {n: read_dataset_table(idx, n) for n in dict.fromkeys(want)
-                      if n in idx.tables}
-            jl = path / "flights.jsonl"
-            for line in jl.read_text().splitlines() if jl.exists() else ():
-                try:
-                    rec = json.loads(line)
-                    params[int(rec["flight"])] = {
-                        k: float(v) for k, v in (rec["scenario"].get("params") or {}).items()}
-                except (ValueError, KeyError, TypeError, AttributeError):
-                    continue
-        else:
-            faults = pd.read_parquet(path / "faults.parquet")
-            frames = {n: pd.read_parquet(path / f"{n}.parquet") for n in dict.fromkeys(want)
-                      if (path / f"{n}.parquet").exists()}
-    except (GenerateError, OSError, ValueError) as exc:
-        raise DetectError(str(exc), source=str(path)) from None
-    for fl in _dataset_flights(path, faults, frames):
+    flights, _ = read_dataset(path, partial=partial, tables=source_tables())
+    params = _scenario_params(path / "flights.jsonl")
+    for fl in flights:
         fid = fl.id.rsplit(":", 1)[1]
         p = params.get(int(fid), {}) if fid.isdigit() else {}
         tables = align(fl.tables)
         span, how = armed_span(tables, p)
         yield LogData(fl.id, fl.source, tables, p, span, how, anchor_flight(fl, "auto"))
+
+
+def _scenario_params(jsonl: Path) -> dict[int, dict[str, float]]:
+    """Flight -> the parameters its scenario drew (FRAME_CLASS, wind, noise), from a ``tlm
+    generate`` data set's ``flights.jsonl``; lines that hold none are skipped."""
+    params: dict[int, dict[str, float]] = {}
+    try:
+        lines = jsonl.read_text().splitlines() if jsonl.exists() else []
+    except OSError as exc:
+        raise DetectError(f"cannot read: {exc.strerror or exc}", source=str(jsonl)) from None
+    for line in lines:
+        try:
+            rec = json.loads(line)
+            params[int(rec["flight"])] = {
+                k: float(v) for k, v in (rec["scenario"].get("params") or {}).items()}
+        except (ValueError, KeyError, TypeError, AttributeError):
+            continue
+    return params
 
 
 def _single(kind: str, path: Path) -> Iterator[LogData]:
@@ -153,7 +150,7 @@ def read_log(path: str | Path, *, labels: bool = True) -> LogData:
     if not p.is_file():
         raise DetectError("not a file (expected an ArduPilot .bin or .log)", source=str(p))
     try:
-        lt = read_log_tables(p, [*source_tables(), "MODE", "EV", "ARM", "MSG", "PARM"])
+        lt = read_log_tables(p, source_tables())  # (the parameters always come with them)
     except (OSError, ValueError, KeyError, IndexError) as exc:
         raise DetectError(f"cannot read the log: {exc}", source=str(p)) from None
     warn_damage(lt)

@@ -28,7 +28,7 @@ SHOW_P: float = 0.2
 
 def plot_timeline(log: LogData, pred: pd.DataFrame, classes: Sequence[int],
                   findings: Sequence[Finding], path: str | Path, title: str = "") -> Path:
-    """Write the timeline of ``log`` (predictions ``pred`` of :func:`.predict.predict_log`,
+    """Write the timeline of ``log`` (predictions ``pred`` of :func:`.predict.predict_rows`,
     reported ``findings``) to ``path`` (PNG); returns the path."""
     import matplotlib
 

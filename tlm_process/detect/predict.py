@@ -2,8 +2,8 @@
 
 :func:`log_features`: the log's armed span on the :data:`~.channels.GRID_HZ` grid, its
 channels and features (the same function at training and detection time, so a model sees a
-user's log as it saw its training flights). :func:`predict_log`: probabilities per class and
-the predicted label on every grid row. :func:`find_faults`: the faults a log holds by the
+user's log as it saw its training flights). :func:`predict_rows`: probabilities per class and
+the predicted label on every row. :func:`find_faults`: the faults a log holds by the
 predictions: runs of one fault class that last at least :data:`MIN_FAULT_S` (a persistence
 filter, as :data:`tlm_process.evaluate.events.PERSISTENCE_S`), merged across gaps shorter than
 :data:`MERGE_GAP_S`, and runs of several classes that touch taken as one fault named by its
@@ -27,7 +27,7 @@ from tlm_process.evaluate.events import PERSISTENCE_S
 from tlm_process.labels import class_name
 
 __all__ = ["MERGE_GAP_S", "MIN_FAULT_S", "Finding", "find_faults", "log_features",
-           "predict_log", "predict_rows"]
+           "predict_rows"]
 
 #: A fault class must be predicted on consecutive rows covering this long to be reported [s].
 MIN_FAULT_S: float = PERSISTENCE_S
@@ -60,14 +60,6 @@ def predict_rows(detector: Detector, time_us: np.ndarray, X: np.ndarray,
     if windows is not None:
         out["true_label"] = window_labels(out["TimeUS"].to_numpy(), windows).astype(np.int16)
     return out
-
-
-def predict_log(detector: Detector, log: LogData) -> pd.DataFrame:
-    """Per grid row of ``log``'s armed span: ``TimeUS``, ``p_<class>`` (one per class of the
-    detector, named by :func:`tlm_process.labels.class_name`), ``label`` (the most probable
-    class) and ``true_label`` when the log has fault windows."""
-    grid, X, _ = log_features(log, detector.channels)
-    return predict_rows(detector, grid, X, log.windows)
 
 
 @dataclass(frozen=True)
@@ -112,7 +104,7 @@ def _runs(t: np.ndarray, lab: np.ndarray, classes: Sequence[int], min_s: float,
 
 def find_faults(pred: pd.DataFrame, classes: Sequence[int],
                 min_s: float = MIN_FAULT_S, gap_s: float = MERGE_GAP_S) -> list[Finding]:
-    """The faults in ``pred`` (:func:`predict_log`'s table: rows on the 10 Hz grid, or a
+    """The faults in ``pred`` (:func:`predict_rows`'s table: rows on the 10 Hz grid, or a
     table's rows for a per-table detector; the row interval is their median step), in order
     of start.
 

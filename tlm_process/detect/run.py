@@ -23,12 +23,12 @@ import pandas as pd
 from tlm_process.detect.channels import needed_columns
 from tlm_process.detect.data import DetectError, LogData, read_log
 from tlm_process.detect.model import Detector
-from tlm_process.detect.predict import Finding, find_faults, predict_log, predict_rows
+from tlm_process.detect.predict import Finding, find_faults, log_features, predict_rows
 from tlm_process.labels import class_name
 from tlm_process.pipeline.errors import PipelineError
 
-__all__ = ["SUMMARY_COLUMNS", "LogResult", "check_columns", "detect_log", "log_folder_name",
-           "run_detect", "score_log", "write_log_outputs"]
+__all__ = ["SUMMARY_COLUMNS", "LogResult", "detect_log", "log_folder_name",
+           "refuse_missing", "run_detect", "score_log", "write_log_outputs"]
 
 SUMMARY_COLUMNS = ("log", "class", "label", "start_s", "end_s", "peak_p", "also")
 #: A true fault counts as found when a finding of its class starts within this of its
@@ -68,43 +68,36 @@ def log_folder_name(log: LogData, taken: set[str]) -> str:
     return name
 
 
-def check_columns(det: Detector, log: LogData, allow_missing: bool) -> list[str]:
-    """The log columns ``det`` reads that ``log`` lacks. Raises :class:`DetectError` naming
-    them and the ``--drop-features`` that avoids them, unless ``allow_missing``."""
-    from tlm_process.detect.channels import armed_grid, channel_table
-
-    _, lacking = channel_table(log.tables, log.params, det.channels,
-                               armed_grid(log.span_us[0], log.span_us[0]))
-    if lacking and not allow_missing:
-        need = needed_columns(det.channels)
-        chans = sorted({c for col in lacking for c in need.get(col, [])})
-        raise DetectError(
-            f"the model reads {len(lacking)} log column(s) this log lacks: "
-            f"{', '.join(lacking[:8])}{' ...' if len(lacking) > 8 else ''} (channels "
-            f"{', '.join(chans[:6])}{' ...' if len(chans) > 6 else ''}); train a model "
-            f"without them (tlm train ... --drop-features {','.join(lacking)}) or run with "
-            f"--allow-missing", source=log.source)
-    return lacking
+def refuse_missing(det: Detector, log: LogData, lacking: Sequence[str]) -> None:
+    """Raise :class:`DetectError` naming the log columns ``det`` reads that ``log`` lacks
+    (``lacking``) and the ``--drop-features`` that avoids them."""
+    need = needed_columns(det.channels)
+    chans = sorted({c for col in lacking for c in need.get(col, [])})
+    raise DetectError(
+        f"the model reads {len(lacking)} log column(s) this log lacks: "
+        f"{', '.join(lacking[:8])}{' ...' if len(lacking) > 8 else ''} (channels "
+        f"{', '.join(chans[:6])}{' ...' if len(chans) > 6 else ''}); train a model "
+        f"without them (tlm train ... --drop-features {','.join(lacking)}) or run with "
+        f"--allow-missing", source=log.source)
 
 
 def detect_log(det: Detector, path: str | Path, *, allow_missing: bool = False) -> LogResult:
     """Read ``path`` and run ``det`` on its armed span (a per-table detector: on the rows of
-    its table, processed as its data set's flights were)."""
+    its table, processed as its data set's flights were). A log that lacks columns the
+    whole-log detector reads is refused (:func:`refuse_missing`) unless ``allow_missing``."""
     if det.kind != "whole-log":
         from tlm_process.detect.table_model import table_log_features
 
         log, rows, X = table_log_features(det, path)
-        pred = predict_rows(det, rows["TimeUS"].to_numpy(), X, log.windows)
-        findings = find_faults(pred, det.classes)
-        res = LogResult(log, findings, pred, [])
-        if log.windows is not None:
-            res.scores = score_log(pred, findings, log)
-        return res
-    log = read_log(path)
-    if log.span_us[1] <= log.span_us[0]:
-        raise DetectError("the log's armed span is empty", source=log.source)
-    missing = check_columns(det, log, allow_missing)
-    pred = predict_log(det, log)
+        time_us, missing = rows["TimeUS"].to_numpy(), []
+    else:
+        log = read_log(path)
+        if log.span_us[1] <= log.span_us[0]:
+            raise DetectError("the log's armed span is empty", source=log.source)
+        time_us, X, missing = log_features(log, det.channels)
+        if missing and not allow_missing:
+            refuse_missing(det, log, missing)
+    pred = predict_rows(det, time_us, X, log.windows)
     findings = find_faults(pred, det.classes)
     res = LogResult(log, findings, pred, missing)
     if log.windows is not None:

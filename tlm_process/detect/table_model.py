@@ -120,18 +120,13 @@ def table_log_features(det: Any, path: str | Path) -> tuple[LogData, pd.DataFram
     label``, their window features) for a per-table detector ``det``. Raises
     :class:`DetectError` for a log that lacks a feature (naming the ``--drop-features``)."""
     from tlm_process.evaluate.temporal import window_features
-    from tlm_process.pipeline.anchoring import DEFAULT_MAX_MATCH_M, log_span_us
+    from tlm_process.pipeline.anchoring import log_span_us
     from tlm_process.pipeline.ingest import read_flights
     from tlm_process.pipeline.process import ProcessOptions, process_flight
 
     man = det.manifest
     table = man["table"]
-    opt = man.get("process_options") or {}
-    options = ProcessOptions(
-        method=opt.get("anchoring", "auto"), phase=opt.get("phase", "armed"),
-        instance=opt.get("instance", 0),
-        max_match_m=opt.get("max_match_m") or DEFAULT_MAX_MATCH_M,
-        tables=(table,), rc_label=opt.get("rc_label") or "window")
+    options = ProcessOptions.from_recorded(man.get("process_options") or {}, (table,))
     (flight,) = read_flights([path])[:1]
     p = process_flight(flight, options)
     df = p.features[table]

@@ -22,12 +22,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from tlm_process.detect.channels import CHANNELS, GRID_HZ, drop_channels, needed_columns
 from tlm_process.detect.data import DetectError, read_training, window_labels
 from tlm_process.detect.features import WINDOW_S, feature_names
 from tlm_process.detect.model import Detector
 from tlm_process.detect.predict import log_features
+from tlm_process.evaluate.temporal import normal_rows
 
 __all__ = ["NORMAL_HZ", "TRAIN_HZ", "TrainOptions", "TrainResult", "check_drop", "class_weights",
            "manifest", "train_detector"]
@@ -107,7 +109,6 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
     t_start = time.perf_counter()
     channels = check_drop(opt.drop)
     features = feature_names(channels)
-    stride = max(1, int(round(GRID_HZ / opt.train_hz))) if opt.train_hz else 1
     every = max(1, int(round(opt.train_hz / opt.normal_hz))) if opt.normal_hz else 1
     fit_X: list[np.ndarray] = []
     fit_y: list[np.ndarray] = []
@@ -125,8 +126,8 @@ def train_detector(paths: Sequence[str | Path], opt: TrainOptions,
             held.append((log.id, grid, X, y))
         else:
             labels_seen |= {int(v) for v in np.unique(y)}
-            i = np.arange(len(y))
-            keep = (i % stride == 0) & ((y != 0) | (i % (stride * every) == 0))
+            keep = normal_rows(pd.DataFrame({"flight": 0, "TimeUS": grid}), y, every,
+                               rate_hz=GRID_HZ, train_hz=opt.train_hz)
             fit_X.append(X[keep])
             fit_y.append(y[keep])
         if progress is not None:

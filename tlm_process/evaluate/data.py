@@ -203,7 +203,6 @@ def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
     naming it, unless ``assume_normal``: then it is a normal flight and ``progress`` (if
     given) gets a line naming the logs so taken. A log that lacks a feature of the data set
     raises :class:`EvaluateError` naming the ``--drop-features`` that avoids it."""
-    from tlm_process.pipeline.anchoring import DEFAULT_MAX_MATCH_M
     from tlm_process.pipeline.ingest import read_flights
     from tlm_process.pipeline.process import ProcessOptions, process_flight
 
@@ -211,12 +210,7 @@ def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
     if ds.scaler is None:
         raise EvaluateError("the data set has no scaler.json: transfer logs cannot be "
                             "scaled like its flights", source=str(ds.path))
-    opt = ds.options
-    options = ProcessOptions(
-        method=opt.get("anchoring", "auto"), phase=opt.get("phase", "armed"),
-        instance=opt.get("instance", 0),
-        max_match_m=opt.get("max_match_m") or DEFAULT_MAX_MATCH_M,
-        tables=tuple(tables), rc_label=opt.get("rc_label") or "window")
+    options = ProcessOptions.from_recorded(ds.options, tables)
     flights = read_flights(list(paths))
     bare = [fl for fl in flights if _unlabelled(fl)]
     if bare and not assume_normal:

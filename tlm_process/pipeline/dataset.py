@@ -4,6 +4,7 @@ many flights (:mod:`.process` makes them, :mod:`.report` describes them)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -45,6 +46,20 @@ class ProcessOptions:
     max_match_m: float = DEFAULT_MAX_MATCH_M
     tables: tuple[str, ...] = DATA_TABLES
     rc_label: str = "window"
+
+    @classmethod
+    def from_recorded(cls, recorded: Mapping[str, Any], tables: Sequence[str]
+                      ) -> ProcessOptions:
+        """The options a data set was processed with, from what its report records
+        (``report.json["options"]``: ``anchoring``, ``phase``, ``instance``, ``max_match_m``,
+        ``rc_label``; a report older than an option had its default), for ``tables``: how a
+        log is processed to be seen as the data set's flights were (``tlm evaluate
+        --test-on``, a per-table ``tlm detect``)."""
+        return cls(method=recorded.get("anchoring", "auto"),
+                   phase=recorded.get("phase", "armed"),
+                   instance=recorded.get("instance", 0),
+                   max_match_m=recorded.get("max_match_m") or DEFAULT_MAX_MATCH_M,
+                   tables=tuple(tables), rc_label=recorded.get("rc_label") or "window")
 
     def __post_init__(self) -> None:
         if self.rc_label not in RC_LABELS:

@@ -381,11 +381,11 @@ def _read_csv_folder(path: Path) -> list[Flight]:
     return [Flight(path.name, str(path), "csv", tables, records)]
 
 
-def _generated_tables(path: Path, partial: bool) -> tuple[pd.DataFrame,
-                                                         dict[str, pd.DataFrame], dict]:
-    """Fault records and tables of a ``tlm generate`` data set, through its loader (the
-    committed flights only; a data set that is not complete only with ``partial``), and the
-    loader's summary (state, flights read, files ignored)."""
+def _generated_tables(path: Path, partial: bool, names: Sequence[str]
+                      ) -> tuple[pd.DataFrame, dict[str, pd.DataFrame], dict]:
+    """Fault records and tables ``names`` (those it has) of a ``tlm generate`` data set,
+    through its loader (the committed flights only; a data set that is not complete only
+    with ``partial``), and the loader's summary (state, flights read, files ignored)."""
     from tlm_process.generate.errors import GenerateError
     from tlm_process.generate.reader import index_dataset, read_dataset_table
 
@@ -394,38 +394,40 @@ def _generated_tables(path: Path, partial: bool) -> tuple[pd.DataFrame,
         if "faults" not in idx.tables:
             raise IngestError("no faults.parquet in the dataset", source=str(path))
         faults = read_dataset_table(idx, "faults")
-        frames = {name: read_dataset_table(idx, name)
-                  for name in DATA_TABLES + AUX_TABLES if name in idx.tables}
+        frames = {name: read_dataset_table(idx, name) for name in names if name in idx.tables}
     except GenerateError as exc:
         raise IngestError(str(exc), source=str(path)) from None
     return faults, frames, idx.summary()
 
 
-def _plain_tables(path: Path) -> tuple[pd.DataFrame, dict[str, pd.DataFrame]]:
-    """Fault records and tables of a data set without a tlm manifest (single files or
-    folders with a ``flight`` column), read whole."""
+def _plain_tables(path: Path, names: Sequence[str]
+                  ) -> tuple[pd.DataFrame, dict[str, pd.DataFrame]]:
+    """Fault records and tables ``names`` (those it has) of a data set without a tlm
+    manifest (single files or folders with a ``flight`` column), read whole."""
     faults = _read_table_file(path / "faults.parquet")
     frames = {}
-    for name in DATA_TABLES + AUX_TABLES:
+    for name in names:
         p = path / f"{name}.parquet"
         if p.exists():
             frames[name] = _read_table_file(p)
     return faults, frames
 
 
-def read_dataset(path: str | Path, *, partial: bool = False) -> tuple[list[Flight],
-                                                                      dict | None]:
-    """The flights of a multi-flight data set, and for a ``tlm generate`` data set (one with
-    ``manifest.json``) the loader's summary (:meth:`~tlm_process.generate.reader.
-    DatasetIndex.summary`; None otherwise). A generated data set is read through
-    :mod:`tlm_process.generate.reader`: committed flights only, and one that is not complete
-    is refused unless ``partial``."""
+def read_dataset(path: str | Path, *, partial: bool = False,
+                 tables: Sequence[str] = DATA_TABLES + AUX_TABLES
+                 ) -> tuple[list[Flight], dict | None]:
+    """The flights of a multi-flight data set, with the tables ``tables`` it has (default:
+    the pipeline's; ``tlm train`` asks for every table its detector reads), and for a ``tlm
+    generate`` data set (one with ``manifest.json``) the loader's summary (:meth:`~tlm_process.
+    generate.reader.DatasetIndex.summary`; None otherwise). A generated data set is read
+    through :mod:`tlm_process.generate.reader`: committed flights only, and one that is not
+    complete is refused unless ``partial``."""
     path = Path(path)
     info = None
     if (path / "manifest.json").exists():
-        faults, frames, info = _generated_tables(path, partial)
+        faults, frames, info = _generated_tables(path, partial, tables)
     else:
-        faults, frames = _plain_tables(path)
+        faults, frames = _plain_tables(path, tables)
     if len(faults) and "flight" not in faults.columns:
         raise IngestError("faults.parquet has no 'flight' column", source=str(path))
     for name, df in frames.items():
