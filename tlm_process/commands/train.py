@@ -204,7 +204,7 @@ def _run_table(args: argparse.Namespace) -> int:
 
     from tlm_process.cliutil import UsageError
     from tlm_process.detect.table_model import train_table
-    from tlm_process.detect.table_spec import TABLE_MODELS
+    from tlm_process.detect.table_spec import check_table_model
     from tlm_process.detect.train import TrainOptions, manifest
 
     models = _split([args.models])
@@ -212,10 +212,7 @@ def _run_table(args: argparse.Namespace) -> int:
     if len(models) != 1 or len(tables) != 1:
         raise UsageError("tlm train --models: one window model and one table (--tables) per "
                          "model folder, e.g. --models WindowHGB60 --tables GPS")
-    if models[0] not in TABLE_MODELS:
-        raise UsageError(f"tlm train --models: {models[0]} cannot be saved; choose from "
-                         f"{', '.join(TABLE_MODELS)} (the paper's other classifiers are "
-                         "scikit-learn estimators that save only as pickles)")
+    check_table_model(models[0])  # before the folder is made
     if len(args.inputs) != 1 or not _is_processed(args.inputs[0]):
         raise UsageError("tlm train --models: name one 'tlm process' data set (tlm process "
                          "DS --out DS-tlm)")

@@ -22,7 +22,8 @@ from tlm_process.detect.channels import align, source_tables
 from tlm_process.pipeline.anchoring import FaultWindow, anchor_flight, log_span_us
 from tlm_process.pipeline.errors import PipelineError
 
-__all__ = ["DetectError", "LogData", "armed_span", "read_log", "read_training"]
+__all__ = ["DetectError", "LogData", "armed_span", "check_log_path", "read_log",
+           "read_training"]
 
 
 class DetectError(PipelineError):
@@ -137,6 +138,17 @@ def read_training(paths: Sequence[str | Path], *, partial: bool = False) -> Iter
             yield log
 
 
+def check_log_path(path: str | Path) -> Path:
+    """``path`` as a Path; raises :class:`DetectError` when it does not exist or is not a
+    file (``tlm detect`` reads log files, never folders)."""
+    p = Path(path)
+    if not p.exists():
+        raise DetectError("no such log", source=str(p))
+    if not p.is_file():
+        raise DetectError("not a file (expected an ArduPilot .bin or .log)", source=str(p))
+    return p
+
+
 def read_log(path: str | Path, *, labels: bool = True) -> LogData:
     """Any ArduPilot log (``.bin``, or a text ``.log``) for detection: every table the
     detector reads, normalised (:mod:`tlm_process.logread`: TimeMS, IMU2/IMU3, ...), its
@@ -144,11 +156,7 @@ def read_log(path: str | Path, *, labels: bool = True) -> LogData:
     ``faults.json``, or tlm's fault MSG lines / SITL's SIM_* changes in the log) says them."""
     from tlm_process.logread import read_log_tables, warn_damage
 
-    p = Path(path)
-    if not p.exists():
-        raise DetectError("no such log", source=str(p))
-    if not p.is_file():
-        raise DetectError("not a file (expected an ArduPilot .bin or .log)", source=str(p))
+    p = check_log_path(path)
     try:
         lt = read_log_tables(p, source_tables())  # (the parameters always come with them)
     except (OSError, ValueError, KeyError, IndexError) as exc:

@@ -17,15 +17,14 @@ that save only as pickles, which a model folder never holds.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tlm_process.detect.data import DetectError, LogData
-from tlm_process.detect.table_spec import TABLE_MODELS, window_spec_of
+from tlm_process.detect.data import DetectError, LogData, check_log_path
+from tlm_process.detect.table_spec import TABLE_MODELS, check_table_model, window_spec_of
 
 __all__ = ["TABLE_MODELS", "table_log_features", "train_table"]
 
@@ -34,8 +33,7 @@ __all__ = ["TABLE_MODELS", "table_log_features", "train_table"]
 _TRAIN_HZ, _NORMAL_HZ = 5.0, 1.0
 
 
-def train_table(ds_path: str | Path, table: str, model: str, opt: Any,
-                progress: Callable[[int, str], None] | None = None) -> Any:
+def train_table(ds_path: str | Path, table: str, model: str, opt: Any) -> Any:
     """Fit window model ``model`` on ``table`` of the ``tlm process`` data set ``ds_path``;
     returns a :class:`~.train.TrainResult` whose detector's manifest holds what
     :func:`table_log_features` needs (table, window spec, scaler ranges, processing options).
@@ -49,10 +47,7 @@ def train_table(ds_path: str | Path, table: str, model: str, opt: Any,
     from tlm_process.evaluate.temporal import FlightRuns, normal_rows, window_features
 
     t0 = time.perf_counter()
-    if model not in TABLE_MODELS:
-        raise DetectError(f"--models: {model} cannot be saved; choose from "
-                          f"{', '.join(TABLE_MODELS)} (the paper's other classifiers are "
-                          "scikit-learn estimators that save only as pickles)")
+    check_table_model(model)
     try:
         ds = load_dataset(ds_path, [table])
     except EvaluateError as exc:
@@ -82,8 +77,6 @@ def train_table(ds_path: str | Path, table: str, model: str, opt: Any,
         & ~df["flight"].astype(str).isin(held).to_numpy()
     rows = np.flatnonzero(fit_mask)
     X, names = window_features(df, feats, spec, rows=rows, runs=runs)
-    if progress is not None:
-        progress(len(ids), table)
     t_read = time.perf_counter()
     det = Detector.fit(X, y[rows], [f"{table}.{f}" for f in feats], names,
                        sample_weight=class_weights(y[rows], every), rounds=opt.rounds,
@@ -123,11 +116,12 @@ def table_log_features(det: Any, path: str | Path) -> tuple[LogData, pd.DataFram
     from tlm_process.pipeline.anchoring import log_span_us
     from tlm_process.pipeline.ingest import read_flights
     from tlm_process.pipeline.process import ProcessOptions, process_flight
+    from tlm_process.pipeline.scaling import MinMaxScaler
 
     man = det.manifest
     table = man["table"]
     options = ProcessOptions.from_recorded(man.get("process_options") or {}, (table,))
-    (flight,) = read_flights([path])[:1]
+    (flight,) = read_flights([check_log_path(path)])
     p = process_flight(flight, options)
     df = p.features[table]
     feats = [c.split(".", 1)[1] for c in det.channels]
@@ -138,10 +132,7 @@ def table_log_features(det: Any, path: str | Path) -> tuple[LogData, pd.DataFram
                           f"{','.join(f'{table}.{f}' for f in lack)})", source=str(path))
     df = df.sort_values("TimeUS", kind="stable").reset_index(drop=True)
     if man["scaler"].get("applied", True):
-        df = df.copy()
-        for f, (lo, hi) in man["scaler"]["ranges"].items():
-            v = df[f].to_numpy(np.float64)
-            df[f] = (v - lo) / (hi - lo) if hi > lo else np.where(np.isnan(v), np.nan, 0.0)
+        df = MinMaxScaler({table: man["scaler"]["ranges"]}).transform_table(table, df)
     X, _ = window_features(df, feats, window_spec_of(man))
     labelled = flight.meta.get("labels_source", "") is not None
     span = p.span_us or log_span_us(flight.tables)

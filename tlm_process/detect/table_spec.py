@@ -7,10 +7,21 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-__all__ = ["TABLE_MODELS", "check_table_manifest", "table_feature_names", "window_spec_of"]
+__all__ = ["TABLE_MODELS", "check_table_manifest", "check_table_model", "table_feature_names",
+           "window_spec_of"]
 
 #: The window models ``tlm train --models`` can save (``tlm evaluate``'s names).
 TABLE_MODELS: tuple[str, ...] = ("WindowHGB", "WindowHGB60", "CentredHGB")
+
+
+def check_table_model(model: str) -> None:
+    """Raise :class:`~.data.DetectError` unless ``model`` is one of :data:`TABLE_MODELS`."""
+    from tlm_process.detect.data import DetectError
+
+    if model not in TABLE_MODELS:
+        raise DetectError(f"--models: {model} cannot be saved; choose from "
+                          f"{', '.join(TABLE_MODELS)} (the paper's other classifiers are "
+                          "scikit-learn estimators that save only as pickles)")
 
 
 def window_spec_of(manifest: dict[str, Any]) -> Any:
