@@ -103,7 +103,7 @@ def _single(kind: str, path: Path) -> Iterator[LogData]:
     from tlm_process.pipeline.ingest import read_flight
 
     for fl in read_flight(kind, path):
-        if kind in ("bin", "log") and fl.meta.get("labels_source", "") is None:
+        if fl.unlabelled:
             raise DetectError("no fault labels (no sidecar LOG.json, no faults.json, no fault "
                               "records in the log): give a normal flight a sidecar with "
                               '{"faults": []}', source=str(path))

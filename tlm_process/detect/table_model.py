@@ -134,9 +134,8 @@ def table_log_features(det: Any, path: str | Path) -> tuple[LogData, pd.DataFram
     if man["scaler"].get("applied", True):
         df = MinMaxScaler({table: man["scaler"]["ranges"]}).transform_table(table, df)
     X, _ = window_features(df, feats, window_spec_of(man))
-    labelled = flight.meta.get("labels_source", "") is not None
     span = p.span_us or log_span_us(flight.tables)
     how = flight.meta.get("armed_source", "EV 10") if p.phase == "armed" else p.phase
     log = LogData(flight.id, flight.source, flight.tables, {}, span, how,
-                  p.windows if labelled else None)
+                  None if flight.unlabelled else p.windows)
     return log, df, X

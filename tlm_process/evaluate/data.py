@@ -184,13 +184,6 @@ NO_LABELS = ("no fault labels found (no sidecar {json}, no faults.json beside it
              "or add --assume-normal if it is a normal flight")
 
 
-def _unlabelled(fl: Any) -> bool:
-    """Whether flight ``fl`` (``tlm_process.pipeline.ingest.Flight``) had no fault labels
-    anywhere and was taken as a normal flight by default (a ``.bin`` without sidecar or fault
-    records of its own: ``meta["labels_source"]`` None)."""
-    return "labels_source" in fl.meta and fl.meta["labels_source"] is None
-
-
 def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
                   tables: Sequence[str] | None = None, *, assume_normal: bool = False,
                   progress: Callable[[str], None] | None = None) -> dict[str, pd.DataFrame]:
@@ -212,7 +205,7 @@ def load_transfer(paths: Iterable[str | Path], ds: EvalDataset,
                             "scaled like its flights", source=str(ds.path))
     options = ProcessOptions.from_recorded(ds.options, tables)
     flights = read_flights(list(paths))
-    bare = [fl for fl in flights if _unlabelled(fl)]
+    bare = [fl for fl in flights if fl.unlabelled]
     if bare and not assume_normal:
         src = Path(bare[0].source)
         more = f" ({len(bare) - 1} more log(s) without labels)" if len(bare) > 1 else ""

@@ -129,6 +129,13 @@ class Flight:
     home: tuple[float, float, float] | None = None
     meta: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def unlabelled(self) -> bool:
+        """Whether nothing labels the flight's faults: a log with no sidecar, no
+        ``faults.json`` and no fault records of its own (``meta["labels_source"]`` None), so
+        it would be taken as a normal flight by default. Other sources always carry labels."""
+        return "labels_source" in self.meta and self.meta["labels_source"] is None
+
 
 # --------------------------------------------------------------------------------------------
 # Fault records
