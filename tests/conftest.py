@@ -9,6 +9,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 REFERENCE = REPO.parent / "shared" / "reference" / "sitl"
+REAL = REPO.parent / "shared" / "reference" / "real"
 
 
 def reference_path(name: str) -> Path:
@@ -16,6 +17,15 @@ def reference_path(name: str) -> Path:
     p = REFERENCE / name
     if not p.exists():
         pytest.skip(f"reference SITL logs not found at {REFERENCE}")
+    return p
+
+
+def real_path(name: str) -> Path:
+    """Path of a real (hardware) log; skips the test (with the reason) when it is absent.
+    CI has ``../shared`` beside the clone, so these tests run there."""
+    p = REAL / name
+    if not p.exists():
+        pytest.skip(f"real reference logs not found at {REAL}")
     return p
 
 

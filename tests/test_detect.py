@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.conftest import REFERENCE, reference_path
+from tests.conftest import real_path, reference_path
 from tlm_process.cli import main
 from tlm_process.detect.channels import (
     CHANNELS,
@@ -27,8 +27,6 @@ from tlm_process.detect.data import DetectError, LogData
 from tlm_process.detect.features import feature_matrix, feature_names
 from tlm_process.detect.model import WEIGHTS_FILE, Detector, load_detector
 from tlm_process.detect.predict import find_faults
-
-REAL = REFERENCE.parent / "real"
 
 
 def _grid_s(t0: float, t1: float) -> np.ndarray:
@@ -312,9 +310,7 @@ def test_detect_writes_summary_predictions_and_timeline(small_model, tmp_path, c
 
 def test_detect_names_missing_columns_and_the_drop_that_avoids_them(small_model, tmp_path,
                                                                     capsys):
-    log = REAL / "log171.bin"
-    if not log.exists():
-        pytest.skip("real logs not found")
+    log = real_path("log171.bin")
     rc = main(["detect", str(small_model), str(log), "--out", str(tmp_path / "a"), "--quiet"])
     err = capsys.readouterr().err
     assert rc == 2 and "lacks" in err and "--drop-features" in err and "IMU.GH" in err
@@ -330,9 +326,7 @@ def test_detect_names_missing_columns_and_the_drop_that_avoids_them(small_model,
 @pytest.mark.parametrize("name", ["log171.bin", "nan.log", "mechanical_fail.log",
                                   "backend_log_80k.bin"])
 def test_detect_runs_on_every_real_log(small_model, tmp_path, capsys, name):
-    log = REAL / name
-    if not log.exists():
-        pytest.skip("real logs not found")
+    log = real_path(name)
     rc = main(["detect", str(small_model), str(log), "--out", str(tmp_path / "o"), "--quiet",
                "--allow-missing"])
     cap = capsys.readouterr()

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tests.conftest import REPO, reference_path
+from tests.conftest import real_path, reference_path
 from tlm_process.logread import (
     LogReadError,
     arming_time_us,
@@ -19,16 +19,7 @@ from tlm_process.logread import (
     read_log_tables,
 )
 
-REAL = REPO.parent / "shared" / "reference" / "real"
 REAL_LOGS = ("log171.bin", "backend_log_80k.bin", "nan.log", "mechanical_fail.log")
-
-
-def real_path(name: str) -> Path:
-    """Path of a real log; skips the test when the reference logs are absent."""
-    p = REAL / name
-    if not p.exists():
-        pytest.skip(f"real reference logs not found at {REAL}")
-    return p
 
 
 # --------------------------------------------------------------------------- a text log -----
