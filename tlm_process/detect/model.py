@@ -133,15 +133,26 @@ def load_detector(folder: str | os.PathLike) -> Detector:
     that is not a tlm model, a newer model version, a weights file that is not XGBoost
     UBJSON (a pickle is refused without being read further), or one whose hash differs from
     the manifest's."""
-    import xgboost as xgb
-
-    from tlm_process.detect.channels import CHANNELS
-    from tlm_process.detect.features import feature_names
-
     d = Path(folder)
     if not d.is_dir():
         raise DetectError("no such model folder (make one with tlm train DS --out MODEL)",
                           source=str(d))
+    man = _read_manifest(d)
+    w = man.get("weights") or {}
+    raw = _read_weights(d, w)
+    channels = list(man.get("channels") or [])
+    features = list(man.get("features") or [])
+    _check_inputs(d, man, channels, features)
+    columns = np.asarray(man.get("columns") or [], dtype=np.int64)
+    classes = [int(c) for c in man.get("classes") or []]
+    if not classes or (len(columns) and (columns.min() < 0 or columns.max() >= len(features))):
+        raise DetectError("manifest.json's classes or columns are invalid", source=str(d))
+    booster = _load_booster(d, raw, len(columns)) if w.get("fitted", True) else None
+    return Detector(channels, features, columns, classes, booster, man)
+
+
+def _read_manifest(d: Path) -> dict[str, Any]:
+    """``d/manifest.json``, checked to be a tlm detector of a version this tlm reads."""
     mp = d / MANIFEST_FILE
     try:
         man = json.loads(mp.read_text())
@@ -156,7 +167,12 @@ def load_detector(folder: str | os.PathLike) -> Detector:
     if not isinstance(v, int) or isinstance(v, bool) or v > MODEL_VERSION:
         raise DetectError(f"model version {v!r}; this tlm reads versions up to "
                           f"{MODEL_VERSION} (a newer tlm wrote it: update tlm)", source=str(d))
-    w = man.get("weights") or {}
+    return man
+
+
+def _read_weights(d: Path, w: dict[str, Any]) -> bytes:
+    """The weights file's bytes, checked to be UBJSON (a pickle is refused unread) with the
+    manifest's SHA-256 (``w``: the manifest's ``weights``)."""
     if w.get("format") != "xgboost-ubj" or w.get("file") != WEIGHTS_FILE:
         raise DetectError(f"weights must be XGBoost UBJSON in {WEIGHTS_FILE}", source=str(d))
     try:
@@ -171,9 +187,17 @@ def load_detector(folder: str | os.PathLike) -> Detector:
     if hashlib.sha256(raw).hexdigest() != w.get("sha256"):
         raise DetectError(f"{WEIGHTS_FILE} does not match the manifest's SHA-256 (changed "
                           "after training)", source=str(d))
-    channels = list(man.get("channels") or [])
-    features = list(man.get("features") or [])
+    return raw
+
+
+def _check_inputs(d: Path, man: dict[str, Any], channels: list[str],
+                  features: list[str]) -> None:
+    """Refuse a whole-log model whose channels or feature columns this tlm does not know, or
+    a per-table model whose manifest does not hold together."""
     if man.get("model", "whole-log") == "whole-log":
+        from tlm_process.detect.channels import CHANNELS
+        from tlm_process.detect.features import feature_names
+
         known = {c.name for c in CHANNELS}
         unknown = [c for c in channels if c not in known]
         if unknown or not channels:
@@ -183,25 +207,25 @@ def load_detector(folder: str | os.PathLike) -> Detector:
             raise DetectError("the model's feature columns differ from this tlm's for its "
                               "channels (trained by another tlm version: train it again)",
                               source=str(d))
-    else:
-        from tlm_process.detect.table_spec import check_table_manifest
+        return
+    from tlm_process.detect.table_spec import check_table_manifest
 
-        why = check_table_manifest(man, features)
-        if why is not None:
-            raise DetectError(f"manifest.json: {why}", source=str(d))
-    columns = np.asarray(man.get("columns") or [], dtype=np.int64)
-    classes = [int(c) for c in man.get("classes") or []]
-    if not classes or (len(columns) and (columns.min() < 0 or columns.max() >= len(features))):
-        raise DetectError("manifest.json's classes or columns are invalid", source=str(d))
-    booster = None
-    if w.get("fitted", True):
-        booster = xgb.Booster()
-        try:
-            booster.load_model(bytearray(raw))
-        except xgb.core.XGBoostError as exc:
-            first = str(exc).splitlines()[0] if str(exc) else "unreadable"
-            raise DetectError(f"cannot load {WEIGHTS_FILE}: {first}", source=str(d)) from None
-        if booster.num_features() != len(columns):
-            raise DetectError(f"{WEIGHTS_FILE} has {booster.num_features()} inputs, the "
-                              f"manifest {len(columns)}", source=str(d))
-    return Detector(channels, features, columns, classes, booster, man)
+    why = check_table_manifest(man, features)
+    if why is not None:
+        raise DetectError(f"manifest.json: {why}", source=str(d))
+
+
+def _load_booster(d: Path, raw: bytes, n_columns: int) -> Any:
+    """XGBoost's booster from the checked weights ``raw``, with ``n_columns`` inputs."""
+    import xgboost as xgb
+
+    booster = xgb.Booster()
+    try:
+        booster.load_model(bytearray(raw))
+    except xgb.core.XGBoostError as exc:
+        first = str(exc).splitlines()[0] if str(exc) else "unreadable"
+        raise DetectError(f"cannot load {WEIGHTS_FILE}: {first}", source=str(d)) from None
+    if booster.num_features() != n_columns:
+        raise DetectError(f"{WEIGHTS_FILE} has {booster.num_features()} inputs, the "
+                          f"manifest {n_columns}", source=str(d))
+    return booster
