@@ -145,6 +145,39 @@ def test_features_are_causal(cut, seed):
     assert np.isnan(fa[:3, level]).all() and np.isfinite(fa[3:, level]).all()
 
 
+def test_a_state_channel_counts_its_changes_over_the_trailing_minute():
+    """An error flagged and cleared twice (a GPS glitch's start and end): the count of
+    changes in the trailing 60 s tells the second flag from the first, and only past
+    changes count (the future of the series moves nothing before it)."""
+    n = 1500  # 150 s at 10 Hz
+    v = np.zeros(n)
+    v[100:300] = 2.0  # ERR 11/2 at 10 s, 11/0 at 30 s
+    v[450:650] = 2.0  # again at 45 s, cleared at 65 s
+    X = feature_matrix(pd.DataFrame({"ERR.S11": v}), ["ERR.S11"], hz=10.0)
+    col = dict(zip(feature_names(["ERR.S11"]), X.T, strict=True))
+    count = col["ERR.S11_changes60s"]
+    assert count[99] == 0 and count[100] == 1 and count[300] == 2  # the first flag and clear
+    assert count[450] == 3 and count[650] == 4  # the second flag: two changes before it
+    assert count[699] == 4 and count[700] == 3  # the 10 s flag leaves the window at 70 s
+    assert count[1249] == 1 and count[1250] == 0  # the last clear (65 s) left at 125 s
+    assert col["ERR.S11_age"][460] == pytest.approx(1.0)
+    mode = np.full(n, np.nan)
+    mode[120:] = 3.0  # the first mode: no change (it would say when the flight started)
+    mode[900:] = 6.0
+    X = feature_matrix(pd.DataFrame({"ERR.S11": v, "MODE.ModeNum": mode}),
+                       ["ERR.S11", "MODE.ModeNum"], hz=10.0)
+    col = dict(zip(feature_names(["ERR.S11", "MODE.ModeNum"]), X.T, strict=True))
+    assert col["MODE.ModeNum_changes60s"].tolist() == [0.0] * 900 + [1.0] * 600
+    assert col["MODE.ModeNum_age"][:900].tolist() == [60.0] * 900  # no change yet
+    assert col["MODE.ModeNum_age"][905] == pytest.approx(0.5)
+    assert col["ERR.S11_age"][:100].tolist() == [60.0] * 100
+    later = v.copy()
+    later[500:] = 7.0
+    X2 = feature_matrix(pd.DataFrame({"ERR.S11": later, "MODE.ModeNum": mode}),
+                        ["ERR.S11", "MODE.ModeNum"], hz=10.0)
+    np.testing.assert_array_equal(X[:500], X2[:500])
+
+
 # --------------------------------------------------------------------------------------------
 # Findings
 # --------------------------------------------------------------------------------------------
