@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import reference_path
+from tlm_sim import ardupilot as AP
 from tlm_sim import fly
 from tlm_sim.control import arming as A
 from tlm_sim.flight import END_NOT_ARMED, END_REASONS, end_reason
@@ -233,35 +234,35 @@ def test_baro_temperature_warms_up_as_sitls():
 
 
 def _row(kind: int, mask: int, **aux: float) -> list[float]:
-    row = [1e6, float(kind), float(mask)] + [0.0] * (A.N_TXT_COLS - 3)
+    row = [1e6, float(kind), float(mask)] + [0.0] * (AP.N_TXT_COLS - 3)
     for k, v in aux.items():
-        row[getattr(A, k)] = v
+        row[getattr(AP, k)] = v
     return row
 
 
 @pytest.mark.parametrize(("mask", "aux", "text"), [
-    (A.F_NEED_POS, {}, "Need Position Estimate"),
-    (A.F_MAG_FIELD, {"A_MAG_FIELD": 900.4}, "Check mag field:  900, max 875, min 185"),
-    (A.F_GPS_AHRS, {"A_GPS_AHRS": 12.34}, "GPS and AHRS differ by 12.3m"),
-    (A.F_AHRS, {"A_LANE": A.AHRS_NOT_STARTED}, "AHRS: EKF3 not started"),
-    (A.F_AHRS, {"A_LANE": 1.0}, "AHRS: EKF3 core 1 unhealthy"),
-    (A.F_EKF_VARIANCE, {"A_VARIANCE": A.VAR_VELOCITY}, "EKF velocity variance"),
-    (A.F_BATTERY, {"A_BATTERY": A.BATT_CRT_VOLT}, "Battery 1 critical voltage failsafe"),
-    (A.F_ARM_LEANING, {}, "Leaning"),
+    (AP.F_NEED_POS, {}, "Need Position Estimate"),
+    (AP.F_MAG_FIELD, {"A_MAG_FIELD": 900.4}, "Check mag field:  900, max 875, min 185"),
+    (AP.F_GPS_AHRS, {"A_GPS_AHRS": 12.34}, "GPS and AHRS differ by 12.3m"),
+    (AP.F_AHRS, {"A_LANE": AP.AHRS_NOT_STARTED}, "AHRS: EKF3 not started"),
+    (AP.F_AHRS, {"A_LANE": 1.0}, "AHRS: EKF3 core 1 unhealthy"),
+    (AP.F_EKF_VARIANCE, {"A_VARIANCE": AP.VAR_VELOCITY}, "EKF velocity variance"),
+    (AP.F_BATTERY, {"A_BATTERY": AP.BATT_CRT_VOLT}, "Battery 1 critical voltage failsafe"),
+    (AP.F_ARM_LEANING, {}, "Leaning"),
 ])
 def test_check_texts_are_arducopters(mask, aux, text):
-    assert logged_texts([_row(A.KIND_ARM, mask, **aux)]) == [(1000000, "Arm: " + text)]
-    assert logged_texts([_row(A.KIND_PREARM, mask, **aux)]) == [(1000000, "PreArm: " + text)]
+    assert logged_texts([_row(AP.KIND_ARM, mask, **aux)]) == [(1000000, "Arm: " + text)]
+    assert logged_texts([_row(AP.KIND_PREARM, mask, **aux)]) == [(1000000, "PreArm: " + text)]
 
 
 def test_several_failures_are_reported_in_arducopters_order():
-    mask = A.F_WAIT_HOME | A.F_NEED_ALT | A.F_EKF_ATTITUDE | A.F_ACC_INCONS
-    assert [s for _, s in logged_texts([_row(A.KIND_ARM, mask)])] == [
+    mask = AP.F_WAIT_HOME | AP.F_NEED_ALT | AP.F_EKF_ATTITUDE | AP.F_ACC_INCONS
+    assert [s for _, s in logged_texts([_row(AP.KIND_ARM, mask)])] == [
         "Arm: Need Alt Estimate", "Arm: Accels inconsistent", "Arm: EKF attitude is bad",
         "Arm: AHRS: waiting for home"]
     # every check has its text, one bit each
-    assert sorted(ARM_CHECK_TEXTS) == [1 << k for k in range(A.N_FAIL_BITS)]
-    assert math.log2(A.F_ARM_LEANING) == A.N_FAIL_BITS - 1
+    assert sorted(ARM_CHECK_TEXTS) == [1 << k for k in range(AP.N_FAIL_BITS)]
+    assert math.log2(AP.F_ARM_LEANING) == AP.N_FAIL_BITS - 1
 
 
 def test_tlm_generate_reports_flights_that_never_armed(tmp_path):

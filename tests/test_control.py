@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control import layout as C
@@ -196,13 +197,13 @@ def test_vibration_check_innovation_clause_needs_the_ekf_check():
     """With FS_EKF_THRESH 0 ArduCopter's ekf_check never filters the variances, so only the
     EKF's bad-IMU flag can turn vibration compensation on (as in the reference flights: ERR 29
     ~1 s after EKF3's bad-IMU response, not after its velocity ratio exceeds 1)."""
-    assert not (_vibe_run(0.0, 0.0)[:, 1] == FS.ERR_FAILSAFE_VIBE).any()
+    assert not (_vibe_run(0.0, 0.0)[:, 1] == AP.ERR_FAILSAFE_VIBE).any()
     on = _vibe_run(0.0, 1.0)
-    vibe = on[on[:, 1] == FS.ERR_FAILSAFE_VIBE]
+    vibe = on[on[:, 1] == AP.ERR_FAILSAFE_VIBE]
     assert len(vibe) == 1 and vibe[0, 2] == 1 and vibe[0, 0] == pytest.approx(1.0e6)
     # with the EKF check on, the filtered ratio counts too (and the EKF failsafe also fires)
     with_check = _vibe_run(0.8, 0.0)
-    assert (with_check[:, 1] == FS.ERR_FAILSAFE_VIBE).any()
+    assert (with_check[:, 1] == AP.ERR_FAILSAFE_VIBE).any()
 
 
 def _thrust_loss_run(g, roll_cmd, thr, vd, limit_hi=0.0, seconds=1.5):

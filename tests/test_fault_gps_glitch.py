@@ -17,10 +17,10 @@ import pytest
 
 from tests.conftest import reference_path
 from tlm_process.fault_signatures import _Flight
+from tlm_sim import ardupilot as AP
 from tlm_sim.geo import HOME_CMAC, M_PER_DEG_LAT, latlon_to_ne, ne_to_latlon
 
 REL = 0.35
-ERR_GPS, ERR_PRIMARY = 11, 24
 
 
 def _route_dist(n: np.ndarray, e: np.ndarray, route: np.ndarray) -> np.ndarray:
@@ -58,12 +58,12 @@ def glitch_signature(tables: dict[str, pd.DataFrame], t0: float, t1: float,
             e = e[e.ECode == code]
         return (float(e.TimeUS.iloc[0]) - a) * 1e-6 if len(e) else math.nan
 
-    out["switch_s"] = first(ERR_PRIMARY, None, t0, t1)
-    out["glitch_s"] = first(ERR_GPS, 2, t0, t1)
-    out["cleared_s"] = first(ERR_GPS, 0, t0, t1)
-    out["switch_after_s"] = first(ERR_PRIMARY, None, t1)
-    out["glitch_after_s"] = first(ERR_GPS, 2, t1)
-    out["cleared_after_s"] = first(ERR_GPS, 0, t1)
+    out["switch_s"] = first(AP.ERR_EKF_PRIMARY, None, t0, t1)
+    out["glitch_s"] = first(AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH, t0, t1)
+    out["cleared_s"] = first(AP.ERR_GPS, AP.ERR_CODE_RESOLVED, t0, t1)
+    out["switch_after_s"] = first(AP.ERR_EKF_PRIMARY, None, t1)
+    out["glitch_after_s"] = first(AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH, t1)
+    out["cleared_after_s"] = first(AP.ERR_GPS, AP.ERR_CODE_RESOLVED, t1)
     tp, d = f.ekf_error()
     out["ekf_err_max"] = float(d[(tp >= t0) & (tp <= t1)].max())
     out["ekf_err_max_after"] = float(d[(tp >= t1) & (tp <= t1 + 30e6)].max())
@@ -227,7 +227,7 @@ def test_jamming_raises_the_gps_glitch_without_failsafe():
     log = _short()
     err = log.tables["ERR"]
     w = err[(err.TimeUS >= JAM_ON * 1e6) & (err.TimeUS < LOSS_ON * 1e6)]
-    glitch = w[w.Subsys == ERR_GPS]
+    glitch = w[w.Subsys == AP.ERR_GPS]
     assert list(glitch.ECode) == [2, 0]
     assert glitch.TimeUS.iloc[0] < JAM_OFF * 1e6 < glitch.TimeUS.iloc[1]
     mode = log.tables["MODE"]
@@ -242,7 +242,7 @@ def test_gps_loss_keeps_its_signature():
     g = _gps(log, LOSS_ON + 0.5, LOSS_OFF)
     assert (g.Status == 1).all() and (g.NSats == 3).all()
     err = log.tables["ERR"]
-    assert not ((err.Subsys == ERR_GPS) & (err.TimeUS > LOSS_ON * 1e6)).any()
+    assert not ((err.Subsys == AP.ERR_GPS) & (err.TimeUS > LOSS_ON * 1e6)).any()
 
 
 def test_jamming_is_deterministic_per_seed():

@@ -20,6 +20,7 @@ import pytest
 from tests.conftest import reference_path
 from tlm_process.fault_signatures import _Flight
 from tlm_process.reference import time_window
+from tlm_sim import ardupilot as AP
 from tlm_sim.params import ParamError, Params
 from tlm_sim.rng import new_streams
 from tlm_sim.sensors import layout as S
@@ -27,8 +28,6 @@ from tlm_sim.sensors.config import build_sensor_config
 
 TYPES = ["IMU", "VIBE", "CTUN", "ATT", "XKF1", "XKF4", "SIM", "MODE", "EV", "ERR", "MSG"]
 REL = 0.35  # issue 19: each signature within 35 % of SITL's
-AUTO = 3
-ERR_EKF_PRIMARY = 24
 
 
 # ------------------------------------------------------------------------------ measurements
@@ -67,7 +66,7 @@ def gyro_signature(tables: dict, t0: float, t1: float) -> dict[str, float]:
         "lane_changes": float(len(x4.PI.unique()) - 1) if "PI" in x4 else 0.0,
         "ekf_err_max_m": float(err[ew].max()),
         "roll_max_deg": float(np.abs(f.roll[f.sel(t0, t1)]).max()),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     }
 
 
@@ -95,7 +94,7 @@ def vibration_signature(tables: dict, t0: float, t1: float) -> dict[str, float]:
     tp, err = f.ekf_error()
     out["ekf_err_max_m"] = float(err[(tp >= t0) & (tp <= t1)].max())
     out["err_count"] = float(len(time_window(f.err, t0, t1 + 5e6)))
-    out["auto_kept"] = f.mode_kept(AUTO, t0, t1)
+    out["auto_kept"] = f.mode_kept(AP.MODE_AUTO, t0, t1)
     return out
 
 
@@ -359,7 +358,7 @@ def test_accel_sample_loss_marks_the_imu_unhealthy_and_the_ekf_uses_the_other():
     tp, err = f.ekf_error()
     assert err[(tp >= 120e6) & (tp <= 160e6)].max() < 0.5
     assert len(time_window(f.err, 120e6, 160e6)) == 0
-    assert f.mode_kept(AUTO, 120e6, 150e6) == 1.0
+    assert f.mode_kept(AP.MODE_AUTO, 120e6, 150e6) == 1.0
     x4 = time_window(t["XKF4"], 120e6, 160e6)
     assert "PI" not in x4 or x4.PI.nunique() == 1
 

@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
-from tlm_sim.control import layout as C
+from tlm_sim import ardupilot as AP
 from tlm_sim.flightlog import SCHEMAS, read_bin, read_schemas
 from tlm_sim.flightlog.binwriter import message_types, msg_table, write_bin
 from tlm_sim.flightlog.texts import text_kind
@@ -108,7 +108,7 @@ def test_arm_rows_are_the_arming_and_disarming_events_as_sitl_logs_them(log, sit
     cols = ["ArmState", "ArmChecks", "Forced", "Method"]
     # arming by MAVLink with ARMING_CHECK 1; disarming at the end of the mission (MISSIONEXIT)
     assert arm[cols].values.tolist() == sitl["ARM"][cols].values.tolist() == [
-        [1, 1, 0, C.ARM_METHOD_MAVLINK], [0, 0, 0, C.ARM_METHOD_MISSIONEXIT]]
+        [1, 1, 0, AP.ARM_METHOD_MAVLINK], [0, 0, 0, AP.ARM_METHOD_MISSIONEXIT]]
     assert int(ev[ev.Id == 18].TimeUS.iloc[0]) == int(arm.TimeUS.iloc[1])  # landed, disarmed
 
 
@@ -119,7 +119,7 @@ def test_radio_failsafe_rtl_disarms_as_landed():
 
     log = fly(3, faults=[(120.0, "SIM_RC_FAIL", 1), (150.0, "SIM_RC_FAIL", 0)], seed=2)
     arm = log.tables["ARM"]
-    assert arm.Method.tolist() == [C.ARM_METHOD_MAVLINK, C.ARM_METHOD_LANDED]
+    assert arm.Method.tolist() == [AP.ARM_METHOD_MAVLINK, AP.ARM_METHOD_LANDED]
     assert arm.TimeUS.iloc[1] == _ev_times(log.tables, 11)[0]
 
 
@@ -145,10 +145,10 @@ def test_ldet_follows_the_land_detector_and_the_landing(log):
     landed = _ev_times(tables, 18)[0]
     flags = ld.Flags.to_numpy()
     t = ld.TimeUS.to_numpy()
-    is_landed = (flags & C.LDET_LANDED) != 0
+    is_landed = (flags & AP.LDET_LANDED) != 0
     # landed before the takeoff (the disarmed / ground-idle state: flags 3), not in flight,
     # landed from the land-complete event on
-    assert (flags[t < took_off] == C.LDET_LANDED + C.LDET_LANDED_MAYBE).all()
+    assert (flags[t < took_off] == AP.LDET_LANDED + AP.LDET_LANDED_MAYBE).all()
     assert not is_landed[(t >= took_off) & (t < landed)].any()
     assert is_landed[t >= landed].all() and t[is_landed].min() <= landed + 20000
     # the final second: every condition met (1776 = lower limit, mix at min, stationary, slow

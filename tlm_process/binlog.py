@@ -338,8 +338,9 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     import pandas as pd
 
     from tlm_process.logread import arming_time_us, disarm_time_us
+    from tlm_sim.ardupilot import MODE_NAMES, MODE_REASONS
     from tlm_sim.faults.detect import faults_from_messages, faults_from_param_changes
-    from tlm_sim.flightlog.binreader import COPTER_MODES, MODE_REASONS, param_changes_from_parm
+    from tlm_sim.flightlog.binreader import param_changes_from_parm
 
     p = Path(path)
     log, tables, damage = open_log(p)
@@ -393,7 +394,7 @@ def log_info(path: str | Path, *, all_params: bool = False) -> dict[str, Any]:
     mode = log.modes
     info["modes"] = [
         {"time_s": int(t) * 1e-6, "mode": int(m),
-         "name": COPTER_MODES.get(int(m), str(int(m))),
+         "name": MODE_NAMES.get(int(m), str(int(m))),
          "reason": None if int(r) < 0 else MODE_REASONS.get(int(r), str(int(r)))}
         for t, m, r in zip(mode.TimeUS, mode.ModeNum, mode.Rsn, strict=True)
     ]

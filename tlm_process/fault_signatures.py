@@ -127,13 +127,9 @@ import numpy as np
 import pandas as pd
 
 from tlm_process.reference import time_window
+from tlm_sim import ardupilot as AP
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.geo import latlon_to_ne
-
-ARMED, DISARMED = 10, 11  # EV ids
-AUTO, RTL = 3, 6  # MODE ModeNum
-RSN_RADIO_FAILSAFE = 3  # ModeReason::RADIO_FAILSAFE
-ERR_RADIO, ERR_FS_RADIO = 2, 5  # ERR Subsys
-ERR_EKF_PRIMARY, ERR_THRUST_LOSS, ERR_VIBE_FS = 24, 25, 29  # ERR Subsys
 
 #: margin at the window edges for in/out row fractions [s] (two 5 Hz GPS samples)
 EDGE_MARGIN_S = 0.5
@@ -154,7 +150,6 @@ SETTLE_FROM_S, SETTLE_TO_S = 10.0, 20.0
 PATH_LAG_S = 0.3
 #: a PSCN/PSCE row older than this no longer gives the path's acceleration [s]
 PSC_MAX_AGE_S = 0.25
-GRAVITY = 9.80665
 
 #: The log messages :func:`fault_signature` reads (``read_bin(path, SIGNATURE_MESSAGES)``).
 SIGNATURE_MESSAGES = ("GPS", "IMU", "CTUN", "XKF1", "XKF4", "XKFS", "SIM", "MODE", "EV", "ERR",
@@ -163,10 +158,6 @@ SIGNATURE_MESSAGES = ("GPS", "IMU", "CTUN", "XKF1", "XKF4", "XKFS", "SIM", "MODE
 #: (``tlm_sim.faults.FAULT_TYPES``, labels 5-13).
 FAULT_TYPES = ("gps", "accel", "engine", "rc", "gyro", "baro", "compass", "gps_glitch",
                "motor_partial", "vibration", "battery", "gps_jam", "accel_samples")
-#: ERR subsystems of the catalogue (ArduCopter's LogErrorSubsystem)
-ERR_COMPASS, ERR_FS_BATT, ERR_GPS, ERR_BARO = 3, 6, 11, 18
-#: ERR codes: 0 resolved, 1 failsafe, 2 GPS glitch, 4 unhealthy
-CODE_RESOLVED, CODE_FAILSAFE, CODE_GLITCH, CODE_UNHEALTHY = 0, 1, 2, 4
 #: seconds before a fault over which "before" baselines are measured
 BEFORE_S = 20.0
 #: seconds after a fault's end over which recoveries (lane switches, glitch, descent) are seen
@@ -185,9 +176,9 @@ class _Flight:
     def __init__(self, tables: Mapping[str, pd.DataFrame]):
         self.t = tables
         ev = tables["EV"]
-        armed = ev[ev.Id == ARMED].TimeUS
+        armed = ev[ev.Id == AP.EV_ARMED].TimeUS
         self.arm_us = float(armed.iloc[0]) if len(armed) else float("nan")
-        disarm = ev[(ev.Id == DISARMED) & (ev.TimeUS > self.arm_us)].TimeUS
+        disarm = ev[(ev.Id == AP.EV_DISARMED) & (ev.TimeUS > self.arm_us)].TimeUS
         self.disarm_us = float(disarm.iloc[0]) if len(disarm) else float("nan")
         sim = tables["SIM"].sort_values("TimeUS")
         pre = sim[sim.TimeUS < self.arm_us]
@@ -251,7 +242,7 @@ class _Flight:
             acc.append(np.where(ok, tab[col].to_numpy(float)[np.maximum(i, 0)], 0.0))
         yaw = np.radians(self.yaw)
         a_right = -np.sin(yaw) * acc[0] + np.cos(yaw) * acc[1]
-        return np.degrees(np.arctan2(a_right, GRAVITY))
+        return np.degrees(np.arctan2(a_right, GRAVITY_MSS))
 
     def roll_beyond_path(self) -> np.ndarray:
         """|roll| beyond what the path asks for [deg] at each SIM row: the distance of the
@@ -267,7 +258,7 @@ class _Flight:
 
     def primary_lane(self, t: np.ndarray) -> np.ndarray:
         """EKF primary core at times t: 0 until an ERR 24 (EKF_PRIMARY) names another lane."""
-        e = self.err[self.err.Subsys == ERR_EKF_PRIMARY].sort_values("TimeUS")
+        e = self.err[self.err.Subsys == AP.ERR_EKF_PRIMARY].sort_values("TimeUS")
         i = np.searchsorted(e.TimeUS.to_numpy(float), t, side="right") - 1
         lanes = np.concatenate([[0], e.ECode.to_numpy(int)])
         return lanes[i + 1]
@@ -372,7 +363,7 @@ def _gps(f: _Flight, t0: float, t1: float) -> dict[str, float]:
         "roll_max_deg": float(np.abs(f.roll[sel]).max()),
         "pitch_max_deg": float(np.abs(f.pitch[sel]).max()),
         "baro_alt_range_m": float(ctun.BAlt.max() - ctun.BAlt.min()),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
         "path_after_end_m": f.path_m(t1, t1 + RESUME_S * 1e6),
     }
 
@@ -412,10 +403,10 @@ def _accel(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]) -> dict[s
         "thr_max_3s": _max(ctun.ThO),
         "roll_max_deg": float(np.abs(f.roll[sel]).max()),
         "pitch_max_deg": float(np.abs(f.pitch[sel]).max()),
-        "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1),
-        "err29_vibe_fs": f.err_count(ERR_VIBE_FS, t0, t1),
-        "err25_thrust_loss": f.err_count(ERR_THRUST_LOSS, t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "err24_ekf_primary": f.err_count(AP.ERR_EKF_PRIMARY, t0, t1),
+        "err29_vibe_fs": f.err_count(AP.ERR_FAILSAFE_VIBE, t0, t1),
+        "err25_thrust_loss": f.err_count(AP.ERR_THRUST_LOSS_CHECK, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
         "settle_roll_max_deg": float(f.roll_beyond_path()[settle].max()) if settle.any()
         else float("nan"),
     })
@@ -433,28 +424,28 @@ def _engine(f: _Flight, t0: float, t1: float) -> dict[str, float]:
         "impact_speed_ms": _max(gps.VZ),
         "roll_max_3s_deg": float(np.abs(f.roll[early]).max()),
         "armed_kept": 1.0 - f.disarmed_in(t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
-        "err25_thrust_loss": f.err_count(ERR_THRUST_LOSS, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
+        "err25_thrust_loss": f.err_count(AP.ERR_THRUST_LOSS_CHECK, t0, t1),
         "liftoff_1m_after_end_s": (up1 - t1) * 1e-6,
         "above_10m_after_end_s": (up10 - t1) * 1e-6,
-        "auto_after_end": float(f.mode_at(up10) == AUTO) if np.isfinite(up10) else 0.0,
+        "auto_after_end": float(f.mode_at(up10) == AP.MODE_AUTO) if np.isfinite(up10) else 0.0,
         "path_after_10m_m": f.path_m(up10, up10 + RESUME_S * 1e6) if np.isfinite(up10)
         else 0.0,
     }
 
 
 def _rc(f: _Flight, t0: float, t1: float) -> dict[str, float]:
-    rtl = np.flatnonzero((f.mode_t >= t0) & (f.mode == RTL))
+    rtl = np.flatnonzero((f.mode_t >= t0) & (f.mode == AP.MODE_RTL))
     t_rtl = float(f.mode_t[rtl[0]]) if len(rtl) else float("nan")
     end = f.disarm_us if np.isfinite(f.disarm_us) else float(f.sim_t[-1])
     last = np.searchsorted(f.sim_t, end, side="right") - 1
     return {
         "rtl_delay_s": (t_rtl - t0) * 1e-6,
         "rtl_reason": float(f.mode_rsn[rtl[0]]) if len(rtl) else float("nan"),
-        "err2_2_late_frame": f.err_count(ERR_RADIO, t0, t1, 2),
-        "err5_1_failsafe": f.err_count(ERR_FS_RADIO, t0, t1, 1),
-        "err5_0_cleared": f.err_count(ERR_FS_RADIO, t1, t1 + 2e6, 0),
-        "rtl_kept_after_end": f.mode_kept(RTL, t1, end) if np.isfinite(t_rtl) else 0.0,
+        "err2_2_late_frame": f.err_count(AP.ERR_RADIO, t0, t1, AP.ERR_CODE_LATE_FRAME),
+        "err5_1_failsafe": f.err_count(AP.ERR_FAILSAFE_RADIO, t0, t1, AP.ERR_CODE_FAILSAFE),
+        "err5_0_cleared": f.err_count(AP.ERR_FAILSAFE_RADIO, t1, t1 + 2e6, AP.ERR_CODE_RESOLVED),
+        "rtl_kept_after_end": f.mode_kept(AP.MODE_RTL, t1, end) if np.isfinite(t_rtl) else 0.0,
         "disarm_s": (f.disarm_us - t0) * 1e-6 if f.disarm_us >= t0 else float("nan"),
         "final_home_dist_m": float(np.hypot(f.n[last], f.e[last])),
     }
@@ -540,11 +531,11 @@ def _sample_loss(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any], mas
             float("nan")
     sel = f.sel(t0, t1)
     out.update({
-        "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1 + AFTER_S * 1e6),
+        "err24_ekf_primary": f.err_count(AP.ERR_EKF_PRIMARY, t0, t1 + AFTER_S * 1e6),
         "lane_changes": _lane_changes(f, t0, t1 + AFTER_S * 1e6),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
         "roll_max_deg": float(np.abs(f.roll[sel]).max()) if sel.any() else float("nan"),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     })
     return out
 
@@ -568,8 +559,8 @@ def _baro(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any],
     return {
         "baro_h_drop_s": _rel_s(min(downs), t0),
         "baro_h_restore_s": _rel_s(max(ups), t0),
-        "err18_4_s": _rel_s(f.first_err(ERR_BARO, CODE_UNHEALTHY, t0, t1), t0),
-        "err18_0_s": _rel_s(f.first_err(ERR_BARO, CODE_RESOLVED, t0), t0),
+        "err18_4_s": _rel_s(f.first_err(AP.ERR_BARO, AP.ERR_CODE_UNHEALTHY, t0, t1), t0),
+        "err18_0_s": _rel_s(f.first_err(AP.ERR_BARO, AP.ERR_CODE_RESOLVED, t0), t0),
         "alt_invalid_s": _rel_s(float(inv.iloc[0]) if len(inv) else float("nan"), t0),
         "climb_m": float(f.h[sel].max() - h0) if sel.any() else float("nan"),
         "climb_rate_max_ms": float(np.nanmax(vz[sel])) if sel.any() else float("nan"),
@@ -578,7 +569,7 @@ def _baro(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any],
         "descent_rate_max_ms": float(-np.nanmin(vz[after])) if after.any() else float("nan"),
         "back_after_end_s": _rel_s(back, t1),
         "route_dev_max_m": f.route_distance(route, t0, t1 + 5e6),
-        "auto_kept": f.mode_kept(AUTO, t0, t1 + AFTER_S * 1e6),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1 + AFTER_S * 1e6),
     }
 
 
@@ -599,13 +590,13 @@ def _compass(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]) -> dict
         out[f"mag{i}_healthy_frac_in"] = float((d.Health != 0).mean()) if len(d) else \
             float("nan")
     out.update({
-        "err3_4_s": _rel_s(f.first_err(ERR_COMPASS, CODE_UNHEALTHY, t0, t1), t0),
-        "err3_0_s": _rel_s(f.first_err(ERR_COMPASS, CODE_RESOLVED, t0), t0),
-        "err24_ekf_primary": f.err_count(ERR_EKF_PRIMARY, t0, t1),
+        "err3_4_s": _rel_s(f.first_err(AP.ERR_COMPASS, AP.ERR_CODE_UNHEALTHY, t0, t1), t0),
+        "err3_0_s": _rel_s(f.first_err(AP.ERR_COMPASS, AP.ERR_CODE_RESOLVED, t0), t0),
+        "err24_ekf_primary": f.err_count(AP.ERR_EKF_PRIMARY, t0, t1),
         "lane_changes": _lane_changes(f, t0, t1 + AFTER_S * 1e6),
         "sm_max": _max(time_window(f.t["XKF4"], t0, t1).SM) if "XKF4" in f.t else float("nan"),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     })
     out.update(_compass_switch(f, t0, lost))
     return out
@@ -643,24 +634,25 @@ def _gps_glitch(f: _Flight, t0: float, t1: float, route: np.ndarray | None
                 ) -> dict[str, float]:
     on, on_end = t0 + 1e6, t1 + AFTER_S * 1e6
     dn, de = _gps_truth_offset(f, on, t1)
-    g2 = f.first_err(ERR_GPS, CODE_GLITCH, t0, t1)
-    g2_end = f.first_err(ERR_GPS, CODE_GLITCH, t1, on_end)
+    g2 = f.first_err(AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH, t0, t1)
+    g2_end = f.first_err(AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH, t1, on_end)
     return {
         "gps_offset_n_m": dn,
         "gps_offset_e_m": de,
         "gps_offset_m": float(np.hypot(dn, de)),
-        "err24_first_s": _rel_s(f.first_err(ERR_EKF_PRIMARY, None, t0, t1), t0),
+        "err24_first_s": _rel_s(f.first_err(AP.ERR_EKF_PRIMARY, None, t0, t1), t0),
         "err11_2_s": _rel_s(g2, t0),
-        "err11_0_s": _rel_s(f.first_err(ERR_GPS, CODE_RESOLVED, g2 if np.isfinite(g2) else t0,
+        "err11_0_s": _rel_s(f.first_err(AP.ERR_GPS, AP.ERR_CODE_RESOLVED,
+                                        g2 if np.isfinite(g2) else t0,
                                         t1), t0),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
         "route_dev_max_m": f.route_distance(route, t0, t1),
         "err11_2_after_end_s": _rel_s(g2_end, t1),
         "err11_0_after_end_s": _rel_s(f.first_err(
-            ERR_GPS, CODE_RESOLVED, g2_end if np.isfinite(g2_end) else t1, on_end), t1),
+            AP.ERR_GPS, AP.ERR_CODE_RESOLVED, g2_end if np.isfinite(g2_end) else t1, on_end), t1),
         "ekf_err_max_after_end_m": _ekf_max(f, t1, t1 + RESUME_S * 1e6),
         "lane_changes": _lane_changes(f, t0, t1 + RESUME_S * 1e6),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     }
 
 
@@ -679,12 +671,12 @@ def _motor_partial(f: _Flight, t0: float, t1: float, fault: Mapping[str, Any]
         "thr_mean_in": _mean(time_window(f.t["CTUN"], t0, t1).ThO),
         "rcou_failed_mean": float(rcou[motors].to_numpy(float).mean()) if len(rcou)
         else float("nan"),
-        "err25_s": _rel_s(f.first_err(ERR_THRUST_LOSS, None, t0, t1), t0),
+        "err25_s": _rel_s(f.first_err(AP.ERR_THRUST_LOSS_CHECK, None, t0, t1), t0),
         "ground_s": _rel_s(ground, t0),
         "impact_speed_ms": _max(gps.VZ),
         "roll_max_deg": float(np.abs(f.roll[sel]).max()) if sel.any() else float("nan"),
         "armed_kept": 1.0 - f.disarmed_in(t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
         "liftoff_1m_after_end_s": _rel_s(up1, t1),
         "above_10m_after_end_s": _rel_s(up10, t1),
     }
@@ -710,9 +702,9 @@ def _vibration(f: _Flight, t0: float, t1: float) -> dict[str, float]:
         "accz_std_before": float(time_window(imu0, t0 - BEFORE_S * 1e6, t0).AccZ.std()),
         "accz_std_in": float(time_window(imu0, t0, t1).AccZ.std()),
         "thr_mean_in": _mean(time_window(ctun, t0, t1).ThO),
-        "err29_vibe_fs": f.err_count(ERR_VIBE_FS, t0, t1),
+        "err29_vibe_fs": f.err_count(AP.ERR_FAILSAFE_VIBE, t0, t1),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     })
     return out
 
@@ -728,9 +720,10 @@ def _battery(f: _Flight, t0: float, t1: float) -> dict[str, float]:
         "thr_before": _mean(time_window(ctun, t0 - BEFORE_S * 1e6, t0).ThO),
         "thr_in": _mean(time_window(ctun, on, t1).ThO),
         "thr_after": _mean(time_window(ctun, t1 + 5e6, t1 + 25e6).ThO),
-        "err6_1_s": _rel_s(f.first_err(ERR_FS_BATT, CODE_FAILSAFE, t0, t1), t0),
-        "err6_0_after_end": f.err_count(ERR_FS_BATT, t1, t1 + AFTER_S * 1e6, CODE_RESOLVED),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "err6_1_s": _rel_s(f.first_err(AP.ERR_FAILSAFE_BATT, AP.ERR_CODE_FAILSAFE, t0, t1), t0),
+        "err6_0_after_end": f.err_count(AP.ERR_FAILSAFE_BATT, t1, t1 + AFTER_S * 1e6,
+                                        AP.ERR_CODE_RESOLVED),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     }
 
 
@@ -743,7 +736,7 @@ def _gps_jam(f: _Flight, t0: float, t1: float) -> dict[str, float]:
         "nsats_max_in": _max(inside.NSats),
         "hdop_max_in": _max(inside.HDop),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
-        "auto_kept": f.mode_kept(AUTO, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     }
 
 
@@ -754,7 +747,7 @@ def route_from_tables(tables: Mapping[str, pd.DataFrame]) -> np.ndarray | None:
     if cmd is None or not len(cmd):
         return None
     last = cmd.sort_values("TimeUS").drop_duplicates("CNum", keep="last").sort_values("CNum")
-    wp = last[(last.CId == 16) & (last.CNum > 0)]
+    wp = last[(last.CId == AP.MAV_CMD_NAV_WAYPOINT) & (last.CNum > 0)]
     return wp[["Lat", "Lng"]].to_numpy(float) if len(wp) > 1 else None
 
 

@@ -41,9 +41,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_sim import ardupilot as AP
+
 __all__ = [
-    "ARMED_EV",
-    "DISARMED_EV",
     "FOLDS",
     "LogReadError",
     "LogTables",
@@ -61,7 +61,6 @@ __all__ = [
 ]
 
 #: ArduCopter LogEvent ids (EV.Id) of arming and disarming.
-ARMED_EV, DISARMED_EV = 10, 11
 
 #: Numbered-instance messages of older logs → (4.x message, its instance I).
 FOLDS: dict[str, tuple[str, int]] = {
@@ -400,13 +399,8 @@ _STR = set("nNZ")
 
 
 def _mode_numbers() -> dict[str, int]:
-    from tlm_sim.flightlog.binreader import COPTER_MODES
-
-    out = {v.upper().replace(" ", "_"): k for k, v in COPTER_MODES.items()}
-    # Copter 3.x text logs name some modes differently
-    out.update({"STABILIZE": 0, "ALT_HOLD": 2, "POSHOLD": 16, "POSITION": 8,
-                "OF_LOITER": 10, "SPORT": 13, "FLIP": 14, "AUTOTUNE": 15, "BRAKE": 17})
-    return out
+    """Mode name (as a text log writes it: upper case, ``_`` for spaces) -> ModeNum."""
+    return {v.upper().replace(" ", "_"): k for k, v in AP.MODE_NAMES.items()}
 
 
 def _number(text: str) -> float:
@@ -659,7 +653,7 @@ def arming_time_us(tables: dict[str, pd.DataFrame], params: dict[str, float] | N
 
     ``params``: the log's parameters (``LogTables.params``); only rule 3 uses them.
     """
-    t = _first(tables.get("EV"), "Id", ARMED_EV)
+    t = _first(tables.get("EV"), "Id", AP.EV_ARMED)
     if t is not None:
         return t, "EV 10"
     t = _first(tables.get("ARM"), "ArmState", 1)
@@ -682,7 +676,7 @@ def disarm_time_us(tables: dict[str, pd.DataFrame], params: dict[str, float] | N
         armed_us, _ = arming_time_us(tables, params)
     if armed_us is None:
         return None, "never armed"
-    t = _first(tables.get("EV"), "Id", DISARMED_EV, after=armed_us)
+    t = _first(tables.get("EV"), "Id", AP.EV_DISARMED, after=armed_us)
     if t is not None:
         return t, "EV 11"
     t = _first(tables.get("ARM"), "ArmState", 0, after=armed_us)

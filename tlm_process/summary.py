@@ -7,11 +7,10 @@ from typing import Any
 
 import numpy as np
 
+from tlm_sim import ardupilot as AP
 from tlm_sim.flightlog import FlightLog
 from tlm_sim.geo import latlon_to_ne
 
-MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
-              9: "LAND"}
 #: What each ``meta["end_reason"]`` (tlm_sim.flight.END_REASONS) means, for the summary.
 END_REASON_TEXT = {"landed": "landed and disarmed",
                    "crash": "the crash check disarmed it",
@@ -39,7 +38,7 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
         "distance_m": round(dist, 1),
         "max_alt_m": round(max_alt, 1),
         "waypoints_reached": f"{meta.get('waypoints_reached', '?')}/{meta.get('n_waypoints', '?')}",
-        "final_mode": f"{MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
+        "final_mode": f"{AP.MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
         "landed": meta.get("landed"),
         "end_reason": meta.get("end_reason"),
         "arm_failures": last_arm_failures(meta),

@@ -16,14 +16,13 @@ from typing import Any
 
 import numpy as np
 
+from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.boot import BOOT_ARM_S
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.arming import (
-    N_TXT_COLS,
-    TXT_ROWS,
     arming_init,
     arming_step,
     boot_texts_due,
@@ -33,7 +32,7 @@ from tlm_sim.control.battery import battery_monitor
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.dcm import dcm_init, dcm_update
 from tlm_sim.control.dcm_layout import N_DCM
-from tlm_sim.control.events import ERR_CRASH_CHECK, log_err, log_mode
+from tlm_sim.control.events import log_err, log_mode
 from tlm_sim.control.log import (
     CMD_TAKEOFF,
     log_control_10hz,
@@ -86,15 +85,12 @@ from tlm_sim.params import PARAM_INFO, Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.baro import ERR_BARO, baro_init, baro_read, calibration_temperature
+from tlm_sim.sensors.baro import baro_init, baro_read, calibration_temperature
 from tlm_sim.sensors.config import build_sensor_config
 from tlm_sim.sensors.gps import gps_due, gps_init, gps_measure, gps_push_truth
 from tlm_sim.sensors.imu import imu_init, imu_sample, imu_take_deltas
 from tlm_sim.sensors.log import log_gps, log_imu, log_sensors_10hz
 from tlm_sim.sensors.mag import (
-    ERR_COMPASS,
-    ERR_COMPASS_RESOLVED,
-    ERR_COMPASS_UNHEALTHY,
     mag_init,
     mag_sample,
 )
@@ -133,7 +129,6 @@ END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
 END_NOT_ARMED = "not_armed"
 END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP, END_NOT_ARMED)
 
-MAV_CMD_NAV_TAKEOFF = 22  # the takeoff point's P_CMD
 
 
 def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
@@ -290,7 +285,7 @@ def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat, dcm, gsf):
     arming_init(c, g)
     gsf_init(gsf, ecfg)
     dcm_init(dcm)
-    log_mode(events, ev_counts, 0, C.MODE_STABILIZE, C.RSN_INITIALISED)
+    log_mode(events, ev_counts, 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
 
 
 @inline_jit
@@ -323,14 +318,14 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
         s[S.B_NEXT_US] += 100000.0
         baro_new, err = baro_read(s, x, scfg, rng, float(t_us))
         if err >= 0:
-            log_err(events, ev_counts, t_us, ERR_BARO, err)
+            log_err(events, ev_counts, t_us, AP.ERR_BARO, err)
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += 100000.0
         dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
         if dh != 0:
-            log_err(events, ev_counts, t_us, ERR_COMPASS,
-                    ERR_COMPASS_RESOLVED if dh > 0 else ERR_COMPASS_UNHEALTHY)
+            log_err(events, ev_counts, t_us, AP.ERR_COMPASS,
+                    AP.ERR_CODE_RESOLVED if dh > 0 else AP.ERR_CODE_UNHEALTHY)
         mag_new = True
     rc_update(s, scfg, float(t_us))
     return gps_new, baro_new, mag_new
@@ -471,7 +466,7 @@ def mission_path(mission: Mission, g: np.ndarray) -> np.ndarray:
     path = np.zeros((ned.shape[0] + 1, PATH_COLS))
     path[0, :3] = (0.0, 0.0, -mission.takeoff_alt)
     path[1:, :3] = ned
-    path[0, P_CMD], path[0, P_CNUM] = MAV_CMD_NAV_TAKEOFF, CMD_TAKEOFF
+    path[0, P_CMD], path[0, P_CNUM] = AP.MAV_CMD_NAV_TAKEOFF, CMD_TAKEOFF
     path[1:, P_CMD] = mission.nav_commands
     path[1:, P_CNUM] = mission.item_numbers()
     path[1:, P_HOLD] = mission.holds
@@ -523,7 +518,7 @@ def end_reason(disarm_time_s: float, err_rows: np.ndarray, armed: bool = True) -
         return END_NOT_ARMED
     if disarm_time_s < 0.0:
         return END_TIME_CAP
-    return END_CRASH if bool(np.any(err_rows[:, 1] == ERR_CRASH_CHECK)) else END_LANDED
+    return END_CRASH if bool(np.any(err_rows[:, 1] == AP.ERR_CRASH_CHECK)) else END_LANDED
 
 
 def _checked_mission(mission: Mission | int, seed: int) -> Mission:
@@ -606,7 +601,7 @@ def fly(
     c = new_control_state(g, mission, path)
     seg = np.zeros((2, PATH_COLS))
     bufs = allocate_buffers(duration, LOGGED_MESSAGES, rows=evidence_rows(mission, duration))
-    txt = np.zeros((TXT_ROWS, N_TXT_COLS))
+    txt = np.zeros((AP.TXT_ROWS, AP.N_TXT_COLS))
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
     week, ms = gps_week_ms(BOOT_UTC)

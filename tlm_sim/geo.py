@@ -24,8 +24,8 @@ import math
 import numpy as np
 from numba import njit
 
-#: metres per degree of latitude (ArduPilot LOCATION_SCALING_FACTOR * 1e7)
-M_PER_DEG_LAT: float = 111318.84502145034
+from tlm_sim.ardupilot import M_PER_DEG_LAT
+
 #: ArduPilot's lower clamp of the longitude scale (cos(lat)) near the poles
 MIN_LONGITUDE_SCALE: float = 0.01
 

@@ -25,6 +25,7 @@ from typing import Any
 import pandas as pd
 
 from tlm_process.fault_signatures import SIGNATURE_MESSAGES, fault_signature, truth_timeline
+from tlm_sim import ardupilot as AP
 
 SINGLE = ("gps_s12", "accel_s13", "engine_s14", "rc_s15")
 COMBINED = "combined_s21"
@@ -133,7 +134,6 @@ sub-samples. vibration_s48, tlm vs SITL: VIBE mean 5.33 / 6.32 vs 5.73 / 6.74 (I
 
 
 #: ERR subsystem of the vibration failsafe
-ERR_VIBE_FS = 29
 
 
 def accel_timeline(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
@@ -147,7 +147,8 @@ def accel_timeline(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
     """
     t0 = float(fault["start_time_us"])
     err = tables["ERR"]
-    on = err[(err.Subsys == ERR_VIBE_FS) & (err.ECode == 1) & (err.TimeUS >= t0)]
+    on = err[(err.Subsys == AP.ERR_FAILSAFE_VIBE) & (err.ECode == AP.ERR_CODE_FAILSAFE)
+             & (err.TimeUS >= t0)]
     tl = truth_timeline(tables)
     x = (tl.TimeUS - t0) * 1e-6
     h0 = float(tl.h_m[x >= 0].iloc[0])
@@ -200,7 +201,7 @@ def engine_ground(tables: Mapping[str, pd.DataFrame], fault: Mapping[str, Any]
     rate = rate[(rate.TimeUS >= a) & (rate.TimeUS <= t1)]
     if len(imu):
         gyro = (imu.GyrX ** 2 + imu.GyrY ** 2 + imu.GyrZ ** 2) ** 0.5
-        still = ((imu.AccZ + 9.80665).abs() < STILL_ACC) & (gyro < STILL_GYR)
+        still = ((imu.AccZ + AP.GRAVITY_MSS).abs() < STILL_ACC) & (gyro < STILL_GYR)
         out["still_frac_in"] = float(still.mean())
     if len(rate):
         out["rout_ground"] = float(rate.ROut.mean())
@@ -268,7 +269,7 @@ def fly_like_reference(ref_dir: Path, name: str) -> dict[str, Any]:
     sidecar = json.loads(sidecar_path.read_text())
     ref = read_bin(str(ref_dir / f"{name}.bin"), types=TYPES)
     ev = ref["EV"]
-    ref_arm_us = float(ev[ev.Id == 10].TimeUS.iloc[0])
+    ref_arm_us = float(ev[ev.Id == AP.EV_ARMED].TimeUS.iloc[0])
     arm_s = float(Params()["TLM_ARM_TIME"])
     changes, tlm_faults = tlm_fault_schedule(sidecar, ref_arm_us, arm_s)
     log = fly(Mission.from_sidecar(str(sidecar_path)), faults=changes,

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from tlm_sim import ardupilot as AP
+
 __all__ = ["CHANNELS", "ERR_SUBSYSTEMS", "GRID_HZ", "Channel", "align", "armed_grid",
            "channel_table", "drop_channels", "needed_columns", "source_tables"]
 
@@ -48,7 +50,11 @@ _M_PER_DEG = 111195.08
 #: 5 radio failsafe, 6 battery failsafe, 7 GPS failsafe, 11 GPS, 12 crash check, 16 EKF
 #: check, 17 EKF/inertial-nav failsafe, 18 baro, 24 EKF primary lane, 25 thrust loss,
 #: 29 vibration failsafe.
-ERR_SUBSYSTEMS: tuple[int, ...] = (2, 3, 5, 6, 7, 11, 12, 16, 17, 18, 24, 25, 29)
+ERR_SUBSYSTEMS: tuple[int, ...] = (
+    AP.ERR_RADIO, AP.ERR_COMPASS, AP.ERR_FAILSAFE_RADIO, AP.ERR_FAILSAFE_BATT,
+    AP.ERR_FAILSAFE_GPS, AP.ERR_GPS, AP.ERR_CRASH_CHECK, AP.ERR_EKFCHECK,
+    AP.ERR_FAILSAFE_EKFINAV, AP.ERR_BARO, AP.ERR_EKF_PRIMARY, AP.ERR_THRUST_LOSS_CHECK,
+    AP.ERR_FAILSAFE_VIBE)
 
 
 @dataclass(frozen=True)

@@ -76,6 +76,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tlm_process.generate.errors import GenerateError
+from tlm_sim.ardupilot import M_PER_DEG_LAT
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
 from tlm_sim.flight import max_duration_s
 from tlm_sim.frames import FRAMES, FrameError, frame_name
@@ -623,8 +624,8 @@ def fault_params(ftype: str, knobs: Mapping[str, Any], lat_deg: float
     elif ftype == "gps_glitch":
         dn = knobs["offset_m"] * math.cos(math.radians(knobs["bearing_deg"]))
         de = knobs["offset_m"] * math.sin(math.radians(knobs["bearing_deg"]))
-        start = {"SIM_GPS1_GLTCH_X": round(dn / 111319.49, 7),
-                 "SIM_GPS1_GLTCH_Y": round(de / (111319.49 * math.cos(math.radians(lat_deg))),
+        start = {"SIM_GPS1_GLTCH_X": round(dn / M_PER_DEG_LAT, 7),
+                 "SIM_GPS1_GLTCH_Y": round(de / (M_PER_DEG_LAT * math.cos(math.radians(lat_deg))),
                                            7)}
     elif ftype == "motor_partial":
         start = {"SIM_ENGINE_MUL": knobs["mul"]}

@@ -44,6 +44,7 @@ import pandas as pd
 
 from tlm_process.pipeline.errors import AnchorError
 from tlm_process.pipeline.ingest import FaultRecord, Flight
+from tlm_sim import ardupilot as AP
 from tlm_sim.geo import latlon_to_ne
 
 __all__ = [
@@ -69,18 +70,12 @@ Method = Literal["auto", "time", "position"]
 #: How RC fault rows are labelled: "window" (the paper's: while the radio is lost) or
 #: "failsafe" (also the radio failsafe's mode, until it lands); see :func:`extend_rc_failsafe`
 RC_LABELS = ("window", "failsafe")
-#: ArduCopter's ModeReason::RADIO_FAILSAFE (MODE.Rsn)
-RADIO_FAILSAFE_REASON = 3
-#: ArduCopter's LogEvent LAND_COMPLETE and DISARMED (EV.Id)
-EV_LAND_COMPLETE, EV_DISARMED = 18, 11
 
 #: A recorded position farther than this from every GPS row of the allowed part of the flight
 #: [m] "matches nowhere" (position anchoring raises). On the reference logs correct matches are
 #: within 1.3 m; the wrong matches after a GPS loss are within 5 m, so no threshold can catch
 #: those.
 DEFAULT_MAX_MATCH_M = 25.0
-
-ARMED_EV, DISARMED_EV = 10, 11
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,11 +166,11 @@ def armed_span_us(tables: Mapping[str, pd.DataFrame]) -> tuple[int, int] | None:
         return None
     t = ev["TimeUS"].to_numpy(np.int64)
     ids = ev["Id"].to_numpy()
-    armed = t[ids == ARMED_EV]
+    armed = t[ids == AP.EV_ARMED]
     if not len(armed):
         return None
     t0 = int(armed[0])
-    dis = t[(ids == DISARMED_EV) & (t > t0)]
+    dis = t[(ids == AP.EV_DISARMED) & (t > t0)]
     t1 = int(dis[0]) if len(dis) else log_span_us(tables)[1]
     return t0, t1
 
@@ -438,7 +433,7 @@ def _failsafe_end_us(tables: Mapping[str, pd.DataFrame], w: FaultWindow) -> floa
         return None
     t = mode["TimeUS"].to_numpy(np.float64)
     fs = np.flatnonzero((t >= w.start_us) & (t < w.end_us)
-                        & (mode["Rsn"].to_numpy() == RADIO_FAILSAFE_REASON))
+                        & (mode["Rsn"].to_numpy() == AP.RSN_RADIO_FAILSAFE))
     if not len(fs):
         return None
     t_fs = t[fs[0]]
@@ -450,7 +445,7 @@ def _failsafe_end_us(tables: Mapping[str, pd.DataFrame], w: FaultWindow) -> floa
     ev = tables.get("EV")
     if ev is not None and len(ev):
         te = ev["TimeUS"].to_numpy(np.float64)
-        done = (te > t_fs) & np.isin(ev["Id"].to_numpy(), (EV_LAND_COMPLETE, EV_DISARMED))
+        done = (te > t_fs) & np.isin(ev["Id"].to_numpy(), (AP.EV_LAND_COMPLETE, AP.EV_DISARMED))
         if done.any():
             ends.append(float(te[done].min()))
     return min(ends)

@@ -45,6 +45,7 @@ from typing import Any
 import pandas as pd
 
 from tlm_process.pipeline.errors import IngestError
+from tlm_sim import ardupilot as AP
 from tlm_sim.faults.types import FAULT_TYPES
 from tlm_sim.textfile import TextFileError, read_text
 
@@ -313,7 +314,6 @@ def _read_bin(path: Path) -> list[Flight]:
     and ``meta["armed_source"]`` (:func:`tlm_process.pipeline.anchoring.flight_armed_span_us`
     reads them)."""
     from tlm_process.logread import (
-        ARMED_EV,
         LogReadError,
         arming_time_us,
         disarm_time_us,
@@ -344,7 +344,7 @@ def _read_bin(path: Path) -> list[Flight]:
     meta["labels_source"] = str(sidecar) if sidecar is not None else (
         "log" if doc["faults"] else None)
     ev = raw.get("EV")
-    if ev is None or "Id" not in ev.columns or not (ev["Id"] == ARMED_EV).any():
+    if ev is None or "Id" not in ev.columns or not (ev["Id"] == AP.EV_ARMED).any():
         t0, src = arming_time_us(raw, lt.params)
         meta["armed_source"] = src
         if t0 is not None:

@@ -5,11 +5,10 @@ while that one's gyro or accel is stopped). The controllers read only this.
 """
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.control import failsafe as FS
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
-
-GRAVITY = 9.80665  # [m/s^2]
 
 
 @tick_jit
@@ -68,7 +67,7 @@ def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
     az = s[ab + S.I_ACC_F + 2] - eo[EK.O_BAZ]
     acc_ned[0] = eo[EK.O_R00] * ax + eo[EK.O_R01] * ay + eo[EK.O_R02] * az
     acc_ned[1] = eo[EK.O_R10] * ax + eo[EK.O_R11] * ay + eo[EK.O_R12] * az
-    acc_ned[2] = eo[EK.O_R20] * ax + eo[EK.O_R21] * ay + eo[EK.O_R22] * az + GRAVITY
+    acc_ned[2] = eo[EK.O_R20] * ax + eo[EK.O_R21] * ay + eo[EK.O_R22] * az + GRAVITY_MSS
     nav[FS.NAV_INNOV_VD] = eo[EK.O_INNOV_VD]
     nav[FS.NAV_INNOV_HGT] = eo[EK.O_INNOV_HGT]
     nav[FS.NAV_VEL_TR] = eo[EK.O_VEL_TR]

@@ -27,11 +27,11 @@ Text log: every failed attempt, every shown pre-arm report and every EKF lifecyc
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.ekf import layout as EK
-from tlm_sim.ekf.lifecycle import EVT_INIT, EVT_YAW, N_EVT
 from tlm_sim.sensors import layout as S
 
 ARM_RETRY_S = 2.0  # the driver's arm attempts: every 2 s (every reference log)
@@ -46,63 +46,11 @@ CONSISTENT_S = 10.0  # accels / gyros must have been consistent this long
 GYRO_INCONSISTENT = math.radians(5.0)  # rad/s (ins.gyros_consistent(5))
 ALT_DISPARITY_M = 1.0  # PREARM_MAX_ALT_DISPARITY_CM
 AHRS_GPS_ERROR_M = 10.0  # AP_ARMING_AHRS_GPS_ERROR_MAX
-MAG_FIELD_MIN = 185.0  # AP_ARMING_COMPASS_MAGFIELD_MIN [mGauss]
-MAG_FIELD_MAX = 875.0  # AP_ARMING_COMPASS_MAGFIELD_MAX
 MAG_XYZ_ANGLE = math.radians(90.0)  # AP_COMPASS_MAX_XYZ_ANG_DIFF
 MAG_XY_ANGLE = math.radians(60.0)  # AP_COMPASS_MAX_XY_ANG_DIFF
 MAG_XY_LENGTH = 0.2  # AP_COMPASS_MAX_XY_LENGTH_DIFF (200 mGauss) [gauss]
 
-# ARMING_CHECK bits (AP_Arming::Check)
-CHK_ALL, CHK_BARO, CHK_COMPASS, CHK_GPS, CHK_INS = 1, 2, 4, 8, 16
-CHK_RC, CHK_VOLTAGE, CHK_BATTERY = 64, 128, 256
-
-# failing checks: bits of a text row's mask, in the order ArduCopter reports them
-F_RC_NOT_FOUND = 1 << 0  # "RC not found"
-F_THR_LOW = 1 << 1  # "Throttle below failsafe"
-F_NEED_ALT = 1 << 2  # "Need Alt Estimate"
-F_BARO = 1 << 3  # "Baro: not healthy"
-F_ALT_DISPARITY = 1 << 4  # "Altitude disparity"
-F_GYRO_HEALTH = 1 << 5  # "Gyros not healthy"
-F_ACC_HEALTH = 1 << 6  # "Accels not healthy"
-F_ACC_INCONS = 1 << 7  # "Accels inconsistent"
-F_GYRO_INCONS = 1 << 8  # "Gyros inconsistent"
-F_EKF_ATTITUDE = 1 << 9  # "EKF attitude is bad"
-F_COMPASS_HEALTH = 1 << 10  # "Compass not healthy"
-F_MAG_FIELD = 1 << 11  # "Check mag field: %4.0f, max 875, min 185" (A_MAG_FIELD)
-F_COMPASS_INCONS = 1 << 12  # "Compasses inconsistent"
-F_GPS_FIX = 1 << 13  # "GPS 1: Bad fix"
-F_WAIT_HOME = 1 << 14  # "AHRS: waiting for home"
-F_GPS_AHRS = 1 << 15  # "GPS and AHRS differ by %4.1fm" (A_GPS_AHRS)
-F_AHRS = 1 << 16  # "AHRS: EKF3 not started" / "AHRS: EKF3 core %d unhealthy" (A_LANE)
-F_NEED_POS = 1 << 17  # "Need Position Estimate"
-F_GPS_GLITCH = 1 << 18  # "GPS glitching"
-F_EKF_VARIANCE = 1 << 19  # "EKF %s variance" (A_VARIANCE)
-F_HDOP = 1 << 20  # "High GPS HDOP"
-F_BATTERY = 1 << 21  # "Battery 1 %s" (A_BATTERY)
-F_BATT_FS = 1 << 22  # "Battery failsafe"
-F_ARM_AHRS = 1 << 23  # arm only: "AHRS not healthy"
-F_ARM_COMPASS = 1 << 24  # arm only: "Compass not healthy"
-F_ARM_LEANING = 1 << 25  # arm only: "Leaning"
-N_FAIL_BITS = 26
-
-# text log rows: (TimeUS, kind, mask, then aux values)
-TXT_TIME, TXT_KIND, TXT_MASK = 0, 1, 2
-A_GPS_AHRS, A_MAG_FIELD, A_LANE, A_VARIANCE, A_BATTERY = 3, 4, 5, 6, 7
-N_TXT_COLS = 8
-TXT_ROWS = 512
-KIND_ARM = 0  # a failed arm attempt: "Arm: ..." per failing check
-KIND_PREARM = 1  # the periodic report: "PreArm: ..."
-KIND_EKF = 2  # an EKF lifecycle event: mask = its EVT_* bit, A_LANE the lane's IMU,
-# A_MAG_FIELD its compass
-KIND_AHRS_ACTIVE = 3  # "AHRS: EKF3 active"
-KIND_FIELD_ELEV = 4  # "Field Elevation Set: %.0fm" (A_MAG_FIELD: the elevation [m])
-# A_VARIANCE codes: which EKF variance (ArduCopter's order); A_BATTERY codes
-VAR_COMPASS, VAR_POSITION, VAR_VELOCITY, VAR_HEIGHT = 0, 1, 2, 3
-BATT_BELOW_ARM_VOLT, BATT_LOW_VOLT, BATT_LOW_CAP, BATT_CRT_VOLT, BATT_CRT_CAP = 0, 1, 2, 3, 4
-# A_LANE codes of F_AHRS beyond the lane index
-AHRS_NOT_STARTED = -1.0
-
-MODE_NEEDS_GPS = (C.MODE_AUTO, C.MODE_GUIDED, C.MODE_LOITER, C.MODE_RTL)
+MODE_NEEDS_GPS = (AP.MODE_AUTO, AP.MODE_GUIDED, AP.MODE_LOITER, AP.MODE_RTL)
 
 
 @tick_jit
@@ -113,10 +61,10 @@ def txt_row(c, txt, t_us, kind, mask):
     if n >= txt.shape[0]:
         return -1
     c[C.TXT_N] = n + 1
-    txt[n, TXT_TIME] = t_us
-    txt[n, TXT_KIND] = kind
-    txt[n, TXT_MASK] = mask
-    for k in range(A_GPS_AHRS, N_TXT_COLS):
+    txt[n, AP.TXT_TIME] = t_us
+    txt[n, AP.TXT_KIND] = kind
+    txt[n, AP.TXT_MASK] = mask
+    for k in range(AP.A_GPS_AHRS, AP.N_TXT_COLS):
         txt[n, k] = 0.0
     return n
 
@@ -137,7 +85,7 @@ def arming_init(c, g):
 @tick_jit
 def _enabled(g, bit):
     chk = int(g[C.G_ARMING_CHECK])
-    return (chk & CHK_ALL) != 0 or (chk & bit) != 0
+    return (chk & AP.CHK_ALL) != 0 or (chk & bit) != 0
 
 
 @tick_jit
@@ -177,7 +125,7 @@ def _imus_consistent(g, s):
 def _ins_checks(c, g, t_s, s, e):
     """The INS group (first failure) and Copter's EKF attitude check; returns the mask."""
     mask = 0
-    if not _enabled(g, CHK_INS):
+    if not _enabled(g, AP.CHK_INS):
         return mask
     gyro_ok = True
     acc_ok = True
@@ -187,15 +135,15 @@ def _ins_checks(c, g, t_s, s, e):
         acc_ok = acc_ok and s[b + S.I_ACC_OK] != 0.0
     acc_cons, gyr_cons = _imus_consistent(g, s)
     if not gyro_ok:
-        mask |= F_GYRO_HEALTH
+        mask |= AP.F_GYRO_HEALTH
     elif not acc_ok:
-        mask |= F_ACC_HEALTH
+        mask |= AP.F_ACC_HEALTH
     elif not _consistent(c, C.ACC_PASS_T, acc_cons, t_s, S.N_IMU):
-        mask |= F_ACC_INCONS
+        mask |= AP.F_ACC_INCONS
     elif not _consistent(c, C.GYR_PASS_T, gyr_cons, t_s, S.N_IMU):
-        mask |= F_GYRO_INCONS
+        mask |= AP.F_GYRO_INCONS
     if not _attitude_valid(e):
-        mask |= F_EKF_ATTITUDE
+        mask |= AP.F_EKF_ATTITUDE
     return mask
 
 
@@ -210,17 +158,17 @@ def _compass_checks(g, s, txt, r):
     """The compass group: the first compass healthy, its field strength, all compasses
     pointing alike (AP_Compass consistent()); returns the mask (the field in mGauss into
     row r)."""
-    if not _enabled(g, CHK_COMPASS):
+    if not _enabled(g, AP.CHK_COMPASS):
         return 0
     m0 = S.MAG_BASE
     if s[m0 + S.M_HEALTHY] == 0.0:
-        return F_COMPASS_HEALTH
+        return AP.F_COMPASS_HEALTH
     fx, fy, fz = s[m0 + S.M_FIELD], s[m0 + S.M_FIELD + 1], s[m0 + S.M_FIELD + 2]
     field = 1000.0 * math.sqrt(fx * fx + fy * fy + fz * fz)
-    if field > MAG_FIELD_MAX or field < MAG_FIELD_MIN:
+    if field > AP.MAG_FIELD_MAX or field < AP.MAG_FIELD_MIN:
         if r >= 0:
-            txt[r, A_MAG_FIELD] = field
-        return F_MAG_FIELD
+            txt[r, AP.A_MAG_FIELD] = field
+        return AP.F_MAG_FIELD
     for i in range(1, S.N_MAG):
         m = S.MAG_BASE + i * S.MAG_STRIDE
         if s[m + S.M_HEALTHY] == 0.0:
@@ -229,13 +177,13 @@ def _compass_checks(g, s, txt, r):
         n_xyz = math.sqrt((ax * ax + ay * ay + az * az) * (fx * fx + fy * fy + fz * fz))
         n_xy = math.sqrt((ax * ax + ay * ay) * (fx * fx + fy * fy))
         if n_xy == 0.0:
-            return F_COMPASS_INCONS
+            return AP.F_COMPASS_INCONS
         if math.acos(min(max((ax * fx + ay * fy + az * fz) / n_xyz, -1.0), 1.0)) > MAG_XYZ_ANGLE:
-            return F_COMPASS_INCONS
+            return AP.F_COMPASS_INCONS
         if math.acos(min(max((ax * fx + ay * fy) / n_xy, -1.0), 1.0)) > MAG_XY_ANGLE:
-            return F_COMPASS_INCONS
+            return AP.F_COMPASS_INCONS
         if (ax - fx) ** 2 + (ay - fy) ** 2 > MAG_XY_LENGTH**2:
-            return F_COMPASS_INCONS
+            return AP.F_COMPASS_INCONS
     return 0
 
 
@@ -243,18 +191,18 @@ def _compass_checks(g, s, txt, r):
 def _gps_checks(c, g, gps, ekf, e, txt, r):
     """AP_Arming's GPS group (3-D fix, home, GPS vs AHRS position) for a mode that needs GPS;
     returns the mask (the distance into row r)."""
-    if not _enabled(g, CHK_GPS):
+    if not _enabled(g, AP.CHK_GPS):
         return 0
     if gps[S.GE_STATUS] != 0.0 and gps[S.GE_FIX_3D] == 0.0:  # (0: the GPS is not found yet)
-        return F_GPS_FIX
+        return AP.F_GPS_FIX
     if c[C.HOME_SET] == 0.0:
-        return F_WAIT_HOME
+        return AP.F_WAIT_HOME
     if e[EK.F_HORIZ_POS] != 0.0 and gps[S.GE_STATUS] != 0.0:
         d = math.sqrt((gps[S.GE_PN] - e[EK.PN]) ** 2 + (gps[S.GE_PE] - e[EK.PE]) ** 2)
         if d > AHRS_GPS_ERROR_M:
             if r >= 0:
-                txt[r, A_GPS_AHRS] = d
-            return F_GPS_AHRS
+                txt[r, AP.A_GPS_AHRS] = d
+            return AP.F_GPS_AHRS
     return 0
 
 
@@ -265,34 +213,34 @@ def _mandatory_gps_checks(c, g, ekf, e, txt, r):
     against FS_EKF_THRESH; returns the mask (details into row r)."""
     if e[EK.ALIGNED] == 0.0:
         if r >= 0:
-            txt[r, A_LANE] = AHRS_NOT_STARTED
-        return F_AHRS
+            txt[r, AP.A_LANE] = AP.AHRS_NOT_STARTED
+        return AP.F_AHRS
     for i in range(ekf.shape[0]):
         if ekf[i, EK.HEALTHY] == 0.0:
             if r >= 0:
-                txt[r, A_LANE] = i
-            return F_AHRS
+                txt[r, AP.A_LANE] = i
+            return AP.F_AHRS
     pos_ok = (e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0
               and c[C.EKF_FAILSAFE] == 0.0)
     if not pos_ok:
-        return F_NEED_POS
+        return AP.F_NEED_POS
     if e[EK.GPS_GLITCHING] != 0.0:
-        return F_GPS_GLITCH
+        return AP.F_GPS_GLITCH
     thr = g[C.G_FS_EKF_THRESH]
     if thr > 0.0:
         var = -1
         if math.sqrt(max(e[EK.MAG_TR], 0.0)) >= thr:
-            var = VAR_COMPASS
+            var = AP.VAR_COMPASS
         elif math.sqrt(max(e[EK.POS_TR], 0.0)) >= thr:
-            var = VAR_POSITION
+            var = AP.VAR_POSITION
         elif math.sqrt(max(e[EK.VEL_TR], 0.0)) >= thr:
-            var = VAR_VELOCITY
+            var = AP.VAR_VELOCITY
         elif math.sqrt(max(e[EK.HGT_TR], 0.0)) >= thr:
-            var = VAR_HEIGHT
+            var = AP.VAR_HEIGHT
         if var >= 0:
             if r >= 0:
-                txt[r, A_VARIANCE] = var
-            return F_EKF_VARIANCE
+                txt[r, AP.A_VARIANCE] = var
+            return AP.F_EKF_VARIANCE
     return 0
 
 
@@ -300,26 +248,26 @@ def _mandatory_gps_checks(c, g, ekf, e, txt, r):
 def _battery_checks(c, g, txt, r):
     """AP_BattMonitor's arming checks and Copter's battery failsafe check; returns the mask."""
     mask = 0
-    if _enabled(g, CHK_BATTERY):
+    if _enabled(g, AP.CHK_BATTERY):
         v = c[C.BM_VOLT]
         remaining = g[C.G_BATT_CAPACITY] - c[C.BM_MAH]
         code = -1
         if g[C.G_BATT_ARM_VOLT] > 0.0 and v < g[C.G_BATT_ARM_VOLT]:
-            code = BATT_BELOW_ARM_VOLT
+            code = AP.BATT_BELOW_ARM_VOLT
         elif v > 0.0 and g[C.G_BATT_LOW_VOLT] > 0.0 and v < g[C.G_BATT_LOW_VOLT]:
-            code = BATT_LOW_VOLT
+            code = AP.BATT_LOW_VOLT
         elif g[C.G_BATT_LOW_MAH] > 0.0 and remaining < g[C.G_BATT_LOW_MAH]:
-            code = BATT_LOW_CAP
+            code = AP.BATT_LOW_CAP
         elif v > 0.0 and g[C.G_BATT_CRT_VOLT] > 0.0 and v < g[C.G_BATT_CRT_VOLT]:
-            code = BATT_CRT_VOLT
+            code = AP.BATT_CRT_VOLT
         elif g[C.G_BATT_CRT_MAH] > 0.0 and remaining < g[C.G_BATT_CRT_MAH]:
-            code = BATT_CRT_CAP
+            code = AP.BATT_CRT_CAP
         if code >= 0:
-            mask |= F_BATTERY
+            mask |= AP.F_BATTERY
             if r >= 0:
-                txt[r, A_BATTERY] = code
-    if _enabled(g, CHK_VOLTAGE) and c[C.BATT_FS] != 0.0:
-        mask |= F_BATT_FS
+                txt[r, AP.A_BATTERY] = code
+    if _enabled(g, AP.CHK_VOLTAGE) and c[C.BATT_FS] != 0.0:
+        mask |= AP.F_BATT_FS
     return mask
 
 
@@ -332,22 +280,22 @@ def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
     e = ekf[int(sel[EK.SEL_PRIMARY])]
     mode = c[C.MODE]
     mask = 0
-    if _enabled(g, CHK_RC) and g[C.G_FS_THR_ENABLE] != 0.0:
+    if _enabled(g, AP.CHK_RC) and g[C.G_FS_THR_ENABLE] != 0.0:
         if s[S.RC_LAST_FRAME_US] <= 0.0:
-            mask |= F_RC_NOT_FOUND
+            mask |= AP.F_RC_NOT_FOUND
         elif s[S.RC_CH + 2] < g[C.G_FS_THR_VALUE]:
-            mask |= F_THR_LOW
-    if mode != C.MODE_STABILIZE and not (e[EK.HEALTHY] != 0.0 and e[EK.F_VERT_POS] != 0.0):
-        mask |= F_NEED_ALT
-    if _enabled(g, CHK_BARO):
+            mask |= AP.F_THR_LOW
+    if mode != AP.MODE_STABILIZE and not (e[EK.HEALTHY] != 0.0 and e[EK.F_VERT_POS] != 0.0):
+        mask |= AP.F_NEED_ALT
+    if _enabled(g, AP.CHK_BARO):
         healthy = True
         for i in range(S.N_BARO):
             healthy = healthy and s[S.BARO_BASE + i * S.BARO_STRIDE + S.BA_HEALTHY] != 0.0
         if not healthy:
-            mask |= F_BARO
+            mask |= AP.F_BARO
         elif (e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0
               and abs(-e[EK.PD] - s[S.B_ALT]) > ALT_DISPARITY_M):
-            mask |= F_ALT_DISPARITY
+            mask |= AP.F_ALT_DISPARITY
     mask |= _ins_checks(c, g, t_s, s, e)
     mask |= _compass_checks(g, s, txt, r)
     needs_gps = False
@@ -356,8 +304,8 @@ def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
     gps_fail = _gps_checks(c, g, gps, ekf, e, txt, r) if needs_gps else 0
     if gps_fail == 0 and needs_gps:
         gps_fail = _mandatory_gps_checks(c, g, ekf, e, txt, r)
-        if gps_fail == 0 and _enabled(g, CHK_GPS) and gps[S.GE_HDOP] > g[C.G_HDOP_GOOD]:
-            gps_fail = F_HDOP
+        if gps_fail == 0 and _enabled(g, AP.CHK_GPS) and gps[S.GE_HDOP] > g[C.G_HDOP_GOOD]:
+            gps_fail = AP.F_HDOP
     mask |= gps_fail
     mask |= _battery_checks(c, g, txt, r)
     return mask
@@ -368,13 +316,13 @@ def arm_checks(c, g, s, q, e):
     """The checks of an arm command after the pre-arm checks passed: AHRS health, the
     compass, leaning beyond ANGLE_MAX; returns the mask."""
     if e[EK.HEALTHY] == 0.0:
-        return F_ARM_AHRS
+        return AP.F_ARM_AHRS
     if s[S.MAG_BASE + S.M_HEALTHY] == 0.0:
-        return F_ARM_COMPASS
-    if _enabled(g, CHK_INS):
+        return AP.F_ARM_COMPASS
+    if _enabled(g, AP.CHK_INS):
         cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])
         if cos_tilt < math.cos(g[C.G_ANGLE_MAX]):
-            return F_ARM_LEANING
+            return AP.F_ARM_LEANING
     return 0
 
 
@@ -392,11 +340,11 @@ def _prearm_update(c, g, t_us, s, gps, ekf, sel, txt):
     if c[C.ARMED] != 0.0:
         c[C.PREARM_LAST_OK] = 1.0
         return
-    r = txt_row(c, txt, t_us, KIND_PREARM, 0) if show else -1
+    r = txt_row(c, txt, t_us, AP.KIND_PREARM, 0) if show else -1
     mask = prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r)
     if r >= 0:
         if mask != 0:
-            txt[r, TXT_MASK] = mask
+            txt[r, AP.TXT_MASK] = mask
         else:
             c[C.TXT_N] -= 1.0  # nothing to show
     ok = mask == 0
@@ -409,13 +357,13 @@ def _prearm_update(c, g, t_us, s, gps, ekf, sel, txt):
 def _attempt(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
     """One arm attempt of the driver: the checks, then arming or an "Arm:" text row."""
     t_s = t_us * 1e-6
-    r = txt_row(c, txt, t_us, KIND_ARM, 0)
+    r = txt_row(c, txt, t_us, AP.KIND_ARM, 0)
     mask = prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r)
     if mask == 0:
         mask = arm_checks(c, g, s, q, ekf[int(sel[EK.SEL_PRIMARY])])
     if mask != 0:
         if r >= 0:
-            txt[r, TXT_MASK] = mask
+            txt[r, AP.TXT_MASK] = mask
         nxt = g[C.G_ARM_SECOND] if t_s < g[C.G_ARM_SECOND] else c[C.ARM_NEXT_T] + ARM_RETRY_S
         c[C.ARM_NEXT_T] = nxt
         return False
@@ -433,9 +381,9 @@ def arming_step(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
         _prearm_update(c, g, t_us, s, gps, ekf, sel, txt)
     if c[C.ARMED] != 0.0 or c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0:
         return False
-    switched = c[C.MODE] != C.MODE_GUIDED and t_s >= g[C.G_DRIVER_T]
+    switched = c[C.MODE] != AP.MODE_GUIDED and t_s >= g[C.G_DRIVER_T]
     if switched:  # the driver's GUIDED (its MODE row is the arming's when that is now)
-        c[C.MODE] = C.MODE_GUIDED
+        c[C.MODE] = AP.MODE_GUIDED
     passed = False
     if t_s >= c[C.ARM_NEXT_T]:
         if t_s >= g[C.G_ARM_GIVE_UP]:
@@ -443,7 +391,7 @@ def arming_step(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
         else:
             passed = _attempt(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts)
     if switched and not passed:
-        E.log_mode(events, ev_counts, t_us, C.MODE_GUIDED, C.RSN_GCS)
+        E.log_mode(events, ev_counts, t_us, AP.MODE_GUIDED, AP.RSN_GCS)
     return passed
 
 
@@ -463,20 +411,21 @@ def boot_texts_due(c, ekf):
 def _lane_texts(c, t_us, ekf, sel, txt, events, ev_counts):
     """The lanes' pending lifecycle events as text rows, event by event and lane by lane (the
     order EKF3's cores print them in one loop)."""
-    for k in range(N_EVT):
+    for k in range(AP.N_EKF_EVT):
         bit = 1 << k
         for i in range(ekf.shape[0]):
             e = ekf[i]
             if int(e[EK.LIFE_EVENTS]) & bit == 0:
                 continue
-            r = txt_row(c, txt, t_us, KIND_EKF, bit)
+            r = txt_row(c, txt, t_us, AP.KIND_EKF, bit)
             if r >= 0:  # EKF3 names the lane by its IMU, the compass by its index
-                txt[r, A_LANE] = e[EK.IMU_INDEX]
-                txt[r, A_MAG_FIELD] = e[EK.MAG_IDX]
-            if bit == EVT_YAW and i == int(sel[EK.SEL_PRIMARY]):  # Copter watches the primary
-                E.log_ev(events, ev_counts, t_us, E.EV_EKF_YAW_RESET)
-            if bit == EVT_INIT and i == 0:
-                txt_row(c, txt, t_us + 2500.0, KIND_AHRS_ACTIVE, 0)
+                txt[r, AP.A_LANE] = e[EK.IMU_INDEX]
+                txt[r, AP.A_MAG_FIELD] = e[EK.MAG_IDX]
+            # Copter watches the primary
+            if bit == AP.EKF_EVT_YAW and i == int(sel[EK.SEL_PRIMARY]):
+                E.log_ev(events, ev_counts, t_us, AP.EV_EKF_YAW_RESET)
+            if bit == AP.EKF_EVT_INIT and i == 0:
+                txt_row(c, txt, t_us + 2500.0, AP.KIND_AHRS_ACTIVE, 0)
     for i in range(ekf.shape[0]):
         ekf[i, EK.LIFE_EVENTS] = 0.0
 
@@ -496,15 +445,15 @@ def lifecycle_texts(c, t_us, ekf, sel, s, home_alt, baro_new, txt, events, ev_co
         _lane_texts(c, t_us, ekf, sel, txt, events, ev_counts)
     if c[C.HOME_SET] == 0.0 and ekf[int(sel[EK.SEL_PRIMARY]), EK.ORIGIN_OK] != 0.0:
         c[C.HOME_SET] = 1.0
-        E.log_ev(events, ev_counts, t_us, E.EV_SET_HOME)
+        E.log_ev(events, ev_counts, t_us, AP.EV_SET_HOME)
     # AP_Baro sets the field elevation at its next reading after the origin (FIELD_SET 0.5:
     # an origin seen, the reading pending)
     if c[C.FIELD_SET] == 0.5 and baro_new:
         c[C.FIELD_SET] = 1.0
         s[S.B_FIELD_ELEV] = home_alt
         s[S.B_GND_TEMP] = s[S.BARO_BASE + int(s[S.B_PRIMARY]) * S.BARO_STRIDE + S.BA_TEMP]
-        r = txt_row(c, txt, t_us, KIND_FIELD_ELEV, 0)
+        r = txt_row(c, txt, t_us, AP.KIND_FIELD_ELEV, 0)
         if r >= 0:
-            txt[r, A_MAG_FIELD] = home_alt
+            txt[r, AP.A_MAG_FIELD] = home_alt
     if c[C.FIELD_SET] == 0.0 and origin:
         c[C.FIELD_SET] = 0.5

@@ -36,6 +36,7 @@ ERR row and BAT (:mod:`tlm_sim.flightlog.texts`): a second ERR 6/1 of a flight r
 "critical".
 """
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
@@ -158,7 +159,7 @@ def battery_monitor(c, g, t_us, volt, curr, events, ev_counts):
     rank = ACTION_RANK[int(act)]
     if rank <= c[C.BATT_FS_RANK]:
         c[C.BATT_FS_RANK] = rank
-        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_BATT, E.ERR_CODE_FAILSAFE)
+        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_BATT, AP.ERR_CODE_FAILSAFE)
         c[C.BATT_FS_ACT] = act
 
 

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.boot import BOOT_ARM_ATTEMPTS_S, BOOT_DRIVER_S, PREARM_FIRST_S
 from tlm_sim.control import layout as C
 from tlm_sim.control.arming import ARM_RETRY_S, ARM_TIMEOUT_S
@@ -60,7 +61,7 @@ def _attitude(g: np.ndarray, p: Params, dt: float) -> None:
     g[C.G_ANGLE_MAX] = math.radians(p["ANGLE_MAX"] / 100.0)
     g[C.G_THR_MIX_MIN] = p["ATC_THR_MIX_MIN"]
     g[C.G_THR_MIX_MAX] = p["ATC_THR_MIX_MAX"]
-    g[C.G_ACCEL_XY_MAX] = 9.80665 * math.tan(g[C.G_ANGLE_MAX])
+    g[C.G_ACCEL_XY_MAX] = GRAVITY_MSS * math.tan(g[C.G_ANGLE_MAX])
     tc = p["ATC_ANG_LIM_TC"]
     g[C.G_ANG_LIM_ALPHA] = 1.0 if tc <= 0.0 else dt / (dt + tc)
 

@@ -27,6 +27,7 @@ airspeed and wind estimation are not modelled: DCM.VWN/VWE/VWD stay 0, as SITL's
 import math
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import _usable_imu
 from tlm_sim.control.dcm_layout import (
@@ -66,7 +67,6 @@ from tlm_sim.control.dcm_layout import (
 )
 from tlm_sim.sensors import layout as S
 
-GRAVITY = 9.80665  # [m/s^2]
 KI = 0.0087  # roll/pitch drift integrator gain
 KI_YAW = 0.01  # yaw drift integrator gain
 RP_P_MIN = 0.05  # floor of AHRS_RP_P
@@ -379,7 +379,7 @@ def _drift_correction(d, g, s, dvel, imu_ok, gps, ab, gb, armed, t, dt):
         d[D_RA_START] = t_corr
         _keep_velocity(d, vn, ve, vd)
         return
-    ra_scale = 1.0 / (d[D_RA_DT] * GRAVITY)
+    ra_scale = 1.0 / (d[D_RA_DT] * GRAVITY_MSS)
     ex, ey, ez, best_err = _tilt_error(d, g, imu_ok, vn, ve, vd, ra_scale, armed)
     if best_err < 0.0:
         return

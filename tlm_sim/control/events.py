@@ -1,31 +1,12 @@
 """Event log rows (MODE, EV, ERR) written by the vehicle logic into the flight's log buffers
-(the tuple and row counts of :mod:`tlm_sim.logger`, columns by name from the schema).
+(the tuple and row counts of :mod:`tlm_sim.logger`, columns by name from the schema). The
+codes they carry are :mod:`tlm_sim.ardupilot`'s (``EV_*``, ``ERR_*``, ``MODE_*``, ``RSN_*``).
 """
 
 from tlm_sim import logger as L
 from tlm_sim._jit import tick_jit
 
 MODE, EV, ERR = L.MODE_COLS, L.EV_COLS, L.ERR_COLS
-
-# EV ids (AP_Logger LogEvent)
-EV_ARMED = 10
-EV_DISARMED = 11
-EV_AUTO_ARMED = 15
-EV_LAND_COMPLETE_MAYBE = 17
-EV_LAND_COMPLETE = 18
-EV_NOT_LANDED = 28
-EV_SET_HOME = 25
-EV_EKF_YAW_RESET = 62
-
-# ERR subsystems and codes
-ERR_RADIO = 2
-ERR_FAILSAFE_RADIO = 5
-ERR_FAILSAFE_BATT = 6
-ERR_CRASH_CHECK = 12
-ERR_THRUST_LOSS_CHECK = 25
-ERR_CODE_RESOLVED = 0
-ERR_CODE_FAILSAFE = 1
-ERR_CODE_LATE_FRAME = 2
 
 
 @tick_jit

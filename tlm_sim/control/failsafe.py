@@ -41,6 +41,7 @@ are tlm's sign (measurement - prediction), converted here.
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
@@ -66,11 +67,6 @@ THRUST_LOSS_S = 1.0  # THRUST_LOSS_CHECK_TRIGGER_SEC
 THRUST_LOSS_LEAN = math.radians(15.0)  # THRUST_LOSS_CHECK_ANGLE_DEVIATION_CD
 THRUST_LOSS_MIN_THR = 0.9  # THRUST_LOSS_CHECK_MINIMUM_THROTTLE
 ATT_ERR_MAX = math.radians(30.0)  # CRASH_CHECK_ANGLE_DEVIATION_DEG
-
-ERR_EKFCHECK = 16
-ERR_FAILSAFE_EKFINAV = 17
-ERR_FAILSAFE_VIBE = 29
-ERR_CODE_EKF_BAD_VARIANCE = 2
 
 # failsafe_checks results
 FS_NONE = 0
@@ -105,7 +101,7 @@ def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
     if g[C.G_FS_VIBE_ENABLE] == 0.0:
         if c[C.VIBE_COMP] != 0.0:
             c[C.VIBE_COMP] = 0.0
-            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
         return
     # EKF3 innovations are prediction - measurement: both positive = "sinking and low"; the
     # filtered velocity ratio is only valid while ekf_check filters it (FS_EKF_THRESH > 0)
@@ -118,12 +114,12 @@ def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
             c[C.VIBE_FAIL_T] = t_s
         if c[C.VIBE_COMP] == 0.0 and t_s - c[C.VIBE_FAIL_T] >= VIBE_TRIGGER_S - 1e-6:
             c[C.VIBE_COMP] = 1.0
-            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_FAILSAFE)
+            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_FAILSAFE)
     else:
         c[C.VIBE_FAIL_T] = -1.0
         if c[C.VIBE_COMP] != 0.0 and t_s - c[C.VIBE_LAST_FAIL_T] >= VIBE_CLEAR_S - 1e-6:
             c[C.VIBE_COMP] = 0.0
-            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_VIBE, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
 
 
 @tick_jit
@@ -138,7 +134,7 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
         c[C.EKF_FAIL_COUNT] = 0.0
         if c[C.EKF_FAILSAFE] != 0.0:
             c[C.EKF_FAILSAFE] = 0.0
-            E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_RESOLVED)
+            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_RESOLVED)
         return FS_NONE
     a = g[C.G_FS_EKF_ALPHA]
     c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
@@ -161,9 +157,9 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
             c[C.EKF_FAIL_COUNT] -= 1.0
             if c[C.EKF_FAIL_COUNT] == 0.0 and c[C.EKF_FAILSAFE] != 0.0:
                 c[C.EKF_FAILSAFE] = 0.0
-                E.log_err(events, ev_counts, t_us, ERR_EKFCHECK, E.ERR_CODE_RESOLVED)
-                E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV,
-                           E.ERR_CODE_RESOLVED)
+                E.log_err(events, ev_counts, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_RESOLVED)
+                E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV,
+                           AP.ERR_CODE_RESOLVED)
         return FS_NONE
     if c[C.EKF_CHECK_OK_ONCE] == 0.0 or c[C.EKF_FAILSAFE] != 0.0:
         return FS_NONE
@@ -172,8 +168,8 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
         return FS_NONE
     c[C.EKF_FAIL_COUNT] = EKF_CHECK_ITERATIONS
     c[C.EKF_FAILSAFE] = 1.0
-    E.log_err(events, ev_counts, t_us, ERR_EKFCHECK, ERR_CODE_EKF_BAD_VARIANCE)
-    E.log_err(events, ev_counts, t_us, ERR_FAILSAFE_EKFINAV, E.ERR_CODE_FAILSAFE)
+    E.log_err(events, ev_counts, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_EKF_BAD_VARIANCE)
+    E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_FAILSAFE)
     action = g[C.G_FS_EKF_ACTION]
     if action == 2.0:
         return FS_EKF_ALTHOLD
@@ -254,5 +250,5 @@ def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
         return False
     c[C.THRUST_LOSS_T] = 0.0
     c[C.THRUST_BOOST] = 1.0
-    E.log_err(events, ev_counts, t_us, E.ERR_THRUST_LOSS_CHECK, E.ERR_CODE_FAILSAFE)
+    E.log_err(events, ev_counts, t_us, AP.ERR_THRUST_LOSS_CHECK, AP.ERR_CODE_FAILSAFE)
     return True

@@ -244,44 +244,6 @@ SUB_LAND = 6
 SUB_LANDED = 7
 SUB_GROUND_IDLE = 8
 
-# ArduCopter mode numbers (ArduCopter/mode.h)
-MODE_STABILIZE = 0
-MODE_ALT_HOLD = 2
-MODE_AUTO = 3
-MODE_GUIDED = 4
-MODE_LOITER = 5
-MODE_RTL = 6
-MODE_LAND = 9
-
-# mode-change reasons (AP_Vehicle/ModeReason.h)
-RSN_UNKNOWN = 0
-RSN_GCS = 2
-RSN_RADIO_FAILSAFE = 3
-RSN_BATTERY_FAILSAFE = 4
-RSN_EKF_FAILSAFE = 6
-RSN_MISSION_END = 8
-RSN_CRASH_FAILSAFE = 19
-RSN_INITIALISED = 26  # the boot mode
-
-# AP_Arming::Method (ARM.Method)
-ARM_METHOD_MAVLINK = 1  # the GCS arms (the reference driver, tlm's TLM_ARM_TIME)
-ARM_METHOD_BATTERYFAILSAFE = 7
-ARM_METHOD_CRASH = 12
-ARM_METHOD_LANDED = 13  # LAND / RTL mode: the land detector
-ARM_METHOD_MISSIONEXIT = 14  # AUTO: landed at the end of the mission (its RTL item)
-ARM_METHOD_TERMINATE = 20  # FAILSAFE_ACTION_TERMINATE
-
-# Copter::LandDetectorLoggingFlag (LDET.Flags bits)
-LDET_LANDED = 1
-LDET_LANDED_MAYBE = 2
-LDET_WOW = 16  # no weight-on-wheels sensor: always set while the detector runs
-LDET_RANGEFINDER_BELOW_2M = 32  # no rangefinder: always set while the detector runs
-LDET_DESCENT_RATE_LOW = 64
-LDET_ACCEL_STATIONARY = 128
-LDET_LARGE_ANGLE = 256  # large angle request or large angle error (one bit in ArduCopter)
-LDET_MOTOR_AT_LOWER_LIMIT = 512
-LDET_THROTTLE_MIX_AT_MIN = 1024
-
 # ------------------------------------------------------------ controller configuration g ------
 CONFIG = Layout("g", "controller configuration")
 _g = CONFIG

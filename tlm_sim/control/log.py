@@ -11,6 +11,7 @@ item's own fields and ARM.ArmChecks are the flight's inputs, filled in once the 
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import dcm_layout as DL
@@ -85,7 +86,7 @@ def vehicle_events_due(c, origin_ready):
     against the last rows, kept in c: the loop asks every tick)."""
     return (origin_ready or c[C.ARMED] != c[C.ARM_LOGGED]
             or c[C.LDET_FLAGS] != c[C.LDET_LOG_FLAGS] or c[C.LDET_COUNT] != c[C.LDET_LOG_COUNT]
-            or (c[C.MODE] == C.MODE_AUTO and mission_item(c) > c[C.MISE_LOGGED]))
+            or (c[C.MODE] == AP.MODE_AUTO and mission_item(c) > c[C.MISE_LOGGED]))
 
 
 @tick_jit
@@ -106,7 +107,7 @@ def log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home_lat, home_
             _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
     if c[C.LDET_FLAGS] != c[C.LDET_LOG_FLAGS] or c[C.LDET_COUNT] != c[C.LDET_LOG_COUNT]:
         _log_ldet(bufs, counts, t_us, c)
-    if c[C.MODE] == C.MODE_AUTO:
+    if c[C.MODE] == AP.MODE_AUTO:
         _log_mise(bufs, counts, t_us, c)
 
 
@@ -121,7 +122,7 @@ def _log_arm(bufs, counts, t_us, c, armed):
         b[r, ARM.ArmState] = armed
         b[r, ARM.ArmChecks] = 0.0
         b[r, ARM.Forced] = 0.0
-        b[r, ARM.Method] = C.ARM_METHOD_MAVLINK if armed != 0.0 else c[C.DISARM_METHOD]
+        b[r, ARM.Method] = AP.ARM_METHOD_MAVLINK if armed != 0.0 else c[C.DISARM_METHOD]
 
 
 @inline_jit

@@ -17,6 +17,7 @@ tlm_sim.control.failsafe.
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import battery as B
 from tlm_sim.control import events as E
@@ -60,7 +61,6 @@ from tlm_sim.control.wpnav import (
 from tlm_sim.rotation import quat_to_euler
 
 SPOOL_TIME_S = MOT_SPOOL_TIME_S
-MAV_CMD_NAV_LAND = 21  # a path point's P_CMD: the mission's landing point
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
 # ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at MOT_SPIN_ARM and a takeoff
 # waits 2 s after arming; every reference log has EV 57 at 2.00 s, the throttle rising from
@@ -82,9 +82,9 @@ THR_MIX_LEAN = math.radians(15.0)  # LAND_CHECK_LARGE_ANGLE_CD
 THR_MIX_ATT_ERR = math.radians(30.0)  # LAND_CHECK_ANGLE_ERROR_DEG
 THR_MIX_ACCEL = 3.0  # LAND_CHECK_ACCEL_MOVING [m/s^2]
 # the land detector's criteria: these LDET bits set (and LARGE_ANGLE clear)
-LAND_CRITERIA = (C.LDET_MOTOR_AT_LOWER_LIMIT | C.LDET_THROTTLE_MIX_AT_MIN
-                 | C.LDET_ACCEL_STATIONARY | C.LDET_DESCENT_RATE_LOW)
-LAND_CRITERIA_MASK = LAND_CRITERIA | C.LDET_LARGE_ANGLE
+LAND_CRITERIA = (AP.LDET_MOTOR_AT_LOWER_LIMIT | AP.LDET_THROTTLE_MIX_AT_MIN
+                 | AP.LDET_ACCEL_STATIONARY | AP.LDET_DESCENT_RATE_LOW)
+LAND_CRITERIA_MASK = LAND_CRITERIA | AP.LDET_LARGE_ANGLE
 
 
 @tick_jit
@@ -230,7 +230,7 @@ def _motors_at_rest(c, g, v_batt):
     detector reports landed (LDET: ArduCopter's land_complete branch, count 0)."""
     voltage_compensation(c, g, v_batt)
     c[C.THR_AVG_MAX] = c[C.THR_HOVER] * g[C.G_THR_MIX_MIN]
-    c[C.LDET_FLAGS] = C.LDET_LANDED + C.LDET_LANDED_MAYBE
+    c[C.LDET_FLAGS] = AP.LDET_LANDED + AP.LDET_LANDED_MAYBE
     c[C.LDET_COUNT] = 0.0
 
 
@@ -246,7 +246,7 @@ def arm_vehicle(c, t_us, q, events, ev_counts):
     """Arm in GUIDED (the mode is logged again, as AP_Arming_Copter::arm does) once the
     driver's attempt passed the checks (tlm_sim.control.arming): motors to ground idle, the
     takeoff follows the arming delay. q: EKF attitude body->NED (the home heading)."""
-    set_mode(c, C.MODE_GUIDED, C.RSN_GCS, t_us, events, ev_counts)
+    set_mode(c, AP.MODE_GUIDED, AP.RSN_GCS, t_us, events, ev_counts)
     c[C.ARMED] = 1.0
     c[C.ARM_TIME_S] = t_us * 1e-6
     c[C.LANDED] = 1.0
@@ -254,7 +254,7 @@ def arm_vehicle(c, t_us, q, events, ev_counts):
     c[C.SUBMODE] = C.SUB_GROUND_IDLE
     c[C.SUB_TIMER] = 0.0
     c[C.SPOOL] = 1.0
-    E.log_ev(events, ev_counts, t_us, E.EV_ARMED)
+    E.log_ev(events, ev_counts, t_us, AP.EV_ARMED)
 
 
 @tick_jit
@@ -286,16 +286,16 @@ def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, rc_throttl
     if (rc_late or thr_low) and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
         if rc_late:
-            E.log_err(events, ev_counts, t_us, E.ERR_RADIO, E.ERR_CODE_LATE_FRAME)
-        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_FAILSAFE)
+            E.log_err(events, ev_counts, t_us, AP.ERR_RADIO, AP.ERR_CODE_LATE_FRAME)
+        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
-        if not landed and sub != C.SUB_LAND and c[C.MODE] != C.MODE_RTL:
-            return _rtl_or_land(c, g, t_us, pos, vel, seg, C.RSN_RADIO_FAILSAFE, events,
+        if not landed and sub != C.SUB_LAND and c[C.MODE] != AP.MODE_RTL:
+            return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_RADIO_FAILSAFE, events,
                                 ev_counts)
     elif not rc_late and thr_ok and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
-        E.log_err(events, ev_counts, t_us, E.ERR_FAILSAFE_RADIO, E.ERR_CODE_RESOLVED)
+        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED)
     return sub
 
 
@@ -304,10 +304,10 @@ def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, events, ev_counts):
     """A failsafe's RTL, or LAND after a pause when there is no position; returns the new
     submode."""
     if _position_ok(c):
-        set_mode(c, C.MODE_RTL, rsn, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_RTL, rsn, t_us, events, ev_counts)
         _start_rtl(c, g, pos, vel, seg)
         return C.SUB_RTL_CLIMB
-    set_mode(c, C.MODE_LAND, rsn, t_us, events, ev_counts)
+    set_mode(c, AP.MODE_LAND, rsn, t_us, events, ev_counts)
     _start_land(c, pos, True)
     return C.SUB_LAND
 
@@ -325,16 +325,16 @@ def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
     c[C.BATT_FS_ACT] = -1.0
     landed = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
     if landed or act == B.ACT_TERMINATE:
-        method = C.ARM_METHOD_BATTERYFAILSAFE if landed else C.ARM_METHOD_TERMINATE
+        method = AP.ARM_METHOD_BATTERYFAILSAFE if landed else AP.ARM_METHOD_TERMINATE
         _disarm(c, g, t_us, method, events, ev_counts)
         return C.SUB_LANDED
     if act == B.ACT_LAND or act == B.ACT_SMARTRTL_LAND or act == B.ACT_BRAKE_LAND:
-        if c[C.MODE] != C.MODE_LAND:
-            set_mode(c, C.MODE_LAND, C.RSN_BATTERY_FAILSAFE, t_us, events, ev_counts)
+        if c[C.MODE] != AP.MODE_LAND:
+            set_mode(c, AP.MODE_LAND, AP.RSN_BATTERY_FAILSAFE, t_us, events, ev_counts)
             _start_land(c, pos, True)
             return C.SUB_LAND
-    elif act != B.ACT_NONE and c[C.MODE] != C.MODE_RTL and c[C.MODE] != C.MODE_LAND:
-        return _rtl_or_land(c, g, t_us, pos, vel, seg, C.RSN_BATTERY_FAILSAFE, events,
+    elif act != B.ACT_NONE and c[C.MODE] != AP.MODE_RTL and c[C.MODE] != AP.MODE_LAND:
+        return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_BATTERY_FAILSAFE, events,
                             ev_counts)
     return sub
 
@@ -343,7 +343,7 @@ def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
 def _disarm(c, g, t_us, method, events, ev_counts):
     """Disarm now by AP_Arming::Method ``method`` (EV DISARMED, ARM.Method; motors stopped;
     the flight ends 2 s later)."""
-    E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+    E.log_ev(events, ev_counts, t_us, AP.EV_DISARMED)
     c[C.DISARM_METHOD] = method
     c[C.ARMED] = 0.0
     c[C.SUBMODE] = C.SUB_LANDED
@@ -358,16 +358,16 @@ def _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts):
     fs = failsafe_checks(c, g, t_us, nav, events, ev_counts)
     if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
         return sub
-    needs_position = c[C.MODE] == C.MODE_AUTO or c[C.MODE] == C.MODE_GUIDED or (
-        c[C.MODE] == C.MODE_RTL)
+    needs_position = c[C.MODE] == AP.MODE_AUTO or c[C.MODE] == AP.MODE_GUIDED or (
+        c[C.MODE] == AP.MODE_RTL)
     if not (needs_position or g[C.G_FS_EKF_ACTION] == 3.0):
         return sub
     if fs == FS_EKF_ALTHOLD:
-        set_mode(c, C.MODE_ALT_HOLD, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_ALT_HOLD, AP.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
         _start_land(c, pos, True)
         c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
-    elif c[C.MODE] != C.MODE_LAND:
-        set_mode(c, C.MODE_LAND, C.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+    elif c[C.MODE] != AP.MODE_LAND:
+        set_mode(c, AP.MODE_LAND, AP.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
         _start_land(c, pos, True)
     return C.SUB_LAND
 
@@ -379,7 +379,7 @@ def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts):
     output_idle(c, g, g[C.G_MOT_SPIN_ARM])
     attitude_reset(c, 0.0, 0.0, _yaw(q))
     if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
-        E.log_ev(events, ev_counts, t_us, E.EV_AUTO_ARMED)
+        E.log_ev(events, ev_counts, t_us, AP.EV_AUTO_ARMED)
     if c[C.SUB_TIMER] >= ARMING_DELAY_S:
         c[C.SUBMODE] = C.SUB_TAKEOFF
         c[C.SUB_TIMER] = 0.0
@@ -421,11 +421,11 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
     # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
     # runs it outside AC_WPNav)
     heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
-    if c[C.MODE] != C.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
+    if c[C.MODE] != AP.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
         # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
-        set_mode(c, C.MODE_AUTO, C.RSN_GCS, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_AUTO, AP.RSN_GCS, t_us, events, ev_counts)
         c[C.TAKEOFF_DONE_T] = -1.0
-    if c[C.MODE] == C.MODE_AUTO and done > 0.0:
+    if c[C.MODE] == AP.MODE_AUTO and done > 0.0:
         if c[C.TAKEOFF_DONE_T] < 0.0:
             c[C.TAKEOFF_DONE_T] = 0.0
         c[C.TAKEOFF_DONE_T] += dt
@@ -459,7 +459,7 @@ def _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg):
             if i < n_path - 1:
                 c[C.NAV_CNUM] = path[i + 1, P_CNUM]
                 path_resume(c, i)
-            elif path[i, P_CMD] == MAV_CMD_NAV_LAND:
+            elif path[i, P_CMD] == AP.MAV_CMD_NAV_LAND:
                 # ModeAuto::verify_land: at the landing point, descend (and disarm, landed)
                 c[C.MISSION_LAND] = 1.0
                 _start_land(c, pos, False)
@@ -539,12 +539,12 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
         c[C.PZ_VEL_FF] = 0.0
         c[C.PZ_POS_T] = pos[2]
     if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
-        E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE)
-        E.log_ev(events, ev_counts, t_us, E.EV_DISARMED)
+        E.log_ev(events, ev_counts, t_us, AP.EV_LAND_COMPLETE)
+        E.log_ev(events, ev_counts, t_us, AP.EV_DISARMED)
         # AUTO disarms when its last item (RTL) completes on the ground, LAND/RTL on landing,
         # as AUTO's NAV_LAND does (ModeAuto::verify_land)
-        c[C.DISARM_METHOD] = (C.ARM_METHOD_MISSIONEXIT if c[C.MODE] == C.MODE_AUTO
-                              and c[C.MISSION_LAND] == 0.0 else C.ARM_METHOD_LANDED)
+        c[C.DISARM_METHOD] = (AP.ARM_METHOD_MISSIONEXIT if c[C.MODE] == AP.MODE_AUTO
+                              and c[C.MISSION_LAND] == 0.0 else AP.ARM_METHOD_LANDED)
         c[C.ARMED] = 0.0
         c[C.SUBMODE] = C.SUB_LANDED
         c[C.DISARM_TIME] = t_s
@@ -642,7 +642,7 @@ def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
-            E.log_ev(events, ev_counts, t_us, E.EV_LAND_COMPLETE_MAYBE)
+            E.log_ev(events, ev_counts, t_us, AP.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
     elif c[C.LAND_TIMER] != 0.0 or c[C.LANDED] != 0.0:
@@ -650,13 +650,13 @@ def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
-            E.log_ev(events, ev_counts, t_us, E.EV_NOT_LANDED)
+            E.log_ev(events, ev_counts, t_us, AP.EV_NOT_LANDED)
     if c[C.LANDED] != 0.0:
-        flags = (0 if was_landed else flags) | (C.LDET_LANDED | C.LDET_LANDED_MAYBE)
+        flags = (0 if was_landed else flags) | (AP.LDET_LANDED | AP.LDET_LANDED_MAYBE)
         c[C.LDET_COUNT] = 0.0
     elif c[C.LAND_TIMER] > 0.0:
         if c[C.MAYBE_LANDED] != 0.0:
-            flags |= C.LDET_LANDED_MAYBE
+            flags |= AP.LDET_LANDED_MAYBE
         c[C.LDET_COUNT] = float(int(c[C.LAND_TIMER] / dt + 0.5))
     else:
         c[C.LDET_COUNT] = 0.0
@@ -665,19 +665,19 @@ def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
 
 @inline_jit
 def _land_conditions(c, g, thr, vd):
-    """The land detector's condition bits (C.LDET_*; WOW and RANGEFINDER_BELOW_2M always, tlm
-    has neither sensor) from the motors' lower limit, the throttle mix, the lean target and
-    attitude error, the 1 Hz acceleration and the EKF's vertical velocity vd [m/s] (without
-    branches: the loop evaluates it every tick in flight)."""
+    """The land detector's condition bits (ardupilot.LDET_*; WOW and RANGEFINDER_BELOW_2M
+    always, tlm has neither sensor) from the motors' lower limit, the throttle mix, the lean
+    target and attitude error, the 1 Hz acceleration and the EKF's vertical velocity vd [m/s]
+    (without branches: the loop evaluates it every tick in flight)."""
     lower = (c[C.LIM_THR_LO] != 0.0) | (thr <= 0.05)
     mix_min = c[C.THR_RPY_MIX] < 1.25 * g[C.G_THR_MIX_MIN]
     large = ((c[C.ATT_ROLL_T] * c[C.ATT_ROLL_T] + c[C.ATT_PITCH_T] * c[C.ATT_PITCH_T]
               > THR_MIX_LEAN * THR_MIX_LEAN) | (c[C.ATT_THRUST_ERR] > THR_MIX_ATT_ERR))
     still = c[C.ALP] * c[C.ALP] + c[C.ALP + 1] * c[C.ALP + 1] + c[C.ALP + 2] * c[C.ALP + 2] <= 1.0
     slow = abs(vd) < 1.0
-    return (C.LDET_WOW + C.LDET_RANGEFINDER_BELOW_2M + C.LDET_MOTOR_AT_LOWER_LIMIT * lower
-            + C.LDET_THROTTLE_MIX_AT_MIN * mix_min + C.LDET_LARGE_ANGLE * large
-            + C.LDET_ACCEL_STATIONARY * still + C.LDET_DESCENT_RATE_LOW * slow)
+    return (AP.LDET_WOW + AP.LDET_RANGEFINDER_BELOW_2M + AP.LDET_MOTOR_AT_LOWER_LIMIT * lower
+            + AP.LDET_THROTTLE_MIX_AT_MIN * mix_min + AP.LDET_LARGE_ANGLE * large
+            + AP.LDET_ACCEL_STATIONARY * still + AP.LDET_DESCENT_RATE_LOW * slow)
 
 
 @inline_jit
@@ -688,7 +688,7 @@ def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
-            E.log_err(events, ev_counts, t_us, E.ERR_CRASH_CHECK, E.ERR_CODE_FAILSAFE)
-            _disarm(c, g, t_us, C.ARM_METHOD_CRASH, events, ev_counts)
+            E.log_err(events, ev_counts, t_us, AP.ERR_CRASH_CHECK, AP.ERR_CODE_FAILSAFE)
+            _disarm(c, g, t_us, AP.ARM_METHOD_CRASH, events, ev_counts)
     else:
         c[C.CRASH_TIMER] = 0.0

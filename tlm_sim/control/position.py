@@ -11,10 +11,10 @@ NED positions/velocities in m, m/s; PZ_ACC_T is "up" acceleration like ArduPilot
 import math
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import sqrt_ctrl
 
-GRAVITY = 9.80665
 #: the lean-angle limit from the throttle headroom never goes below this (AC_AttitudeControl's
 #: AC_ATTITUDE_CONTROL_ANGLE_LIMIT_MIN, 10 deg); engine_s14.bin shows it on the ground after the
 #: crash: throttle saturated, the lean target held at 10 deg (accel target 1.73 m/s^2) for 25 s
@@ -134,7 +134,7 @@ def xy_update(c, g, pos, vel, cy, sy):
     lean = max(c[C.ALTHOLD_LEAN], LEAN_LIMIT_MIN)
     accel_max = g[C.G_ACCEL_XY_MAX]
     if lean < g[C.G_ANGLE_MAX]:
-        accel_max = GRAVITY * math.tan(lean)
+        accel_max = GRAVITY_MSS * math.tan(lean)
     # position -> velocity (square-root shaped along the error vector, PSC_POSXY_P and
     # WPNAV_ACCEL). As AC_P_2D, an error beyond the one that asks for WPNAV_SPEED is cut to that
     # length and the target moved to match: after a jump of the position estimate (the EKF
@@ -200,9 +200,9 @@ def xy_update(c, g, pos, vel, cy, sy):
     # acceleration -> lean angles in the heading frame
     a_fwd = an * cy + ae * sy
     a_rgt = -an * sy + ae * cy
-    u = -a_fwd / GRAVITY
+    u = -a_fwd / GRAVITY_MSS
     pitch = math.atan(u)
-    roll = math.atan(a_rgt / math.sqrt(1.0 + u * u) / GRAVITY)  # cos(atan(u)) = 1/sqrt(1+u^2)
+    roll = math.atan(a_rgt / math.sqrt(1.0 + u * u) / GRAVITY_MSS)  # cos(atan(u)) = 1/sqrt(1+u^2)
     c[C.ATT_ROLL_CMD] = roll
     c[C.ATT_PITCH_CMD] = pitch
 

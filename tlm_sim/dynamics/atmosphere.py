@@ -9,9 +9,8 @@ All functions are scalar ``@njit`` functions usable from the flight loop and fro
 from __future__ import annotations
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 
-#: standard gravity [m/s^2]
-GRAVITY_MSS: float = 9.80665
 #: sea-level standard pressure [Pa], temperature [K], density [kg/m^3]
 P0_PA: float = 101325.0
 T0_K: float = 288.15

@@ -19,6 +19,7 @@ change needs no field-state reset. ``XKFS.MI`` logs the index; the MSG text is r
 its changes (:mod:`tlm_sim.flightlog.texts`).
 """
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.fusion import lane_fuse_mag
 from tlm_sim.ekf.layout import (
@@ -34,7 +35,7 @@ from tlm_sim.ekf.layout import (
     T_MAG_PASS,
     T_MAG_READ,
 )
-from tlm_sim.ekf.lifecycle import EVT_INFLIGHT_YAW, life_event
+from tlm_sim.ekf.lifecycle import life_event
 from tlm_sim.sensors.layout import M_FIELD, M_HEALTHY, M_NEW, MAG_STRIDE, N_MAG
 
 
@@ -67,7 +68,7 @@ def lane_read_mag(e, cfg, t, mag, armed):
         e[IN_FLIGHT] = 1.0
         if e[INFLIGHT_SEEN] == 0.0:  # EKF3's in-flight yaw alignment (its message only)
             e[INFLIGHT_SEEN] = 1.0
-            life_event(e, EVT_INFLIGHT_YAW)
+            life_event(e, AP.EKF_EVT_INFLIGHT_YAW)
     b = int(e[MAG_IDX]) * MAG_STRIDE
     if mag[b + M_NEW] != 0.0:
         e[T_MAG_READ] = t

@@ -14,7 +14,6 @@ from tlm_sim.boot import BOOT_EKF_START_S
 from tlm_sim.ekf import layout as L
 from tlm_sim.params import ParamError, Params, earth_field, require_params
 
-GRAVITY = 9.80665  # m/s^2
 DEFAULT_GPS_DELAY_MS = 120.0  # u-blox M8/F9 generation (ardupilot-reference §3.8)
 #: EKF3's covariance prediction target interval [s] (a constant in ArduPilot, not a parameter)
 EKF_TARGET_DT_S = 0.012

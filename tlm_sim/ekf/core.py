@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.ekf.layout import (
     ACC_DT,
     ACC_DVD,
@@ -81,8 +82,6 @@ from tlm_sim.ekf.layout import (
     VE,
     VN,
 )
-
-GRAVITY = 9.80665
 
 # upper bounds on variances after prediction (keep P bounded without aiding)
 VAR_MAX_ATT = 1.0  # rad^2
@@ -167,7 +166,7 @@ def propagate(e, dang, dvel, gi, ai, dt):
     vd0 = e[VD]
     vn1 = vn0 + dn
     ve1 = ve0 + de
-    vd1 = vd0 + dd + GRAVITY * dt
+    vd1 = vd0 + dd + GRAVITY_MSS * dt
     e[VN] = vn1
     e[VE] = ve1
     e[VD] = vd1

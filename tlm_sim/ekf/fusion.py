@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.core import (
     apply_correction,
@@ -152,7 +153,6 @@ from tlm_sim.ekf.layout import (
 )
 from tlm_sim.ekf.lifecycle import (
     EKF3_INIT_ROT_SD,
-    EVT_STOPPED,
     life_event,
     mag_heading,
     ready_to_use_gps,
@@ -310,7 +310,7 @@ def stop_aiding(e, cfg, t):
     reset_block(e, ES_VEL, 2, cfg[C_VELNE_NSE] ** 2)
     reset_block(e, ES_POS, 2, cfg[C_POSNE_NSE] ** 2)
     e[AID_MODE] = AID_NONE
-    life_event(e, EVT_STOPPED)
+    life_event(e, AP.EKF_EVT_STOPPED)
     e[CONSTPOS_N] = e[PN]
     e[CONSTPOS_E] = e[PE]
     e[T_CONSTPOS] = t - cfg[C_CONSTPOS_DT]

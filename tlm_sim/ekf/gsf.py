@@ -42,6 +42,7 @@ off-diagonal with a + sign. Both are what SITL's XKY0 shows.
 import math
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.ekf.gsf_layout import (
     G_ACC,
     G_ACC_GAIN,
@@ -89,7 +90,6 @@ from tlm_sim.ekf.layout import (
     IMU_INDEX,
 )
 
-GRAVITY = 9.80665  # [m/s^2]
 GYRO_NOISE = 0.1  # yaw rate noise of the covariance prediction [rad/s]
 ACCEL_NOISE = 2.0  # horizontal accel noise of the covariance prediction [m/s^2]
 TILT_GAIN = 0.2  # AHRS tilt correction gain at 1 g [1/s]
@@ -192,13 +192,13 @@ def gsf_step(g):
     g[G_ACC + 2] = g[G_ACC + 2] * (1.0 - coef) + az * coef
     if g[G_TILT_ALIGNED] == 0.0:
         n2 = ax * ax + ay * ay + az * az
-        if (0.9 * GRAVITY) ** 2 < n2 < (1.1 * GRAVITY) ** 2:
+        if (0.9 * GRAVITY_MSS) ** 2 < n2 < (1.1 * GRAVITY_MSS) ** 2:
             _align_tilt(g, dvx, dvy, dvz)
             g[G_TILT_ALIGNED] = 1.0
             g[G_ACC], g[G_ACC + 1], g[G_ACC + 2] = ax, ay, az
         return
     norm = math.sqrt(g[G_ACC] ** 2 + g[G_ACC + 1] ** 2 + g[G_ACC + 2] ** 2)
-    ng = norm / GRAVITY
+    ng = norm / GRAVITY_MSS
     # the firmware's taper (see the module docstring): off below 1 g
     if ng > 1.0 and g[G_ACC_GAIN] <= 1.5:
         g[G_ACC_GAIN] = TILT_GAIN * (3.0 - 2.0 * ng) ** 2

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from tlm_sim._jit import tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.ekf.compass import lane_read_mag
 from tlm_sim.ekf.core import (
     buffer_push,
@@ -199,7 +200,6 @@ STATIC_GYRO = 0.1  # rad/s: IMU at rest below this rotation rate
 STATIC_ACC = 0.5  # m/s^2: ... and with |specific force| this close to g
 STATIC_TILT_COS = math.cos(math.radians(30.0))  # re-level beyond 30 deg of tilt error
 STATIC_TIME = 0.25  # s at rest with that error before re-levelling
-GRAVITY = 9.80665
 INIT_YAW_SD = 0.1  # rad
 INIT_VEL_SD = 0.5  # m/s
 INIT_POS_SD = 1.0  # m
@@ -309,8 +309,8 @@ def _static_tilt_check(e, dang, dvel, gi, ai, dt):
         return
     vx, vy, vz = dvel[ai, 0], dvel[ai, 1], dvel[ai, 2]
     dv2 = vx * vx + vy * vy + vz * vz
-    lo = (GRAVITY - STATIC_ACC) * dt
-    hi = (GRAVITY + STATIC_ACC) * dt
+    lo = (GRAVITY_MSS - STATIC_ACC) * dt
+    hi = (GRAVITY_MSS + STATIC_ACC) * dt
     if dv2 < lo * lo or dv2 > hi * hi:
         e[TILT_BAD_T] = 0.0
         return

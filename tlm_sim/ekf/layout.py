@@ -221,7 +221,7 @@ GPS_PREV_N, GPS_PREV_E = _l.vector(("GPS_PREV_N", "GPS_PREV_E"), "m",
 GPS_VZ_F = _l.add("GPS_VZ_F", 1, "m/s", "filtered GPS vertical speed (ground check)")
 GPS_VH_F = _l.add("GPS_VH_F", 1, "m/s", "filtered GPS horizontal speed (ground check)")
 LIFE_EVENTS = _l.add("LIFE_EVENTS", 1, "", "lifecycle events not yet written to the text log "
-                     "(bit mask, tlm_sim.ekf.lifecycle EVT_*)")
+                     "(bit mask, tlm_sim.ardupilot EKF_EVT_*)")
 INNOV_YAW = _l.add("INNOV_YAW", 1, "rad", "heading innovation of the ground heading fusion "
                    "(measurement - prediction; XKF3.IYAW)")
 INFLIGHT_SEEN = _l.add("INFLIGHT_SEEN", 1, "", "1 once IN_FLIGHT was first set (in-flight yaw "

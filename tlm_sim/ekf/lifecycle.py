@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.ekf.core import reset_block, set_quat_euler
 from tlm_sim.ekf.layout import (
@@ -78,15 +79,7 @@ from tlm_sim.ekf.layout import (
 )
 from tlm_sim.rotation import quat_to_euler
 
-# lifecycle events (bits of LIFE_EVENTS), in the order the texts are written within one tick
-EVT_INIT = 1  # "EKF3 IMU%u initialised"
-EVT_TILT = 2  # "EKF3 IMU%u tilt alignment complete"
-EVT_YAW = 4  # "EKF3 IMU%u MAG%u initial yaw alignment complete"
-EVT_ORIGIN = 8  # "EKF3 IMU%u origin set"
-EVT_USING_GPS = 16  # "EKF3 IMU%u is using GPS"
-EVT_STOPPED = 32  # "EKF3 IMU%u stopped aiding"
-EVT_INFLIGHT_YAW = 64  # "EKF3 IMU%u MAG%u in-flight yaw alignment complete"
-N_EVT = 7
+# lifecycle events: bits of LIFE_EVENTS (ardupilot.EKF_EVT_*, the texts' order within a tick)
 
 #: EKF3's initial attitude uncertainty (CovarianceInit: rotation vector variance 0.1^2)
 EKF3_INIT_ROT_SD = 0.1  # rad
@@ -112,7 +105,7 @@ GPS_CHK_HORIZ_SPD = 128  # on the ground: filtered horizontal speed above 0.3 m/
 
 @tick_jit
 def life_event(e, bit):
-    """Record lifecycle event ``bit`` (EVT_*) of lane e for the text log."""
+    """Record lifecycle event ``bit`` (ardupilot.EKF_EVT_*) of lane e for the text log."""
     e[LIFE_EVENTS] = float(int(e[LIFE_EVENTS]) | bit)
 
 
@@ -136,14 +129,14 @@ def mag_heading(e, cfg, roll, pitch):
 def lane_started(e, cfg):
     """At alignment (EKF3's InitialiseFilter): the initialised event; with the boot phase off
     the lane is also tilt and yaw aligned, its GPS good and its gyro biases learnt."""
-    life_event(e, EVT_INIT)
+    life_event(e, AP.EKF_EVT_INIT)
     if cfg[C_BOOT] == 0.0:
         e[TILT_DONE] = 1.0
         e[YAW_DONE] = 1.0
         e[GPS_GOOD] = 1.0
         e[BIAS_LEARNED] = 1.0
-        life_event(e, EVT_TILT)
-        life_event(e, EVT_YAW)
+        life_event(e, AP.EKF_EVT_TILT)
+        life_event(e, AP.EKF_EVT_YAW)
     else:
         e[TILT_DONE] = 0.0
         e[YAW_DONE] = 0.0
@@ -161,7 +154,7 @@ def lane_alignment_checks(e, cfg):
     if e[TILT_DONE] == 0.0:
         if max(e[P0 + ES_ATT * d], e[P0 + (ES_ATT + 1) * d]) < TILT_ALIGN_VAR:
             e[TILT_DONE] = 1.0
-            life_event(e, EVT_TILT)
+            life_event(e, AP.EKF_EVT_TILT)
     learnt = (e[P0 + ES_BG * d] <= BIAS_LEARNED_VAR and e[P0 + (ES_BG + 1) * d]
               <= BIAS_LEARNED_VAR and e[P0 + (ES_BG + 2) * d] <= BIAS_LEARNED_VAR)
     e[BIAS_LEARNED] = 1.0 if learnt else 0.0
@@ -178,7 +171,7 @@ def yaw_align(e, cfg, init_yaw_var):
     set_quat_euler(e, roll, pitch, mag_heading(e, cfg, roll, pitch))
     reset_block(e, ES_ATT + 2, 1, init_yaw_var)
     e[YAW_DONE] = 1.0
-    life_event(e, EVT_YAW)
+    life_event(e, AP.EKF_EVT_YAW)
     return True
 
 
@@ -225,7 +218,7 @@ def _gps_check_fails(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, v
 def lane_gps_checks(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, vacc):
     """One 3-D-fix GPS sample through EKF3's readGpsData checks, with the boot phase: the
     GPS quality tests, gpsGoodToAlign (10 s of passing, 5 s of failing to clear it) and the
-    origin, set once when the GPS is good (EVT_ORIGIN). Position NE [m], velocity NED [m/s],
+    origin, set once when the GPS is good (EKF_EVT_ORIGIN). Position NE [m], velocity NED [m/s],
     satellites, HDOP, horizontal / vertical accuracy [m]."""
     if cfg[C_BOOT] == 0.0:
         return
@@ -243,7 +236,7 @@ def lane_gps_checks(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, va
         e[GPS_GOOD] = 0.0
     if e[GPS_GOOD] != 0.0 and e[ORIGIN_OK] == 0.0:
         e[ORIGIN_OK] = 1.0
-        life_event(e, EVT_ORIGIN)
+        life_event(e, AP.EKF_EVT_ORIGIN)
 
 
 @tick_jit
@@ -258,9 +251,9 @@ def ready_to_use_gps(e, cfg):
 @tick_jit
 def started_using_gps(e):
     """The lane starts absolute aiding with GPS: the origin is set with the first sample when
-    the boot phase is off (EKF3 sets it from GPS before using it), then EVT_USING_GPS."""
+    the boot phase is off (EKF3 sets it from GPS before using it), then EKF_EVT_USING_GPS."""
     if e[ORIGIN_OK] == 0.0:
         e[ORIGIN_OK] = 1.0
-        life_event(e, EVT_ORIGIN)
+        life_event(e, AP.EKF_EVT_ORIGIN)
     e[AID_MODE] = AID_ABSOLUTE
-    life_event(e, EVT_USING_GPS)
+    life_event(e, AP.EKF_EVT_USING_GPS)

@@ -11,6 +11,7 @@ predicted minus measured (tlm's filter stores measured minus predicted, ``INNOV_
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ekf import gsf_layout as GL
@@ -26,9 +27,6 @@ XKV_INTERVAL_S = 0.49
 #: EKF3's terrain-height variance Popt after its covariance initialisation [m^2]; without a
 #: range finder or optical flow nothing updates it (XKF5.Herr = its square root, 0.5 m)
 TERRAIN_VAR_INIT = 0.25
-ERR_EKF_PRIMARY = 24  # ERR subsystem of a primary-lane change (ECode: the new lane)
-ERR_GPS = 11  # ERR subsystem GPS: ECode 2 GPS_GLITCH, 0 resolved
-ERR_GPS_GLITCH = 2
 
 
 @tick_jit
@@ -37,7 +35,7 @@ def log_lane_switch(events, ev_counts, t_us, eo):
     buffers (tlm_sim.logger E_*)."""
     r = L.new_row(events, ev_counts, L.E_ERR, t_us)
     if r >= 0:
-        events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_EKF_PRIMARY
+        events[L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_EKF_PRIMARY
         events[L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
 
 
@@ -52,8 +50,9 @@ def gps_glitch_check(events, ev_counts, t_us, ekf, sel):
     sel[EK.SEL_GPS_GLITCH] = g
     r = L.new_row(events, ev_counts, L.E_ERR, t_us)
     if r >= 0:
-        events[L.E_ERR][r, L.ERR_COLS.Subsys] = ERR_GPS
-        events[L.E_ERR][r, L.ERR_COLS.ECode] = ERR_GPS_GLITCH if g != 0.0 else 0
+        events[L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_GPS
+        events[L.E_ERR][r, L.ERR_COLS.ECode] = (AP.ERR_CODE_GPS_GLITCH if g != 0.0
+                                                 else AP.ERR_CODE_RESOLVED)
 
 
 @tick_jit

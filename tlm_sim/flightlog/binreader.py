@@ -46,7 +46,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
-from pymavlink import mavutil
+
+from tlm_sim.ardupilot import MODE_NAMES, MODE_REASONS
 
 from .binscan import (
     BinIndex,
@@ -72,8 +73,6 @@ __all__ = [
     "BinLogError",
     "BinLogWarning",
     "BinLog",
-    "COPTER_MODES",
-    "MODE_REASONS",
     "BOOKKEEPING_PARAMS",
     "read_bin",
     "read_log",
@@ -98,18 +97,6 @@ _NP_CODE = {
     "b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "q": "<i8",
     "Q": "<u8", "M": "i1", "f": "<f4", "d": "<f8", "g": "<f2", "c": "<i2", "C": "<u2",
     "e": "<i4", "E": "<u4", "L": "<i4", "n": "S4", "N": "S16", "Z": "S64", "a": "V64",
-}
-
-#: ArduCopter flight-mode numbers → names, pymavlink's table (as pymavlink and Mission Planner
-#: print them).
-COPTER_MODES: dict[int, str] = dict(mavutil.mode_mapping_acm)
-
-#: Mode-change reasons (``AP_Vehicle/ModeReason.h``) that ArduCopter uses.
-MODE_REASONS: dict[int, str] = {
-    0: "UNKNOWN", 1: "RC_COMMAND", 2: "GCS_COMMAND", 3: "RADIO_FAILSAFE",
-    4: "BATTERY_FAILSAFE", 5: "GCS_FAILSAFE", 6: "EKF_FAILSAFE", 7: "GPS_GLITCH",
-    8: "MISSION_END", 9: "THROTTLE_LAND_ESCAPE", 10: "FENCE_BREACHED", 11: "TERRAIN_FAILSAFE",
-    19: "CRASH_FAILSAFE", 25: "FAILSAFE", 26: "INITIALISED", 50: "DEADRECKON_FAILSAFE",
 }
 
 #: Parameters ArduPilot rewrites by itself (mission upload counter, statistics): left out of
@@ -546,13 +533,14 @@ def read_messages(path: str | os.PathLike) -> pd.DataFrame:
 
 
 def modes_with_names(mode: pd.DataFrame) -> pd.DataFrame:
-    """MODE table plus ModeName (``COPTER_MODES``) and RsnName (``MODE_REASONS``) columns.
+    """MODE table plus ModeName (``ardupilot.MODE_NAMES``) and RsnName
+    (``ardupilot.MODE_REASONS``) columns.
 
     Numbers without a name become "MODE<n>" / "RSN<n>".
     """
     out = mode.copy()
     out["ModeName"] = np.asarray(
-        [COPTER_MODES.get(int(m), f"MODE{int(m)}") for m in mode["ModeNum"]], dtype=object
+        [MODE_NAMES.get(int(m), f"MODE{int(m)}") for m in mode["ModeNum"]], dtype=object
     )
     out["RsnName"] = np.asarray(
         [MODE_REASONS.get(int(r), f"RSN{int(r)}") for r in mode["Rsn"]], dtype=object

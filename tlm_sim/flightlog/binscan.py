@@ -41,6 +41,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from tlm_sim.ardupilot import FMT_TYPE, HEAD1, HEAD2
+
 from .schema import FORMAT_CHARS
 
 __all__ = [
@@ -55,10 +57,8 @@ __all__ = [
     "is_message_name",
 ]
 
-HEAD1 = 0xA3
-HEAD2 = 0x95
-#: type id and length of FMT (fixed in every ArduPilot log and assumed by pymavlink)
-FMT_TYPE = 128
+#: length of FMT (fixed in every ArduPilot log and assumed by pymavlink; its type id is
+#: ardupilot.FMT_TYPE)
 FMT_LENGTH = 89
 _FMT_FORMAT = "BBnNZ"
 _FMT_COLUMNS = ("Type", "Length", "Name", "Format", "Columns")

@@ -31,6 +31,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_sim.ardupilot import FMT_TYPE, HEAD1, HEAD2
+
 from .quantise import column_to_raw, quantise_frame
 from .schema import FORMAT_CHARS, MULTS, SCHEMAS, UNITS, MessageSchema
 from .texts import event_texts, logged_texts, rc_switch_changes, rc_switch_texts, startup_texts
@@ -40,8 +42,6 @@ __all__ = [
     "merge_order", "message_stream", "message_types", "msg_table", "write_bin",
 ]
 
-HEAD1, HEAD2 = 0xA3, 0x95
-FMT_TYPE = 128
 #: Firmware string of the VER/MSG lines: names ArduCopter (pymavlink's vehicle detection) and
 #: the reference logs' firmware, marked as tlm.
 FIRMWARE_STRING = "ArduCopter V4.7.0-dev (tlm)"

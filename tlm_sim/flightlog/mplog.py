@@ -32,14 +32,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .binreader import COPTER_MODES
+from tlm_sim.ardupilot import MODE_NAMES
+
 from .binwriter import merge_order, message_stream
 from .quantise import quantise_frame
 from .schema import FORMAT_CHARS, SCHEMAS, MessageSchema, schema_from_fmt
 
 __all__ = ["write_mp_log", "read_mp_log", "format_column"]
 
-_MODE_NUMBERS = {v: k for k, v in COPTER_MODES.items()}
+_MODE_NUMBERS = {v: k for k, v in MODE_NAMES.items()}
 SEP = ", "
 EOL = "\r\n"
 
@@ -64,7 +65,7 @@ def format_column(values: Any, char: str) -> list[str]:
     kind = FORMAT_CHARS[char].kind
     v = np.asarray(values) if kind not in ("str", "array") else list(values)
     if char == "M":
-        return [COPTER_MODES.get(int(x), str(int(x))) for x in v]
+        return [MODE_NAMES.get(int(x), str(int(x))) for x in v]
     if kind == "int":
         return v.astype(np.int64).astype(str).tolist()
     if char == "f":

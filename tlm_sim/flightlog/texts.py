@@ -32,6 +32,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from tlm_sim import ardupilot as AP
+
 __all__ = ["ARM_CHECK_TEXTS", "ERR_TEXTS", "EV_TEXTS", "STATE_TEXTS", "event_texts",
            "gps_detected", "ground_impacts", "logged_texts", "mission_texts",
            "rc_switch_changes", "rc_switch_texts", "startup_texts", "text_kind"]
@@ -67,10 +69,11 @@ def _battery_low(tables: Tables, t_us: int, _code: int) -> list[str]:
     row = _at(tables, "BAT", t_us)
     volt, used = (0.0, 0.0) if row is None else (float(row["Volt"]), float(row["CurrTot"]))
     err = tables["ERR"]
-    earlier = int(((err["Subsys"] == 6) & (err["ECode"] == 1) & (err["TimeUS"] < t_us)).sum())
+    earlier = int(((err["Subsys"] == AP.ERR_FAILSAFE_BATT) & (err["ECode"] == AP.ERR_CODE_FAILSAFE)
+                   & (err["TimeUS"] < t_us)).sum())
     level = "low" if earlier == 0 else "critical"
     ev = tables.get("EV")
-    disarm = ev is not None and bool(((ev["Id"] == 11) & (ev["TimeUS"] == t_us)).any())
+    disarm = ev is not None and bool(((ev["Id"] == AP.EV_DISARMED) & (ev["TimeUS"] == t_us)).any())
     return [f"Battery 1 is {level} {volt:.2f}V used {used:.0f} mAh",
             "Battery Failsafe - Disarming" if disarm else "Battery Failsafe"]
 
@@ -89,7 +92,7 @@ def ground_impacts(tables: Tables) -> list[tuple[int, str]]:
     sim, ev = tables.get("SIM"), tables.get("EV")
     if sim is None or ev is None or len(sim) < 3:
         return []
-    armed = ev["TimeUS"][ev["Id"] == 10]
+    armed = ev["TimeUS"][ev["Id"] == AP.EV_ARMED]
     if not len(armed):
         return []
     t = sim["TimeUS"].to_numpy(np.float64)
@@ -120,21 +123,21 @@ def _lane_switch(_tables: Tables, _t_us: int, code: int) -> list[str]:
 
 #: (ERR Subsys, ECode) -> renderer; ECode None matches every code of the subsystem.
 ERR_TEXTS: dict[tuple[int, int | None], Render] = {
-    (5, 1): _fixed("Radio Failsafe"),
-    (5, 0): _fixed("Radio Failsafe Cleared"),
-    (6, 1): _battery_low,
-    (11, 2): _fixed("GPS Glitch or Compass error"),
-    (11, 0): _fixed("Glitch cleared"),
-    (24, None): _lane_switch,
-    (25, 1): _lost_motor,
-    (29, 1): _fixed("Vibration compensation ON"),
-    (29, 0): _fixed("Vibration compensation OFF"),
+    (AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_FAILSAFE): _fixed("Radio Failsafe"),
+    (AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED): _fixed("Radio Failsafe Cleared"),
+    (AP.ERR_FAILSAFE_BATT, AP.ERR_CODE_FAILSAFE): _battery_low,
+    (AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH): _fixed("GPS Glitch or Compass error"),
+    (AP.ERR_GPS, AP.ERR_CODE_RESOLVED): _fixed("Glitch cleared"),
+    (AP.ERR_EKF_PRIMARY, None): _lane_switch,
+    (AP.ERR_THRUST_LOSS_CHECK, AP.ERR_CODE_FAILSAFE): _lost_motor,
+    (AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_FAILSAFE): _fixed("Vibration compensation ON"),
+    (AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED): _fixed("Vibration compensation OFF"),
 }
 
 #: EV Id -> text.
 EV_TEXTS: dict[int, str] = {
-    10: "Arming motors",
-    11: "Disarming motors",
+    AP.EV_ARMED: "Arming motors",
+    AP.EV_DISARMED: "Disarming motors",
 }
 
 
@@ -154,12 +157,9 @@ def _compass_switches(tables: Tables) -> list[tuple[int, str]]:
     return out
 
 
-#: AP_Mission::Mission_Command::type() of the MAV_CMD ids tlm's missions hold
-MISSION_CMD_TYPES: dict[int, str] = {16: "WP", 19: "LoitTime", 20: "RTL", 21: "Land",
-                                     22: "Takeoff", 178: "ChangeSpeed"}
 #: the items whose completion ArduCopter announces: NAV_WAYPOINT (verify_nav_wp) and
 #: NAV_LOITER_TIME (verify_loiter_time), once their hold time is over
-REACHED_CMDS = (16, 19)
+REACHED_CMDS = (AP.MAV_CMD_NAV_WAYPOINT, AP.MAV_CMD_NAV_LOITER_TIME)
 
 
 def mission_texts(tables: Tables) -> list[tuple[int, str]]:
@@ -175,7 +175,7 @@ def mission_texts(tables: Tables) -> list[tuple[int, str]]:
     for t, num, cid in zip(mise["TimeUS"], mise["CNum"], mise["CId"], strict=True):
         if prev_id in REACHED_CMDS and int(num) == prev_num + 1:
             out.append((int(t), f"Reached command #{prev_num}"))
-        out.append((int(t), f"Mission: {int(num)} {MISSION_CMD_TYPES.get(int(cid), str(cid))}"))
+        out.append((int(t), f"Mission: {int(num)} {AP.MAV_CMD_TYPES.get(int(cid), str(cid))}"))
         prev_num, prev_id = int(num), int(cid)
     return out
 
@@ -291,63 +291,57 @@ def event_texts(tables: Tables) -> list[tuple[int, str]]:
 # ---------------------------------------------------------------- the flight's text log
 # (FlightLog.meta["texts"]: rows written in the flight loop by tlm_sim.control.arming)
 
-#: what each failing pre-arm / arm check reads (after "Arm: " or "PreArm: "), by its bit
-#: (tlm_sim.control.arming F_*), in ArduCopter's report order; a function takes the text row
-ARM_CHECK_TEXTS: dict[int, str | Callable[[Sequence[float]], str]] = {}
+def _ahrs(row: Sequence[float]) -> str:
+    lane = int(row[AP.A_LANE])
+    return ("AHRS: EKF3 not started" if lane < 0 else f"AHRS: EKF3 core {lane} unhealthy")
 
-_VARIANCES = ("compass", "position", "velocity", "height")
+
+_VARIANCES = ("compass", "position", "velocity", "height")  # by AP.VAR_*
 _BATTERY = ("below minimum arming voltage", "low voltage failsafe", "low capacity failsafe",
-            "critical voltage failsafe", "critical capacity failsafe")
+            "critical voltage failsafe", "critical capacity failsafe")  # by AP.BATT_*
+
+#: what each failing pre-arm / arm check reads (after "Arm: " or "PreArm: "), by its bit
+#: (:mod:`tlm_sim.ardupilot` F_*), in ArduCopter's report order; a function takes the text row
+ARM_CHECK_TEXTS: dict[int, str | Callable[[Sequence[float]], str]] = {
+    AP.F_RC_NOT_FOUND: "RC not found",
+    AP.F_THR_LOW: "Throttle below failsafe",
+    AP.F_NEED_ALT: "Need Alt Estimate",
+    AP.F_BARO: "Baro: not healthy",
+    AP.F_ALT_DISPARITY: "Altitude disparity",
+    AP.F_GYRO_HEALTH: "Gyros not healthy",
+    AP.F_ACC_HEALTH: "Accels not healthy",
+    AP.F_ACC_INCONS: "Accels inconsistent",
+    AP.F_GYRO_INCONS: "Gyros inconsistent",
+    AP.F_EKF_ATTITUDE: "EKF attitude is bad",
+    AP.F_COMPASS_HEALTH: "Compass not healthy",
+    AP.F_MAG_FIELD: lambda row: (f"Check mag field: {row[AP.A_MAG_FIELD]:4.0f}, max "
+                                 f"{AP.MAG_FIELD_MAX:.0f}, min {AP.MAG_FIELD_MIN:.0f}"),
+    AP.F_COMPASS_INCONS: "Compasses inconsistent",
+    AP.F_GPS_FIX: "GPS 1: Bad fix",
+    AP.F_WAIT_HOME: "AHRS: waiting for home",
+    AP.F_GPS_AHRS: lambda row: f"GPS and AHRS differ by {row[AP.A_GPS_AHRS]:4.1f}m",
+    AP.F_AHRS: _ahrs,
+    AP.F_NEED_POS: "Need Position Estimate",
+    AP.F_GPS_GLITCH: "GPS glitching",
+    AP.F_EKF_VARIANCE: lambda row: f"EKF {_VARIANCES[int(row[AP.A_VARIANCE])]} variance",
+    AP.F_HDOP: "High GPS HDOP",
+    AP.F_BATTERY: lambda row: f"Battery 1 {_BATTERY[int(row[AP.A_BATTERY])]}",
+    AP.F_BATT_FS: "Battery failsafe",
+    AP.F_ARM_AHRS: "AHRS not healthy",
+    AP.F_ARM_COMPASS: "Compass not healthy",
+    AP.F_ARM_LEANING: "Leaning",
+}
 
 
-def _arm_check_texts() -> dict[int, str | Callable[[Sequence[float]], str]]:
-    """ARM_CHECK_TEXTS, built on first use (the bit constants live with the numba code)."""
-    if ARM_CHECK_TEXTS:
-        return ARM_CHECK_TEXTS
-    from tlm_sim.control import arming as A
-
-    def ahrs(row: Sequence[float]) -> str:
-        lane = int(row[A.A_LANE])
-        return ("AHRS: EKF3 not started" if lane < 0 else f"AHRS: EKF3 core {lane} unhealthy")
-
-    ARM_CHECK_TEXTS.update({
-        A.F_RC_NOT_FOUND: "RC not found",
-        A.F_THR_LOW: "Throttle below failsafe",
-        A.F_NEED_ALT: "Need Alt Estimate",
-        A.F_BARO: "Baro: not healthy",
-        A.F_ALT_DISPARITY: "Altitude disparity",
-        A.F_GYRO_HEALTH: "Gyros not healthy",
-        A.F_ACC_HEALTH: "Accels not healthy",
-        A.F_ACC_INCONS: "Accels inconsistent",
-        A.F_GYRO_INCONS: "Gyros inconsistent",
-        A.F_EKF_ATTITUDE: "EKF attitude is bad",
-        A.F_COMPASS_HEALTH: "Compass not healthy",
-        A.F_MAG_FIELD: lambda row: (f"Check mag field: {row[A.A_MAG_FIELD]:4.0f}, max "
-                                    f"{A.MAG_FIELD_MAX:.0f}, min {A.MAG_FIELD_MIN:.0f}"),
-        A.F_COMPASS_INCONS: "Compasses inconsistent",
-        A.F_GPS_FIX: "GPS 1: Bad fix",
-        A.F_WAIT_HOME: "AHRS: waiting for home",
-        A.F_GPS_AHRS: lambda row: f"GPS and AHRS differ by {row[A.A_GPS_AHRS]:4.1f}m",
-        A.F_AHRS: ahrs,
-        A.F_NEED_POS: "Need Position Estimate",
-        A.F_GPS_GLITCH: "GPS glitching",
-        A.F_EKF_VARIANCE: lambda row: f"EKF {_VARIANCES[int(row[A.A_VARIANCE])]} variance",
-        A.F_HDOP: "High GPS HDOP",
-        A.F_BATTERY: lambda row: f"Battery 1 {_BATTERY[int(row[A.A_BATTERY])]}",
-        A.F_BATT_FS: "Battery failsafe",
-        A.F_ARM_AHRS: "AHRS not healthy",
-        A.F_ARM_COMPASS: "Compass not healthy",
-        A.F_ARM_LEANING: "Leaning",
-    })
-    return ARM_CHECK_TEXTS
-
-
-#: EKF3's lifecycle messages by event bit (tlm_sim.ekf.lifecycle EVT_*): IMU and compass index
-_EKF_TEXTS = {1: "EKF3 IMU{imu} initialised", 2: "EKF3 IMU{imu} tilt alignment complete",
-              4: "EKF3 IMU{imu} MAG{mag} initial yaw alignment complete",
-              8: "EKF3 IMU{imu} origin set", 16: "EKF3 IMU{imu} is using GPS",
-              32: "EKF3 IMU{imu} stopped aiding",
-              64: "EKF3 IMU{imu} MAG{mag} in-flight yaw alignment complete"}
+#: EKF3's lifecycle messages by event bit (:mod:`tlm_sim.ardupilot` EKF_EVT_*): IMU and
+#: compass index
+_EKF_TEXTS = {AP.EKF_EVT_INIT: "EKF3 IMU{imu} initialised",
+              AP.EKF_EVT_TILT: "EKF3 IMU{imu} tilt alignment complete",
+              AP.EKF_EVT_YAW: "EKF3 IMU{imu} MAG{mag} initial yaw alignment complete",
+              AP.EKF_EVT_ORIGIN: "EKF3 IMU{imu} origin set",
+              AP.EKF_EVT_USING_GPS: "EKF3 IMU{imu} is using GPS",
+              AP.EKF_EVT_STOPPED: "EKF3 IMU{imu} stopped aiding",
+              AP.EKF_EVT_INFLIGHT_YAW: "EKF3 IMU{imu} MAG{mag} in-flight yaw alignment complete"}
 
 
 def logged_texts(rows: Iterable[Sequence[float]]) -> list[tuple[int, str]]:
@@ -355,24 +349,21 @@ def logged_texts(rows: Iterable[Sequence[float]]) -> list[tuple[int, str]]:
     failed arm attempts ("Arm: ..." per failing check), the periodic pre-arm reports
     ("PreArm: ..."), EKF3's lifecycle ("EKF3 IMU0 tilt alignment complete", "origin set",
     "is using GPS", ...), "AHRS: EKF3 active" and "Field Elevation Set: 584m", in time order."""
-    from tlm_sim.control import arming as A
-
-    checks = _arm_check_texts()
     out: list[tuple[int, str]] = []
     for row in rows:
-        t, kind, mask = int(row[A.TXT_TIME]), int(row[A.TXT_KIND]), int(row[A.TXT_MASK])
-        if kind in (A.KIND_ARM, A.KIND_PREARM):
-            prefix = "Arm: " if kind == A.KIND_ARM else "PreArm: "
-            for bit, text in checks.items():
+        t, kind, mask = int(row[AP.TXT_TIME]), int(row[AP.TXT_KIND]), int(row[AP.TXT_MASK])
+        if kind in (AP.KIND_ARM, AP.KIND_PREARM):
+            prefix = "Arm: " if kind == AP.KIND_ARM else "PreArm: "
+            for bit, text in ARM_CHECK_TEXTS.items():
                 if mask & bit:
                     out.append((t, prefix + (text if isinstance(text, str) else text(row))))
-        elif kind == A.KIND_EKF and mask in _EKF_TEXTS:
-            out.append((t, _EKF_TEXTS[mask].format(imu=int(row[A.A_LANE]),
-                                                   mag=int(row[A.A_MAG_FIELD]))))
-        elif kind == A.KIND_AHRS_ACTIVE:
+        elif kind == AP.KIND_EKF and mask in _EKF_TEXTS:
+            out.append((t, _EKF_TEXTS[mask].format(imu=int(row[AP.A_LANE]),
+                                                   mag=int(row[AP.A_MAG_FIELD]))))
+        elif kind == AP.KIND_AHRS_ACTIVE:
             out.append((t, "AHRS: EKF3 active"))
-        elif kind == A.KIND_FIELD_ELEV:
-            out.append((t, f"Field Elevation Set: {row[A.A_MAG_FIELD]:.0f}m"))
+        elif kind == AP.KIND_FIELD_ELEV:
+            out.append((t, f"Field Elevation Set: {row[AP.A_MAG_FIELD]:.0f}m"))
     return sorted(out, key=lambda line: line[0])
 
 

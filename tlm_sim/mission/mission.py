@@ -25,17 +25,21 @@ from typing import Any
 
 import numpy as np
 
+from tlm_sim.ardupilot import (
+    MAV_CMD_DO_CHANGE_SPEED,
+    MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_TIME,
+    MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    MAV_CMD_NAV_TAKEOFF,
+    MAV_CMD_NAV_WAYPOINT,
+    MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+)
 from tlm_sim.geo import HOME_CMAC, latlon_to_ne
 from tlm_sim.mission.errors import MissionError
 
 __all__ = [
     "ITEM_FIELDS",
-    "MAV_CMD_DO_CHANGE_SPEED",
-    "MAV_CMD_NAV_LAND",
-    "MAV_CMD_NAV_LOITER_TIME",
-    "MAV_CMD_NAV_RETURN_TO_LAUNCH",
-    "MAV_CMD_NAV_TAKEOFF",
-    "MAV_CMD_NAV_WAYPOINT",
     "MAX_ALT_M",
     "MAX_HOLD_S",
     "MAX_HOME_DISTANCE_M",
@@ -52,14 +56,6 @@ MAX_ALT_M: float = 10_000.0
 #: farthest allowed waypoint from home (horizontal, flat earth), metres
 MAX_HOME_DISTANCE_M: float = 50_000.0
 
-# MAV_CMD ids of the mission items tlm flies, MAV_FRAMEs of their CMD / MISE rows
-MAV_CMD_NAV_WAYPOINT = 16
-MAV_CMD_NAV_LOITER_TIME = 19
-MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
-MAV_CMD_NAV_LAND = 21
-MAV_CMD_NAV_TAKEOFF = 22
-MAV_CMD_DO_CHANGE_SPEED = 178
-MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_RELATIVE_ALT = 0, 3
 #: the navigation commands a waypoint row can be (:attr:`Mission.commands`)
 NAV_COMMANDS: dict[int, str] = {MAV_CMD_NAV_WAYPOINT: "NAV_WAYPOINT",
                                 MAV_CMD_NAV_LOITER_TIME: "NAV_LOITER_TIME",

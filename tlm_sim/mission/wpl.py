@@ -35,9 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tlm_sim.geo import HOME_CMAC
-from tlm_sim.mission.errors import MissionError
-from tlm_sim.mission.mission import (
+from tlm_sim.ardupilot import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
     MAV_CMD_NAV_LOITER_TIME,
@@ -45,7 +43,13 @@ from tlm_sim.mission.mission import (
     MAV_CMD_NAV_TAKEOFF,
     MAV_CMD_NAV_WAYPOINT,
     MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_INT,
     MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+)
+from tlm_sim.geo import HOME_CMAC
+from tlm_sim.mission.errors import MissionError
+from tlm_sim.mission.mission import (
     MAX_HOLD_S,
     MAX_SPEED_MPS,
     MIN_SPEED_MPS,
@@ -63,8 +67,6 @@ __all__ = [
 
 WPL_HEADER = "QGC WPL 110"
 
-MAV_FRAME_GLOBAL_INT = 5
-MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
 _ABSOLUTE_FRAMES = (MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_INT)
 _RELATIVE_FRAMES = (MAV_FRAME_GLOBAL_RELATIVE_ALT, MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
 

@@ -13,6 +13,7 @@ fuses the primary. The compasses are in :mod:`tlm_sim.sensors.mag`.
 
 import math
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.boot import BARO_CAL_S
 from tlm_sim.dynamics import layout as X
@@ -21,8 +22,6 @@ from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
 BARO_PERIOD_S = 0.1  # the autopilot's baro reads (10 Hz): the sample interval of DRIFT
-ERR_BARO = 18  # ERR subsystem BARO (AP_Logger LogErrorSubsystem)
-ERR_CODE_UNHEALTHY = 4  # LogErrorCode UNHEALTHY (0: resolved)
 BARO_NOISE_ROWS = (S.RNG_BARO, S.RNG_BARO2)  # noise stream of each instance
 
 
@@ -102,6 +101,6 @@ def baro_read(s, x, cfg, rng, t_us):
     s[S.B_ALT] = s[S.BARO_BASE + prim * S.BARO_STRIDE + S.BA_ALT]
     code = -1
     if ok != s[S.B_PRIMARY_OK]:
-        code = 0 if ok != 0.0 else ERR_CODE_UNHEALTHY
+        code = AP.ERR_CODE_RESOLVED if ok != 0.0 else AP.ERR_CODE_UNHEALTHY
         s[S.B_PRIMARY_OK] = ok
     return (new1 if prim == 1 else new0), code

@@ -16,12 +16,13 @@ import math
 import numpy as np
 
 from tlm_sim._jit import inline_jit, tick_jit
+from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.dynamics import layout as X
 from tlm_sim.frames import MAX_MOTORS
 from tlm_sim.rng import uniform_pm1
 from tlm_sim.sensors import layout as S
 
-CLIP_LIMIT = (16.0 - 0.5) * 9.80665  # m/s^2, a sample beyond this on any axis counts as a clip
+CLIP_LIMIT = (16.0 - 0.5) * GRAVITY_MSS  # m/s^2, a sample beyond this on any axis counts as a clip
 TWO_PI = 2.0 * math.pi
 VIB_AMP_VARIATION = 0.05  # SITL: each vibration amplitude x (1 + 0.05 U)
 VIB_FREQ_VARIATION = 0.12  # SITL: each motor phase step x (1 + 0.12 U), smearing the peaks

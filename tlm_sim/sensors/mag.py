@@ -31,10 +31,6 @@ from tlm_sim.sensors import layout as S
 HEALTH_TIMEOUT_US = 450000.0
 #: SIM_MAGn_FAIL values
 MAG_FAIL_NONE, MAG_FAIL_NO_DATA, MAG_FAIL_FROZEN = 0, 1, 2
-#: ERR subsystem COMPASS and its codes (health of the first compass)
-ERR_COMPASS = 3
-ERR_COMPASS_UNHEALTHY = 4
-ERR_COMPASS_RESOLVED = 0
 
 
 @tick_jit
