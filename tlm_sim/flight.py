@@ -33,6 +33,7 @@ from tlm_sim.control.config import build_control_config
 from tlm_sim.control.dcm import dcm_init, dcm_update
 from tlm_sim.control.dcm_layout import N_DCM
 from tlm_sim.control.events import log_err, log_mode
+from tlm_sim.control.failsafe import N_NAV
 from tlm_sim.control.log import (
     CMD_TAKEOFF,
     log_control_10hz,
@@ -95,6 +96,7 @@ from tlm_sim.sensors.mag import (
     mag_sample,
 )
 from tlm_sim.sensors.rc import rc_init, rc_update
+from tlm_sim.slots import Layout
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
 # SCHED_LOOP_RATE are pinned to them: tlm_sim.params refuses any other value)
@@ -128,6 +130,24 @@ END_LANDED, END_CRASH, END_TIME_CAP = "landed", "crash", "time_cap"
 #: "Arm:" / "PreArm:" texts)
 END_NOT_ARMED = "not_armed"
 END_REASONS: tuple[str, ...] = (END_LANDED, END_CRASH, END_TIME_CAP, END_NOT_ARMED)
+
+#: The rows of run_flight's scratch block (:func:`new_work`): one row per per-tick vector the
+#: main loop hands between its stages, :data:`WORK_COLS` wide (the widest of them).
+WORK = Layout("work", "run_flight's scratch rows (rows of new_work's block)")
+W_IMU_OK = WORK.add("W_IMU_OK", doc="per IMU i: [i] its accel delivered samples this tick, "
+                    "[N_IMU + i] its gyro did (0/1)")
+W_GPS = WORK.add("W_GPS", doc="the GPS epoch of this tick (sensors.layout GE_*)")
+W_PWM = WORK.add("W_PWM", doc="the motors' PWM as the engine fault alters it [us]")
+W_POS = WORK.add("W_POS", doc="the controllers' position NED from home (control.ahrs) [m]")
+W_VEL = WORK.add("W_VEL", doc="the controllers' velocity NED (control.ahrs) [m/s]")
+W_Q = WORK.add("W_Q", doc="the controllers' attitude quaternion body->NED (control.ahrs)")
+W_GYRO = WORK.add("W_GYRO", doc="the controllers' body rates (control.ahrs) [rad/s]")
+W_ACC_NED = WORK.add("W_ACC_NED", doc="the controllers' acceleration NED (control.ahrs) [m/s^2]")
+W_NAV = WORK.add("W_NAV", doc="the EKF status for the failsafe checks (control.failsafe NAV_*)")
+N_WORK_ROWS = WORK.close()
+#: the scratch rows' width: the widest row's (imu_ok, the GPS epoch, the PWM of MAX_MOTORS
+#: outputs, the quaternion, NAV_*)
+WORK_COLS = max(2 * S.N_IMU, S.N_GPS_EPOCH, MAX_MOTORS, 4, N_NAV)
 
 
 
@@ -218,8 +238,9 @@ def run_flight(
     t_end_us.
     """
     dang, dvel, rows, eo = work
-    imu_ok, gps, pwm = rows[0], rows[1], rows[2]
-    pos, vel, q, gyro, acc_ned, nav = rows[3], rows[4], rows[5], rows[6], rows[7], rows[8]
+    imu_ok, gps, pwm = rows[W_IMU_OK], rows[W_GPS], rows[W_PWM]
+    pos, vel, q, gyro = rows[W_POS], rows[W_VEL], rows[W_Q], rows[W_GYRO]
+    acc_ned, nav = rows[W_ACC_NED], rows[W_NAV]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
     _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0], dcm, gsf)
@@ -384,13 +405,12 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
 
 
 def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a (9, >= 9)
-    block whose rows are imu_ok, the GPS epoch (sensors.layout GE_*), motor PWM, and the
-    controllers' inputs of control.ahrs (position, velocity, attitude, gyro, NED acceleration,
-    the EKF status for the failsafe checks, control.failsafe NAV_*); the EKF output block
+    """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a
+    (N_WORK_ROWS, WORK_COLS) block whose rows are :data:`WORK`'s (imu_ok, the GPS epoch,
+    motor PWM, and the controllers' inputs of control.ahrs); the EKF output block
     (ekf.layout O_*)."""
     return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)),
-            np.zeros((9, max(9, S.N_GPS_EPOCH))), np.zeros(EK.N_OUT))
+            np.zeros((N_WORK_ROWS, WORK_COLS)), np.zeros(EK.N_OUT))
 
 
 def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
