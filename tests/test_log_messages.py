@@ -18,7 +18,7 @@ import pytest
 
 from tests.conftest import reference_path
 from tlm_sim import ardupilot as AP
-from tlm_sim.flightlog import SCHEMAS, read_bin, read_schemas
+from tlm_sim.flightlog import LOGGED_MESSAGES, SCHEMAS, read_bin, read_schemas
 from tlm_sim.flightlog.binwriter import message_types, msg_table, write_bin
 from tlm_sim.flightlog.texts import text_kind
 from tlm_sim.geo import latlon_to_ne
@@ -97,6 +97,37 @@ def test_periodic_rates_within_ten_percent_of_sitl(log):
     for name in ("ARM", "ORGN", "MISE"):
         assert len(log.tables[name]) == rates[name]["count"], name
     assert 0.5 * rates["LDET"]["count"] <= len(log.tables["LDET"]) <= 1.5 * rates["LDET"]["count"]
+
+
+def test_each_periodic_message_comes_at_its_schema_rate_the_rate_of_its_task(normal_flight):
+    """A logged message's schema rate_hz is the rate of the task that writes it: one of the
+    main loop's task rates (tlm_sim.ardupilot.TASK_RATES_HZ, whence the loop's divisors) or,
+    for GPS/GPA, the GPS epochs' (SIM_GPS1_HZ); each instance's rows of a flight come one
+    period apart (to a physics tick: the loop runs on the 833 us physics clock)."""
+    from tlm_sim.flight import PHYSICS_DT_US
+
+    task_rates = set(AP.TASK_RATES_HZ.values())
+    for name in LOGGED_MESSAGES:
+        sch = SCHEMAS[name]
+        if sch.rate_hz == 0:
+            continue
+        writer = normal_flight.params["SIM_GPS1_HZ"] if name in ("GPS", "GPA") else (
+            sch.rate_hz if sch.rate_hz in task_rates else None)
+        assert writer == sch.rate_hz, f"{name}: no task at its {sch.rate_hz} Hz"
+        df = normal_flight.tables[name]
+        groups = df.groupby(sch.instance_field) if sch.instance_field else [(0, df)]
+        for inst, rows in groups:
+            period = float(np.median(np.diff(rows["TimeUS"].to_numpy(np.float64))))
+            assert abs(period - 1e6 / sch.rate_hz) <= PHYSICS_DT_US, (name, inst, period)
+
+
+def test_task_periods_are_whole_main_loop_ticks(monkeypatch):
+    from tlm_sim.flight import TEN_HZ_LOG_TICKS, task_ticks
+
+    assert TEN_HZ_LOG_TICKS * AP.TASK_RATES_HZ["ten_hz_logging_loop"] == AP.LOOP_RATE_HZ
+    monkeypatch.setitem(AP.TASK_RATES_HZ, "three_hz_loop", 3)
+    with pytest.raises(ValueError, match="does not divide"):
+        task_ticks("three_hz_loop")
 
 
 # --- values from the simulator ------------------------------------------------------------------

@@ -4,6 +4,8 @@ Every module of ``tlm_sim`` and ``tlm_process`` that writes or reads one of thes
 it from here (``tests/test_ardupilot_vocabulary.py`` greps the sources for stray literals):
 
 * physical constants: :data:`GRAVITY_MSS`, :data:`M_PER_DEG_LAT`;
+* the scheduler: the physics and main-loop rates, the main loop's task rates
+  (:data:`TASK_RATES_HZ`);
 * DataFlash framing: the message header bytes and the FMT message's type id;
 * MAVLink mission vocabulary: ``MAV_CMD_*`` ids and ``MAV_FRAME_*`` frames;
 * ArduCopter flight modes (``MODE.ModeNum``) and mode-change reasons (``MODE.Rsn``,
@@ -27,6 +29,27 @@ from __future__ import annotations
 GRAVITY_MSS: float = 9.80665
 #: metres per degree of latitude (ArduPilot's LOCATION_SCALING_FACTOR x 1e7) [m/deg]
 M_PER_DEG_LAT: float = 111318.84502145034
+
+# ----------------------------------------------------------------------- the scheduler
+#: SITL's physics rate [Hz] (SIM_RATE_HZ: 833 us ticks) and ArduCopter's main-loop rate [Hz]
+#: (SCHED_LOOP_RATE): the only rates tlm runs (tlm_sim.params pins both parameters to them)
+SIM_RATE_HZ = 1200
+LOOP_RATE_HZ = 400
+#: The periodic tasks of tlm's main loop and their rates [Hz] (ArduCopter's scheduler table
+#: names where it has the task). Each runs every ``LOOP_RATE_HZ / rate`` main-loop ticks:
+#: tlm_sim.flight's ``*_TICKS`` / ``*_PERIOD_US`` constants come from here, and each logged
+#: message's schema rate (tlm_sim.flightlog.schema ``rate_hz``) is the rate of the task that
+#: writes it (tests/test_log_messages.py checks both against a flight).
+TASK_RATES_HZ: dict[str, int] = {
+    "gpsglitch_check": 10,  # the GPS glitch ERR check
+    "update_altitude": 10,  # the barometers read
+    "update_batt_compass": 10,  # the compasses read
+    "sim_state_logging": 50,  # SITL's SIM2, at LOG_FILE_RATEMAX
+    "twentyfive_hz_logging": 25,  # IMU, both instances
+    "ten_hz_logging_loop": 10,  # every other periodic message (ATT, RATE, XKF*, CTUN, ...)
+    "ekf_variance_logging": 2,  # XKV1/XKV2 (EKF3 logs them from the 10 Hz logging once its
+    # last are older than tlm_sim.ekf.log.XKV_INTERVAL_S)
+}
 
 # ----------------------------------------------------------------------- DataFlash framing
 #: the two bytes that start every DataFlash message

@@ -82,7 +82,7 @@ from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.frames import FRAMES, MAX_MOTORS, frame_for
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.mission.mission import ITEM_FIELDS
-from tlm_sim.params import PARAM_INFO, Params
+from tlm_sim.params import Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
 from tlm_sim.sensors import layout as S
@@ -100,8 +100,28 @@ from tlm_sim.slots import Layout
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
 # SCHED_LOOP_RATE are pinned to them: tlm_sim.params refuses any other value)
-PHYSICS_DT_US = int(1e6 // PARAM_INFO["SIM_RATE_HZ"].min)  # 833 us at 1200 Hz, as SITL
-LOOP_DT_US = round(1e6 / PARAM_INFO["SCHED_LOOP_RATE"].min)  # 2500 us at 400 Hz
+PHYSICS_DT_US = int(1e6 // AP.SIM_RATE_HZ)  # 833 us at 1200 Hz, as SITL
+LOOP_DT_US = round(1e6 / AP.LOOP_RATE_HZ)  # 2500 us at 400 Hz
+
+
+def task_ticks(task: str) -> int:
+    """Main-loop ticks between two runs of ``task`` (a task of
+    :data:`tlm_sim.ardupilot.TASK_RATES_HZ`); ValueError unless the loop rate is a whole
+    multiple of its rate."""
+    n, rest = divmod(AP.LOOP_RATE_HZ, AP.TASK_RATES_HZ[task])
+    if rest or n < 1:
+        raise ValueError(f"task {task} at {AP.TASK_RATES_HZ[task]} Hz does not divide the "
+                         f"{AP.LOOP_RATE_HZ} Hz main loop")
+    return n
+
+
+# the main loop's schedule (module constants: numba compiles them in)
+GLITCH_CHECK_TICKS = task_ticks("gpsglitch_check")  # 40: 10 Hz
+SIM2_TICKS = task_ticks("sim_state_logging")  # 8: 50 Hz
+IMU_LOG_TICKS = task_ticks("twentyfive_hz_logging")  # 16: 25 Hz
+TEN_HZ_LOG_TICKS = task_ticks("ten_hz_logging_loop")  # 40: 10 Hz
+BARO_PERIOD_US = 1e6 / AP.TASK_RATES_HZ["update_altitude"]  # 100000.0 us: 10 Hz
+MAG_PERIOD_US = 1e6 / AP.TASK_RATES_HZ["update_batt_compass"]  # 100000.0 us: 10 Hz
 GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.UTC)
 BOOT_UTC = _dt.datetime(2025, 10, 24, 12, 0, 0, tzinfo=_dt.UTC)  # simulated boot time (UTC)
 LEAP_SECONDS = 18
@@ -271,7 +291,7 @@ def run_flight(
         if boot_texts_due(c, ekf):
             lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events,
                             ev_counts)
-        if tick % 40 == 0:  # ArduCopter's 10 Hz GPS glitch check
+        if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
@@ -336,13 +356,13 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
         gps_new = True
     baro_new = False
     if t_us >= s[S.B_NEXT_US]:
-        s[S.B_NEXT_US] += 100000.0
+        s[S.B_NEXT_US] += BARO_PERIOD_US
         baro_new, err = baro_read(s, x, scfg, rng, float(t_us))
         if err >= 0:
             log_err(events, ev_counts, t_us, AP.ERR_BARO, err)
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
-        s[S.M_NEXT_US] += 100000.0
+        s[S.M_NEXT_US] += MAG_PERIOD_US
         dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
         if dh != 0:
             log_err(events, ev_counts, t_us, AP.ERR_COMPASS,
@@ -382,14 +402,14 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
     origin_ready = counts[L.K_ORGN] == 0 and c[C.HOME_SET] != 0.0
     if vehicle_events_due(c, origin_ready):
         log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home[0], home[1], home[2])
-    if tick % 8 == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
+    if tick % SIM2_TICKS == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
         log_sim2(bufs, counts, t_us, x)
     if gps_new:
         last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
                               gps_time, last_gps_ms)
-    if tick % 16 == 0:  # IMU at 25 Hz, both instances
+    if tick % IMU_LOG_TICKS == 0:  # IMU at 25 Hz, both instances
         log_imu(bufs, counts, t_us, s, scfg)
-    if tick % 40 == 0:  # 10 Hz messages
+    if tick % TEN_HZ_LOG_TICKS == 0:  # 10 Hz messages
         ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
         log_sensors_10hz(bufs, counts, t_us, s, home[2])
         log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])

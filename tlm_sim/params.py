@@ -43,6 +43,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from tlm_sim import ardupilot as AP
 from tlm_sim.frames import FrameError, frame_for
 from tlm_sim.textfile import TextFileError, read_text
 
@@ -278,7 +279,7 @@ def _flag(names: str | Iterable[str], desc: str, *, modelled: bool = True) -> No
 
 
 # ---- SIM_*: physics, sensors, faults (libraries/SITL/SITL.cpp, §1, §2.1) --------------------
-_add("SIM_RATE_HZ", "Hz", 1200, 1200,
+_add("SIM_RATE_HZ", "Hz", AP.SIM_RATE_HZ, AP.SIM_RATE_HZ,
      "physics rate (§1.9); tlm's physics runs at 1200 Hz only (833 us ticks)", True)
 _add("SIM_SPEEDUP", "", 0, 10000, "SITL wall-clock speed-up (no effect in tlm)", modelled=False)
 _add("SIM_IMU_COUNT", "", 0, 3, "number of simulated IMUs (§2.3)", True, modelled=False)
@@ -550,8 +551,8 @@ _add("FRAME_CLASS", "", 1, 3,
      "frame class: 1 quad, 2 hexa, 3 octa (tlm_sim.frames; sitl-faults.md §6.3)", True)
 _add("FRAME_TYPE", "", 0, 1,
      "frame type: 0 plus, 1 X (octa: plus only; tlm_sim.frames, sitl-faults.md §6.3)", True)
-_add("SCHED_LOOP_RATE", "Hz", 400, 400, "main loop rate (§4.1); tlm runs it at 400 Hz only",
-     True)
+_add("SCHED_LOOP_RATE", "Hz", AP.LOOP_RATE_HZ, AP.LOOP_RATE_HZ,
+     "main loop rate (§4.1); tlm runs it at 400 Hz only", True)
 _add("GPS_HDOP_GOOD", "", 100, 900,
      "HDOP x 100 above which the pre-arm check fails (\"High GPS HDOP\", tlm_sim.control.arming)",
      True)
