@@ -18,6 +18,7 @@ from tlm_sim.control.mixer import lift_max, mix, thrust_to_actuator
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step, set_airborne
 from tlm_sim.dynamics.frame import build_frame, hover_command, pwm_to_command
+from tlm_sim.ekf import layout as EK
 from tlm_sim.params import Params
 from tlm_sim.rng import new_rng
 
@@ -181,15 +182,15 @@ def _vibe_run(thresh, bad_imu, seconds=3.0):
     velocity test ratio of 4, with or without its bad-IMU flag."""
     g = build_control_config(Params({"FS_EKF_THRESH": thresh}))
     c = _armed_state(g)
-    nav = np.zeros(FS.N_NAV)
-    nav[FS.NAV_INNOV_VD] = -3.0  # tlm sign: measurement - prediction
-    nav[FS.NAV_INNOV_HGT] = -5.0
-    nav[FS.NAV_VEL_TR] = 16.0
-    nav[FS.NAV_POS_OK] = 1.0
-    nav[FS.NAV_BAD_IMU] = bad_imu
+    eo = np.zeros(EK.N_OUT)  # the EKF's output block
+    eo[EK.O_INNOV_VD] = -3.0  # tlm sign: measurement - prediction
+    eo[EK.O_INNOV_HGT] = -5.0
+    eo[EK.O_VEL_TR] = 16.0
+    eo[EK.O_F_HORIZ_POS] = 1.0  # an absolute position, not constant-position mode
+    eo[EK.O_BAD_IMU] = bad_imu
     events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     for k in range(int(seconds / 0.1) + 1):
-        FS.failsafe_checks(c, g, k * 100000, nav, events, ev_counts)
+        FS.failsafe_checks(c, g, k * 100000, eo, events, ev_counts)
     return events[L.E_ERR][: ev_counts[L.E_ERR]]
 
 

@@ -171,8 +171,7 @@ def test_ahrs_builds_the_controllers_inputs_from_the_output_block(const_pos):
     ekf_output(ekf, sel, eo)
     s = np.random.default_rng(4).normal(size=S.N_SENSOR_STATE)
     pos, vel, q, gyro, acc = (np.zeros(3), np.zeros(3), np.zeros(4), np.zeros(3), np.zeros(3))
-    nav = np.zeros(FS.N_NAV)
-    ahrs_update(eo, s, pos, vel, q, gyro, acc, nav)
+    ahrs_update(eo, s, pos, vel, q, gyro, acc)
     e = ekf[1]
     ib = S.IMU_BASE + S.IMU_STRIDE  # lane 1 integrates IMU 1
     assert list(pos[:2]) == ([0.0, 0.0] if const_pos else list(e[EK.PN:EK.PN + 2]))
@@ -182,9 +181,9 @@ def test_ahrs_builds_the_controllers_inputs_from_the_output_block(const_pos):
     r = e[EK.R00:EK.R22 + 1].reshape(3, 3)
     f = s[ib + S.I_ACC_F:ib + S.I_ACC_F + 3] - e[EK.BAX:EK.BAX + 3]
     assert acc == pytest.approx(r @ f + np.array([0.0, 0.0, 9.80665]))
-    assert nav[FS.NAV_POS_OK] == (0.0 if const_pos else 1.0)
-    assert nav[FS.NAV_VEL_TR] == e[EK.VEL_TR] and nav[FS.NAV_BAD_IMU] == e[EK.BAD_IMU]
-    assert not math.isnan(nav[FS.NAV_INNOV_HGT])
+    assert FS.ekf_position_ok(eo) == (not const_pos)
+    assert eo[EK.O_VEL_TR] == e[EK.VEL_TR] and eo[EK.O_BAD_IMU] == e[EK.BAD_IMU]
+    assert not math.isnan(eo[EK.O_INNOV_HGT])
 
 
 def test_run_flight_work_rows_hold_a_gps_epoch_and_the_ekf_output():

@@ -33,7 +33,6 @@ from tlm_sim.control.config import build_control_config
 from tlm_sim.control.dcm import dcm_init, dcm_update
 from tlm_sim.control.dcm_layout import N_DCM
 from tlm_sim.control.events import log_err, log_mode
-from tlm_sim.control.failsafe import N_NAV
 from tlm_sim.control.log import (
     CMD_TAKEOFF,
     log_control_10hz,
@@ -163,11 +162,10 @@ W_VEL = WORK.add("W_VEL", doc="the controllers' velocity NED (control.ahrs) [m/s
 W_Q = WORK.add("W_Q", doc="the controllers' attitude quaternion body->NED (control.ahrs)")
 W_GYRO = WORK.add("W_GYRO", doc="the controllers' body rates (control.ahrs) [rad/s]")
 W_ACC_NED = WORK.add("W_ACC_NED", doc="the controllers' acceleration NED (control.ahrs) [m/s^2]")
-W_NAV = WORK.add("W_NAV", doc="the EKF status for the failsafe checks (control.failsafe NAV_*)")
 N_WORK_ROWS = WORK.close()
 #: the scratch rows' width: the widest row's (imu_ok, the GPS epoch, the PWM of MAX_MOTORS
-#: outputs, the quaternion, NAV_*)
-WORK_COLS = max(2 * S.N_IMU, S.N_GPS_EPOCH, MAX_MOTORS, 4, N_NAV)
+#: outputs, the quaternion)
+WORK_COLS = max(2 * S.N_IMU, S.N_GPS_EPOCH, MAX_MOTORS, 4)
 
 
 
@@ -260,7 +258,7 @@ def run_flight(
     dang, dvel, rows, eo = work
     imu_ok, gps, pwm = rows[W_IMU_OK], rows[W_GPS], rows[W_PWM]
     pos, vel, q, gyro = rows[W_POS], rows[W_VEL], rows[W_Q], rows[W_GYRO]
-    acc_ned, nav = rows[W_ACC_NED], rows[W_NAV]
+    acc_ned = rows[W_ACC_NED]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
     _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0], dcm, gsf)
@@ -293,10 +291,10 @@ def run_flight(
                             ev_counts)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
-        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav)
+        ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
         battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
-                     seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], nav, events, ev_counts)
+                     seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], eo, events, ev_counts)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)

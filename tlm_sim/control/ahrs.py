@@ -6,7 +6,6 @@ while that one's gyro or accel is stopped). The controllers read only this.
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.ardupilot import GRAVITY_MSS
-from tlm_sim.control import failsafe as FS
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
 
@@ -28,14 +27,14 @@ def _usable_imu(s, imu, ok_slot):
 
 
 @tick_jit
-def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
+def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned):
     """Fill the controllers' inputs from the EKF output eo and the sensor state s.
 
     pos, vel: position / velocity NED [m, m/s] (position (0, 0) in constant-position mode);
     q: attitude body->NED; gyro: filtered body rates minus the EKF's gyro bias [rad/s];
     acc_ned: kinematic acceleration NED [m/s^2] (filtered accel minus the EKF's bias, rotated
-    by the EKF attitude, gravity removed); nav: the EKF status for the failsafe checks
-    (control.failsafe NAV_*).
+    by the EKF attitude, gravity removed). The failsafe checks read the EKF's status from eo
+    itself (:mod:`tlm_sim.control.failsafe`).
     """
     for k in range(3):
         pos[k] = eo[EK.O_PN + k]
@@ -68,11 +67,3 @@ def ahrs_update(eo, s, pos, vel, q, gyro, acc_ned, nav):
     acc_ned[0] = eo[EK.O_R00] * ax + eo[EK.O_R01] * ay + eo[EK.O_R02] * az
     acc_ned[1] = eo[EK.O_R10] * ax + eo[EK.O_R11] * ay + eo[EK.O_R12] * az
     acc_ned[2] = eo[EK.O_R20] * ax + eo[EK.O_R21] * ay + eo[EK.O_R22] * az + GRAVITY_MSS
-    nav[FS.NAV_INNOV_VD] = eo[EK.O_INNOV_VD]
-    nav[FS.NAV_INNOV_HGT] = eo[EK.O_INNOV_HGT]
-    nav[FS.NAV_VEL_TR] = eo[EK.O_VEL_TR]
-    nav[FS.NAV_POS_TR] = eo[EK.O_POS_TR]
-    nav[FS.NAV_MAG_TR] = eo[EK.O_MAG_TR]
-    nav[FS.NAV_BAD_IMU] = eo[EK.O_BAD_IMU]
-    nav[FS.NAV_POS_OK] = 1.0 if (eo[EK.O_F_HORIZ_POS] != 0.0
-                                 and eo[EK.O_F_CONST_POS] == 0.0) else 0.0

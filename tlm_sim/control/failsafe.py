@@ -35,8 +35,9 @@ failsafe (FS_VIBE_ENABLE):
   lets the mixer take the lost motor out of its limits (tlm_sim.control.mixer); on a quad it
   changes nothing in tlm (ArduPilot's motor-loss compensation needs six or more motors).
 
-``nav`` carries the primary lane's status into these checks (indices ``NAV_*``); innovations
-are tlm's sign (measurement - prediction), converted here.
+The checks read the primary lane's status from the EKF's output block ``eo``
+(``tlm_sim.ekf.layout`` O_*, :func:`tlm_sim.ekf.lanes.ekf_output_nav`); innovations are tlm's
+sign (measurement - prediction), converted here.
 """
 
 import math
@@ -45,17 +46,8 @@ from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
+from tlm_sim.ekf import layout as EK
 from tlm_sim.rotation import quat_to_euler
-
-# nav vector (filled by the flight loop from the primary EKF lane)
-NAV_INNOV_VD = 0  # GPS down-velocity innovation, measurement - prediction [m/s]
-NAV_INNOV_HGT = 1  # height innovation (down), measurement - prediction [m]
-NAV_VEL_TR = 2  # velocity test ratio (innovation^2 / (gate^2 variance))
-NAV_POS_TR = 3  # horizontal position test ratio
-NAV_MAG_TR = 4  # compass test ratio (max axis)
-NAV_POS_OK = 5  # 1 with an absolute horizontal position, not in constant-position mode
-NAV_BAD_IMU = 6  # 1 while the EKF's bad-IMU (vibration affected) response is active
-N_NAV = 7
 
 CHECK_DT_S = 0.1  # ekf_check / vibration check period
 VIBE_TRIGGER_S = 1.0
@@ -97,7 +89,14 @@ def vertical_cf_update(c, g, pd, acc_down, dt):
 
 
 @tick_jit
-def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
+def ekf_position_ok(eo):
+    """True while the primary lane has an absolute horizontal position (not constant-position
+    mode): what ArduCopter's checks ask of the AHRS."""
+    return eo[EK.O_F_HORIZ_POS] != 0.0 and eo[EK.O_F_CONST_POS] == 0.0
+
+
+@tick_jit
+def _vibration_check(c, g, t_s, eo, events, ev_counts, t_us):
     if g[C.G_FS_VIBE_ENABLE] == 0.0:
         if c[C.VIBE_COMP] != 0.0:
             c[C.VIBE_COMP] = 0.0
@@ -105,9 +104,9 @@ def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
         return
     # EKF3 innovations are prediction - measurement: both positive = "sinking and low"; the
     # filtered velocity ratio is only valid while ekf_check filters it (FS_EKF_THRESH > 0)
-    innov = (g[C.G_FS_EKF_THRESH] > 0.0 and -nav[NAV_INNOV_VD] > 0.0
-             and -nav[NAV_INNOV_HGT] > 0.0 and c[C.EKF_VEL_TR_F] > 1.0)
-    failing = innov or nav[NAV_BAD_IMU] != 0.0
+    innov = (g[C.G_FS_EKF_THRESH] > 0.0 and -eo[EK.O_INNOV_VD] > 0.0
+             and -eo[EK.O_INNOV_HGT] > 0.0 and c[C.EKF_VEL_TR_F] > 1.0)
+    failing = innov or eo[EK.O_BAD_IMU] != 0.0
     if failing:
         c[C.VIBE_LAST_FAIL_T] = t_s
         if c[C.VIBE_FAIL_T] < 0.0:
@@ -123,7 +122,7 @@ def _vibration_check(c, g, t_s, nav, events, ev_counts, t_us):
 
 
 @tick_jit
-def _ekf_check(c, g, nav, events, ev_counts, t_us):
+def _ekf_check(c, g, eo, events, ev_counts, t_us):
     """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle.
 
     With FS_EKF_THRESH <= 0 it only clears the failsafe and returns before filtering the test
@@ -137,11 +136,11 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
             E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_RESOLVED)
         return FS_NONE
     a = g[C.G_FS_EKF_ALPHA]
-    c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(nav[NAV_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
-    c[C.EKF_POS_TR_F] += a * (math.sqrt(max(nav[NAV_POS_TR], 0.0)) - c[C.EKF_POS_TR_F])
+    c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(eo[EK.O_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
+    c[C.EKF_POS_TR_F] += a * (math.sqrt(max(eo[EK.O_POS_TR], 0.0)) - c[C.EKF_POS_TR_F])
     vel = c[C.EKF_VEL_TR_F]
     pos = c[C.EKF_POS_TR_F]
-    mag = math.sqrt(max(nav[NAV_MAG_TR], 0.0))
+    mag = math.sqrt(max(eo[EK.O_MAG_TR], 0.0))
     n_over = 0
     if mag >= thresh:
         n_over += 1
@@ -150,7 +149,7 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
     if vel >= 2.0 * thresh:
         n_over += 1
     over = (pos >= thresh and n_over > 0) or n_over >= 2
-    passed = not over and nav[NAV_POS_OK] != 0.0
+    passed = not over and ekf_position_ok(eo)
     if passed:
         c[C.EKF_CHECK_OK_ONCE] = 1.0
         if c[C.EKF_FAIL_COUNT] > 0.0:
@@ -179,18 +178,18 @@ def _ekf_check(c, g, nav, events, ev_counts, t_us):
 
 
 @tick_jit
-def failsafe_checks(c, g, t_us, nav, events, ev_counts):
+def failsafe_checks(c, g, t_us, eo, events, ev_counts):
     """The 10 Hz EKF and vibration checks (armed only, in that order); returns an FS_* action."""
     t_s = t_us * 1e-6
-    c[C.EKF_POS_OK] = nav[NAV_POS_OK]
+    c[C.EKF_POS_OK] = 1.0 if ekf_position_ok(eo) else 0.0
     if t_s < c[C.CHECK_TIMER]:
         return FS_NONE
     c[C.CHECK_TIMER] = t_s + CHECK_DT_S - 1e-7
     if c[C.ARMED] == 0.0:
         c[C.VIBE_FAIL_T] = -1.0
         return FS_NONE
-    fs = _ekf_check(c, g, nav, events, ev_counts, t_us)
-    _vibration_check(c, g, t_s, nav, events, ev_counts, t_us)
+    fs = _ekf_check(c, g, eo, events, ev_counts, t_us)
+    _vibration_check(c, g, t_s, eo, events, ev_counts, t_us)
     return fs
 
 

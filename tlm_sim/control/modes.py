@@ -165,7 +165,7 @@ def _start_land(c, pos, failsafe):
 @tick_jit
 def vehicle_step(
     c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
-    rc_throttle, nav, events, ev_counts,
+    rc_throttle, eo, events, ev_counts,
 ):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
@@ -174,8 +174,8 @@ def vehicle_step(
     [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
     path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
     seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
-    rc_throttle: that frame's throttle channel [us]; nav: the primary EKF lane's status for the
-    failsafe checks (control.failsafe NAV_*); events/ev_counts: the flight's event log buffers
+    rc_throttle: that frame's throttle channel [us]; eo: the EKF's output block (ekf.layout O_*)
+    for the failsafe checks; events/ev_counts: the flight's event log buffers
     and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
     """
     dt = g[C.G_DT]
@@ -189,7 +189,7 @@ def vehicle_step(
     c[C.SUB_TIMER] += dt
     sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
                           rc_throttle, events, ev_counts)
-    sub = _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts)
+    sub = _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts)
     sub = _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts)
     if c[C.ARMED] == 0.0:
         return
@@ -352,10 +352,10 @@ def _disarm(c, g, t_us, method, events, ev_counts):
 
 
 @inline_jit
-def _nav_failsafes(c, g, t_us, sub, pos, nav, events, ev_counts):
+def _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts):
     """The vibration and EKF failsafes (10 Hz): an EKF failsafe in flight -> LAND (or AltHold
     with FS_EKF_ACTION 2) where the mode needs a position. Returns the submode."""
-    fs = failsafe_checks(c, g, t_us, nav, events, ev_counts)
+    fs = failsafe_checks(c, g, t_us, eo, events, ev_counts)
     if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
         return sub
     needs_position = c[C.MODE] == AP.MODE_AUTO or c[C.MODE] == AP.MODE_GUIDED or (
