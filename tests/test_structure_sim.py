@@ -144,6 +144,7 @@ def _lanes(primary: int) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("primary", [0, 1])
 def test_ekf_output_carries_what_the_autopilot_needs(primary):
     ekf, sel = _lanes(primary)
+    ekf[:, EK.LIFE_EVENTS] = 0.0  # (published once: a second call would show none)
     out = np.full(EK.N_OUT, np.nan)
     ekf_output(ekf, sel, out)
     e = ekf[primary]
@@ -159,7 +160,36 @@ def test_ekf_output_carries_what_the_autopilot_needs(primary):
     ekf_output_nav(ekf, sel, nav)
     filled = ~np.isnan(nav)
     assert (nav[filled] == out[filled]).all()
-    assert filled.sum() == EK.N_OUT - 10  # all but the Euler angles, square roots, counters
+    # all but the Euler angles, square roots, counters and the records of absent lanes
+    assert filled.sum() == EK.N_OUT - 10 - (EK.MAX_LANES - 2) * EK.LANE_STRIDE
+
+
+@pytest.mark.parametrize("primary", [0, 1])
+def test_ekf_output_carries_what_the_arming_checks_ask(primary):
+    """The pre-arm checks read the EKF only through its output block: the primary lane's
+    health, alignment, glitch flag and height test ratio, and one status record per lane whose
+    lifecycle events are published once (the lanes forget them, the next call shows none)."""
+    ekf, sel = _lanes(primary)
+    ekf[:, EK.LIFE_EVENTS] = (5.0, 2.0)
+    ekf[:, EK.MAG_IDX] = (2.0, 1.0)
+    out = np.zeros(EK.N_OUT)
+    ekf_output_nav(ekf, sel, out)
+    e = ekf[primary]
+    for o, lane in ((EK.O_HEALTHY, EK.HEALTHY), (EK.O_ALIGNED, EK.ALIGNED),
+                    (EK.O_TILT_DONE, EK.TILT_DONE), (EK.O_YAW_DONE, EK.YAW_DONE),
+                    (EK.O_GPS_GLITCHING, EK.GPS_GLITCHING), (EK.O_HGT_TR, EK.HGT_TR),
+                    (EK.O_ORIGIN_OK, EK.ORIGIN_OK)):
+        assert out[o] == e[lane]
+    assert out[EK.O_N_LANES] == 2
+    for i, events in enumerate((5.0, 2.0)):
+        b = EK.O_LANES + i * EK.LANE_STRIDE
+        assert out[b + EK.LS_HEALTHY] == ekf[i, EK.HEALTHY]
+        assert out[b + EK.LS_ORIGIN_OK] == ekf[i, EK.ORIGIN_OK]
+        assert out[b + EK.LS_IMU] == i and out[b + EK.LS_MAG] == ekf[i, EK.MAG_IDX]
+        assert out[b + EK.LS_EVENTS] == events
+    assert (ekf[:, EK.LIFE_EVENTS] == 0.0).all()
+    ekf_output_nav(ekf, sel, out)
+    assert out[EK.O_LANES + EK.LS_EVENTS] == out[EK.O_LANES + EK.LANE_STRIDE + EK.LS_EVENTS] == 0
 
 
 @pytest.mark.parametrize("const_pos", [0.0, 1.0])

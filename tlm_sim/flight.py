@@ -286,9 +286,8 @@ def run_flight(
         dcm_update(dcm, g, s, dang, dvel, imu_ok, gps, gps_new, int(eo[EK.O_IMU]), armed, t_us)
         _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
                   mag_new, s, armed, events, ev_counts, gsf)
-        if boot_texts_due(c, ekf):
-            lifecycle_texts(c, float(t_us), ekf, sel, s, home[2], baro_new, txt, events,
-                            ev_counts)
+        if boot_texts_due(c, eo):
+            lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, events, ev_counts)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
@@ -296,7 +295,7 @@ def run_flight(
         vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], eo, events, ev_counts)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
-                c, g, float(t_us), s, gps, ekf, sel, q, txt, events, ev_counts):
+                c, g, float(t_us), s, gps, eo, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick

@@ -122,9 +122,9 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_BUFS, _I1, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",
-        (_F1, _F1, _f8, _F1, _F1, _F2, _F1, _F1, _F2, _EVENTS, _I1), 2.8),
+        (_F1, _F1, _f8, _F1, _F1, _F1, _F1, _F2, _EVENTS, _I1), 2.8),
     Job("tlm_sim.control.arming:lifecycle_texts",
-        (_F1, _f8, _F2, _F1, _F1, _f8, _b1, _F2, _EVENTS, _I1), 0.5),
+        (_F1, _f8, _F1, _F1, _f8, _b1, _F2, _EVENTS, _I1), 0.5),
     Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EVENTS, _I1), 0.1),
     Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 1.1),
     # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs

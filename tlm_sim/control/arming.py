@@ -17,12 +17,14 @@ to arm every 2 s until an attempt passes; with the boot phase (``TLM_BOOT_PHASE`
 3.75 s (:mod:`tlm_sim.boot`), without it from ``TLM_ARM_TIME``. It gives up ARM_TIMEOUT_S after
 its first attempt: the flight then ends unarmed (``end_reason`` "not_armed"), never flies.
 
-The checks read the EKF lanes themselves (health, alignment, origin of every lane), as
-EKF3's pre_arm_check iterates its cores; the flight's logic reads the output block only.
+The checks ask the EKF through its output block (``tlm_sim.ekf.layout`` O_*: the primary
+lane's health, alignment, position, glitch flag and test ratios, and one status record per lane
+for EKF3's pre_arm_check, which iterates its cores); nothing here reads a lane.
 
 Text log: every failed attempt, every shown pre-arm report and every EKF lifecycle event
-(:mod:`tlm_sim.ekf.lifecycle`) becomes a row of the flight's text log (TXT_* columns, kept in
-``FlightLog.meta["texts"]``); :mod:`tlm_sim.flightlog.texts` writes ArduCopter's wording.
+(:mod:`tlm_sim.ekf.lifecycle`, published once in the lanes' status records) becomes a row of
+the flight's text log (TXT_* columns, kept in ``FlightLog.meta["texts"]``);
+:mod:`tlm_sim.flightlog.texts` writes ArduCopter's wording.
 """
 
 import math
@@ -122,7 +124,7 @@ def _imus_consistent(g, s):
 
 
 @inline_jit
-def _ins_checks(c, g, t_s, s, e):
+def _ins_checks(c, g, t_s, s, eo):
     """The INS group (first failure) and Copter's EKF attitude check; returns the mask."""
     mask = 0
     if not _enabled(g, AP.CHK_INS):
@@ -142,15 +144,15 @@ def _ins_checks(c, g, t_s, s, e):
         mask |= AP.F_ACC_INCONS
     elif not _consistent(c, C.GYR_PASS_T, gyr_cons, t_s, S.N_IMU):
         mask |= AP.F_GYRO_INCONS
-    if not _attitude_valid(e):
+    if not _attitude_valid(eo):
         mask |= AP.F_EKF_ATTITUDE
     return mask
 
 
 @tick_jit
-def _attitude_valid(e):
-    """EKF3's attitude status: a healthy lane with tilt and yaw aligned."""
-    return e[EK.HEALTHY] != 0.0 and e[EK.TILT_DONE] != 0.0 and e[EK.YAW_DONE] != 0.0
+def _attitude_valid(eo):
+    """EKF3's attitude status: a healthy primary lane with tilt and yaw aligned."""
+    return eo[EK.O_HEALTHY] != 0.0 and eo[EK.O_TILT_DONE] != 0.0 and eo[EK.O_YAW_DONE] != 0.0
 
 
 @inline_jit
@@ -188,7 +190,7 @@ def _compass_checks(g, s, txt, r):
 
 
 @inline_jit
-def _gps_checks(c, g, gps, ekf, e, txt, r):
+def _gps_checks(c, g, gps, eo, txt, r):
     """AP_Arming's GPS group (3-D fix, home, GPS vs AHRS position) for a mode that needs GPS;
     returns the mask (the distance into row r)."""
     if not _enabled(g, AP.CHK_GPS):
@@ -197,8 +199,8 @@ def _gps_checks(c, g, gps, ekf, e, txt, r):
         return AP.F_GPS_FIX
     if c[C.HOME_SET] == 0.0:
         return AP.F_WAIT_HOME
-    if e[EK.F_HORIZ_POS] != 0.0 and gps[S.GE_STATUS] != 0.0:
-        d = math.sqrt((gps[S.GE_PN] - e[EK.PN]) ** 2 + (gps[S.GE_PE] - e[EK.PE]) ** 2)
+    if eo[EK.O_F_HORIZ_POS] != 0.0 and gps[S.GE_STATUS] != 0.0:
+        d = math.sqrt((gps[S.GE_PN] - eo[EK.O_PN]) ** 2 + (gps[S.GE_PE] - eo[EK.O_PE]) ** 2)
         if d > AHRS_GPS_ERROR_M:
             if r >= 0:
                 txt[r, AP.A_GPS_AHRS] = d
@@ -207,35 +209,35 @@ def _gps_checks(c, g, gps, ekf, e, txt, r):
 
 
 @inline_jit
-def _mandatory_gps_checks(c, g, ekf, e, txt, r):
+def _mandatory_gps_checks(c, g, eo, txt, r):
     """Copter's mandatory GPS checks (run with every ARMING_CHECK): the AHRS' check (EKF
     started, every lane healthy), the position estimate, GPS glitching, the EKF variances
     against FS_EKF_THRESH; returns the mask (details into row r)."""
-    if e[EK.ALIGNED] == 0.0:
+    if eo[EK.O_ALIGNED] == 0.0:
         if r >= 0:
             txt[r, AP.A_LANE] = AP.AHRS_NOT_STARTED
         return AP.F_AHRS
-    for i in range(ekf.shape[0]):
-        if ekf[i, EK.HEALTHY] == 0.0:
+    for i in range(int(eo[EK.O_N_LANES])):
+        if eo[EK.O_LANES + i * EK.LANE_STRIDE + EK.LS_HEALTHY] == 0.0:
             if r >= 0:
                 txt[r, AP.A_LANE] = i
             return AP.F_AHRS
-    pos_ok = (e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0
+    pos_ok = (eo[EK.O_F_HORIZ_POS] != 0.0 and eo[EK.O_F_CONST_POS] == 0.0
               and c[C.EKF_FAILSAFE] == 0.0)
     if not pos_ok:
         return AP.F_NEED_POS
-    if e[EK.GPS_GLITCHING] != 0.0:
+    if eo[EK.O_GPS_GLITCHING] != 0.0:
         return AP.F_GPS_GLITCH
     thr = g[C.G_FS_EKF_THRESH]
     if thr > 0.0:
         var = -1
-        if math.sqrt(max(e[EK.MAG_TR], 0.0)) >= thr:
+        if math.sqrt(max(eo[EK.O_MAG_TR], 0.0)) >= thr:
             var = AP.VAR_COMPASS
-        elif math.sqrt(max(e[EK.POS_TR], 0.0)) >= thr:
+        elif math.sqrt(max(eo[EK.O_POS_TR], 0.0)) >= thr:
             var = AP.VAR_POSITION
-        elif math.sqrt(max(e[EK.VEL_TR], 0.0)) >= thr:
+        elif math.sqrt(max(eo[EK.O_VEL_TR], 0.0)) >= thr:
             var = AP.VAR_VELOCITY
-        elif math.sqrt(max(e[EK.HGT_TR], 0.0)) >= thr:
+        elif math.sqrt(max(eo[EK.O_HGT_TR], 0.0)) >= thr:
             var = AP.VAR_HEIGHT
         if var >= 0:
             if r >= 0:
@@ -272,12 +274,11 @@ def _battery_checks(c, g, txt, r):
 
 
 @tick_jit
-def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
+def prearm_checks(c, g, t_s, s, gps, eo, txt, r):
     """ArduCopter's pre-arm checks now; returns the mask of failing checks (F_*), their
     details written into text row r (-1: none). A function of its own, not an inline_jit
     section: numba inlined it, with its five inlined check groups, into both its callers, and
     ``arming_step``'s cold compile took 9.9 s of CPU instead of 2.5 s (same flights)."""
-    e = ekf[int(sel[EK.SEL_PRIMARY])]
     mode = c[C.MODE]
     mask = 0
     if _enabled(g, AP.CHK_RC) and g[C.G_FS_THR_ENABLE] != 0.0:
@@ -285,7 +286,8 @@ def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
             mask |= AP.F_RC_NOT_FOUND
         elif s[S.RC_CH + 2] < g[C.G_FS_THR_VALUE]:
             mask |= AP.F_THR_LOW
-    if mode != AP.MODE_STABILIZE and not (e[EK.HEALTHY] != 0.0 and e[EK.F_VERT_POS] != 0.0):
+    if mode != AP.MODE_STABILIZE and not (eo[EK.O_HEALTHY] != 0.0
+                                          and eo[EK.O_F_VERT_POS] != 0.0):
         mask |= AP.F_NEED_ALT
     if _enabled(g, AP.CHK_BARO):
         healthy = True
@@ -293,17 +295,17 @@ def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
             healthy = healthy and s[S.BARO_BASE + i * S.BARO_STRIDE + S.BA_HEALTHY] != 0.0
         if not healthy:
             mask |= AP.F_BARO
-        elif (e[EK.F_HORIZ_POS] != 0.0 and e[EK.F_CONST_POS] == 0.0
-              and abs(-e[EK.PD] - s[S.B_ALT]) > ALT_DISPARITY_M):
+        elif (eo[EK.O_F_HORIZ_POS] != 0.0 and eo[EK.O_F_CONST_POS] == 0.0
+              and abs(-eo[EK.O_PD] - s[S.B_ALT]) > ALT_DISPARITY_M):
             mask |= AP.F_ALT_DISPARITY
-    mask |= _ins_checks(c, g, t_s, s, e)
+    mask |= _ins_checks(c, g, t_s, s, eo)
     mask |= _compass_checks(g, s, txt, r)
     needs_gps = False
     for m in MODE_NEEDS_GPS:
         needs_gps = needs_gps or mode == m
-    gps_fail = _gps_checks(c, g, gps, ekf, e, txt, r) if needs_gps else 0
+    gps_fail = _gps_checks(c, g, gps, eo, txt, r) if needs_gps else 0
     if gps_fail == 0 and needs_gps:
-        gps_fail = _mandatory_gps_checks(c, g, ekf, e, txt, r)
+        gps_fail = _mandatory_gps_checks(c, g, eo, txt, r)
         if gps_fail == 0 and _enabled(g, AP.CHK_GPS) and gps[S.GE_HDOP] > g[C.G_HDOP_GOOD]:
             gps_fail = AP.F_HDOP
     mask |= gps_fail
@@ -312,10 +314,10 @@ def prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r):
 
 
 @inline_jit
-def arm_checks(c, g, s, q, e):
+def arm_checks(c, g, s, q, eo):
     """The checks of an arm command after the pre-arm checks passed: AHRS health, the
     compass, leaning beyond ANGLE_MAX; returns the mask."""
-    if e[EK.HEALTHY] == 0.0:
+    if eo[EK.O_HEALTHY] == 0.0:
         return AP.F_ARM_AHRS
     if s[S.MAG_BASE + S.M_HEALTHY] == 0.0:
         return AP.F_ARM_COMPASS
@@ -327,7 +329,7 @@ def arm_checks(c, g, s, q, e):
 
 
 @inline_jit
-def _prearm_update(c, g, t_us, s, gps, ekf, sel, txt):
+def _prearm_update(c, g, t_us, s, gps, eo, txt):
     """AP_Arming::update at 1 Hz: the checks, shown every 30 s or 4 s after they start
     failing again; armed, they pass without running (ArduCopter returns at once)."""
     t_s = t_us * 1e-6
@@ -341,7 +343,7 @@ def _prearm_update(c, g, t_us, s, gps, ekf, sel, txt):
         c[C.PREARM_LAST_OK] = 1.0
         return
     r = txt_row(c, txt, t_us, AP.KIND_PREARM, 0) if show else -1
-    mask = prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r)
+    mask = prearm_checks(c, g, t_s, s, gps, eo, txt, r)
     if r >= 0:
         if mask != 0:
             txt[r, AP.TXT_MASK] = mask
@@ -354,13 +356,13 @@ def _prearm_update(c, g, t_us, s, gps, ekf, sel, txt):
 
 
 @inline_jit
-def _attempt(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
+def _attempt(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
     """One arm attempt of the driver: the checks, then arming or an "Arm:" text row."""
     t_s = t_us * 1e-6
     r = txt_row(c, txt, t_us, AP.KIND_ARM, 0)
-    mask = prearm_checks(c, g, t_s, s, gps, ekf, sel, txt, r)
+    mask = prearm_checks(c, g, t_s, s, gps, eo, txt, r)
     if mask == 0:
-        mask = arm_checks(c, g, s, q, ekf[int(sel[EK.SEL_PRIMARY])])
+        mask = arm_checks(c, g, s, q, eo)
     if mask != 0:
         if r >= 0:
             txt[r, AP.TXT_MASK] = mask
@@ -373,12 +375,12 @@ def _attempt(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
 
 
 @tick_jit
-def arming_step(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
+def arming_step(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
     """The driver and the 1 Hz pre-arm checks, once per main-loop tick after the vehicle's
     step. Returns True on the tick an attempt passes: the caller arms the vehicle."""
     t_s = t_us * 1e-6
     if t_s >= c[C.PREARM_NEXT_T]:
-        _prearm_update(c, g, t_us, s, gps, ekf, sel, txt)
+        _prearm_update(c, g, t_us, s, gps, eo, txt)
     if c[C.ARMED] != 0.0 or c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0:
         return False
     switched = c[C.MODE] != AP.MODE_GUIDED and t_s >= g[C.G_DRIVER_T]
@@ -389,61 +391,61 @@ def arming_step(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts):
         if t_s >= g[C.G_ARM_GIVE_UP]:
             c[C.ARM_GAVE_UP] = 1.0
         else:
-            passed = _attempt(c, g, t_us, s, gps, ekf, sel, q, txt, events, ev_counts)
+            passed = _attempt(c, g, t_us, s, gps, eo, q, txt, events, ev_counts)
     if switched and not passed:
         E.log_mode(events, ev_counts, t_us, AP.MODE_GUIDED, AP.RSN_GCS)
     return passed
 
 
 @inline_jit
-def boot_texts_due(c, ekf):
+def boot_texts_due(c, eo):
     """Whether :func:`tlm_sim.control.arming.lifecycle_texts` has work this tick: a lane's
-    lifecycle event, or home / field elevation not yet set (cheap: the loop runs it only then)."""
+    lifecycle event published in the EKF's output block eo, or home / field elevation not yet
+    set (cheap: the loop runs it only then)."""
     if c[C.FIELD_SET] != 1.0 or c[C.HOME_SET] == 0.0:
         return True
-    for i in range(ekf.shape[0]):
-        if ekf[i, EK.LIFE_EVENTS] != 0.0:
+    for i in range(int(eo[EK.O_N_LANES])):
+        if eo[EK.O_LANES + i * EK.LANE_STRIDE + EK.LS_EVENTS] != 0.0:
             return True
     return False
 
 
 @tick_jit
-def _lane_texts(c, t_us, ekf, sel, txt, events, ev_counts):
-    """The lanes' pending lifecycle events as text rows, event by event and lane by lane (the
-    order EKF3's cores print them in one loop)."""
+def _lane_texts(c, t_us, eo, txt, events, ev_counts):
+    """The lifecycle events the lanes published this tick (eo's lane records) as text rows,
+    event by event and lane by lane (the order EKF3's cores print them in one loop)."""
     for k in range(AP.N_EKF_EVT):
         bit = 1 << k
-        for i in range(ekf.shape[0]):
-            e = ekf[i]
-            if int(e[EK.LIFE_EVENTS]) & bit == 0:
+        for i in range(int(eo[EK.O_N_LANES])):
+            b = EK.O_LANES + i * EK.LANE_STRIDE
+            if int(eo[b + EK.LS_EVENTS]) & bit == 0:
                 continue
             r = txt_row(c, txt, t_us, AP.KIND_EKF, bit)
             if r >= 0:  # EKF3 names the lane by its IMU, the compass by its index
-                txt[r, AP.A_LANE] = e[EK.IMU_INDEX]
-                txt[r, AP.A_MAG_FIELD] = e[EK.MAG_IDX]
+                txt[r, AP.A_LANE] = eo[b + EK.LS_IMU]
+                txt[r, AP.A_MAG_FIELD] = eo[b + EK.LS_MAG]
             # Copter watches the primary
-            if bit == AP.EKF_EVT_YAW and i == int(sel[EK.SEL_PRIMARY]):
+            if bit == AP.EKF_EVT_YAW and i == int(eo[EK.O_PRIMARY]):
                 E.log_ev(events, ev_counts, t_us, AP.EV_EKF_YAW_RESET)
             if bit == AP.EKF_EVT_INIT and i == 0:
                 txt_row(c, txt, t_us + 2500.0, AP.KIND_AHRS_ACTIVE, 0)
-    for i in range(ekf.shape[0]):
-        ekf[i, EK.LIFE_EVENTS] = 0.0
 
 
 @tick_jit
-def lifecycle_texts(c, t_us, ekf, sel, s, home_alt, baro_new, txt, events, ev_counts):
+def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, events, ev_counts):
     """Every tick: the lanes' EKF lifecycle events into text rows (EV EKF_YAW_RESET at a yaw
     alignment, "AHRS: EKF3 active" after lane 0 starts); home set when the primary lane has
     its origin (EV SET_HOME); the baro's field elevation (and ground temperature) at its first
     reading after an origin is set ("Field Elevation Set")."""
     origin = False
     pending = 0
-    for i in range(ekf.shape[0]):
-        origin = origin or ekf[i, EK.ORIGIN_OK] != 0.0
-        pending |= int(ekf[i, EK.LIFE_EVENTS])
+    for i in range(int(eo[EK.O_N_LANES])):
+        b = EK.O_LANES + i * EK.LANE_STRIDE
+        origin = origin or eo[b + EK.LS_ORIGIN_OK] != 0.0
+        pending |= int(eo[b + EK.LS_EVENTS])
     if pending != 0:
-        _lane_texts(c, t_us, ekf, sel, txt, events, ev_counts)
-    if c[C.HOME_SET] == 0.0 and ekf[int(sel[EK.SEL_PRIMARY]), EK.ORIGIN_OK] != 0.0:
+        _lane_texts(c, t_us, eo, txt, events, ev_counts)
+    if c[C.HOME_SET] == 0.0 and eo[EK.O_ORIGIN_OK] != 0.0:
         c[C.HOME_SET] = 1.0
         E.log_ev(events, ev_counts, t_us, AP.EV_SET_HOME)
     # AP_Baro sets the field elevation at its next reading after the origin (FIELD_SET 0.5:

@@ -90,18 +90,28 @@ from tlm_sim.ekf.layout import (
     F_USING_GPS,
     F_VERT_POS,
     FAULT,
+    GPS_GLITCHING,
     HEALTHY,
     HGT_TR,
     IMU_INDEX,
     IMU_OK,
     INNOV_HGT,
     INNOV_VD,
+    LANE_STRIDE,
+    LIFE_EVENTS,
+    LS_EVENTS,
+    LS_HEALTHY,
+    LS_IMU,
+    LS_MAG,
+    LS_ORIGIN_OK,
     MAG_HAVE,
+    MAG_IDX,
     MAG_TR,
     MAX_LANES,
     N_EKF,
     N_PREDICT,
     NS,
+    O_ALIGNED,
     O_BAD_IMU,
     O_BAX,
     O_BGX,
@@ -111,10 +121,16 @@ from tlm_sim.ekf.layout import (
     O_F_HORIZ_VEL,
     O_F_USING_GPS,
     O_F_VERT_POS,
+    O_GPS_GLITCHING,
+    O_HEALTHY,
+    O_HGT_TR,
     O_IMU,
     O_INNOV_HGT,
     O_INNOV_VD,
+    O_LANES,
     O_MAG_TR,
+    O_N_LANES,
+    O_ORIGIN_OK,
     O_PITCH,
     O_POS_RESET_COUNT,
     O_POS_TR,
@@ -127,10 +143,13 @@ from tlm_sim.ekf.layout import (
     O_SQRT_MAG,
     O_SQRT_POS,
     O_SQRT_VEL,
+    O_TILT_DONE,
     O_VEL_RESET_COUNT,
     O_VEL_TR,
     O_VN,
     O_YAW,
+    O_YAW_DONE,
+    ORIGIN_OK,
     OUT_EPN,
     OUT_IPN,
     P0,
@@ -169,10 +188,12 @@ from tlm_sim.ekf.layout import (
     T_VEL_PASS,
     TERRAIN,
     TILT_BAD_T,
+    TILT_DONE,
     TILT_RESET_COUNT,
     VEL_RESET_COUNT,
     VEL_TR,
     VN,
+    YAW_DONE,
 )
 from tlm_sim.ekf.lifecycle import (
     EKF3_INIT_ROT_SD,
@@ -627,7 +648,10 @@ def ekf_output_nav(ekf, sel, out):
     """Fill the per-tick part of out[N_OUT] (layout O_*) from the primary lane: what the
     autopilot reads every main-loop tick (control.ahrs): primary index, attitude, velocity,
     position, biases, status flags, the lane's IMU and rotation matrix, innovations, test
-    ratios and bad-IMU flag. :func:`ekf_output` fills the rest."""
+    ratios and bad-IMU flag; what the pre-arm checks ask (health, alignment, GPS glitching,
+    height test ratio, origin) and every lane's status record (O_LANES: health, origin, IMU,
+    compass and the lifecycle events raised since the last call, which the lanes then forget:
+    each event is published once, for the text log). :func:`ekf_output` fills the rest."""
     p = int(sel[SEL_PRIMARY])
     e = ekf[p]
     out[O_PRIMARY] = p
@@ -653,14 +677,31 @@ def ekf_output_nav(ekf, sel, out):
     out[O_POS_TR] = e[POS_TR]
     out[O_MAG_TR] = e[MAG_TR]
     out[O_BAD_IMU] = e[BAD_IMU]
+    out[O_HEALTHY] = e[HEALTHY]
+    out[O_ALIGNED] = e[ALIGNED]
+    out[O_TILT_DONE] = e[TILT_DONE]
+    out[O_YAW_DONE] = e[YAW_DONE]
+    out[O_GPS_GLITCHING] = e[GPS_GLITCHING]
+    out[O_HGT_TR] = e[HGT_TR]
+    out[O_ORIGIN_OK] = e[ORIGIN_OK]
+    out[O_N_LANES] = ekf.shape[0]
+    for i in range(ekf.shape[0]):
+        b = O_LANES + i * LANE_STRIDE
+        out[b + LS_HEALTHY] = ekf[i, HEALTHY]
+        out[b + LS_ORIGIN_OK] = ekf[i, ORIGIN_OK]
+        out[b + LS_IMU] = ekf[i, IMU_INDEX]
+        out[b + LS_MAG] = ekf[i, MAG_IDX]
+        out[b + LS_EVENTS] = ekf[i, LIFE_EVENTS]  # published once: the lane forgets them
+        ekf[i, LIFE_EVENTS] = 0.0
 
 
 @tick_jit
 def ekf_output(ekf, sel, out):
     """Fill all of out[N_OUT] (layout O_*) from the primary lane: :func:`ekf_output_nav`'s
     part, the Euler angles, the square roots of the test ratios (what ekf_check compares with
-    FS_EKF_THRESH) and the counters. The only EKF block the rest of the vehicle reads (the
-    flight fills the per-tick part every tick, all of it before the 10 Hz logging)."""
+    FS_EKF_THRESH), the counters, and zeros in the status records of lanes that do not run.
+    The only EKF block the rest of the vehicle reads (the flight fills the per-tick part every
+    tick, all of it before the 10 Hz logging)."""
     ekf_output_nav(ekf, sel, out)
     e = ekf[int(sel[SEL_PRIMARY])]
     r, pt, y = quat_to_euler(e[QW], e[QX], e[QY], e[QZ])
@@ -674,6 +715,8 @@ def ekf_output(ekf, sel, out):
     out[O_PRIMARY_CHANGES] = sel[SEL_CHANGES]
     out[O_POS_RESET_COUNT] = e[POS_RESET_COUNT]
     out[O_VEL_RESET_COUNT] = e[VEL_RESET_COUNT]
+    for k in range(O_LANES + ekf.shape[0] * LANE_STRIDE, O_LANES + MAX_LANES * LANE_STRIDE):
+        out[k] = 0.0  # the status records of lanes that do not run
 
 
 @tick_jit

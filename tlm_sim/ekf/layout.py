@@ -357,4 +357,26 @@ O_INNOV_HGT = _o.add("O_INNOV_HGT", 1, "m", "height innovation (down), measureme
 O_VEL_TR, O_POS_TR, O_MAG_TR = _o.vector(("O_VEL_TR", "O_POS_TR", "O_MAG_TR"), "",
                                          "test ratios (velocity, horizontal position, compass)")
 O_BAD_IMU = _o.add("O_BAD_IMU", 1, "", "1 while the bad-IMU (vibration) response is active")
+# what the pre-arm checks ask of EKF3 (its pre_arm_check, attitude and variance status)
+O_HEALTHY = _o.add("O_HEALTHY", 1, "", "1 while the primary lane is healthy")
+O_ALIGNED = _o.add("O_ALIGNED", 1, "", "1 once the primary lane has aligned (EKF started)")
+O_TILT_DONE, O_YAW_DONE = _o.vector(("O_TILT_DONE", "O_YAW_DONE"), "",
+                                    "1 once the primary lane's tilt / yaw alignment is complete")
+O_GPS_GLITCHING = _o.add("O_GPS_GLITCHING", 1, "",
+                         "1 while the primary lane rejects GPS position as a glitch")
+O_HGT_TR = _o.add("O_HGT_TR", 1, "", "height test ratio of the primary lane")
+O_ORIGIN_OK = _o.add("O_ORIGIN_OK", 1, "", "1 once the primary lane's origin is set")
+O_N_LANES = _o.add("O_N_LANES", 1, "", "lanes whose status records O_LANES holds")
+
+# one status record per lane: what EKF3 reports of each core (health, origin, texts)
+LANE_STATUS = Layout("lane status", "one EKF lane's published status")
+LS_HEALTHY = LANE_STATUS.add("LS_HEALTHY", 1, "", "1 while the lane is healthy")
+LS_ORIGIN_OK = LANE_STATUS.add("LS_ORIGIN_OK", 1, "", "1 once the lane's origin is set")
+LS_IMU = LANE_STATUS.add("LS_IMU", 1, "", "IMU instance the lane integrates (its name in texts)")
+LS_MAG = LANE_STATUS.add("LS_MAG", 1, "", "compass the lane reads (0-based)")
+LS_EVENTS = LANE_STATUS.add("LS_EVENTS", 1, "",
+                            "lifecycle events (ardupilot.EKF_EVT_* bits) raised since the "
+                            "last publication: each event is published once")
+LANE_STRIDE = LANE_STATUS.close()
+O_LANES = _o.block("O_LANES", LANE_STATUS, MAX_LANES)
 N_OUT = OUTPUT.close()
