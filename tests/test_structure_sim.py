@@ -18,7 +18,7 @@ from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.ekf import layout as EK
 from tlm_sim.ekf.lanes import ekf_output, ekf_output_nav
 from tlm_sim.flight import new_work
-from tlm_sim.flightlog.schema import SCHEMAS
+from tlm_sim.flightlog.schema import LOGGED_MESSAGES, SCHEMAS
 from tlm_sim.sensors import layout as S
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,6 +56,9 @@ def test_column_constants_follow_the_schema():
         assert list(cols) == [SCHEMAS[name].index(c) for c in SCHEMAS[name].columns]
         assert SCHEMAS[name].columns[L.TIME_US] == "TimeUS"
         assert getattr(L, f"K_{name}") == k
+        assert {f"K_{name}", f"{name}_COLS"} <= set(L.__all__), name
+    assert L.LOG_ORDER == LOGGED_MESSAGES  # a new message: its schema entry and its writer
+    assert (L.K_EV, L.K_ERR) == (L.K_MODE + L.E_EV, L.K_MODE + L.E_ERR)
     # PSCN's names address PSCE and PSCD too (control.log writes all three with them)
     assert list(L.PSCN_COLS) == list(L.PSCE_COLS) == list(L.PSCD_COLS)
 

@@ -1,12 +1,13 @@
 """The in-loop log: preallocated float64 buffers, one row appender, column indices by name.
 
-Buffers come as a tuple in ``tlm_sim.flightlog.LOGGED_MESSAGES`` order (the K_* constants below
-index it); columns follow each message's ArduPilot field order (``tlm_sim.flightlog.schema``),
-values in the units pymavlink shows (degrees, metres, m/s, deg/s, cm/s^2 where ArduPilot logs
-them). :func:`new_row` is the only way a row is appended; rows beyond a buffer's capacity are
-dropped (the counts never exceed the buffer size). Each subsystem writes its own messages
-(``sensors.log``, ``ekf.log``, ``control.log``, ``control.events``, ``dynamics.log``), addressing
-columns by name through the ``*_COLS`` constants here, made from the schema at import::
+Buffers come as a tuple in ``tlm_sim.flightlog.LOGGED_MESSAGES`` order (``LOG_ORDER``; the
+``K_NAME`` constants, made from the schema at import, index it); columns follow each
+message's ArduPilot field order (``tlm_sim.flightlog.schema``), values in the units pymavlink
+shows (degrees, metres, m/s, deg/s, cm/s^2 where ArduPilot logs them). :func:`new_row` is
+the only way a row is appended; rows beyond a buffer's capacity are dropped (the counts never
+exceed the buffer size). Each subsystem writes its own messages (``sensors.log``,
+``ekf.log``, ``control.log``, ``control.events``, ``dynamics.log``), addressing columns by
+name through the ``*_COLS`` constants here, made from the schema at import::
 
     r = new_row(bufs, counts, K_GPS, t_us)
     if r >= 0:
@@ -23,28 +24,20 @@ import numpy as np
 
 from tlm_sim._jit import tick_jit
 from tlm_sim.flightlog.flightlog import allocate_buffers
-from tlm_sim.flightlog.schema import SCHEMAS
+from tlm_sim.flightlog.schema import LOGGED_MESSAGES, SCHEMAS
 from tlm_sim.rotation import quat_to_euler
 
-K_GPS, K_GPA, K_IMU, K_RATE, K_VIBE, K_ATT, K_BARO, K_MAG, K_RCIN, K_RCOU = range(10)
-K_MODE, K_EV, K_ERR, K_XKF1, K_XKF4, K_CTUN, K_BAT, K_POS, K_SIM = range(10, 19)
-K_PSCN, K_PSCE, K_PSCD, K_XKFS = 19, 20, 21, 22
-K_XKF2, K_XKF3, K_XKF5, K_XKQ, K_XKV1, K_XKV2 = range(23, 29)
-K_DCM, K_AHR2, K_XKY0, K_XKY1 = 29, 30, 31, 32
-K_ARM, K_ORGN, K_LDET, K_MOTB, K_MISE, K_SIM2 = range(33, 39)
-LOG_ORDER = (
-    "GPS", "GPA", "IMU", "RATE", "VIBE", "ATT", "BARO", "MAG", "RCIN", "RCOU", "MODE", "EV",
-    "ERR", "XKF1", "XKF4", "CTUN", "BAT", "POS", "SIM", "PSCN", "PSCE", "PSCD", "XKFS",
-    "XKF2", "XKF3", "XKF5", "XKQ", "XKV1", "XKV2", "DCM", "AHR2", "XKY0", "XKY1",
-    "ARM", "ORGN", "LDET", "MOTB", "MISE", "SIM2",
-)  # must equal tlm_sim.flightlog.LOGGED_MESSAGES (checked by the tests)
+#: the order of the flight loop's log buffers and of their row counts: the schema's
+#: LOGGED_MESSAGES, so a new message is its schema entry and its writer only
+LOG_ORDER: tuple[str, ...] = LOGGED_MESSAGES
 
 #: The event messages (MODE, EV, ERR: consecutive in LOG_ORDER) as a tuple of their own,
 #: indexed by E_*, with their row counts ``counts[K_MODE:K_ERR + 1]`` (a view): what the
 #: vehicle logic writes into. A short tuple, because numba passes each array of a tuple as
 #: seven arguments to every function that takes it (the whole log is 39 arrays).
 E_MODE, E_EV, E_ERR = 0, 1, 2
-assert (K_EV, K_ERR) == (K_MODE + E_EV, K_MODE + E_ERR)
+_K_EVENTS = LOG_ORDER.index("MODE")
+assert LOG_ORDER[_K_EVENTS:_K_EVENTS + 3] == ("MODE", "EV", "ERR")
 
 RAD2DEG = 180.0 / math.pi
 TIME_US = 0  # every message's first column: TimeUS (checked against the schema by the tests)
@@ -57,23 +50,34 @@ def schema_columns(name: str) -> Any:
     return namedtuple(f"{name}_COLS", cols)(*range(len(cols)))
 
 
-GPS_COLS, GPA_COLS, IMU_COLS, RATE_COLS, VIBE_COLS, ATT_COLS, BARO_COLS, MAG_COLS = (
-    schema_columns(n) for n in LOG_ORDER[:8])
-RCIN_COLS, RCOU_COLS, MODE_COLS, EV_COLS, ERR_COLS, XKF1_COLS, XKF4_COLS, CTUN_COLS = (
-    schema_columns(n) for n in LOG_ORDER[8:16])
-BAT_COLS, POS_COLS, SIM_COLS, PSCN_COLS, PSCE_COLS, PSCD_COLS, XKFS_COLS = (
-    schema_columns(n) for n in LOG_ORDER[16:23])
-XKF2_COLS, XKF3_COLS, XKF5_COLS, XKQ_COLS, XKV1_COLS, XKV2_COLS = (
-    schema_columns(n) for n in LOG_ORDER[23:29])
-DCM_COLS, AHR2_COLS, XKY0_COLS, XKY1_COLS = (schema_columns(n) for n in LOG_ORDER[29:33])
-ARM_COLS, ORGN_COLS, LDET_COLS, MOTB_COLS, MISE_COLS, SIM2_COLS = (
-    schema_columns(n) for n in LOG_ORDER[33:39])
+def _message_constants() -> dict[str, Any]:
+    """For each message of LOG_ORDER: ``K_NAME``, its buffer's index, and ``NAME_COLS``, its
+    column indices by name (:func:`schema_columns`)."""
+    out: dict[str, Any] = {}
+    for k, name in enumerate(LOG_ORDER):
+        out[f"K_{name}"] = k
+        out[f"{name}_COLS"] = schema_columns(name)
+    return out
+
+
+#: ``K_NAME`` (an int) and ``NAME_COLS`` (a NamedTuple of ints) of every logged message, made
+#: from the schema and set as this module's globals (``L.K_GPS``, ``L.GPS_COLS.Lat``), which
+#: numba compiles in as constants like any other module constant
+MESSAGE_CONSTANTS: dict[str, Any] = _message_constants()
+globals().update(MESSAGE_CONSTANTS)
+
+__all__ = [
+    "LOG_ORDER", "MESSAGE_CONSTANTS", "E_MODE", "E_EV", "E_ERR", "RAD2DEG", "TIME_US",
+    "schema_columns", "event_buffers", "new_buffers", "new_row", "euler_deg",
+    *MESSAGE_CONSTANTS,
+]
 
 
 def event_buffers(bufs: tuple[np.ndarray, ...], counts: np.ndarray
                   ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
     """The event buffers (E_* order) of a log-buffer tuple and a view of their row counts."""
-    return (bufs[K_MODE], bufs[K_EV], bufs[K_ERR]), counts[K_MODE:K_ERR + 1]
+    k = _K_EVENTS
+    return (bufs[k + E_MODE], bufs[k + E_EV], bufs[k + E_ERR]), counts[k:k + 3]
 
 
 def new_buffers(duration_s: float) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
