@@ -7,9 +7,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tlm_sim import ardupilot as AP
 from tlm_sim import flight as FL
 from tlm_sim.control import dcm_layout as DL
 from tlm_sim.control import layout as C
+from tlm_sim.dynamics import frame as FR
 from tlm_sim.dynamics import layout as X
 from tlm_sim.ekf import gsf_layout as GL
 from tlm_sim.ekf import layout as L
@@ -26,7 +28,7 @@ LAYOUTS = [
     (L, L.CONFIG, "N_CFG"), (L, L.OUTPUT, "N_OUT"),
     (C, C.RATE, "RATE_STRIDE"), (C, C.STATE, "N_CONTROL_STATE"), (C, C.CONFIG, "N_CONTROL_CFG"),
     (DL, DL.DCM, "N_DCM"), (GL, GL.MODEL, "MODEL_STRIDE"), (GL, GL.GSF, "N_GSF"),
-    (FL, FL.WORK, "N_WORK_ROWS"),
+    (FL, FL.WORK, "N_WORK_ROWS"), (FR, FR.FRAME, "N_FRAME"), (AP, AP.TEXT_ROW, "N_TXT_COLS"),
 ]
 IDS = [f"{m.__name__.split('.')[1]}.{lay.name}" for m, lay, _ in LAYOUTS]
 

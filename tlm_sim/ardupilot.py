@@ -24,6 +24,8 @@ numbers are facts of ArduPilot's public interfaces (log messages, MAVLink), rest
 
 from __future__ import annotations
 
+from tlm_sim.slots import Layout
+
 # ----------------------------------------------------------------------- physical constants
 #: standard gravity [m/s²] (AP_Math GRAVITY_MSS)
 GRAVITY_MSS: float = 9.80665
@@ -214,10 +216,24 @@ MAG_FIELD_MIN = 185.0
 MAG_FIELD_MAX = 875.0
 
 # ----------------------------------------------------------------------- tlm's text log
-# a row: (TimeUS, kind, mask, then aux values); FlightLog.meta["texts"]
-TXT_TIME, TXT_KIND, TXT_MASK = 0, 1, 2
-A_GPS_AHRS, A_MAG_FIELD, A_LANE, A_VARIANCE, A_BATTERY = 3, 4, 5, 6, 7
-N_TXT_COLS = 8
+#: a row's columns: (TimeUS, kind, mask, then the aux values A_*, the row's tail);
+#: FlightLog.meta["texts"]
+TEXT_ROW = Layout("txt", "a row of tlm's text log (the flight loop's txt array)")
+TXT_TIME = TEXT_ROW.add("TXT_TIME", 1, "us", "time of the text")
+TXT_KIND = TEXT_ROW.add("TXT_KIND", 1, "", "what the row reports (KIND_*)")
+TXT_MASK = TEXT_ROW.add("TXT_MASK", 1, "", "the failing checks (F_* bits), or a KIND_EKF "
+                        "row's EKF_EVT_* bit")
+A_GPS_AHRS = TEXT_ROW.add("A_GPS_AHRS", 1, "m", "aux: distance of GPS and AHRS (F_GPS_AHRS)")
+A_MAG_FIELD = TEXT_ROW.add("A_MAG_FIELD", 1, "mGauss", "aux: the compass field strength "
+                           "(F_MAG_FIELD); a KIND_EKF row's compass, KIND_FIELD_ELEV's "
+                           "elevation [m]")
+A_LANE = TEXT_ROW.add("A_LANE", 1, "", "aux: the unhealthy EKF lane (F_AHRS, or "
+                      "AHRS_NOT_STARTED); a KIND_EKF row's IMU")
+A_VARIANCE = TEXT_ROW.add("A_VARIANCE", 1, "", "aux: which EKF variance (F_EKF_VARIANCE, "
+                          "VAR_*)")
+A_BATTERY = TEXT_ROW.add("A_BATTERY", 1, "", "aux: the battery failsafe level (F_BATTERY, "
+                         "BATT_*)")
+N_TXT_COLS = TEXT_ROW.close()
 TXT_ROWS = 512
 KIND_ARM = 0  # a failed arm attempt: "Arm: ..." per failing check
 KIND_PREARM = 1  # the periodic report: "PreArm: ..."

@@ -25,9 +25,10 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:  # numpy only for describe(), so the plain-constant modules
+    import numpy as np  # (tlm_sim.ardupilot) can declare layouts without importing it
 
 __all__ = ["Layout", "Slot"]
 
@@ -133,6 +134,8 @@ class Layout:
     def describe(self, array: np.ndarray) -> dict[str, Any]:
         """A named view of ``array`` (one row of this layout): name -> float for a one-wide
         slot, name -> array view for a wider one, name -> list of record views for a block."""
+        import numpy as np
+
         a = np.asarray(array)
         if a.shape != (self._size,):
             raise ValueError(f"{self.name} describes arrays of shape ({self._size},), got "

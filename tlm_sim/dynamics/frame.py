@@ -37,62 +37,79 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
 from tlm_sim.frames import MAX_MOTORS, FrameLayout, frame_for
 from tlm_sim.params import Params, require_params
+from tlm_sim.slots import Layout
 
+#: the frame configuration array (:func:`build_frame`), declared once
+FRAME = Layout("frame", "airframe, motor, environment and battery configuration of the physics")
+_f = FRAME
 # ---- model values (SIM_Frame.h struct Model) --------------------------------------------
-F_MASS = 0  # vehicle mass [kg]
-F_DIAG = 1  # diagonal_size, used as the motor arm length [m]
-F_HOVER_THR = 2  # hoverThrOut, hover thrust fraction
-F_EXPO = 3  # propExpo, thrust curve expo
-F_PWM_MIN, F_PWM_MAX = 4, 5  # reference MOT_PWM_MIN/MAX [us]
-F_SPIN_MIN, F_SPIN_MAX = 6, 7  # reference MOT_SPIN_MIN/MAX
-F_SLEW_MAX = 8  # max motor command rate [1/s] (0 = no limit)
-F_DISC_AREA = 9  # total rotor disc area [m^2]
-F_MAX_VOLT = 10  # full-pack voltage, voltage_scale = V / this [V]
-F_FRAME_HEIGHT = 11  # height of the CG above the ground when resting [m]
-F_PROFILE = 12  # 0 = current SITL models, 1 = paper era (yaw torque, frame momentum drag)
-F_GYRO = 13  # 1 = include the gyroscopic term -w x (I w) (SITL omits it), 0 = SITL-exact
+F_MASS = _f.add("F_MASS", 1, "kg", "vehicle mass")
+F_DIAG = _f.add("F_DIAG", 1, "m", "diagonal_size, used as the motor arm length")
+F_HOVER_THR = _f.add("F_HOVER_THR", 1, "", "hoverThrOut, hover thrust fraction")
+F_EXPO = _f.add("F_EXPO", 1, "", "propExpo, thrust curve expo")
+F_PWM_MIN, F_PWM_MAX = _f.vector(("F_PWM_MIN", "F_PWM_MAX"), "us",
+                                 "reference MOT_PWM_MIN / MOT_PWM_MAX")
+F_SPIN_MIN, F_SPIN_MAX = _f.vector(("F_SPIN_MIN", "F_SPIN_MAX"), "",
+                                   "reference MOT_SPIN_MIN / MOT_SPIN_MAX")
+F_SLEW_MAX = _f.add("F_SLEW_MAX", 1, "1/s", "max motor command rate (0 = no limit)")
+F_DISC_AREA = _f.add("F_DISC_AREA", 1, "m^2", "total rotor disc area")
+F_MAX_VOLT = _f.add("F_MAX_VOLT", 1, "V", "full-pack voltage, voltage_scale = V / this")
+F_FRAME_HEIGHT = _f.add("F_FRAME_HEIGHT", 1, "m",
+                        "height of the CG above the ground when resting")
+F_PROFILE = _f.add("F_PROFILE", 1, "",
+                   "0 = current SITL models, 1 = paper era (yaw torque, frame momentum drag)")
+F_GYRO = _f.add("F_GYRO", 1, "", "1 = include the gyroscopic term -w x (I w) (SITL omits it), "
+                "0 = SITL-exact")
 # ---- derived at start-up (Frame::init) --------------------------------------------------
-F_RHO_REF = 14  # air density at refAlt [kg/m^3]
-F_D_REF = 15  # drag at the reference test [N]
-F_D_MOM = 16  # momentum drag at the reference test [N]
-F_AREA_CD = 17  # body drag area x Cd [m^2]
-F_MDRAG_COEF = 18  # momentum drag coefficient (possibly scaled down)
-F_HOVER_POWER = 19  # P_h = refCurrent * refVoltage [W]
-F_HOVER_VOUT = 20  # hover outflow speed v_h [m/s]
-F_AREA_EFF = 21  # effective prop area per motor A_e [m^2]
-F_AREA_TRUE = 22  # true prop area per motor A_p [m^2]
-F_VEL_MAX = 23  # max outflow speed v_max [m/s]
-F_POWER_FACTOR = 24  # power per newton of thrust k_P [W/N]
-F_IXX, F_IYY, F_IZZ = 25, 26, 27  # principal moments of inertia [kg m^2]
-F_ROT_DAMP = 28  # rotational air damping rate c_w [1/s]
-F_PWM_LO, F_PWM_HI = 29, 30  # PWM of command 0 and command 1 [us]
-F_HOVER_CMD = 31  # motor command a_h that gives hover thrust at rho_ref and full voltage
+F_RHO_REF = _f.add("F_RHO_REF", 1, "kg/m^3", "air density at refAlt")
+F_D_REF = _f.add("F_D_REF", 1, "N", "drag at the reference test")
+F_D_MOM = _f.add("F_D_MOM", 1, "N", "momentum drag at the reference test")
+F_AREA_CD = _f.add("F_AREA_CD", 1, "m^2", "body drag area x Cd")
+F_MDRAG_COEF = _f.add("F_MDRAG_COEF", 1, "", "momentum drag coefficient (possibly scaled down)")
+F_HOVER_POWER = _f.add("F_HOVER_POWER", 1, "W", "P_h = refCurrent * refVoltage")
+F_HOVER_VOUT = _f.add("F_HOVER_VOUT", 1, "m/s", "hover outflow speed v_h")
+F_AREA_EFF = _f.add("F_AREA_EFF", 1, "m^2", "effective prop area per motor A_e")
+F_AREA_TRUE = _f.add("F_AREA_TRUE", 1, "m^2", "true prop area per motor A_p")
+F_VEL_MAX = _f.add("F_VEL_MAX", 1, "m/s", "max outflow speed v_max")
+F_POWER_FACTOR = _f.add("F_POWER_FACTOR", 1, "W/N", "power per newton of thrust k_P")
+F_IXX, F_IYY, F_IZZ = _f.vector(("F_IXX", "F_IYY", "F_IZZ"), "kg m^2",
+                                "principal moments of inertia")
+F_ROT_DAMP = _f.add("F_ROT_DAMP", 1, "1/s", "rotational air damping rate c_w")
+F_PWM_LO, F_PWM_HI = _f.vector(("F_PWM_LO", "F_PWM_HI"), "us",
+                               "PWM of command 0 and command 1")
+F_HOVER_CMD = _f.add("F_HOVER_CMD", 1, "", "motor command a_h that gives hover thrust at "
+                     "rho_ref and full voltage")
 # ---- environment and battery (SIM_*); live entries may change in flight ------------------
-F_HOME_ALT = 32  # SIM_OPOS_ALT, home ground altitude [m AMSL]
-F_BATT_VOLT = 33  # SIM_BATT_VOLTAGE [V] (live: a change re-initialises the battery)
-F_BATT_CAP_AH = 34  # battery capacity [Ah], 0 = infinite
-F_BATT_RES = 35  # battery internal resistance [ohm]
-F_WIND_SPD = 36  # SIM_WIND_SPD [m/s] (live)
-F_WIND_DIR = 37  # SIM_WIND_DIR, direction the wind comes FROM [deg true] (live)
-F_WIND_TURB = 38  # SIM_WIND_TURB [m/s] (live)
-F_WIND_TC = 39  # SIM_WIND_TC [s] (live)
-F_WIND_DIR_Z = 40  # SIM_WIND_DIR_Z, vertical wind angle [deg], 90 = updraft (live)
-F_WIND_T = 41  # SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)
-F_WIND_T_ALT = 42  # SIM_WIND_T_ALT [m] (live)
-F_WIND_T_COEF = 43  # SIM_WIND_T_COEF [1/s] (live)
-F_REF_ALT = 44  # refAlt [m AMSL]
+F_HOME_ALT = _f.add("F_HOME_ALT", 1, "m", "SIM_OPOS_ALT, home ground altitude AMSL")
+F_BATT_VOLT = _f.add("F_BATT_VOLT", 1, "V",
+                     "SIM_BATT_VOLTAGE (live: a change re-initialises the battery)")
+F_BATT_CAP_AH = _f.add("F_BATT_CAP_AH", 1, "Ah", "battery capacity, 0 = infinite")
+F_BATT_RES = _f.add("F_BATT_RES", 1, "ohm", "battery internal resistance")
+F_WIND_SPD = _f.add("F_WIND_SPD", 1, "m/s", "SIM_WIND_SPD (live)")
+F_WIND_DIR = _f.add("F_WIND_DIR", 1, "deg",
+                    "SIM_WIND_DIR, direction the wind comes FROM, true (live)")
+F_WIND_TURB = _f.add("F_WIND_TURB", 1, "m/s", "SIM_WIND_TURB (live)")
+F_WIND_TC = _f.add("F_WIND_TC", 1, "s", "SIM_WIND_TC (live)")
+F_WIND_DIR_Z = _f.add("F_WIND_DIR_Z", 1, "deg",
+                      "SIM_WIND_DIR_Z, vertical wind angle, 90 = updraft (live)")
+F_WIND_T = _f.add("F_WIND_T", 1, "", "SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)")
+F_WIND_T_ALT = _f.add("F_WIND_T_ALT", 1, "m", "SIM_WIND_T_ALT (live)")
+F_WIND_T_COEF = _f.add("F_WIND_T_COEF", 1, "1/s", "SIM_WIND_T_COEF (live)")
+F_REF_ALT = _f.add("F_REF_ALT", 1, "m", "refAlt AMSL")
 # ---- airframe disturbances (SIM_SHOVE_*, SIM_TWIST_*, sitl-faults.md §6.2; live) ----------
-F_SHOVE = 45  # 3 entries: SIM_SHOVE_X/Y/Z, extra body specific force [m/s^2]
-F_SHOVE_TIME = 48  # SIM_SHOVE_TIME [ms]; the physics sets it back to 0 once elapsed
-F_TWIST = 49  # 3 entries: SIM_TWIST_X/Y/Z, extra body angular acceleration [rad/s^2]
-F_TWIST_TIME = 52  # SIM_TWIST_TIME [ms]; the physics sets it back to 0 once elapsed
+F_SHOVE = _f.add("F_SHOVE", 3, "m/s^2", "SIM_SHOVE_X/Y/Z, extra body specific force")
+F_SHOVE_TIME = _f.add("F_SHOVE_TIME", 1, "ms",
+                      "SIM_SHOVE_TIME; the physics sets it back to 0 once elapsed")
+F_TWIST = _f.add("F_TWIST", 3, "rad/s^2", "SIM_TWIST_X/Y/Z, extra body angular acceleration")
+F_TWIST_TIME = _f.add("F_TWIST_TIME", 1, "ms",
+                      "SIM_TWIST_TIME; the physics sets it back to 0 once elapsed")
 # ---- motor table (tlm_sim.frames; positions in metres, body FRD) --------------------------
-F_N_MOTORS = 53  # number of motors n (FRAME_CLASS / FRAME_TYPE)
-F_MOT_X = 54  # MAX_MOTORS entries: arm x [m] (0 beyond n)
-F_MOT_Y = F_MOT_X + MAX_MOTORS  # MAX_MOTORS entries: arm y [m]
-F_MOT_YAW = F_MOT_Y + MAX_MOTORS  # MAX_MOTORS entries: yaw factor (+1 CCW, -1 CW)
+F_N_MOTORS = _f.add("F_N_MOTORS", 1, "", "number of motors n (FRAME_CLASS / FRAME_TYPE)")
+F_MOT_X = _f.add("F_MOT_X", MAX_MOTORS, "m", "per output: arm x (0 beyond n)")
+F_MOT_Y = _f.add("F_MOT_Y", MAX_MOTORS, "m", "per output: arm y (0 beyond n)")
+F_MOT_YAW = _f.add("F_MOT_YAW", MAX_MOTORS, "", "per output: yaw factor (+1 CCW, -1 CW)")
 
-N_FRAME = F_MOT_YAW + MAX_MOTORS
+N_FRAME = FRAME.close()
 
 def _hover_command(hover_thr: float, expo: float) -> float:
     """Command ``a`` in [0, 1] solving ``(1 - e) a + e a^2 = hover_thr``."""
