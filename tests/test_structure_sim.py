@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.test_structure_process import _modules, find_cycle, import_graph
 from tlm_sim import logger as L
 from tlm_sim.control import failsafe as FS
 from tlm_sim.control.ahrs import ahrs_update
@@ -118,19 +119,119 @@ def test_new_row_appends_until_the_buffer_is_full():
 # ----------------------------------------------------------------------------- output blocks
 
 
-def _ekf_layout_names(path: Path) -> set[str]:
-    """Names read from the EKF layout module (imported as EK) in a source file."""
+#: the subsystems, lowest first: a module may import its own package, a lower subsystem and
+#: the foundation (every other tlm_sim module but the flight loop's), never a higher one
+SUBSYSTEMS = ("dynamics", "sensors", "ekf", "control")
+#: the loop that wires the subsystems together, and what compiles it: above all of them
+WIRING = ("tlm_sim", "tlm_sim.flight", "tlm_sim.precompile")
+
+
+def _rank(module: str) -> int:
+    """0 for the foundation, 1.. for the subsystems in order, above them the wiring."""
+    if module in WIRING:
+        return len(SUBSYSTEMS) + 1
+    part = module.split(".")[1]
+    return SUBSYSTEMS.index(part) + 1 if part in SUBSYSTEMS else 0
+
+
+def test_tlm_sim_has_no_import_cycle():
+    graph = import_graph(package="tlm_sim")
+    assert len(graph) > 80
+    cycle = find_cycle(graph)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_no_upward_arrow_in_tlm_sim():
+    """Truth -> sensors -> EKF -> autopilot, one way (ARCHITECTURE.md's layers): no module
+    imports a higher subsystem or the flight loop, and the foundation imports no subsystem."""
+    graph = import_graph(package="tlm_sim")
+    up = sorted(f"{m} -> {d}" for m, deps in graph.items() for d in deps
+                if _rank(d) > _rank(m))
+    assert not up, "upward imports: " + ", ".join(up)
+    assert _rank("tlm_sim.ekf.lanes") > _rank("tlm_sim.sensors.imu") > _rank("tlm_sim.geo")
+
+
+def _layout_modules() -> dict[str, Path]:
+    """Every subsystem module that declares a Layout (the state and configuration arrays)."""
+    mods = _modules(ROOT, "tlm_sim")
+    return {m: p for m, p in mods.items() if _package(m) in SUBSYSTEMS
+            and "= Layout(" in p.read_text(encoding="utf-8")}
+
+
+def _layout_reads(path: Path, module: str, layouts: set[str]) -> dict[str, set[str]]:
+    """Layout module -> the names a source file reads of it: ``from L import NAME``, and
+    ``A.NAME`` where A is L imported as a module (``from pkg import layout as S``)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    return {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
-            and isinstance(n.value, ast.Name) and n.value.id == "EK"}
+    alias: dict[str, str] = {}
+    reads: dict[str, set[str]] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module:
+            for a in node.names:
+                if f"{node.module}.{a.name}" in layouts:
+                    alias[a.asname or a.name] = f"{node.module}.{a.name}"
+                elif node.module in layouts:
+                    reads.setdefault(node.module, set()).add(a.name)
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name in layouts and a.asname:
+                    alias[a.asname] = a.name
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                and node.value.id in alias):
+            reads.setdefault(alias[node.value.id], set()).add(node.attr)
+    reads.pop(module, None)
+    return reads
 
 
-@pytest.mark.parametrize("rel", ["tlm_sim/flight.py", "tlm_sim/control/ahrs.py",
-                                 "tlm_sim/control/log.py"])
-def test_the_vehicle_reads_the_ekf_through_its_output_block(rel):
-    names = _ekf_layout_names(ROOT / rel)
-    inside = sorted(n for n in names if not n.startswith("O_") and n != "N_OUT")
-    assert not inside, f"{rel} reads EKF lane internals: {inside}"
+def _package(module: str) -> str:
+    return module.split(".")[1] if module.count(".") else module
+
+
+def test_subsystems_read_each_other_only_through_published_blocks():
+    """Every module of dynamics/, sensors/, ekf/ and control/ reads another package's layout
+    only through the names that layout publishes (its ``PUBLISHED``: the EKF's output block,
+    the sensors' output block, the truth the sensors sense); the lanes, filter states,
+    configurations and noise streams stay their owner's."""
+    import importlib
+
+    layouts = _layout_modules()
+    assert {"tlm_sim.ekf.layout", "tlm_sim.sensors.layout", "tlm_sim.dynamics.layout",
+            "tlm_sim.control.layout"} <= set(layouts)
+    bad, checked = [], 0
+    for module, path in _modules(ROOT, "tlm_sim").items():
+        if _package(module) not in SUBSYSTEMS:
+            continue
+        checked += 1
+        for layout, names in _layout_reads(path, module, set(layouts)).items():
+            if _package(layout) == _package(module):
+                continue
+            published = getattr(importlib.import_module(layout), "PUBLISHED", frozenset())
+            inside = sorted(names - published)
+            if inside:
+                bad.append(f"{module} reads {layout}'s {inside}")
+    assert checked > 40  # every module of the four packages
+    assert not bad, "reads of another subsystem's internals: " + "; ".join(bad)
+
+
+@pytest.mark.parametrize("name", ["tlm_sim.ekf.layout", "tlm_sim.sensors.layout",
+                                  "tlm_sim.dynamics.layout"])
+def test_published_names_exist(name):
+    import importlib
+
+    mod = importlib.import_module(name)
+    assert mod.PUBLISHED and all(isinstance(getattr(mod, n), int) for n in mod.PUBLISHED)
+
+
+def test_the_published_rule_sees_a_read_of_internals(tmp_path):
+    """The check above on a made-up module: a lane slot read through an alias and a from-import
+    of a configuration slot are both found."""
+    src = tmp_path / "m.py"
+    src.write_text("from tlm_sim.ekf import layout as EK\n"
+                   "from tlm_sim.sensors.layout import C_GPS_LAG_S, GE_PN\n"
+                   "def f(e, eo):\n    return e[EK.HEALTHY] + eo[EK.O_PN]\n")
+    reads = _layout_reads(src, "tlm_sim.control.m", set(_layout_modules()))
+    assert reads["tlm_sim.ekf.layout"] == {"HEALTHY", "O_PN"}
+    assert reads["tlm_sim.sensors.layout"] == {"C_GPS_LAG_S", "GE_PN"}
 
 
 def _lanes(primary: int) -> tuple[np.ndarray, np.ndarray]:

@@ -94,6 +94,7 @@ from tlm_sim.sensors.mag import (
     mag_init,
     mag_sample,
 )
+from tlm_sim.sensors.power import power_module_read
 from tlm_sim.sensors.rc import rc_init, rc_update
 from tlm_sim.slots import Layout
 
@@ -291,8 +292,8 @@ def run_flight(
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
-        battery_monitor(c, g, t_us, x[X.BATT_V], x[X.BATT_I], events, ev_counts)
-        vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, x[X.BATT_V], path, path.shape[0],
+        battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], events, ev_counts)
+        vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, s[S.PM_VOLT], path, path.shape[0],
                      seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], eo, events, ev_counts)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), s, gps, eo, q, txt, events, ev_counts):
@@ -342,7 +343,9 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
     """The main loop's sensor reads at t_us: IMU deltas (imu_ok[i]: IMU i's accel delivered
     samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch into gps when one is due, baro and
     compass at 10 Hz (ERR 18 when the primary baro's health changes, ERR 3 when the first
-    compass's does), the RC receiver. Returns (GPS, primary baro, compass tick) new this tick."""
+    compass's does), the RC receiver, the power module. Returns (GPS, primary baro, compass
+    tick) new this tick."""
+    power_module_read(s, x)
     for i in range(S.N_IMU):
         imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
         imu_ok[S.N_IMU + i] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_GYR_OK]

@@ -35,6 +35,7 @@ from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
+from tlm_sim.sensors.baro import baro_set_field_elevation
 
 ARM_RETRY_S = 2.0  # the driver's arm attempts: every 2 s (every reference log)
 #: the driver gives up this long after its first attempt [s]: three times the 38 s the
@@ -452,8 +453,7 @@ def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, events, ev_counts):
     # an origin seen, the reading pending)
     if c[C.FIELD_SET] == 0.5 and baro_new:
         c[C.FIELD_SET] = 1.0
-        s[S.B_FIELD_ELEV] = home_alt
-        s[S.B_GND_TEMP] = s[S.BARO_BASE + int(s[S.B_PRIMARY]) * S.BARO_STRIDE + S.BA_TEMP]
+        baro_set_field_elevation(s, home_alt)
         r = txt_row(c, txt, t_us, AP.KIND_FIELD_ELEV, 0)
         if r >= 0:
             txt[r, AP.A_MAG_FIELD] = home_alt

@@ -94,3 +94,11 @@ WIND_STILL_KEY = _x.add("WIND_STILL_KEY", 7, "",
                         "WIND_DIRZ_F when WIND_STILL_DT was found")
 
 N_STATE = STATE.close()
+
+#: What the sensors may sense of the truth state: the sensor shadow (SITL's smoothed position,
+#: velocity, specific force and body rate), the height and attitude, the battery's terminal
+#: voltage and current. Nothing above the sensors reads the truth (tests/test_structure_sim.py).
+PUBLISHED: frozenset[str] = frozenset({
+    "PD", "QW", "QX", "QY", "QZ", "SPN", "SPE", "SPD", "SVN", "SVE", "SVD", "SFX", "SFY", "SFZ",
+    "SWX", "SWY", "SWZ", "BATT_V", "BATT_I",
+})

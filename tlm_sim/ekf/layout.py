@@ -380,3 +380,11 @@ LS_EVENTS = LANE_STATUS.add("LS_EVENTS", 1, "",
 LANE_STRIDE = LANE_STATUS.close()
 O_LANES = _o.block("O_LANES", LANE_STATUS, MAX_LANES)
 N_OUT = OUTPUT.close()
+
+#: The EKF's output block: all the rest of the vehicle may read of the EKF (the O_* slots and
+#: the lanes' status records); the lanes, the selector and the configuration are its own
+#: (tests/test_structure_sim.py).
+PUBLISHED: frozenset[str] = frozenset({
+    "N_OUT", "MAX_LANES", "LANE_STRIDE", *(slot.name for slot in OUTPUT),
+    *(slot.name for slot in LANE_STATUS),
+})

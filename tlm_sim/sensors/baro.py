@@ -104,3 +104,11 @@ def baro_read(s, x, cfg, rng, t_us):
         code = AP.ERR_CODE_RESOLVED if ok != 0.0 else AP.ERR_CODE_UNHEALTHY
         s[S.B_PRIMARY_OK] = ok
     return (new1 if prim == 1 else new0), code
+
+
+@tick_jit
+def baro_set_field_elevation(s, alt):
+    """AP_Baro's field elevation [m AMSL], set at its first reading after the EKF's origin is
+    set (BARO.AltAMSL), and its ground temperature from the primary barometer's (BARO.GndTemp)."""
+    s[S.B_FIELD_ELEV] = alt
+    s[S.B_GND_TEMP] = s[S.BARO_BASE + int(s[S.B_PRIMARY]) * S.BARO_STRIDE + S.BA_TEMP]

@@ -133,7 +133,22 @@ B_GND_TEMP = _s.add("B_GND_TEMP", 1, "degC",
 B_FIELD_ELEV = _s.add("B_FIELD_ELEV", 1, "m",
                       "field elevation once set from the EKF origin, 0 before (BARO.AltAMSL)")
 G_EPOCHS = _s.add("G_EPOCHS", 1, "", "GPS epochs produced so far")
+PM_VOLT = _s.add("PM_VOLT", 1, "V", "battery voltage as the power module reads it this tick")
+PM_CURR = _s.add("PM_CURR", 1, "A", "battery current as the power module reads it this tick")
 N_SENSOR_STATE = STATE.close()
+
+#: The sensors' output block: what the EKF and the autopilot may read of the sensor state, as
+#: ArduPilot's sensor libraries expose it (each IMU's filtered gyro and accel and their health,
+#: the barometers' health and the primary's altitude, each compass's record, the GPS epoch, the
+#: RC channels, the power module). Delay lines, filter states, vibration phases, timers, the
+#: configuration and the noise streams are the sensors' own (tests/test_structure_sim.py).
+PUBLISHED: frozenset[str] = frozenset({
+    "N_IMU", "IMU_BASE", "IMU_STRIDE", "I_GYR_F", "I_ACC_F", "I_GYR_OK", "I_ACC_OK",
+    "N_BARO", "BARO_BASE", "BARO_STRIDE", "BA_HEALTHY", "B_ALT", "B_PRIMARY",
+    "N_MAG", "MAG_BASE", "MAG_STRIDE", *(slot.name for slot in MAG),
+    "N_GPS_EPOCH", *(slot.name for slot in GPS_EPOCH),
+    "RC_CH", "RC_LAST_FRAME_US", "PM_VOLT", "PM_CURR",
+})
 
 # ---- sensor configuration scfg (built once per flight from parameters) ------------------------
 CONFIG = Layout("scfg", "sensor configuration")
