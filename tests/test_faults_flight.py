@@ -21,10 +21,9 @@ from tlm_sim import fly
 from tlm_sim.control import layout as C
 from tlm_sim.control.config import build_control_config
 from tlm_sim.control.failsafe import crash_check, vertical_cf_reset, vertical_cf_update
+from tlm_sim.dynamics.frame import F_ENGINE_MASK, build_frame
 from tlm_sim.faults import FaultSchedule
 from tlm_sim.params import Params
-from tlm_sim.sensors import layout as S
-from tlm_sim.sensors.config import build_sensor_config
 
 SIDECAR_KEYS = {"type", "label", "start_time_us", "end_time_us", "start_lat", "start_lon",
                 "start_alt", "end_lat", "end_lon", "end_alt", "params_start", "params_end"}
@@ -174,11 +173,11 @@ def test_engine_fault_ekf_is_level_again_soon_after_the_impact():
 
 
 def test_paper_profile_reads_sim_engine_fail_as_a_motor_index():
-    cur = build_sensor_config(Params({"SIM_ENGINE_FAIL": 1}))
-    assert cur[S.C_ENGINE_MASK] == 1.0  # current: bit mask, bit 0 = motor 1
+    cur = build_frame(Params({"SIM_ENGINE_FAIL": 1}))
+    assert cur[F_ENGINE_MASK] == 1.0  # current: bit mask, bit 0 = motor 1
     for index, mask in ((0, 1.0), (1, 2.0), (3, 8.0)):
-        cfg = build_sensor_config(Params({"TLM_PROFILE": 1, "SIM_ENGINE_FAIL": index}))
-        assert cfg[S.C_ENGINE_MASK] == mask
+        cfg = build_frame(Params({"TLM_PROFILE": 1, "SIM_ENGINE_FAIL": index}))
+        assert cfg[F_ENGINE_MASK] == mask
 
 
 def test_paper_profile_rc_timeout_and_satellite_jitter():

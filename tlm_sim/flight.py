@@ -53,7 +53,7 @@ from tlm_sim.control.wpnav import (
 )
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.body import init_state, physics_step
-from tlm_sim.dynamics.frame import build_frame
+from tlm_sim.dynamics.frame import F_ENGINE_MASK, F_ENGINE_MUL, build_frame
 from tlm_sim.dynamics.log import log_dynamics_10hz, log_sim2
 from tlm_sim.earthfield import with_home_field
 from tlm_sim.ekf import layout as EK
@@ -211,15 +211,15 @@ def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
 
 
 @tick_jit
-def _motor_pwm(c, scfg, pwm):
+def _motor_pwm(c, frame, pwm):
     """Commanded PWM -> what the motors see: SIM_ENGINE_MUL on the SIM_ENGINE_FAIL outputs,
     ``1000 + (pwm - 1000) * mul`` truncated to whole microseconds as SITL's uint16 servo value
     (sitl-faults.md §6.1; RCOU keeps the commanded value). Returns the motors' mean output
     0..1 over those with a PWM (SITL's throttle for the IMU noise). run_flight calls it only
     when its inputs change (the autopilot's step, a scheduled parameter change), not every
     physics tick."""
-    mask = int(scfg[S.C_ENGINE_MASK])
-    mul = scfg[S.C_ENGINE_MUL]
+    mask = int(frame[F_ENGINE_MASK])
+    mul = frame[F_ENGINE_MUL]
     for i in range(MAX_MOTORS):
         p = c[C.MIX_PWM + i]
         if (mask >> i) & 1 and p > 0.0:  # (an output without a motor stays at 0)
@@ -269,13 +269,13 @@ def run_flight(
     tick = 0
     last_gps_ms = 0.0
     stop_at = -1
-    throttle = _motor_pwm(c, scfg, pwm)
+    throttle = _motor_pwm(c, frame, pwm)
     while t_us < t_end_us:
         k_next = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
                                  applied)
         if k_next != k_sched:  # a parameter changed: the engine fault may act on the PWM
             k_sched = k_next
-            throttle = _motor_pwm(c, scfg, pwm)
+            throttle = _motor_pwm(c, frame, pwm)
         t_us = _physics_tick(x, frame, scfg, s, pwm, throttle, t_us, rng, wind_rng)
         if t_us < next_loop:
             continue
@@ -299,7 +299,7 @@ def run_flight(
                 c, g, float(t_us), s, gps, eo, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
-        throttle = _motor_pwm(c, scfg, pwm)  # the new commands, until the next main tick
+        throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
                                 home, x, s, scfg, c, ekf, sel, ecfg, eo, pos, g, dcm, gsf)
         if stop_at < 0 and (c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0):

@@ -103,6 +103,11 @@ F_SHOVE_TIME = _f.add("F_SHOVE_TIME", 1, "ms",
 F_TWIST = _f.add("F_TWIST", 3, "rad/s^2", "SIM_TWIST_X/Y/Z, extra body angular acceleration")
 F_TWIST_TIME = _f.add("F_TWIST_TIME", 1, "ms",
                       "SIM_TWIST_TIME; the physics sets it back to 0 once elapsed")
+# ---- SITL's servo interface: what the motors see of the autopilot's outputs --------------
+F_ENGINE_MUL = _f.add("F_ENGINE_MUL", 1, "",
+                      "SIM_ENGINE_MUL: PWM multiplier above 1000 us on the failed outputs")
+F_ENGINE_MASK = _f.add("F_ENGINE_MASK", 1, "",
+                       "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
 # ---- motor table (tlm_sim.frames; positions in metres, body FRD) --------------------------
 F_N_MOTORS = _f.add("F_N_MOTORS", 1, "", "number of motors n (FRAME_CLASS / FRAME_TYPE)")
 F_MOT_X = _f.add("F_MOT_X", MAX_MOTORS, "m", "per output: arm x (0 beyond n)")
@@ -205,7 +210,19 @@ def build_frame(p: Params) -> np.ndarray:
 
     _motor_table(f, layout, diag)
     _environment(f, p)
+    _engine_fault(f, p)
     return f
+
+
+def _engine_fault(f: np.ndarray, p: Params) -> None:
+    """SIM_ENGINE_MUL and SIM_ENGINE_FAIL: SITL applies them where the autopilot's outputs
+    reach the simulated motors (sitl-faults.md §6.1). SIM_ENGINE_FAIL is a bit mask of outputs;
+    in the paper-era profile (TLM_PROFILE 1) the index of one output, 0 = motor 1."""
+    f[F_ENGINE_MUL] = p["SIM_ENGINE_MUL"]
+    fail = p["SIM_ENGINE_FAIL"]
+    if p["TLM_PROFILE"] >= 0.5:
+        fail = float(1 << int(fail)) if 0 <= fail < 31 else 0.0
+    f[F_ENGINE_MASK] = fail
 
 
 def _motor_table(f: np.ndarray, layout: FrameLayout, diag: float) -> None:

@@ -131,9 +131,4 @@ def build_sensor_config(p: Params) -> np.ndarray:
     c[S.C_RC_FAIL] = p["SIM_RC_FAIL"]
     c[S.C_HOME_ALT] = p["SIM_OPOS_ALT"]
     c[S.C_FRAME_HEIGHT] = p["TLM_FRAME_HEIGHT"]
-    c[S.C_ENGINE_MUL] = p["SIM_ENGINE_MUL"]
-    fail = p["SIM_ENGINE_FAIL"]
-    if p["TLM_PROFILE"] >= 0.5:  # paper era: the index of one output, 0 = motor 1
-        fail = float(1 << int(fail)) if 0 <= fail < 31 else 0.0
-    c[S.C_ENGINE_MASK] = fail
     return c

@@ -200,10 +200,6 @@ C_HOME_ALT = _c.add("C_HOME_ALT", 1, "m", "SIM_OPOS_ALT (AMSL)")
 C_VIB_MOT_MAX = _c.add("C_VIB_MOT_MAX", 1, "Hz", "SIM_VIB_MOT_MAX")
 C_ACC_RND = _c.add("C_ACC_RND", 2, "m/s/s", "SIM_ACC1_RND, SIM_ACC2_RND")
 C_FRAME_HEIGHT = _c.add("C_FRAME_HEIGHT", 1, "m", "ground-to-CG height")
-C_ENGINE_MUL = _c.add("C_ENGINE_MUL", 1, "",
-                      "SIM_ENGINE_MUL: PWM multiplier above 1000 us on the failed outputs")
-C_ENGINE_MASK = _c.add("C_ENGINE_MASK", 1, "",
-                       "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
 C_NOISE_SCALE = _c.add("C_NOISE_SCALE", 2, "", "per-IMU scale of the base noise amplitudes")
 C_ACC_SCAL = _c.add("C_ACC_SCAL", 6, "",
                      "SIM_ACC1_SCAL, SIM_ACC2_SCAL (2 x 3): reading divided by it if non-zero")
