@@ -51,7 +51,11 @@ from tlm_sim.ekf.layout import (
     BUF_HEAD,
     BUF_OFS,
     BUF_ROW,
+    ES_ATT,
     ES_BA,
+    ES_BG,
+    ES_POS,
+    ES_VEL,
     NBUF,
     NS,
     OUT_EPN,
@@ -255,66 +259,69 @@ def predict_covariance(e, q_att, q_vel, q_gb, q_ab):
     sx = e[ACC_DVN]
     sy = e[ACC_DVE]
     sz = e[ACC_DVD]
-    # ---- A = F P for the rows phi (0..2), v (3..5), p (6..8); other rows of F are identity ----
+    # ---- A = F P for the rows phi, v, p (ES_ATT, ES_VEL, ES_POS: the states before the biases
+    # ES_BG, ES_BA); the other rows of F are identity ----
     for c in range(NS):
-        f0 = e[P0 + 0 * NS + c]
-        f1 = e[P0 + 1 * NS + c]
-        f2 = e[P0 + 2 * NS + c]
-        g0 = e[P0 + 9 * NS + c]
-        g1 = e[P0 + 10 * NS + c]
-        g2 = e[P0 + 11 * NS + c]
-        b0 = e[P0 + 12 * NS + c]
-        b1 = e[P0 + 13 * NS + c]
-        b2 = e[P0 + 14 * NS + c]
-        v0 = e[P0 + 3 * NS + c]
-        v1 = e[P0 + 4 * NS + c]
-        v2 = e[P0 + 5 * NS + c]
-        e[SCR_A + 0 * NS + c] = f0 - (r00 * g0 + r01 * g1 + r02 * g2)
-        e[SCR_A + 1 * NS + c] = f1 - (r10 * g0 + r11 * g1 + r12 * g2)
-        e[SCR_A + 2 * NS + c] = f2 - (r20 * g0 + r21 * g1 + r22 * g2)
+        f0 = e[P0 + ES_ATT * NS + c]
+        f1 = e[P0 + (ES_ATT + 1) * NS + c]
+        f2 = e[P0 + (ES_ATT + 2) * NS + c]
+        g0 = e[P0 + ES_BG * NS + c]
+        g1 = e[P0 + (ES_BG + 1) * NS + c]
+        g2 = e[P0 + (ES_BG + 2) * NS + c]
+        b0 = e[P0 + ES_BA * NS + c]
+        b1 = e[P0 + (ES_BA + 1) * NS + c]
+        b2 = e[P0 + (ES_BA + 2) * NS + c]
+        v0 = e[P0 + ES_VEL * NS + c]
+        v1 = e[P0 + (ES_VEL + 1) * NS + c]
+        v2 = e[P0 + (ES_VEL + 2) * NS + c]
+        e[SCR_A + ES_ATT * NS + c] = f0 - (r00 * g0 + r01 * g1 + r02 * g2)
+        e[SCR_A + (ES_ATT + 1) * NS + c] = f1 - (r10 * g0 + r11 * g1 + r12 * g2)
+        e[SCR_A + (ES_ATT + 2) * NS + c] = f2 - (r20 * g0 + r21 * g1 + r22 * g2)
         # -[s x] f = (sz f1 - sy f2, sx f2 - sz f0, sy f0 - sx f1)
-        e[SCR_A + 3 * NS + c] = v0 + (sz * f1 - sy * f2) - (r00 * b0 + r01 * b1 + r02 * b2)
-        e[SCR_A + 4 * NS + c] = v1 + (sx * f2 - sz * f0) - (r10 * b0 + r11 * b1 + r12 * b2)
-        e[SCR_A + 5 * NS + c] = v2 + (sy * f0 - sx * f1) - (r20 * b0 + r21 * b1 + r22 * b2)
-        e[SCR_A + 6 * NS + c] = e[P0 + 6 * NS + c] + t * v0
-        e[SCR_A + 7 * NS + c] = e[P0 + 7 * NS + c] + t * v1
-        e[SCR_A + 8 * NS + c] = e[P0 + 8 * NS + c] + t * v2
+        e[SCR_A + ES_VEL * NS + c] = v0 + (sz * f1 - sy * f2) - (r00 * b0 + r01 * b1 + r02 * b2)
+        e[SCR_A + (ES_VEL + 1) * NS + c] = (v1 + (sx * f2 - sz * f0)
+                                            - (r10 * b0 + r11 * b1 + r12 * b2))
+        e[SCR_A + (ES_VEL + 2) * NS + c] = (v2 + (sy * f0 - sx * f1)
+                                            - (r20 * b0 + r21 * b1 + r22 * b2))
+        e[SCR_A + ES_POS * NS + c] = e[P0 + ES_POS * NS + c] + t * v0
+        e[SCR_A + (ES_POS + 1) * NS + c] = e[P0 + (ES_POS + 1) * NS + c] + t * v1
+        e[SCR_A + (ES_POS + 2) * NS + c] = e[P0 + (ES_POS + 2) * NS + c] + t * v2
     # ---- P' = A F^T: apply the same column operations to each row of A (upper triangle) ----
-    for r in range(9):
+    for r in range(ES_BG):
         a = SCR_A + r * NS
-        f0 = e[a + 0]
-        f1 = e[a + 1]
-        f2 = e[a + 2]
-        v0 = e[a + 3]
-        v1 = e[a + 4]
-        v2 = e[a + 5]
-        g0 = e[a + 9]
-        g1 = e[a + 10]
-        g2 = e[a + 11]
-        b0 = e[a + 12]
-        b1 = e[a + 13]
-        b2 = e[a + 14]
+        f0 = e[a + ES_ATT]
+        f1 = e[a + ES_ATT + 1]
+        f2 = e[a + ES_ATT + 2]
+        v0 = e[a + ES_VEL]
+        v1 = e[a + ES_VEL + 1]
+        v2 = e[a + ES_VEL + 2]
+        g0 = e[a + ES_BG]
+        g1 = e[a + ES_BG + 1]
+        g2 = e[a + ES_BG + 2]
+        b0 = e[a + ES_BA]
+        b1 = e[a + ES_BA + 1]
+        b2 = e[a + ES_BA + 2]
         row = P0 + r * NS
-        # columns 0..8 (only c >= r are written; mirrored below)
-        if r <= 0:
-            e[row + 0] = f0 - (r00 * g0 + r01 * g1 + r02 * g2)
-        if r <= 1:
-            e[row + 1] = f1 - (r10 * g0 + r11 * g1 + r12 * g2)
-        if r <= 2:
-            e[row + 2] = f2 - (r20 * g0 + r21 * g1 + r22 * g2)
-        if r <= 3:
-            e[row + 3] = v0 + (sz * f1 - sy * f2) - (r00 * b0 + r01 * b1 + r02 * b2)
-        if r <= 4:
-            e[row + 4] = v1 + (sx * f2 - sz * f0) - (r10 * b0 + r11 * b1 + r12 * b2)
-        if r <= 5:
-            e[row + 5] = v2 + (sy * f0 - sx * f1) - (r20 * b0 + r21 * b1 + r22 * b2)
-        if r <= 6:
-            e[row + 6] = e[a + 6] + t * v0
-        if r <= 7:
-            e[row + 7] = e[a + 7] + t * v1
-        e[row + 8] = e[a + 8] + t * v2
-        # bias columns are unchanged by F^T: P'[r, 9..14] = A[r, 9..14]
-        for c in range(9, NS):
+        # columns below ES_BG (only c >= r are written; mirrored below)
+        if r <= ES_ATT:
+            e[row + ES_ATT] = f0 - (r00 * g0 + r01 * g1 + r02 * g2)
+        if r <= ES_ATT + 1:
+            e[row + ES_ATT + 1] = f1 - (r10 * g0 + r11 * g1 + r12 * g2)
+        if r <= ES_ATT + 2:
+            e[row + ES_ATT + 2] = f2 - (r20 * g0 + r21 * g1 + r22 * g2)
+        if r <= ES_VEL:
+            e[row + ES_VEL] = v0 + (sz * f1 - sy * f2) - (r00 * b0 + r01 * b1 + r02 * b2)
+        if r <= ES_VEL + 1:
+            e[row + ES_VEL + 1] = v1 + (sx * f2 - sz * f0) - (r10 * b0 + r11 * b1 + r12 * b2)
+        if r <= ES_VEL + 2:
+            e[row + ES_VEL + 2] = v2 + (sy * f0 - sx * f1) - (r20 * b0 + r21 * b1 + r22 * b2)
+        if r <= ES_POS:
+            e[row + ES_POS] = e[a + ES_POS] + t * v0
+        if r <= ES_POS + 1:
+            e[row + ES_POS + 1] = e[a + ES_POS + 1] + t * v1
+        e[row + ES_POS + 2] = e[a + ES_POS + 2] + t * v2
+        # bias columns are unchanged by F^T: P'[r, ES_BG:] = A[r, ES_BG:]
+        for c in range(ES_BG, NS):
             e[row + c] = e[a + c]
     _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab)
 
@@ -324,19 +331,19 @@ def _mirror_and_add_noise(e, q_att, q_vel, q_gb, q_ab):
     """End of the covariance prediction: mirror the upper triangle of P's 9 x 15 block into
     the lower one, add the process noise (variances, see :func:`predict_covariance`) within
     the variance limits, clear the accumulators."""
-    for r in range(9):
+    for r in range(ES_BG):
         for c in range(r + 1, NS):
             e[P0 + c * NS + r] = e[P0 + r * NS + c]
     for i in range(3):
-        d = P0 + (i + 0) * (NS + 1)
+        d = P0 + (ES_ATT + i) * (NS + 1)
         e[d] = min(max(e[d] + q_att, VAR_MIN), VAR_MAX_ATT)
-        d = P0 + (i + 3) * (NS + 1)
+        d = P0 + (ES_VEL + i) * (NS + 1)
         e[d] = min(max(e[d] + q_vel, VAR_MIN), VAR_MAX_VEL)
-        d = P0 + (i + 6) * (NS + 1)
+        d = P0 + (ES_POS + i) * (NS + 1)
         e[d] = min(max(e[d], VAR_MIN), VAR_MAX_POS)
-        d = P0 + (i + 9) * (NS + 1)
+        d = P0 + (ES_BG + i) * (NS + 1)
         e[d] = max(e[d] + q_gb, VAR_MIN)
-        d = P0 + (i + 12) * (NS + 1)
+        d = P0 + (ES_BA + i) * (NS + 1)
         e[d] = max(e[d] + q_ab, VAR_MIN)
     e[ACC_DVN] = 0.0
     e[ACC_DVE] = 0.0
@@ -450,9 +457,9 @@ def apply_correction(e, gb_lim, ab_lim):
     controllers read follows through :func:`output_track`, as EKF3's output observer does.
     Biases are limited to +-gb_lim [rad/s] and +-ab_lim [m/s^2].
     """
-    px = 0.5 * e[SCR_DX + 0]
-    py = 0.5 * e[SCR_DX + 1]
-    pz = 0.5 * e[SCR_DX + 2]
+    px = 0.5 * e[SCR_DX + ES_ATT]
+    py = 0.5 * e[SCR_DX + ES_ATT + 1]
+    pz = 0.5 * e[SCR_DX + ES_ATT + 2]
     w = e[QW]
     x = e[QX]
     y = e[QY]
@@ -468,10 +475,10 @@ def apply_correction(e, gb_lim, ab_lim):
     e[QZ] = nz * inv
     quat_to_rot(e)
     for i in range(3):
-        e[OUT_EVN + i] += e[SCR_DX + 3 + i]
-        e[OUT_EPN + i] += e[SCR_DX + 6 + i]
-        e[BGX + i] = min(max(e[BGX + i] + e[SCR_DX + 9 + i], -gb_lim), gb_lim)
-        e[BAX + i] = min(max(e[BAX + i] + e[SCR_DX + 12 + i], -ab_lim), ab_lim)
+        e[OUT_EVN + i] += e[SCR_DX + ES_VEL + i]
+        e[OUT_EPN + i] += e[SCR_DX + ES_POS + i]
+        e[BGX + i] = min(max(e[BGX + i] + e[SCR_DX + ES_BG + i], -gb_lim), gb_lim)
+        e[BAX + i] = min(max(e[BAX + i] + e[SCR_DX + ES_BA + i], -ab_lim), ab_lim)
     clear_dx(e)
 
 
