@@ -20,6 +20,7 @@ from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.boot import BOOT_ARM_S
+from tlm_sim.bundles import FlightLogs, FlightPlan, LoopWork, VehicleConfig, VehicleState
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.arming import (
@@ -235,27 +236,26 @@ def _motor_pwm(c, frame, pwm):
 
 
 @loop_jit
-def run_flight(
-    x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied, t_end_us, home,
-    gps_time, bufs, counts, s, work, rng, wind_rng, txt, dcm, gsf,
-):
+def run_flight(state, cfg, plan, logs, work, t_end_us):
     """Fly one whole flight in place; returns the final simulated time [us].
 
-    x: truth state; frame/scfg/g/ecfg: configuration arrays; ekf/sel: EKF lanes and selector;
-    c: controller state; path: mission as NED points (path[0] = takeoff point); seg: scratch
-    segment; sched: rows of parameter changes (see :func:`build_schedule`); applied: per change,
-    the time [us] it took effect (filled in, -1 if never); home: (lat,
-    lon, alt AMSL); gps_time: (week, ms of week at boot); bufs/counts: log buffers;
-    s: sensor state (N_SENSOR_STATE); work: scratch, see :func:`new_work`; rng: the sensor
-    noise streams, one row per sensor (S.RNG_*, :func:`tlm_sim.rng.new_streams`); wind_rng:
-    wind turbulence generator (tlm_sim.rng); txt: the text log (tlm_sim.control.arming TXT_*,
-    its row count in c[TXT_N]); dcm: the DCM attitude estimator (control.dcm_layout);
-    gsf[lane]: the EKF lanes' yaw estimators (ekf.gsf_layout). Allocation-free.
+    state: the :class:`~tlm_sim.bundles.VehicleState` (truth, sensors, EKF lanes and selector,
+    autopilot, DCM, yaw estimators, noise streams and the wind generator); cfg: the
+    :class:`~tlm_sim.bundles.VehicleConfig` arrays (scheduled changes rewrite their slots);
+    plan: the :class:`~tlm_sim.bundles.FlightPlan` (mission path, segment scratch, the change
+    schedule of :func:`build_schedule` and, filled in, when each change took effect, home, GPS
+    time at boot); logs: the :class:`~tlm_sim.bundles.FlightLogs` (buffers, row counts, text
+    log); work: the :class:`~tlm_sim.bundles.LoopWork` scratch (:func:`new_work`).
+    Allocation-free.
 
     The physics runs at 1200 Hz, the main loop (sensors, EKF, autopilot, logging) at 400 Hz;
     the flight ends 2 s after the autopilot disarms or the driver gives up arming, or at
     t_end_us.
     """
+    x, s, ekf, sel, c, dcm, gsf, rng, wind_rng = state
+    frame, scfg, ecfg, g = cfg
+    path, seg, sched, applied, home, gps_time = plan
+    bufs, counts, txt = logs
     dang, dvel, rows, eo = work
     imu_ok, gps, pwm = rows[W_IMU_OK], rows[W_GPS], rows[W_PWM]
     pos, vel, q, gyro = rows[W_POS], rows[W_VEL], rows[W_Q], rows[W_GYRO]
@@ -424,13 +424,13 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
 # ------------------------------------------------------------------------- Python entry point
 
 
-def new_work() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def new_work() -> LoopWork:
     """Scratch arrays of run_flight: IMU delta angles and velocities (N_IMU, 3); a
     (N_WORK_ROWS, WORK_COLS) block whose rows are :data:`WORK`'s (imu_ok, the GPS epoch,
     motor PWM, and the controllers' inputs of control.ahrs); the EKF output block
     (ekf.layout O_*)."""
-    return (np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)),
-            np.zeros((N_WORK_ROWS, WORK_COLS)), np.zeros(EK.N_OUT))
+    return LoopWork(np.zeros((S.N_IMU, 3)), np.zeros((S.N_IMU, 3)),
+                    np.zeros((N_WORK_ROWS, WORK_COLS)), np.zeros(EK.N_OUT))
 
 
 def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -645,12 +645,12 @@ def fly(
     buf_tuple = tuple(bufs[n] for n in L.LOG_ORDER)
     counts = np.zeros(len(L.LOG_ORDER), dtype=np.int64)
     week, ms = gps_week_ms(BOOT_UTC)
-    t_final = run_flight(
-        x, frame, scfg, ekf, sel, ecfg, c, g, path, seg, sched, applied,
-        int(duration * 1e6), home, np.array([week, ms], dtype=np.float64), buf_tuple, counts,
-        np.zeros(S.N_SENSOR_STATE), new_work(), new_streams(int(seed), S.N_NOISE_STREAMS),
-        new_rng(int(seed), 2), txt, np.zeros(N_DCM), np.zeros((ekf.shape[0], N_GSF)),
-    )
+    state = VehicleState(x, np.zeros(S.N_SENSOR_STATE), ekf, sel, c, np.zeros(N_DCM),
+                         np.zeros((ekf.shape[0], N_GSF)),
+                         new_streams(int(seed), S.N_NOISE_STREAMS), new_rng(int(seed), 2))
+    plan = FlightPlan(path, seg, sched, applied, home, np.array([week, ms], dtype=np.float64))
+    t_final = run_flight(state, VehicleConfig(frame, scfg, ecfg, g), plan,
+                         FlightLogs(buf_tuple, counts, txt), new_work(), int(duration * 1e6))
     armed = c[C.ARM_TIME_S] >= 0.0
     meta: dict[str, Any] = {
         "seed": int(seed),

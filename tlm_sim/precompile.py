@@ -45,6 +45,7 @@ from typing import Any
 from numba import config
 from numba import types as nt
 
+from tlm_sim import bundles as B
 from tlm_sim import logger as L
 
 __all__ = ["JOBS", "CompileReport", "ensure_compiled", "job_dispatcher", "precompile"]
@@ -143,8 +144,11 @@ JOBS: tuple[Job, ...] = (
 
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
-    (_F1, _F1, _F1, _F2, _F1, _F1, _F1, _F1, _F2, _F2, _F2, _F1, _i8, _F1, _F1, _BUFS, _I1, _F1,
-     nt.Tuple((_F2, _F2, _F2, _F1)), _U2, _U1, _F2, _F1, _F2), 8.4)
+    (nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState),
+     nt.NamedTuple((_F1,) * 4, B.VehicleConfig),
+     nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan),
+     nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs),
+     nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork), _i8), 8.4)
 
 
 @dataclass

@@ -1,0 +1,69 @@
+"""The named bundles in which the flight loop's arrays travel.
+
+A flight's state, configuration, plan and logs are plain float64 arrays (each with its
+:class:`tlm_sim.slots.Layout`); :func:`tlm_sim.flight.run_flight` takes them as a few named
+tuples instead of two dozen positional arrays. numba types a ``NamedTuple`` of arrays as a
+heterogeneous tuple: unpacking one costs nothing, and the fields are read by name
+(``state.ekf``). Only numpy is imported here, so :mod:`tlm_sim.precompile` can name the bundle
+types without importing the flight code.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["FlightLogs", "FlightPlan", "LoopWork", "VehicleConfig", "VehicleState"]
+
+
+class VehicleState(NamedTuple):
+    """Everything that evolves during a flight."""
+
+    x: np.ndarray  #: truth state (tlm_sim.dynamics.layout, SI units, NED / body FRD)
+    s: np.ndarray  #: sensor state (tlm_sim.sensors.layout)
+    ekf: np.ndarray  #: EKF lanes, one row per lane (tlm_sim.ekf.layout)
+    sel: np.ndarray  #: the EKF's lane selector (tlm_sim.ekf.layout SEL_*)
+    c: np.ndarray  #: autopilot state (tlm_sim.control.layout)
+    dcm: np.ndarray  #: the DCM attitude estimator (tlm_sim.control.dcm_layout)
+    gsf: np.ndarray  #: the EKF lanes' yaw estimators, one row per lane (tlm_sim.ekf.gsf_layout)
+    rng: np.ndarray  #: sensor noise streams, one row per sensor (tlm_sim.rng.new_streams)
+    wind_rng: np.ndarray  #: the wind turbulence generator (tlm_sim.rng.new_rng)
+
+
+class VehicleConfig(NamedTuple):
+    """The configuration arrays built from the parameters (a scheduled change rewrites
+    slots of them in flight)."""
+
+    frame: np.ndarray  #: frame, motors, environment (tlm_sim.dynamics.frame)
+    scfg: np.ndarray  #: sensors (tlm_sim.sensors.layout C_*)
+    ecfg: np.ndarray  #: EKF (tlm_sim.ekf.layout C_*)
+    g: np.ndarray  #: autopilot (tlm_sim.control.layout G_*)
+
+
+class FlightPlan(NamedTuple):
+    """What the flight is to do, and where and when."""
+
+    path: np.ndarray  #: the mission as NED points and per-leg data (control.wpnav.PATH_COLS)
+    seg: np.ndarray  #: scratch path for take-off, RTL and landing segments
+    sched: np.ndarray  #: scheduled parameter changes (tlm_sim.flight.build_schedule)
+    applied: np.ndarray  #: per change, the time [us] it took effect (-1: never)
+    home: np.ndarray  #: home latitude, longitude [deg] and altitude AMSL [m]
+    gps_time: np.ndarray  #: GPS week and milliseconds of week at boot
+
+
+class FlightLogs(NamedTuple):
+    """The log buffers the loop fills."""
+
+    bufs: tuple  #: one 2-D buffer per logged message (tlm_sim.logger K_*)
+    counts: np.ndarray  #: rows written per buffer
+    txt: np.ndarray  #: the text log (tlm_sim.ardupilot TEXT_ROW), its row count in c[TXT_N]
+
+
+class LoopWork(NamedTuple):
+    """Scratch the main loop hands between its stages (tlm_sim.flight.new_work)."""
+
+    dang: np.ndarray  #: per IMU, the delta angle of this tick [rad]
+    dvel: np.ndarray  #: per IMU, the delta velocity of this tick [m/s]
+    rows: np.ndarray  #: the per-tick vectors (tlm_sim.flight.WORK rows)
+    eo: np.ndarray  #: the EKF's output block (tlm_sim.ekf.layout O_*)
