@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from tlm_sim.bundles import EkfInputs
 from tlm_sim.ekf import layout as L
 from tlm_sim.ekf.lanes import ekf_output, ekf_update
 from tlm_sim.sensors.mag import healthy_compasses
@@ -221,11 +222,11 @@ def run_ekf(
     n = t_us.shape[0]
     o = np.zeros(L.N_OUT)
     for k in range(n):
-        ekf_update(
-            ekf, sel, cfg, t_us[k], dang[k], dvel[k], imu_ok[k],
+        ekf_update(ekf, sel, cfg, t_us[k], EkfInputs(
+            dang[k], dvel[k], imu_ok[k],
             gps_new[k], gps_pos[k], gps_vel[k], gps_fix[k],
             baro_new[k], baro[k], mag_new[k], mag[k], armed[k],
-        )  # fmt: skip
+        ))  # fmt: skip
         ekf_output(ekf, sel, o)
         for j in range(L.N_OUT):
             out[k, j] = o[j]

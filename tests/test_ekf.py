@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.ekf_synth import DT, G, fly_ekf, make_flight, quat_angle_deg
+from tlm_sim.bundles import EkfInputs
 from tlm_sim.ekf import build_ekf_config, ekf_output, new_ekf
 from tlm_sim.ekf import layout as L
 from tlm_sim.ekf.core import (
@@ -289,10 +290,10 @@ def test_alignment_at_rest_recovers_tilt_and_yaw():
     mag = healthy_compasses(r.T @ earth_field(params))
     gps = np.zeros(3)
     for k in range(400):
-        ekf_update(
-            ekf, sel, cfg, (k + 1) * 2500, dang, dvel, np.ones(2),
+        ekf_update(ekf, sel, cfg, (k + 1) * 2500, EkfInputs(
+            dang, dvel, np.ones(2),
             False, gps, gps, False, False, 0.0, k % 40 == 0, mag, False,
-        )  # fmt: skip
+        ))  # fmt: skip
     out = np.zeros(L.N_OUT)
     ekf_output(ekf, sel, out)
     assert out[L.O_F_ATTITUDE] == 1.0

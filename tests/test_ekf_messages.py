@@ -41,6 +41,7 @@ from tests.conftest import flown, reference_path
 from tests.ekf_synth import DT, G
 from tlm_sim import fly
 from tlm_sim import logger as LG
+from tlm_sim.bundles import EkfInputs
 from tlm_sim.ekf import build_ekf_config, new_ekf
 from tlm_sim.ekf import layout as L
 from tlm_sim.ekf.core import apply_correction, clear_dx, filter_now, set_quat_euler
@@ -279,8 +280,8 @@ def _aided_lanes() -> tuple[np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]
     k = 0
     for k in range(1, 1600):
         gps = k > 400 and k % 40 == 0
-        ekf_update(ekf, sel, cfg, float(k * 2500), dang, dvel, np.ones(4), gps, z, z, True,
-                   k % 40 == 20, 0.0, k % 40 == 0, mag, True)
+        ekf_update(ekf, sel, cfg, float(k * 2500), EkfInputs(
+            dang, dvel, np.ones(4), gps, z, z, True, k % 40 == 20, 0.0, k % 40 == 0, mag, True))
     return ekf, sel, cfg, k, dvel
 
 
@@ -292,9 +293,9 @@ def test_xkf3_holds_the_innovations_of_the_last_fusion():
     mag = healthy_compasses(np.zeros(3))
     k += 1
     before = [filter_now(ekf[i], 0) for i in range(2)]
-    ekf_update(ekf, sel, cfg, float(k * 2500), dang, dvel, np.ones(4), True,
-               np.array([2.0, 0.0, 0.0]), np.array([0.0, 0.3, 0.0]), True,
-               False, 0.0, False, mag, True)
+    ekf_update(ekf, sel, cfg, float(k * 2500), EkfInputs(
+        dang, dvel, np.ones(4), True, np.array([2.0, 0.0, 0.0]), np.array([0.0, 0.3, 0.0]), True,
+        False, 0.0, False, mag, True))
     bufs, counts = LG.new_buffers(1.0)
     log_ekf_evidence(bufs, counts, k * 2500, ekf, sel, cfg)
     x3 = bufs[LG.K_XKF3][: counts[LG.K_XKF3]]

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["FlightLogs", "FlightPlan", "LoopWork", "VehicleConfig", "VehicleState"]
+__all__ = ["EkfInputs", "FlightLogs", "FlightPlan", "LoopWork", "VehicleConfig", "VehicleState"]
 
 
 class VehicleState(NamedTuple):
@@ -67,3 +67,20 @@ class LoopWork(NamedTuple):
     dvel: np.ndarray  #: per IMU, the delta velocity of this tick [m/s]
     rows: np.ndarray  #: the per-tick vectors (tlm_sim.flight.WORK rows)
     eo: np.ndarray  #: the EKF's output block (tlm_sim.ekf.layout O_*)
+
+
+class EkfInputs(NamedTuple):
+    """What the EKF takes in one main-loop tick (tlm_sim.ekf.lanes.ekf_update)."""
+
+    dang: np.ndarray  #: per IMU, the delta angle of this tick [rad] (body FRD)
+    dvel: np.ndarray  #: per IMU, the delta velocity of this tick [m/s] (body FRD)
+    imu_ok: np.ndarray  #: [imu] its accel, [N_IMU + imu] its gyro delivered samples (0/1)
+    gps_new: bool  #: a GPS epoch arrived this tick
+    gps_pos: np.ndarray  #: its position NED from the origin [m]
+    gps_vel: np.ndarray  #: its velocity NED [m/s]
+    gps_fix: bool  #: it has a 3-D fix
+    baro_new: bool  #: a primary-baro sample arrived this tick
+    baro_alt: float  #: its altitude above the origin [m, up]
+    mag_new: bool  #: a compass tick
+    mag: np.ndarray  #: the compass block (sensors.layout MAG records)
+    armed: bool  #: the vehicle is armed (lane switching, constant-position noise, compass reset)

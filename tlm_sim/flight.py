@@ -20,7 +20,7 @@ from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.boot import BOOT_ARM_S
-from tlm_sim.bundles import FlightLogs, FlightPlan, LoopWork, VehicleConfig, VehicleState
+from tlm_sim.bundles import EkfInputs, FlightLogs, FlightPlan, LoopWork, VehicleConfig, VehicleState
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.arming import (
@@ -381,11 +381,11 @@ def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_n
     if gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
-    switched = ekf_update(
-        ekf, sel, ecfg, float(t_us), dang, dvel, imu_ok,
+    switched = ekf_update(ekf, sel, ecfg, float(t_us), EkfInputs(
+        dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
         baro_new, s[S.B_ALT], mag_new, s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
-    )
+    ))
     gsf_update(gsf, ekf, ecfg, dang, dvel, imu_ok, gps_new, gps[S.GE_VN], gps[S.GE_VE],
                gps[S.GE_FIX_3D] > 0.5, armed)
     ekf_output_nav(ekf, sel, eo)

@@ -91,7 +91,8 @@ JOBS: tuple[Job, ...] = (
          _I1),
         13.1),
     Job("tlm_sim.ekf.lanes:ekf_update",
-        (_F2, _F1, _F1, _f8, _F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), 13.4),
+        (_F2, _F1, _F1, _f8, nt.NamedTuple(
+            (_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), B.EkfInputs)), 13.4),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.1),
     Job("tlm_sim.control.log:log_control_10hz",
         (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.8),

@@ -605,42 +605,22 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
 
 
 @tick_jit
-def ekf_update(
-    ekf,
-    sel,
-    cfg,
-    t_us,
-    dang,
-    dvel,
-    imu_ok,
-    gps_new,
-    gps_pos,
-    gps_vel,
-    gps_fix,
-    baro_new,
-    baro_alt,
-    mag_new,
-    mag,
-    armed=True,
-):
+def ekf_update(ekf, sel, cfg, t_us, inputs):
     """One main-loop tick: predict, fuse the new samples flagged, select the primary lane.
 
-    t_us: time since boot [us]; dang/dvel[imu, 0:3]: IMU deltas of this tick (body FRD);
-    imu_ok[imu] (accel) / imu_ok[N_IMU + imu] (gyro) delivered samples; gps_new + gps_pos[0:3]
-    (NED from the origin, m) + gps_vel[0:3] (NED, m/s) + gps_fix (3-D fix); baro_new +
-    baro_alt (m above the origin, up); mag_new (a compass tick) + mag (the compass block, see
-    :func:`ekf_fuse_mag`); armed (vehicle armed: enables lane switching, sets the
-    constant-position noise, resets the compass choice).
+    t_us: time since boot [us]; inputs: the tick's :class:`tlm_sim.bundles.EkfInputs` (IMU
+    deltas and health, the GPS epoch, the baro altitude, the compass block, whether armed:
+    armed enables lane switching, sets the constant-position noise, resets the compass choice).
     Returns True when the primary lane changed on this tick (log ERR 24 then).
     """
-    ekf_predict(ekf, cfg, t_us, dang, dvel, imu_ok, armed)
-    if gps_new:
-        ekf_fuse_gps(ekf, cfg, t_us, gps_pos, gps_vel, gps_fix)
-    if baro_new:
-        ekf_fuse_baro(ekf, cfg, t_us, baro_alt)
-    if mag_new:
-        ekf_fuse_mag(ekf, cfg, t_us, mag, armed)
-    return ekf_select_primary(ekf, sel, cfg, t_us, armed)
+    ekf_predict(ekf, cfg, t_us, inputs.dang, inputs.dvel, inputs.imu_ok, inputs.armed)
+    if inputs.gps_new:
+        ekf_fuse_gps(ekf, cfg, t_us, inputs.gps_pos, inputs.gps_vel, inputs.gps_fix)
+    if inputs.baro_new:
+        ekf_fuse_baro(ekf, cfg, t_us, inputs.baro_alt)
+    if inputs.mag_new:
+        ekf_fuse_mag(ekf, cfg, t_us, inputs.mag, inputs.armed)
+    return ekf_select_primary(ekf, sel, cfg, t_us, inputs.armed)
 
 
 @tick_jit
