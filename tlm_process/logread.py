@@ -433,80 +433,114 @@ def _read_text(p: Path, want: set[str] | None
                           list[str]]:
     """Raw tables of a DataFlash text log, the line number of every row, the parameters and
     notes on the lines that are not messages."""
-    formats: dict[str, tuple[str, list[str]]] = {}
-    rows: dict[str, list[list[str]]] = {}
-    lines_at: dict[str, list[int]] = {}
-    skipped: list[tuple[int, str]] = []
-    bad: dict[str, int] = {}
     try:
         fh = open(p, encoding="utf-8", errors="replace", newline="")
     except OSError as e:
         raise LogReadError(f"{p}: cannot read: {e.strerror or e}") from None
     with fh:
+        lines = _TextLines()
         for lineno, line in enumerate(fh, 1):
-            line = line.rstrip("\r\n")
-            if not line.strip():
-                continue
-            parts = [s.strip() for s in line.split(",")]
-            name = parts[0]
-            if name == "FMT" and len(parts) >= 5:
-                fname, fmt = parts[3], parts[4]
-                cols = [c for c in parts[5:] if c]
-                if re.fullmatch(r"[A-Za-z0-9_]{1,16}", fname) and len(cols) == len(fmt):
-                    formats[fname] = (fmt, cols)
-                rows.setdefault("FMT", []).append(parts[1:5] + [",".join(cols)])
-                lines_at.setdefault("FMT", []).append(lineno)
-                continue
-            spec = formats.get(name)
-            if spec is None:
-                skipped.append((lineno, line))
-                continue
-            fmt, cols = spec
-            fields = parts[1:]
-            if len(fields) != len(fmt):
-                if fmt and fmt[-1] in _STR and len(fields) > len(fmt):
-                    k = len(fmt) - 1  # a text field that itself holds commas
-                    fields = fields[:k] + [",".join(fields[k:])]
-                elif not fmt and fields == [""]:
-                    fields = []
-                else:
-                    bad[name] = bad.get(name, 0) + 1
-                    continue
-            rows.setdefault(name, []).append(fields)
-            lines_at.setdefault(name, []).append(lineno)
-    if "FMT" not in rows:
+            lines.add(lineno, line.rstrip("\r\n"))
+    if "FMT" not in lines.rows:
         raise LogReadError(f"{p}: not an ArduPilot DataFlash log (no FMT message)")
+    raw, order = _text_tables(lines)
+    params = _params(raw.get("PARM"))
+    skipped = lines.skipped
+    notes = [f"text log: {len(skipped)} line(s) that are not messages skipped (the first: "
+             f"line {skipped[0][0]} {skipped[0][1][:40]!r})"] if skipped else []
+    notes += [f"text log: {k} {n} line(s) with the wrong number of fields skipped"
+              for n, k in lines.bad.items()]
+    if want is not None:
+        _keep_wanted(raw, order, want)
+    return raw, order, params, notes
+
+
+class _TextLines:
+    """The lines of a DataFlash text log sorted by message: each message's formats (from its
+    FMT line), its rows of fields and their line numbers, the lines that are no message and
+    the count of lines per message with the wrong number of fields."""
+
+    def __init__(self) -> None:
+        self.formats: dict[str, tuple[str, list[str]]] = {}
+        self.rows: dict[str, list[list[str]]] = {}
+        self.lines_at: dict[str, list[int]] = {}
+        self.skipped: list[tuple[int, str]] = []
+        self.bad: dict[str, int] = {}
+
+    def add(self, lineno: int, line: str) -> None:
+        """Take line ``lineno`` (without its line end)."""
+        if not line.strip():
+            return
+        parts = [s.strip() for s in line.split(",")]
+        name = parts[0]
+        if name == "FMT" and len(parts) >= 5:
+            fname, fmt = parts[3], parts[4]
+            cols = [c for c in parts[5:] if c]
+            if re.fullmatch(r"[A-Za-z0-9_]{1,16}", fname) and len(cols) == len(fmt):
+                self.formats[fname] = (fmt, cols)
+            self._row("FMT", parts[1:5] + [",".join(cols)], lineno)
+            return
+        spec = self.formats.get(name)
+        if spec is None:
+            self.skipped.append((lineno, line))
+            return
+        fields = _text_fields(spec[0], parts[1:])
+        if fields is None:
+            self.bad[name] = self.bad.get(name, 0) + 1
+        else:
+            self._row(name, fields, lineno)
+
+    def _row(self, name: str, fields: list[str], lineno: int) -> None:
+        self.rows.setdefault(name, []).append(fields)
+        self.lines_at.setdefault(name, []).append(lineno)
+
+
+def _text_fields(fmt: str, fields: list[str]) -> list[str] | None:
+    """A text line's fields for format ``fmt``: a trailing text field that itself holds commas
+    joined again; None when the count is wrong."""
+    if len(fields) == len(fmt):
+        return fields
+    if fmt and fmt[-1] in _STR and len(fields) > len(fmt):
+        k = len(fmt) - 1
+        return fields[:k] + [",".join(fields[k:])]
+    if not fmt and fields == [""]:
+        return []
+    return None
+
+
+def _text_tables(lines: _TextLines) -> tuple[dict[str, pd.DataFrame], dict[str, np.ndarray]]:
+    """The raw tables of a text log's messages and the line number of every row."""
     modes = _mode_numbers()
     raw: dict[str, pd.DataFrame] = {}
     order: dict[str, np.ndarray] = {}
-    for name, r in rows.items():
+    for name, r in lines.rows.items():
         if name == "FMT":
             cols = ["Type", "Length", "Name", "Format", "Columns"]
             fmt = "BBnNZ"
         else:
-            fmt, cols = formats[name]
+            fmt, cols = lines.formats[name]
         data = list(zip(*r, strict=True)) if r and fmt else [[] for _ in fmt]
         raw[name] = pd.DataFrame({c: _text_column(list(v), ch, modes)
                                   for c, ch, v in zip(cols, fmt, data, strict=True)},
                                  index=pd.RangeIndex(len(r)))
-        order[name] = np.asarray(lines_at[name], dtype=np.int64)
-    params = _params(raw.get("PARM"))
-    notes = [f"text log: {len(skipped)} line(s) that are not messages skipped (the first: "
-             f"line {skipped[0][0]} {skipped[0][1][:40]!r})"] if skipped else []
-    notes += [f"text log: {k} {n} line(s) with the wrong number of fields skipped"
-              for n, k in bad.items()]
-    if want is not None:
-        helpers = {}
-        for n in list(raw):
-            if n not in want:
-                df = raw.pop(n)
-                o = order.pop(n)
-                t, _ = _stamp(df)
-                if t is not None:
-                    helpers[_HELPER + n] = pd.DataFrame({"TimeUS": t})
-                    order[_HELPER + n] = o
-        raw.update(helpers)
-    return raw, order, params, notes
+        order[name] = np.asarray(lines.lines_at[name], dtype=np.int64)
+    return raw, order
+
+
+def _keep_wanted(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
+                 want: set[str]) -> None:
+    """Drop the tables not in ``want`` from ``raw`` and ``order``, keeping of each only its
+    times as a helper table (``_HELPER + name``)."""
+    helpers = {}
+    for n in list(raw):
+        if n not in want:
+            df = raw.pop(n)
+            o = order.pop(n)
+            t, _ = _stamp(df)
+            if t is not None:
+                helpers[_HELPER + n] = pd.DataFrame({"TimeUS": t})
+                order[_HELPER + n] = o
+    raw.update(helpers)
 
 
 # --------------------------------------------------------------------------------------------
