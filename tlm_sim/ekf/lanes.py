@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 
-from tlm_sim._jit import tick_jit
+from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.ekf.compass import lane_read_mag
 from tlm_sim.ekf.core import (
@@ -533,6 +533,65 @@ def lane_healthy(e, cfg, t):
     return not (e[VEL_TR] > 1.0 and e[POS_TR] > 1.0 and e[HGT_TR] > 1.0)
 
 
+@inline_jit
+def _score_lanes(ekf, cfg, t):
+    """Each lane's score (its previous one and the time [s] it changed kept) and health at
+    time t [s]."""
+    for i in range(ekf.shape[0]):
+        e = ekf[i]
+        score = lane_score(e)
+        if score != e[SCORE]:
+            e[SCORE_PREV] = e[SCORE]
+            e[T_SCORE] = t
+            e[SCORE] = score
+        e[HEALTHY] = 1.0 if lane_healthy(e, cfg, t) else 0.0
+
+
+@inline_jit
+def _accumulate_rel_err(ekf, sel, cfg, t, p, sp):
+    """The non-primary lanes' relative errors against primary p (score sp, seen C_SCORE_LAG
+    late), see :func:`ekf_select_primary`."""
+    sp_seen = ekf[p, SCORE_PREV] if t - ekf[p, T_SCORE] < cfg[C_SCORE_LAG] - 1e-9 else sp
+    thr = max(cfg[C_ERR_THRESH], 0.05)
+    for i in range(ekf.shape[0]):
+        if i == p:
+            continue
+        d = ekf[i, SCORE] - sp_seen
+        if d > 0.0 or d < -thr:
+            sel[SEL_REL_ERR + i] = min(max(sel[SEL_REL_ERR + i] + d, -1.0), 1.0)
+
+
+@inline_jit
+def _latch_selection(sel, cfg, t, healthy_p):
+    """Before the selection runs: it starts (latched) once the primary has been healthy for
+    C_SELECT_T [s]."""
+    if healthy_p:
+        if sel[SEL_HEALTHY_SINCE] < 0.0:
+            sel[SEL_HEALTHY_SINCE] = t
+        if t - sel[SEL_HEALTHY_SINCE] >= cfg[C_SELECT_T]:
+            sel[SEL_RUN] = 1.0
+    else:
+        sel[SEL_HEALTHY_SINCE] = -1.0
+
+
+@inline_jit
+def _switch_candidate(ekf, sel, cfg, t, p, imu_dead):
+    """(lane, relative error) of the healthy lane with the lowest relative error that was not
+    primary in the last C_SELECT_T [s] (any healthy lane when the primary's IMU is dead);
+    (-1, 1e30) when there is none."""
+    best = -1
+    best_rel = 1.0e30
+    for i in range(ekf.shape[0]):
+        if i == p or ekf[i, HEALTHY] == 0.0:
+            continue
+        if t - sel[SEL_T_PRIMARY + i] < cfg[C_SELECT_T] and not imu_dead:
+            continue
+        if sel[SEL_REL_ERR + i] < best_rel:
+            best_rel = sel[SEL_REL_ERR + i]
+            best = i
+    return best, best_rel
+
+
 @tick_jit
 def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     """Update lane scores/health and switch the primary lane as EKF3 does (section 3.4).
@@ -549,47 +608,17 @@ def ekf_select_primary(ekf, sel, cfg, t_us, armed):
     Returns True when the primary changed on this call.
     """
     t = t_us * 1e-6
-    n = ekf.shape[0]
-    for i in range(n):
-        e = ekf[i]
-        score = lane_score(e)
-        if score != e[SCORE]:
-            e[SCORE_PREV] = e[SCORE]
-            e[T_SCORE] = t
-            e[SCORE] = score
-        e[HEALTHY] = 1.0 if lane_healthy(e, cfg, t) else 0.0
+    _score_lanes(ekf, cfg, t)
     p = int(sel[SEL_PRIMARY])
     sp = ekf[p, SCORE]
-    sp_seen = ekf[p, SCORE_PREV] if t - ekf[p, T_SCORE] < cfg[C_SCORE_LAG] - 1e-9 else sp
-    thr = max(cfg[C_ERR_THRESH], 0.05)
-    for i in range(n):
-        if i == p:
-            continue
-        d = ekf[i, SCORE] - sp_seen
-        if d > 0.0 or d < -thr:
-            sel[SEL_REL_ERR + i] = min(max(sel[SEL_REL_ERR + i] + d, -1.0), 1.0)
+    _accumulate_rel_err(ekf, sel, cfg, t, p, sp)
     healthy_p = ekf[p, HEALTHY] != 0.0
     if sel[SEL_RUN] == 0.0:
-        if healthy_p:
-            if sel[SEL_HEALTHY_SINCE] < 0.0:
-                sel[SEL_HEALTHY_SINCE] = t
-            if t - sel[SEL_HEALTHY_SINCE] >= cfg[C_SELECT_T]:
-                sel[SEL_RUN] = 1.0
-        else:
-            sel[SEL_HEALTHY_SINCE] = -1.0
+        _latch_selection(sel, cfg, t, healthy_p)
     imu_dead = ekf[p, IMU_OK] == 0.0
     if not imu_dead and (sel[SEL_RUN] == 0.0 or not armed):
         return False
-    best = -1
-    best_rel = 1.0e30
-    for i in range(n):
-        if i == p or ekf[i, HEALTHY] == 0.0:
-            continue
-        if t - sel[SEL_T_PRIMARY + i] < cfg[C_SELECT_T] and not imu_dead:
-            continue
-        if sel[SEL_REL_ERR + i] < best_rel:
-            best_rel = sel[SEL_REL_ERR + i]
-            best = i
+    best, best_rel = _switch_candidate(ekf, sel, cfg, t, p, imu_dead)
     if best < 0:
         return False
     switch = imu_dead or not healthy_p or (sp > 1.0 and ekf[best, SCORE] < sp) or best_rel <= -0.5

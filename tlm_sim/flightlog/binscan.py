@@ -121,6 +121,48 @@ def _same_fmt(data: np.ndarray, a: int, b: int) -> bool:
 
 
 @njit(cache=True, nogil=True)
+def _take_fmt(data: np.ndarray, i: int, sizes: np.ndarray, lengths: np.ndarray,
+              fmt_at: np.ndarray, rejected_at: np.ndarray, stats: np.ndarray) -> None:
+    """The FMT message at ``i`` (see :func:`_scan`): a self-consistent one defines its type
+    (length, offset) unless the type is defined already (then a different one counts as
+    conflicting); any other is counted as rejected."""
+    if not _fmt_ok(data, i, sizes):
+        stats[3] += 1
+        if stats[4] < 0:
+            stats[4] = i
+        if rejected_at[data[i + _F_TYPE]] < 0:
+            rejected_at[data[i + _F_TYPE]] = i
+        return
+    ft = data[i + _F_TYPE]
+    if fmt_at[ft] < 0:
+        lengths[ft] = data[i + _F_LEN]
+        fmt_at[ft] = i
+    elif not _same_fmt(data, fmt_at[ft], i):
+        stats[5] += 1
+        if stats[6] < 0:
+            stats[6] = i
+
+
+@njit(cache=True, nogil=True)
+def _end_skipped(stats: np.ndarray, run_start: int, end: int) -> None:
+    """Count the run of skipped bytes ``run_start`` to ``end`` (see :func:`_scan`'s stats)."""
+    stats[0] += end - run_start
+    stats[1] += 1
+    if stats[2] < 0:
+        stats[2] = run_start
+
+
+@njit(cache=True, nogil=True)
+def _grown(offsets: np.ndarray, types: np.ndarray, count: int):  # noqa: ANN202 - numba tuple
+    """(offsets, types) with twice the room, their first ``count`` entries kept."""
+    grown = np.empty(2 * count, dtype=np.int64)
+    grown[:count] = offsets[:count]
+    grown_t = np.empty(2 * count, dtype=np.uint8)
+    grown_t[:count] = types[:count]
+    return grown, grown_t
+
+
+@njit(cache=True, nogil=True)
 def _scan(data: np.ndarray, sizes: np.ndarray):  # noqa: ANN202 - numba tuple
     """Walk the messages of ``data`` (uint8). See the module docstring for the rules.
 
@@ -156,34 +198,12 @@ def _scan(data: np.ndarray, sizes: np.ndarray):  # noqa: ANN202 - numba tuple
             length = lengths[t]
             if length > 0 and i + length <= n:
                 if t == FMT_TYPE:
-                    if not _fmt_ok(data, i, sizes):
-                        stats[3] += 1
-                        if stats[4] < 0:
-                            stats[4] = i
-                        if rejected_at[data[i + _F_TYPE]] < 0:
-                            rejected_at[data[i + _F_TYPE]] = i
-                    else:
-                        ft = data[i + _F_TYPE]
-                        if fmt_at[ft] < 0:
-                            lengths[ft] = data[i + _F_LEN]
-                            fmt_at[ft] = i
-                        elif not _same_fmt(data, fmt_at[ft], i):
-                            stats[5] += 1
-                            if stats[6] < 0:
-                                stats[6] = i
+                    _take_fmt(data, i, sizes, lengths, fmt_at, rejected_at, stats)
                 if run_start >= 0:
-                    stats[0] += i - run_start
-                    stats[1] += 1
-                    if stats[2] < 0:
-                        stats[2] = run_start
+                    _end_skipped(stats, run_start, i)
                     run_start = -1
                 if count == offsets.size:
-                    grown = np.empty(2 * count, dtype=np.int64)
-                    grown[:count] = offsets
-                    offsets = grown
-                    grown_t = np.empty(2 * count, dtype=np.uint8)
-                    grown_t[:count] = types
-                    types = grown_t
+                    offsets, types = _grown(offsets, types, count)
                 offsets[count] = i
                 types[count] = t
                 count += 1
@@ -196,10 +216,7 @@ def _scan(data: np.ndarray, sizes: np.ndarray):  # noqa: ANN202 - numba tuple
             run_start = i
         i += 1
     if run_start >= 0:  # trailing bytes that are not messages
-        stats[0] += n - run_start
-        stats[1] += 1
-        if stats[2] < 0:
-            stats[2] = run_start
+        _end_skipped(stats, run_start, n)
     elif i < n:  # an incomplete final message (or 1-2 bytes of a header)
         stats[7] = n - i
     ordered, bounds = _by_type(offsets, types, count)
