@@ -14,7 +14,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["EkfInputs", "FlightLogs", "FlightPlan", "LoopWork", "VehicleConfig", "VehicleState"]
+__all__ = [
+    "EkfInputs", "FlightLogs", "FlightPlan", "LoopTick", "LoopWork", "VehicleConfig",
+    "VehicleInputs", "VehicleState",
+]
 
 
 class VehicleState(NamedTuple):
@@ -84,3 +87,29 @@ class EkfInputs(NamedTuple):
     mag_new: bool  #: a compass tick
     mag: np.ndarray  #: the compass block (sensors.layout MAG records)
     armed: bool  #: the vehicle is armed (lane switching, constant-position noise, compass reset)
+
+
+class VehicleInputs(NamedTuple):
+    """What the autopilot reads in one main-loop tick (tlm_sim.control.modes.vehicle_step):
+    the AHRS view (tlm_sim.control.ahrs), the EKF's output block for its failsafe checks, and
+    the power module's and the RC receiver's readings."""
+
+    pos: np.ndarray  #: position NED from home ground [m]
+    vel: np.ndarray  #: velocity NED [m/s]
+    q: np.ndarray  #: attitude quaternion body -> NED
+    gyro: np.ndarray  #: body rates, filtered, bias removed [rad/s] (body FRD)
+    acc_ned: np.ndarray  #: kinematic acceleration NED, gravity removed [m/s^2]
+    eo: np.ndarray  #: the EKF's output block (tlm_sim.ekf.layout O_*)
+    v_batt: float  #: battery voltage [V]
+    rc_last_frame_us: float  #: time of the last RC frame [us]
+    rc_throttle: float  #: that frame's throttle channel [us PWM]
+
+
+class LoopTick(NamedTuple):
+    """One main-loop tick: its time, its number, and which sensors delivered on it."""
+
+    t_us: int  #: time since boot [us]
+    tick: int  #: main-loop ticks so far (400 Hz)
+    gps_new: bool  #: a GPS epoch arrived
+    baro_new: bool  #: a primary-baro sample arrived
+    mag_new: bool  #: a compass tick

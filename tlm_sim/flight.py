@@ -20,7 +20,16 @@ from tlm_sim import ardupilot as AP
 from tlm_sim import logger as L
 from tlm_sim._jit import inline_jit, loop_jit, tick_jit
 from tlm_sim.boot import BOOT_ARM_S
-from tlm_sim.bundles import EkfInputs, FlightLogs, FlightPlan, LoopWork, VehicleConfig, VehicleState
+from tlm_sim.bundles import (
+    EkfInputs,
+    FlightLogs,
+    FlightPlan,
+    LoopTick,
+    LoopWork,
+    VehicleConfig,
+    VehicleInputs,
+    VehicleState,
+)
 from tlm_sim.control import layout as C
 from tlm_sim.control.ahrs import ahrs_update
 from tlm_sim.control.arming import (
@@ -179,12 +188,14 @@ def gps_week_ms(utc: _dt.datetime) -> tuple[int, int]:
 
 
 @tick_jit
-def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
-    """Apply the scheduled rows that are due, strictly in order; returns the next row index.
+def _apply_schedule(plan, cfg, k, t_us, wp_reached):
+    """Apply the scheduled rows of plan.sched that are due, strictly in order, to the
+    configuration arrays cfg; returns the next row index.
 
     A row is due when its trigger has passed: time rows at t_us >= SCH_AT, waypoint rows once
-    wp_reached >= SCH_AT. applied[change] gets the time [us] its first row was applied.
+    wp_reached >= SCH_AT. plan.applied[change] gets the time [us] its first row was applied.
     """
+    sched, applied = plan.sched, plan.applied
     while k < sched.shape[0]:
         if sched[k, SCH_KIND] == TRIG_TIME:
             if sched[k, SCH_AT] > t_us:
@@ -200,13 +211,13 @@ def _apply_schedule(sched, k, t_us, wp_reached, scfg, frame, g, ecfg, applied):
         if tgt == TGT_NONE:
             pass
         elif tgt == TGT_SENSOR:
-            scfg[idx] = v
+            cfg.scfg[idx] = v
         elif tgt == TGT_FRAME:
-            frame[idx] = v
+            cfg.frame[idx] = v
         elif tgt == TGT_CONTROL:
-            g[idx] = v
+            cfg.g[idx] = v
         else:
-            ecfg[idx] = v
+            cfg.ecfg[idx] = v
         k += 1
     return k
 
@@ -257,12 +268,13 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     path, seg, sched, applied, home, gps_time = plan
     bufs, counts, txt = logs
     dang, dvel, rows, eo = work
-    imu_ok, gps, pwm = rows[W_IMU_OK], rows[W_GPS], rows[W_PWM]
+    gps, pwm = rows[W_GPS], rows[W_PWM]
     pos, vel, q, gyro = rows[W_POS], rows[W_VEL], rows[W_Q], rows[W_GYRO]
     acc_ned = rows[W_ACC_NED]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home[0], dcm, gsf)
+    ev = (events, ev_counts)
+    _boot(state, cfg, ev, home[0])
     k_sched = 0
     t_us = 0
     next_loop = 0
@@ -271,37 +283,35 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     stop_at = -1
     throttle = _motor_pwm(c, frame, pwm)
     while t_us < t_end_us:
-        k_next = _apply_schedule(sched, k_sched, t_us, c[C.WP_REACHED], scfg, frame, g, ecfg,
-                                 applied)
+        k_next = _apply_schedule(plan, cfg, k_sched, t_us, c[C.WP_REACHED])
         if k_next != k_sched:  # a parameter changed: the engine fault may act on the PWM
             k_sched = k_next
             throttle = _motor_pwm(c, frame, pwm)
-        t_us = _physics_tick(x, frame, scfg, s, pwm, throttle, t_us, rng, wind_rng)
+        t_us = _physics_tick(state, cfg, pwm, throttle, t_us)
         if t_us < next_loop:
             continue
         next_loop += LOOP_DT_US
         tick += 1
-        gps_new, baro_new, mag_new = _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps,
-                                                   rng, events, ev_counts)
-        armed = c[C.ARMED] != 0.0
-        dcm_update(dcm, g, s, dang, dvel, imu_ok, gps, gps_new, int(eo[EK.O_IMU]), armed, t_us)
-        _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new,
-                  mag_new, s, armed, events, ev_counts, gsf)
+        gps_new, baro_new, mag_new = _read_sensors(state, scfg, work, t_us, ev)
+        now = LoopTick(t_us, tick, gps_new, baro_new, mag_new)
+        dcm_update(dcm, g, s, dang, dvel, rows[W_IMU_OK], gps, gps_new, int(eo[EK.O_IMU]),
+                   c[C.ARMED] != 0.0, t_us)
+        _estimate(state, ecfg, work, now, ev)
         if boot_texts_due(c, eo):
             lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, events, ev_counts)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(events, ev_counts, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
         battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], events, ev_counts)
-        vehicle_step(c, g, t_us, pos, vel, q, gyro, acc_ned, s[S.PM_VOLT], path, path.shape[0],
-                     seg, s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2], eo, events, ev_counts)
+        vehicle_step(c, g, t_us, VehicleInputs(pos, vel, q, gyro, acc_ned, eo, s[S.PM_VOLT],
+                                               s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2]),
+                     path, seg, events, ev_counts)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), s, gps, eo, q, txt, events, ev_counts):
             arm_vehicle(c, t_us, q, events, ev_counts)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
-        last_gps_ms = _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time,
-                                home, x, s, scfg, c, ekf, sel, ecfg, eo, pos, g, dcm, gsf)
+        last_gps_ms = _log_tick(logs, state, cfg, plan, work, now, last_gps_ms)
         if stop_at < 0 and (c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0):
             stop_at = t_us + 2000000
         if stop_at >= 0 and t_us >= stop_at:
@@ -310,44 +320,47 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
 
 
 @inline_jit
-def _boot(s, scfg, ekf, sel, ecfg, c, g, events, ev_counts, home_lat, dcm, gsf):
+def _boot(state, cfg, ev, home_lat):
     """Power on: sensors, EKF lanes, their yaw estimators and the DCM estimator initialised
     (the GPS found at once, or when the boot phase's driver finds it), the arming driver
-    ready, the boot mode (STABILIZE) logged."""
+    ready, the boot mode (STABILIZE) logged into the event buffers ev (events, counts)."""
+    s, scfg = state.s, cfg.scfg
     imu_init(s, scfg, 0.0)
     gps_init(s, scfg[S.C_GPS_DETECT_US], home_lat)
     rc_init(s, 0.0)
     baro_init(s)
     s[S.B_GND_TEMP] = calibration_temperature(scfg)
     mag_init(s)
-    ekf_init(ekf, sel, ecfg)
-    arming_init(c, g)
-    gsf_init(gsf, ecfg)
-    dcm_init(dcm)
-    log_mode(events, ev_counts, 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
+    ekf_init(state.ekf, state.sel, cfg.ecfg)
+    arming_init(state.c, cfg.g)
+    gsf_init(state.gsf, cfg.ecfg)
+    dcm_init(state.dcm)
+    log_mode(ev[0], ev[1], 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
 
 
 @inline_jit
-def _physics_tick(x, frame, scfg, s, pwm, throttle, t_us, rng, wind_rng):
+def _physics_tick(state, cfg, pwm, throttle, t_us):
     """One 1200 Hz physics step at t_us: the motors driven by pwm (the autopilot's PWM as the
     engine fault alters it, :func:`_motor_pwm`; throttle: their mean output), the rigid body,
     the IMU sampling it; returns the new time [us]."""
-    physics_step(x, pwm, frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, wind_rng)
+    physics_step(state.x, pwm, cfg.frame, PHYSICS_DT_US * 1e-6, t_us * 1e-6, state.wind_rng)
     t_us += PHYSICS_DT_US
-    imu_sample(s, x, scfg, float(t_us), throttle, pwm, rng)
+    imu_sample(state.s, state.x, cfg.scfg, float(t_us), throttle, pwm, state.rng)
     return t_us
 
 
 @inline_jit
-def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_counts):
-    """The main loop's sensor reads at t_us: IMU deltas (imu_ok[i]: IMU i's accel delivered
-    samples, imu_ok[N_IMU + i]: its gyro did), the GPS epoch into gps when one is due, baro and
-    compass at 10 Hz (ERR 18 when the primary baro's health changes, ERR 3 when the first
-    compass's does), the RC receiver, the power module. Returns (GPS, primary baro, compass
-    tick) new this tick."""
+def _read_sensors(state, scfg, work, t_us, ev):
+    """The main loop's sensor reads at t_us: IMU deltas into work (its W_IMU_OK row: [i] IMU
+    i's accel delivered samples, [N_IMU + i] its gyro did), the GPS epoch into the W_GPS row
+    when one is due, baro and compass at 10 Hz (ERR 18 when the primary baro's health changes,
+    ERR 3 when the first compass's does; ev: the event buffers and counts), the RC receiver,
+    the power module. Returns (GPS, primary baro, compass tick) new this tick."""
+    s, x, rng = state.s, state.x, state.rng
+    imu_ok, gps = work.rows[W_IMU_OK], work.rows[W_GPS]
     power_module_read(s, x)
     for i in range(S.N_IMU):
-        imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, dang, dvel)
+        imu_ok[i] = imu_take_deltas(s, i, LOOP_DT_US * 1e-6, work.dang, work.dvel)
         imu_ok[S.N_IMU + i] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_GYR_OK]
     gps_push_truth(s, x, t_us * 1e-6)
     gps_new = False
@@ -359,13 +372,13 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
         s[S.B_NEXT_US] += BARO_PERIOD_US
         baro_new, err = baro_read(s, x, scfg, rng, float(t_us))
         if err >= 0:
-            log_err(events, ev_counts, t_us, AP.ERR_BARO, err)
+            log_err(ev[0], ev[1], t_us, AP.ERR_BARO, err)
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += MAG_PERIOD_US
         dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
         if dh != 0:
-            log_err(events, ev_counts, t_us, AP.ERR_COMPASS,
+            log_err(ev[0], ev[1], t_us, AP.ERR_COMPASS,
                     AP.ERR_CODE_RESOLVED if dh > 0 else AP.ERR_CODE_UNHEALTHY)
         mag_new = True
     rc_update(s, scfg, float(t_us))
@@ -373,40 +386,50 @@ def _read_sensors(s, x, scfg, t_us, dang, dvel, imu_ok, gps, rng, events, ev_cou
 
 
 @inline_jit
-def _estimate(ekf, sel, ecfg, eo, t_us, dang, dvel, imu_ok, gps, gps_new, baro_new, mag_new, s,
-              armed, events, ev_counts, gsf):
-    """The EKF's main-loop update with this tick's sensor data, its lanes' yaw estimators
-    (:mod:`tlm_sim.ekf.gsf`), the per-tick part of its output block eo filled (ekf.layout O_*,
-    :func:`ekf_output_nav`) and a primary-lane change logged."""
+def _estimate(state, ecfg, work, now, ev):
+    """The EKF's main-loop update with this tick's sensor data (now: the
+    :class:`~tlm_sim.bundles.LoopTick`), its lanes' yaw estimators (:mod:`tlm_sim.ekf.gsf`), the
+    per-tick part of its output block work.eo filled (ekf.layout O_*, :func:`ekf_output_nav`)
+    and a primary-lane change logged into the event buffers ev (events, counts)."""
+    ekf, sel, s, gsf = state.ekf, state.sel, state.s, state.gsf
+    dang, dvel, imu_ok, gps = work.dang, work.dvel, work.rows[W_IMU_OK], work.rows[W_GPS]
+    t_us, gps_new = now.t_us, now.gps_new
+    armed = state.c[C.ARMED] != 0.0
     if gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
     switched = ekf_update(ekf, sel, ecfg, float(t_us), EkfInputs(
         dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
-        baro_new, s[S.B_ALT], mag_new, s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
+        now.baro_new, s[S.B_ALT], now.mag_new,
+        s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
     ))
     gsf_update(gsf, ekf, ecfg, dang, dvel, imu_ok, gps_new, gps[S.GE_VN], gps[S.GE_VE],
                gps[S.GE_FIX_3D] > 0.5, armed)
-    ekf_output_nav(ekf, sel, eo)
+    ekf_output_nav(ekf, sel, work.eo)
     if switched:
-        log_lane_switch(events, ev_counts, t_us, eo)
+        log_lane_switch(ev[0], ev[1], t_us, work.eo)
 
 
 @inline_jit
-def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, home, x, s, scfg,
-              c, ekf, sel, ecfg, eo, pos, g, dcm, gsf):
-    """The main loop's logging: the on-event messages (ORGN once home is set from the EKF's
-    origin, ARM, LDET, MISE), GPS/GPA per epoch, SIM2 at 50 Hz, IMU at 25 Hz, each subsystem's
-    10 Hz messages. Returns the last GPS epoch's ms of week."""
+def _log_tick(logs, state, cfg, plan, work, now, last_gps_ms):
+    """The main loop's logging at now (:class:`~tlm_sim.bundles.LoopTick`): the on-event
+    messages (ORGN once home is set from the EKF's origin, ARM, LDET, MISE), GPS/GPA per epoch,
+    SIM2 at 50 Hz, IMU at 25 Hz, each subsystem's 10 Hz messages. Returns the last GPS epoch's
+    ms of week."""
+    bufs, counts = logs.bufs, logs.counts
+    x, s, ekf, sel, c = state.x, state.s, state.ekf, state.sel, state.c
+    scfg, ecfg, g, home = cfg.scfg, cfg.ecfg, cfg.g, plan.home
+    eo, pos, gps = work.eo, work.rows[W_POS], work.rows[W_GPS]
+    t_us, tick = now.t_us, now.tick
     origin_ready = counts[L.K_ORGN] == 0 and c[C.HOME_SET] != 0.0
     if vehicle_events_due(c, origin_ready):
         log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home[0], home[1], home[2])
     if tick % SIM2_TICKS == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
         log_sim2(bufs, counts, t_us, x)
-    if gps_new:
+    if now.gps_new:
         last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
-                              gps_time, last_gps_ms)
+                              plan.gps_time, last_gps_ms)
     if tick % IMU_LOG_TICKS == 0:  # IMU at 25 Hz, both instances
         log_imu(bufs, counts, t_us, s, scfg)
     if tick % TEN_HZ_LOG_TICKS == 0:  # 10 Hz messages
@@ -416,8 +439,8 @@ def _log_tick(bufs, counts, t_us, tick, gps_new, gps, last_gps_ms, gps_time, hom
         log_ekf_evidence(bufs, counts, t_us, ekf, sel, ecfg)
         log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
         log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
-        log_dcm_10hz(bufs, counts, t_us, dcm, g, s, gps, eo, home[0], home[1], home[2])
-        log_gsf(bufs, counts, t_us, gsf)
+        log_dcm_10hz(bufs, counts, t_us, state.dcm, g, s, gps, eo, home[0], home[1], home[2])
+        log_gsf(bufs, counts, t_us, state.gsf)
     return last_gps_ms
 
 

@@ -67,6 +67,11 @@ _U2 = nt.uint64[:, ::1]  # the sensor noise streams (tlm_sim.rng.new_streams)
 _f8, _i8, _b1 = nt.float64, nt.int64, nt.boolean
 _BUFS = nt.UniTuple(_F2, len(L.LOG_ORDER))
 _EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
+# the flight loop's bundles (tlm_sim.bundles)
+_STATE = nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState)
+_CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
+_WORK = nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork)
+_PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan)
 
 
 @dataclass(frozen=True)
@@ -87,8 +92,8 @@ class Job:
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
-        (_F1, _F1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _F2, _i8, _F2, _f8, _f8, _F1, _EVENTS,
-         _I1),
+        (_F1, _F1, _i8, nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs), _F2, _F2,
+         _EVENTS, _I1),
         13.1),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, nt.NamedTuple(
@@ -105,7 +110,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _f8, _f8, _f8, _F1, _f8), 0.6),
     Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.1),
     Job("tlm_sim.sensors.gps:gps_measure", (_F1, _F1, _f8, _F1, _U1), 0.9),
-    Job("tlm_sim.flight:_apply_schedule", (_F2, _i8, _i8, _f8, _F1, _F1, _F1, _F1, _F1), 0.3),
+    Job("tlm_sim.flight:_apply_schedule", (_PLAN, _CONFIG, _i8, _i8, _f8), 0.3),
     Job("tlm_sim.sensors.imu:imu_take_deltas", (_F1, _i8, _f8, _F2, _F2), 0.3),
     Job("tlm_sim.sensors.baro:baro_read", (_F1, _F1, _F1, _U2, _f8), 0.5),
     Job("tlm_sim.sensors.baro:baro_init", (_F1,), 0.1),
@@ -145,11 +150,7 @@ JOBS: tuple[Job, ...] = (
 
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
-    (nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState),
-     nt.NamedTuple((_F1,) * 4, B.VehicleConfig),
-     nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan),
-     nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs),
-     nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork), _i8), 8.4)
+    (_STATE, _CONFIG, _PLAN, nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs), _WORK, _i8), 8.4)
 
 
 @dataclass

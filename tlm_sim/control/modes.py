@@ -163,21 +163,19 @@ def _start_land(c, pos, failsafe):
 
 
 @tick_jit
-def vehicle_step(
-    c, g, t_us, pos, vel, q, gyro, acc_ned, v_batt, path, n_path, seg, rc_last_frame_us,
-    rc_throttle, eo, events, ev_counts,
-):
+def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
-    pos, vel: EKF position/velocity NED [m, m/s] (origin home ground); q: EKF attitude body->NED;
-    gyro: body rates [rad/s] (filtered, bias removed); acc_ned: kinematic acceleration NED
-    [m/s^2] from the accelerometers (gravity removed); v_batt: battery voltage [V];
-    path[0:n_path]: the mission as NED points (path[0] = the takeoff point above home);
-    seg: (>=2, 3) scratch path for takeoff/RTL segments; rc_last_frame_us: last RC frame time;
-    rc_throttle: that frame's throttle channel [us]; eo: the EKF's output block (ekf.layout O_*)
-    for the failsafe checks; events/ev_counts: the flight's event log buffers
-    and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
+    inputs: the tick's :class:`tlm_sim.bundles.VehicleInputs` (the AHRS view: EKF position and
+    velocity NED [m, m/s] from home ground, attitude body->NED, filtered body rates without the
+    bias [rad/s], kinematic acceleration NED without gravity [m/s^2]; the EKF's output block
+    for the failsafe checks; battery voltage [V]; the last RC frame's time [us] and throttle
+    channel [us]); path: the mission as NED points (path[0] = the takeoff point above home);
+    seg: (>=2, 3) scratch path for takeoff/RTL segments; events/ev_counts: the flight's event
+    log buffers and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
     """
+    pos, vel, q, gyro, acc_ned, eo, v_batt, rc_last_frame_us, rc_throttle = inputs
+    n_path = path.shape[0]
     dt = g[C.G_DT]
     t_s = t_us * 1e-6
     cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])  # cos(roll) cos(pitch)
