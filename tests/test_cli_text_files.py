@@ -79,7 +79,7 @@ def test_a_journal_line_that_is_not_utf8_counts_as_one_bad_line(tmp_path):
 
 
 def test_a_sidecar_that_is_not_utf8_is_reported_by_tlm_info(normal_flight, tmp_path):
-    from tlm_process.logcmd import log_info
+    from tlm_process.binlog import log_info
     from tlm_sim.flightlog.binwriter import encode_bin
 
     (tmp_path / "f.json").write_bytes(b'{"faults": []} ' + BAD)

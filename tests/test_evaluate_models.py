@@ -177,7 +177,7 @@ def test_weka_feature_count_and_every_model_fits_and_is_seeded():
 
 
 def test_command_model_list_matches_the_models_module():
-    from tlm_process.evaluate.command import MODEL_NAMES
+    from tlm_process.commands.evaluate import MODEL_NAMES
 
     assert MODEL_NAMES == ALL_MODELS
 

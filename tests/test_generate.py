@@ -279,7 +279,7 @@ def test_dask_local_cluster_writes_the_same_bytes(dataset, tmp_path):
 def _cli(argv: list[str]) -> int:
     import argparse
 
-    from tlm_process.generate import command
+    from tlm_process.commands import generate as command
 
     ap = argparse.ArgumentParser(prog="tlm")
     command.add_parser(ap.add_subparsers(dest="command", required=True))

@@ -196,7 +196,7 @@ def test_bad_frame_and_wind_settings_are_one_line_errors(kwargs, needle):
 
 
 def _args(*argv: str) -> argparse.Namespace:
-    from tlm_process.generate import command
+    from tlm_process.commands import generate as command
 
     ap = argparse.ArgumentParser(prog="tlm")
     command.add_parser(ap.add_subparsers(dest="command", required=True))

@@ -20,7 +20,7 @@ SHORT = ScenarioConfig(kinds={"single": 1.0}, fault_weights={"rc": 1.0},
 def _cli(argv: list[str]) -> int:
     import argparse
 
-    from tlm_process.generate import command
+    from tlm_process.commands import generate as command
 
     ap = argparse.ArgumentParser(prog="tlm")
     command.add_parser(ap.add_subparsers(dest="command", required=True))
