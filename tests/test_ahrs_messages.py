@@ -21,6 +21,7 @@ from tests.ekf_synth import (
     rot_to_quat,
 )
 from tlm_sim import fly
+from tlm_sim.bundles import EkfInputs
 from tlm_sim.control import dcm as D
 from tlm_sim.control import dcm_layout as DL
 from tlm_sim.control import layout as C
@@ -299,11 +300,14 @@ def test_gsf_converges_from_between_its_hypotheses_on_a_synthetic_flight():
     da = np.zeros((S.N_IMU, 3))
     dv = np.zeros((S.N_IMU, 3))
     imu_ok = np.ones(2 * S.N_IMU)
+    no_mag = np.zeros(1)
     out = []
     for k in range(t.shape[0]):
         da[0], dv[0] = dang[k], dvel[k]
-        G.gsf_update(gsf, ekf[:1], cfg, da, dv, imu_ok, bool(gps_new[k]), gps_vel[k, 0],
-                     gps_vel[k, 1], bool(gps_new[k]), bool(armed[k]))
+        new = bool(gps_new[k])  # (the estimator reads no GPS position, baro or compass)
+        G.gsf_update(gsf, ekf[:1], cfg, EkfInputs(da, dv, imu_ok, new, gps_vel[k], gps_vel[k],
+                                                  new, False, 0.0, False, no_mag,
+                                                  bool(armed[k])))
         if k % 40 == 0 and gsf[0, GL.G_FUSING]:
             G.gsf_refresh(gsf[0])
             out.append((t[k], math.degrees(gsf[0, GL.G_YAW]),

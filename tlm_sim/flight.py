@@ -398,14 +398,14 @@ def _estimate(state, ecfg, work, now, ev):
     if gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
-    switched = ekf_update(ekf, sel, ecfg, float(t_us), EkfInputs(
+    inputs = EkfInputs(
         dang, dvel, imu_ok,
         gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
         now.baro_new, s[S.B_ALT], now.mag_new,
         s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
-    ))
-    gsf_update(gsf, ekf, ecfg, dang, dvel, imu_ok, gps_new, gps[S.GE_VN], gps[S.GE_VE],
-               gps[S.GE_FIX_3D] > 0.5, armed)
+    )
+    switched = ekf_update(ekf, sel, ecfg, float(t_us), inputs)
+    gsf_update(gsf, ekf, ecfg, inputs)
     ekf_output_nav(ekf, sel, work.eo)
     if switched:
         log_lane_switch(ev[0], ev[1], t_us, work.eo)

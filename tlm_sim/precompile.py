@@ -71,6 +71,8 @@ _EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
 _STATE = nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState)
 _CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
 _WORK = nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork)
+_EKF_INPUTS = nt.NamedTuple((_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1),
+                            B.EkfInputs)
 _PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan)
 
 
@@ -96,8 +98,7 @@ JOBS: tuple[Job, ...] = (
          _EVENTS, _I1),
         13.1),
     Job("tlm_sim.ekf.lanes:ekf_update",
-        (_F2, _F1, _F1, _f8, nt.NamedTuple(
-            (_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1), B.EkfInputs)), 13.4),
+        (_F2, _F1, _F1, _f8, _EKF_INPUTS), 13.4),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.1),
     Job("tlm_sim.control.log:log_control_10hz",
         (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.8),
@@ -137,8 +138,7 @@ JOBS: tuple[Job, ...] = (
     # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs
     Job("tlm_sim.control.dcm:dcm_update",
         (_F1, _F1, _F1, _F2, _F2, _F1, _F1, _b1, _i8, _b1, _i8), 3.9),
-    Job("tlm_sim.ekf.gsf:gsf_update",
-        (_F2, _F2, _F1, _F2, _F2, _F1, _b1, _f8, _f8, _b1, _b1), 2.7),
+    Job("tlm_sim.ekf.gsf:gsf_update", (_F2, _F2, _F1, _EKF_INPUTS), 2.7),
     Job("tlm_sim.control.log:log_dcm_10hz",
         (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1, _f8, _f8, _f8), 0.7),
     Job("tlm_sim.ekf.log:log_gsf", (_BUFS, _I1, _i8, _F2), 0.8),

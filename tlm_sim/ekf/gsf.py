@@ -117,13 +117,16 @@ def gsf_init(gsf, cfg):
 
 
 @tick_jit
-def gsf_update(gsf, ekf, cfg, dang, dvel, imu_ok, gps_new, gps_vn, gps_ve, gps_fix, armed):
+def gsf_update(gsf, ekf, cfg, inputs):
     """One main-loop tick of every lane's estimator, after the EKF's (its gyro bias, GPS checks).
 
-    dang/dvel[imu, 0:3]: this tick's IMU deltas [rad, m/s, body FRD]; imu_ok as
-    :func:`tlm_sim.ekf.lanes.lane_imu_sources` reads it; gps_new with gps_vn/gps_ve [m/s] the
-    new GPS epoch's NE velocity and gps_fix its 3-D fix; armed: the vehicle is armed.
+    inputs: the tick's :class:`tlm_sim.bundles.EkfInputs`, as the EKF had them: the IMU deltas
+    [rad, m/s, body FRD] and health (as :func:`tlm_sim.ekf.lanes.lane_imu_sources` reads it),
+    a new GPS epoch's NE velocity [m/s] and 3-D fix, whether the vehicle is armed.
     """
+    dang, dvel, imu_ok, armed = inputs.dang, inputs.dvel, inputs.imu_ok, inputs.armed
+    gps_new, gps_fix = inputs.gps_new, inputs.gps_fix
+    gps_vn, gps_ve = inputs.gps_vel[0], inputs.gps_vel[1]
     for ln in range(gsf.shape[0]):
         g = gsf[ln]
         if g[G_ENABLED] == 0.0:
