@@ -156,7 +156,7 @@ def test_tlm_gps_loss_shakes_vibe_like_sitl_once_aiding_stops():
     """In calm air a GPS loss shows in VIBE only after EKF3 stops aiding (15 s): the position
     controller loses its position and the vehicle hunts (VibeX 95th percentile, 25 s before the
     loss -> its last 19 s: SITL gps_s12 0.0031 -> 0.0433 m/s^2, tlm 0.0030 -> 0.0427). This
-    small signal is what the VIBE models find without wind (docs/evaluation.md)."""
+    small signal is what the VIBE models find without wind (docs/evaluation-history.md)."""
     from tlm_sim.flightlog import read_bin
 
     _, flight = _tlm("gps")

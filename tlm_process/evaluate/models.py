@@ -83,7 +83,7 @@ ALL_MODELS: tuple[str, ...] = PAPER_MODELS + ("CNN",) + TIME_MODELS
 #: Rate [Hz] each model's training rows are thinned to by default (``tlm evaluate
 #: --train-hz``; 0: every row): in each flight, in time order, every k-th row, k =
 #: round(table rate / Hz) (5 Hz: every GPS row, every 2nd RATE/VIBE row, every 5th IMU
-#: row). Test rows are never thinned. Measured on a 60-flight set (``docs/evaluation.md``,
+#: row). Test rows are never thinned. Measured on a 60-flight set (``docs/evaluation-history.md``,
 #: "Training rows"): a model is thinned to 5 Hz where on every table its macro-F1 on the
 #: test flights and on the transfer logs stayed within 0.01 of fitting every row; SMO to
 #: 1 Hz (within 0.01 on GPS; on every row it takes hours on IMU); the window models keep the
@@ -102,7 +102,7 @@ WEIGHTED_MODELS: tuple[str, ...] = ("NaiveBayes", "Logistic", "ZeroR", "RandomFo
 
 #: Rate [Hz] of each model's Normal training rows by default (``--normal-hz``; 0 or missing:
 #: the model's training-row rate), for :data:`WEIGHTED_MODELS`. Normal rows are 87 % of a
-#: ``tlm generate`` data set. Measured on the 60-flight benchmark set (``docs/evaluation.md``,
+#: ``tlm generate`` data set. Measured on the 60-flight set (``docs/evaluation-history.md``,
 #: "Normal rows"; 3.5-17 times fewer rows fitted): Logistic and RandomForest at 5 Hz with the
 #: Normal rows at 1 Hz scored within 0.01 of every row except Logistic's RATE transfer score
 #: (-0.07) and RandomForest's VIBE transfer score (-0.011); WindowHGB60 and CentredHGB gained

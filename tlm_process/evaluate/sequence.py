@@ -182,7 +182,7 @@ class SeqCNN(ClassifierMixin, BaseEstimator):
     ``dilations``, ``head``: the network; ``steps`` (None: :data:`STEPS`), ``batch`` (crops
     per step), ``crop`` (coarse steps with a loss per crop, after the receptive field),
     ``lr`` (Adam's peak), ``arch`` (``"tcn"``; ``"gru"``: one GRU layer instead of the
-    convolutions, measured and not the default, ``docs/evaluation.md``),
+    convolutions, measured and not the default, ``docs/evaluation-history.md``),
     ``class_weight`` (None, ``"balanced"``: n / (k n_c), ``"sqrt"``: its square root,
     normalised to a mean of 1 over the rows); ``fault_share``: share of crops drawn to end
     shortly after a row of a minority class. ``history_``: per ``steps / 10`` steps the mean

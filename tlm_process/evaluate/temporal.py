@@ -397,7 +397,7 @@ def window_hgb(seed: int = 0, n_jobs: int = 1, booster: str = "xgboost") -> Any:
     limits them). Three to four times slower than the default; on the 200-flight benchmark set
     its test macro-F1 is 0.02-0.04 higher in three cells (IMU ``WindowHGB60``, VIBE
     ``WindowHGB60`` and ``CentredHGB``) and within the seed's spread elsewhere
-    (``docs/evaluation.md``, "The booster").
+    (``docs/evaluation-history.md``, "The booster").
 
     ``booster`` "xgboost" (the default): XGBoost's histogram gradient boosting (``tree_method=
     "hist"``, 255 bins per column), 150 rounds of one tree per class, learning rate 0.1,
@@ -410,7 +410,7 @@ def window_hgb(seed: int = 0, n_jobs: int = 1, booster: str = "xgboost") -> Any:
     scikit-learn's ``HistGradientBoostingClassifier`` with 150 rounds, rate 0.1 and 31
     leaves (the window models' booster until 2026-11) on the 60-flight benchmark set: fits
     2-5 times faster, macro-F1 0.025 higher in-domain and 0.068 higher on the SITL logs on
-    average over the 12 table x model cells (``docs/evaluation.md``, "The booster")."""
+    average over the 12 table x model cells (``docs/evaluation-history.md``, "The booster")."""
     if booster == "sklearn":
         from sklearn.ensemble import HistGradientBoostingClassifier
 
