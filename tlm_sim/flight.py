@@ -424,22 +424,21 @@ def _log_tick(logs, state, cfg, plan, work, now, last_gps_ms):
     t_us, tick = now.t_us, now.tick
     origin_ready = counts[L.K_ORGN] == 0 and c[C.HOME_SET] != 0.0
     if vehicle_events_due(c, origin_ready):
-        log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home[0], home[1], home[2])
+        log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home)
     if tick % SIM2_TICKS == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
         log_sim2(bufs, counts, t_us, x)
     if now.gps_new:
-        last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home[0], home[1], home[2],
-                              plan.gps_time, last_gps_ms)
+        last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home, plan.gps_time, last_gps_ms)
     if tick % IMU_LOG_TICKS == 0:  # IMU at 25 Hz, both instances
         log_imu(bufs, counts, t_us, s, scfg)
     if tick % TEN_HZ_LOG_TICKS == 0:  # 10 Hz messages
         ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
         log_sensors_10hz(bufs, counts, t_us, s, home[2])
-        log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home[0], home[1], home[2])
+        log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home)
         log_ekf_evidence(bufs, counts, t_us, ekf, sel, ecfg)
         log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
-        log_dynamics_10hz(bufs, counts, t_us, x, home[0], home[1], home[2])
-        log_dcm_10hz(bufs, counts, t_us, state.dcm, g, s, gps, eo, home[0], home[1], home[2])
+        log_dynamics_10hz(bufs, counts, t_us, x, home)
+        log_dcm_10hz(bufs, counts, t_us, state.dcm, g, s, gps, eo, home)
         log_gsf(bufs, counts, t_us, state.gsf)
     return last_gps_ms
 

@@ -90,13 +90,14 @@ def vehicle_events_due(c, origin_ready):
 
 
 @tick_jit
-def log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home_lat, home_lon, home_alt):
+def log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home):
     """The on-event messages, when :func:`vehicle_events_due` (after the autopilot's step):
     ORGN once home is set from the EKF's origin (``origin_ready``; EV SET_HOME is the arming
     driver's, :mod:`tlm_sim.control.arming`), ARM (and ORGN:
     ArduCopter sets home to the current position when arming) on a change of the armed state,
     LDET, MISE. pos: the EKF position NED [m] from the origin; home: the EKF origin (degrees,
     m AMSL)."""
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     if origin_ready and counts[L.K_ORGN] == 0:
         _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
     armed = c[C.ARMED]
@@ -279,12 +280,13 @@ DCMC, AHR2 = L.DCM_COLS, L.AHR2_COLS
 
 
 @tick_jit
-def log_dcm_10hz(bufs, counts, t_us, d, g, s, gps, eo, home_lat, home_lon, home_alt):
+def log_dcm_10hz(bufs, counts, t_us, d, g, s, gps, eo, home):
     """DCM (the estimator's state) and AHR2 (the AHRS's secondary solution: the DCM's, while the
     EKF is the active one) at 10 Hz from the DCM array d (:mod:`tlm_sim.control.dcm`); g: the
     controller configuration, s: sensor state (baro), gps: the latest GPS epoch, eo: the EKF
     output block, home: degrees, m AMSL. AHR2's angles are truncated to centidegrees as the
     firmware's integer casts do."""
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     if d[DL.D_INIT] == 0.0:
         return
     dcm_eulers(d)

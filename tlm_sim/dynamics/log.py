@@ -18,8 +18,9 @@ PITOT_GAIN = 0.5 * math.pi / (0.5 * math.pi - PITOT_AOA_MAX)  # ... then falls o
 
 
 @tick_jit
-def log_dynamics_10hz(bufs, counts, t_us, x, home_lat, home_lon, home_alt):
+def log_dynamics_10hz(bufs, counts, t_us, x, home):
     """The SIM row from the truth state x (home: degrees, m AMSL)."""
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     r = L.new_row(bufs, counts, L.K_SIM, t_us)
     if r >= 0:
         b = bufs[L.K_SIM]

@@ -56,9 +56,10 @@ def gps_glitch_check(events, ev_counts, t_us, ekf, sel):
 
 
 @tick_jit
-def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home_lat, home_lon, home_alt):
+def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home):
     """The EKF's 10 Hz rows: XKF1, XKF4 and XKFS for every lane, POS of the output (home:
     degrees, m AMSL)."""
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     for ln in range(int(sel[EK.SEL_N_LANES])):
         _log_lane(bufs, counts, t_us, ekf[ln], ln, sel[EK.SEL_PRIMARY], home_alt)
         _log_sources(bufs, counts, t_us, ekf[ln], ln)

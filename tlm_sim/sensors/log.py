@@ -14,9 +14,10 @@ VIBE, BARO, MAG, RCIN = L.VIBE_COLS, L.BARO_COLS, L.MAG_COLS, L.RCIN_COLS
 
 
 @tick_jit
-def log_gps(bufs, counts, t_us, gps, scfg, home_lat, home_lon, home_alt, gps_time, last_ms):
+def log_gps(bufs, counts, t_us, gps, scfg, home, gps_time, last_ms):
     """GPS and GPA rows for one GPS epoch gps (layout GE_*); home in degrees and m AMSL;
     gps_time: (week, ms of week at boot). Returns the epoch's ms of week."""
+    home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     r = L.new_row(bufs, counts, L.K_GPS, t_us)
     ms = gps_time[1] + round(t_us / 200000.0) * 200.0
     week = gps_time[0] + math.floor(ms / 604800000.0)
