@@ -174,10 +174,8 @@ def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
     seg: (>=2, 3) scratch path for takeoff/RTL segments; events/ev_counts: the flight's event
     log buffers and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
     """
-    pos, vel, q, gyro, acc_ned, eo, v_batt, rc_last_frame_us, rc_throttle = inputs
-    n_path = path.shape[0]
+    pos, q, acc_ned, eo, v_batt = inputs.pos, inputs.q, inputs.acc_ned, inputs.eo, inputs.v_batt
     dt = g[C.G_DT]
-    t_s = t_us * 1e-6
     cos_tilt = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2])  # cos(roll) cos(pitch)
     _estimates_update(c, g, pos, acc_ned, dt)
     if c[C.ARMED] == 0.0:
@@ -185,27 +183,24 @@ def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
         _motors_at_rest(c, g, v_batt)
         return
     c[C.SUB_TIMER] += dt
-    sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), pos, vel, seg, rc_last_frame_us,
-                          rc_throttle, events, ev_counts)
+    sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), inputs, seg, events, ev_counts)
     sub = _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts)
-    sub = _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts)
+    sub = _battery_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts)
     if c[C.ARMED] == 0.0:
         return
     if sub == C.SUB_GROUND_IDLE:
-        _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts)
+        _ground_idle(c, g, t_us, inputs, seg, events, ev_counts)
         _motors_at_rest(c, g, v_batt)
         return
-    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path,
-                                                    seg, events, ev_counts)
+    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, path, seg, events,
+                                                    ev_counts)
     sub = int(c[C.SUBMODE])
-    if sub == C.SUB_LAND and _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events,
-                                           ev_counts):
+    if sub == C.SUB_LAND and _land_descent(c, g, t_us, pos, land_vertical, events, ev_counts):
         return
-    thr = _controllers(c, g, sub, pos, vel, q, gyro, -acc_ned[2], cos_tilt,
-                       yaw_cmd, yaw_rate_ff, v_batt)
-    _hover_learning(c, g, dt, sub, thr, vel, q)
-    _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts)
-    _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts)
+    thr = _controllers(c, g, sub, inputs, cos_tilt, yaw_cmd, yaw_rate_ff)
+    _hover_learning(c, g, sub, thr, inputs)
+    _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts)
+    _crash_checks(c, g, t_us, inputs, cos_tilt, events, ev_counts)
 
 
 @inline_jit
@@ -273,12 +268,13 @@ def _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle):
 
 
 @inline_jit
-def _radio_failsafe(c, g, t_us, sub, pos, vel, seg, rc_last_frame_us, rc_throttle, events,
-                    ev_counts):
+def _radio_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
     """The radio failsafe: no RC frame for RC_FS_TIMEOUT (ERR 2/2 and 5/1) or three frames with
     throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> RTL (LAND without a
     position); frames again with a good throttle -> ERR 5/0. Returns the submode to continue
     with."""
+    pos, vel = inputs.pos, inputs.vel
+    rc_last_frame_us, rc_throttle = inputs.rc_last_frame_us, inputs.rc_throttle
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     thr_low, thr_ok = _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle)
     if (rc_late or thr_low) and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
@@ -311,12 +307,13 @@ def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, events, ev_counts):
 
 
 @inline_jit
-def _battery_failsafe(c, g, t_us, sub, pos, vel, seg, events, ev_counts):
+def _battery_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
     """The battery failsafe's action (Copter's handle_battery_failsafe), once the monitor has
     asked for one (c[BATT_FS_ACT], tlm_sim.control.battery): on the ground disarm; else Land
     (with a pause), RTL (or Land without a position), Terminate (disarm in the air). tlm has
     no SmartRTL, DO_LAND_START or Brake: their fallbacks fly (RTL, RTL, Land). Returns the
     submode."""
+    pos, vel = inputs.pos, inputs.vel
     act = int(c[C.BATT_FS_ACT])
     if act < 0:
         return sub
@@ -371,9 +368,11 @@ def _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts):
 
 
 @inline_jit
-def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts):
+def _ground_idle(c, g, t_us, inputs, seg, events, ev_counts):
     """Armed on the ground: motors at MOT_SPIN_ARM, EV AUTO_ARMED, then after ARMING_DELAY the
     takeoff starts (controllers reset here, a vertical segment to the takeoff altitude)."""
+    dt = g[C.G_DT]
+    pos, vel, q = inputs.pos, inputs.vel, inputs.q
     output_idle(c, g, g[C.G_MOT_SPIN_ARM])
     attitude_reset(c, 0.0, 0.0, _yaw(q))
     if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
@@ -390,10 +389,12 @@ def _ground_idle(c, g, t_us, dt, pos, vel, q, seg, events, ev_counts):
 
 
 @inline_jit
-def _navigate(c, g, t_us, dt, sub, pos, vel, path, n_path, seg, events, ev_counts):
+def _navigate(c, g, t_us, sub, inputs, path, seg, events, ev_counts):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
     [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
+    dt = g[C.G_DT]
+    pos, vel, n_path = inputs.pos, inputs.vel, path.shape[0]
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
     if sub == C.SUB_TAKEOFF:
@@ -504,9 +505,10 @@ def _nav_rtl_loiter(c, g):
 
 
 @inline_jit
-def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
+def _land_descent(c, g, t_us, pos, land_vertical, events, ev_counts):
     """LAND: hold the height through a failsafe's pause, else hold the landing point and
     descend; disarm once landed. Returns True when it disarmed (the tick ends)."""
+    t_s, dt = t_us * 1e-6, g[C.G_DT]
     if c[C.LAND_PAUSE] > 0.0:
         # failsafe LAND: hold the height for LAND_WITH_DELAY before descending
         c[C.LAND_PAUSE] -= dt
@@ -552,8 +554,7 @@ def _land_descent(c, g, t_us, t_s, dt, pos, land_vertical, events, ev_counts):
 
 
 @inline_jit
-def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_tilt, yaw_cmd,
-                 yaw_rate_ff, v_batt):
+def _controllers(c, g, sub, inputs, cos_tilt, yaw_cmd, yaw_rate_ff):
     """Position (xy, z), attitude and rate controllers and the mixer; returns the throttle.
 
     The horizontal controller's acceleration becomes a thrust direction: roll and pitch about
@@ -562,6 +563,8 @@ def _controllers(c, g, sub, pos, vel, q, gyro, acc_up, cos_tilt, yaw_cmd,
     normal flight; after a motor failure has yawed the copter far from its target heading
     (motor_partial_s47: 45 deg), leaning in the vehicle's frame would tilt the thrust the
     wrong way."""
+    pos, vel, q, gyro = inputs.pos, inputs.vel, inputs.q, inputs.gyro
+    acc_up, v_batt = -inputs.acc_ned[2], inputs.v_batt
     if c[C.LAND_NOGPS] != 0.0 and sub == C.SUB_LAND:
         c[C.ATT_ROLL_CMD] = 0.0  # no position control: level, drift with the wind
         c[C.ATT_PITCH_CMD] = 0.0
@@ -605,11 +608,12 @@ def _attitude_first(c, sub):
 
 
 @inline_jit
-def _hover_learning(c, g, dt, sub, thr, vel, q):
+def _hover_learning(c, g, sub, thr, inputs):
     """MOT_HOVER_LEARN 2 with ArduCopter's conditions: flying, no desired climb or descent,
     climb rate below 0.6 m/s, roll and pitch within 5 deg. (Cruise pitches the copter beyond
     5 deg, so SITL learns only in level hovers: normal_s11 keeps ThH 0.3876 from 15 s after
     arming to the RTL, where it drops to 0.3746.)"""
+    dt, vel, q = g[C.G_DT], inputs.vel, inputs.q
     learning = (c[C.LANDED] == 0.0 and c[C.LAND_TIMER] == 0.0 and c[C.LIM_THR_LO] == 0.0
                 and c[C.LIM_THR_HI] == 0.0 and abs(vel[2]) < 0.6 and c[C.PZ_VEL_FF] == 0.0
                 and sub >= C.SUB_WP and thr > 0.0)
@@ -626,7 +630,7 @@ def _hover_learning(c, g, dt, sub, thr, vel, q):
 
 
 @inline_jit
-def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
+def _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts):
     """Copter::update_land_detector: the motors at their lower limit (or the throttle below
     0.05), the attitude controller's mix at its minimum, no lean target above 15 deg and no
     attitude error above 30 deg, the 1 Hz acceleration at most 1 m/s^2 and the EKF's climb
@@ -634,6 +638,7 @@ def _land_detector(c, g, t_us, dt, sub, thr, vel, pos, events, ev_counts):
     EV NOT_LANDED once above 0.5 m again. Leaves the condition bits and the pass count in
     c[LDET_FLAGS], c[LDET_COUNT] (LDET; only LANDED | LANDED_MAYBE and 0 once landed, as
     ArduCopter's land_complete branch)."""
+    dt, vel, pos = g[C.G_DT], inputs.vel, inputs.pos
     was_landed = c[C.LANDED] != 0.0
     flags = _land_conditions(c, g, thr, vel[2])
     if (flags & LAND_CRITERIA_MASK) == LAND_CRITERIA and sub != C.SUB_TAKEOFF:
@@ -679,9 +684,10 @@ def _land_conditions(c, g, thr, vd):
 
 
 @inline_jit
-def _crash_checks(c, g, t_us, t_s, dt, q, vel, cos_tilt, events, ev_counts):
+def _crash_checks(c, g, t_us, inputs, cos_tilt, events, ev_counts):
     """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
     (ERR 12/1, EV DISARMED)."""
+    dt, q, vel = g[C.G_DT], inputs.q, inputs.vel
     thrust_loss_check(c, dt, q, vel[2], events, ev_counts, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
