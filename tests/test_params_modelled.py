@@ -42,13 +42,13 @@ def _inputs(p: Params) -> list[np.ndarray]:
     arrays, the initial state, the log buffer sizing and the GPS.NSats jitter of a fixed log;
     first the earth field at the mission's home (TLM_MAG_*, as ``fly`` resolves it)."""
     p, _ = with_home_field(p, FL.builtin_mission(1).home, FL.BOOT_UTC)
-    scfg, frame, g, ecfg = FL._configs(p)
+    cfg = FL._configs(p)
     x = np.zeros(X.N_STATE)
-    init_state(x, frame, math.radians(p["SIM_OPOS_HDG"]))
+    init_state(x, cfg.frame, math.radians(p["SIM_OPOS_HDG"]))
     status = np.array([6.0, 6.0, 1.0, 6.0, 1.0] * 4)
     nsats = jitter_nsats(status, 0, p["TLM_SAT_JITTER"]) if p["TLM_SAT_JITTER"] > 0 else status
     duration = FL.max_duration_s(FL.builtin_mission(1), p)
-    return [scfg, frame, g, ecfg, x, np.asarray(nsats, float), np.array([duration])]
+    return [*cfg, x, np.asarray(nsats, float), np.array([duration])]
 
 
 def _candidates(name: str) -> list[float]:

@@ -136,11 +136,13 @@ GPS_EPOCH = _dt.datetime(1980, 1, 6, tzinfo=_dt.UTC)
 BOOT_UTC = _dt.datetime(2025, 10, 24, 12, 0, 0, tzinfo=_dt.UTC)  # simulated boot time (UTC)
 LEAP_SECONDS = 18
 
-# schedule targets (which configuration array a parameter change writes into)
-TGT_SENSOR = 0
-TGT_FRAME = 1
-TGT_CONTROL = 2
-TGT_EKF = 3
+#: the flight ends this long after the autopilot disarms or the arming driver gives up [us]
+END_AFTER_US = 2_000_000
+
+# schedule targets: which configuration array a parameter change writes into (its field of
+# VehicleConfig, the order build_schedule enumerates the configuration in)
+TGT_FRAME, TGT_SENSOR, TGT_EKF, TGT_CONTROL = (
+    VehicleConfig._fields.index(name) for name in ("frame", "scfg", "ecfg", "g"))
 TGT_NONE = -1  # marks a change that alters no configuration entry (its time is still recorded)
 
 # schedule row columns and trigger kinds
@@ -313,7 +315,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(logs, state, cfg, plan, work, now, last_gps_ms)
         if stop_at < 0 and (c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0):
-            stop_at = t_us + 2000000
+            stop_at = t_us + END_AFTER_US
         if stop_at >= 0 and t_us >= stop_at:
             break
     return t_us
@@ -455,9 +457,10 @@ def new_work() -> LoopWork:
                     np.zeros((N_WORK_ROWS, WORK_COLS)), np.zeros(EK.N_OUT))
 
 
-def _configs(p: Params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(sensor, frame, control, ekf) configuration arrays for a parameter set."""
-    return build_sensor_config(p), build_frame(p), build_control_config(p), build_ekf_config(p)
+def _configs(p: Params) -> VehicleConfig:
+    """The configuration arrays (frame, sensors, EKF, autopilot) of a parameter set."""
+    return VehicleConfig(build_frame(p), build_sensor_config(p), build_ekf_config(p),
+                         build_control_config(p))
 
 
 def _as_change(ch: Any) -> tuple[int, float, str, float]:
@@ -476,7 +479,7 @@ BOOT_ONLY_PARAMS: frozenset[str] = frozenset({"FRAME_CLASS", "FRAME_TYPE"})
 def build_schedule(
     params: Params,
     changes: Sequence[Any],
-    base: tuple[np.ndarray, ...] | None = None,
+    base: VehicleConfig | None = None,
 ) -> np.ndarray:
     """Rows (at, kind, target, index, value, change) realising scheduled parameter changes.
 
@@ -652,8 +655,9 @@ def fly(
         changes = list(faults or ())
         _check_changes(p, changes)  # a bad change fails before any compiling
     ensure_compiled()  # a cold numba cache is compiled by several processes at once
-    scfg, frame, g, ecfg = _configs(p)
-    sched = build_schedule(p, changes, (scfg, frame, g, ecfg))
+    cfg = _configs(p)
+    frame, g = cfg.frame, cfg.g
+    sched = build_schedule(p, changes, cfg)
     applied = np.full(len(changes), -1.0)
     home = np.array(mission.home, dtype=np.float64)
     x = np.zeros(X.N_STATE)
@@ -671,7 +675,7 @@ def fly(
                          np.zeros((ekf.shape[0], N_GSF)),
                          new_streams(int(seed), S.N_NOISE_STREAMS), new_rng(int(seed), 2))
     plan = FlightPlan(path, seg, sched, applied, home, np.array([week, ms], dtype=np.float64))
-    t_final = run_flight(state, VehicleConfig(frame, scfg, ecfg, g), plan,
+    t_final = run_flight(state, cfg, plan,
                          FlightLogs(buf_tuple, counts, txt), new_work(), int(duration * 1e6))
     armed = c[C.ARM_TIME_S] >= 0.0
     meta: dict[str, Any] = {
