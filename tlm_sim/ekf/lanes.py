@@ -203,17 +203,6 @@ from tlm_sim.ekf.lifecycle import (
     mag_heading,
 )
 from tlm_sim.rotation import quat_to_euler
-from tlm_sim.sensors.layout import (
-    GE_HACC,
-    GE_HDOP,
-    GE_NSATS,
-    GE_PE,
-    GE_PN,
-    GE_VACC,
-    GE_VD,
-    GE_VE,
-    GE_VN,
-)
 
 # initial standard deviations at alignment
 INIT_TILT_SD = 0.05  # rad
@@ -491,9 +480,7 @@ def ekf_gps_checks(ekf, cfg, t_us, gps):
     for i in range(ekf.shape[0]):
         e = ekf[i]
         if e[ALIGNED] != 0.0 and e[FAULT] == 0.0:
-            lane_gps_checks(e, cfg, t, gps[GE_PN], gps[GE_PE], gps[GE_VN], gps[GE_VE],
-                            gps[GE_VD], gps[GE_NSATS], gps[GE_HDOP], gps[GE_HACC],
-                            gps[GE_VACC])
+            lane_gps_checks(e, cfg, t, gps)
 
 
 @tick_jit

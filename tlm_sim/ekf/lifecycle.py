@@ -78,6 +78,17 @@ from tlm_sim.ekf.layout import (
     YAW_DONE,
 )
 from tlm_sim.rotation import quat_to_euler
+from tlm_sim.sensors.layout import (
+    GE_HACC,
+    GE_HDOP,
+    GE_NSATS,
+    GE_PE,
+    GE_PN,
+    GE_VACC,
+    GE_VD,
+    GE_VE,
+    GE_VN,
+)
 
 # lifecycle events: bits of LIFE_EVENTS (ardupilot.EKF_EVT_*, the texts' order within a tick)
 
@@ -176,9 +187,12 @@ def yaw_align(e, cfg, init_yaw_var):
 
 
 @tick_jit
-def _gps_check_fails(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, vacc):
+def _gps_check_fails(e, cfg, t, gps):
     """EK3_GPS_CHECK bits failing on this sample (calcGpsGoodToAlign's tests), updating the
     drift and ground-speed filters. EKF3's drift sum starts from the first sample here."""
+    gps_pn, gps_pe = gps[GE_PN], gps[GE_PE]
+    vn, ve, vd = gps[GE_VN], gps[GE_VE], gps[GE_VD]
+    nsats, hdop, hacc, vacc = gps[GE_NSATS], gps[GE_HDOP], gps[GE_HACC], gps[GE_VACC]
     mask = int(cfg[C_GPS_CHECK])
     scale = cfg[C_CHECK_SCALE] * (1.3 if e[GPS_GOOD] != 0.0 else 1.0)
     on_ground = e[IN_FLIGHT] == 0.0
@@ -215,14 +229,15 @@ def _gps_check_fails(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, v
 
 
 @tick_jit
-def lane_gps_checks(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, vacc):
+def lane_gps_checks(e, cfg, t, gps):
     """One 3-D-fix GPS sample through EKF3's readGpsData checks, with the boot phase: the
     GPS quality tests, gpsGoodToAlign (10 s of passing, 5 s of failing to clear it) and the
-    origin, set once when the GPS is good (EKF_EVT_ORIGIN). Position NE [m], velocity NED [m/s],
-    satellites, HDOP, horizontal / vertical accuracy [m]."""
+    origin, set once when the GPS is good (EKF_EVT_ORIGIN). gps: the epoch
+    (``tlm_sim.sensors.layout`` GE_*: position NE [m], velocity NED [m/s], satellites, HDOP,
+    horizontal / vertical accuracy [m])."""
     if cfg[C_BOOT] == 0.0:
         return
-    fails = _gps_check_fails(e, cfg, t, gps_pn, gps_pe, vn, ve, vd, nsats, hdop, hacc, vacc)
+    fails = _gps_check_fails(e, cfg, t, gps)
     e[GPS_CHK_FAILS] = fails
     if e[T_GPS_CHK_FAIL] < 0.0:
         e[T_GPS_CHK_FAIL] = t  # EKF3 counts its first check as a failure
