@@ -91,21 +91,23 @@ def _stray(tree: ast.Module) -> list[tuple[int, str]]:
     return out
 
 
-def test_the_vocabulary_is_declared_once():
-    bad = []
+def _findings(check) -> list[str]:
+    """``file:line what`` of every finding of ``check(tree)`` over the checked sources."""
+    out = []
     for path in _sources():
-        tree = ast.parse(path.read_text(encoding="utf-8"))
         rel = path.relative_to(ROOT).as_posix()
-        bad += [f"{rel}:{line} {name}" for line, name in _declarations(tree)]
+        out += [f"{rel}:{line} {what}" for line, what in check(ast.parse(
+            path.read_text(encoding="utf-8")))]
+    return out
+
+
+def test_the_vocabulary_is_declared_once():
+    bad = _findings(_declarations)
     assert not bad, "ArduPilot codes declared outside tlm_sim/ardupilot.py: " + ", ".join(bad)
 
 
 def test_no_code_is_written_as_a_bare_number():
-    bad = []
-    for path in _sources():
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        rel = path.relative_to(ROOT).as_posix()
-        bad += [f"{rel}:{line} ({what})" for line, what in _stray(tree)]
+    bad = _findings(_stray)
     assert not bad, "literal ArduPilot codes: " + ", ".join(bad)
 
 
