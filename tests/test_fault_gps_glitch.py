@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
-from tlm_process.fault_signatures import _Flight
+from tlm_process.fault_metrics import Flight
 from tlm_sim import ardupilot as AP
 from tlm_sim.geo import HOME_CMAC, M_PER_DEG_LAT, latlon_to_ne, ne_to_latlon
 
@@ -42,7 +42,7 @@ def glitch_signature(tables: dict[str, pd.DataFrame], t0: float, t1: float,
     in the window and in the 30 s after; the true path's largest distance from the mission
     line [m] in the window; attitude extremes [deg] and XKF4 figures to 30 s after the end.
     """
-    f = _Flight(tables)
+    f = Flight(tables)
     out: dict[str, float] = {}
     g = tables["GPS"]
     g = g[(g.TimeUS > t0 + 0.5e6) & (g.TimeUS < t1)]

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
-from tlm_process.fault_signatures import _Flight
+from tlm_process.fault_metrics import Flight
 from tlm_process.reference import time_window
 from tlm_sim import ardupilot as AP
 from tlm_sim.params import ParamError, Params
@@ -41,7 +41,7 @@ def _imu(tables: dict, i: int) -> pd.DataFrame:
 def gyro_signature(tables: dict, t0: float, t1: float) -> dict[str, float]:
     """The gyro-loss facts of the reference README, measured in a log (TimeUS t0/t1: the
     fault's set and clear)."""
-    f = _Flight(tables)
+    f = Flight(tables)
     i0, i1 = _imu(tables, 0), _imu(tables, 1)
     tt = i0.TimeUS.to_numpy(float)
     gh = i0.GH.to_numpy(float)
@@ -72,7 +72,7 @@ def gyro_signature(tables: dict, t0: float, t1: float) -> dict[str, float]:
 
 def vibration_signature(tables: dict, t0: float, t1: float) -> dict[str, float]:
     """The vibration facts of the reference README, measured in a log."""
-    f = _Flight(tables)
+    f = Flight(tables)
     v = tables["VIBE"]
     out: dict[str, float] = {}
     for i in (0, 1):
@@ -354,7 +354,7 @@ def test_accel_sample_loss_marks_the_imu_unhealthy_and_the_ekf_uses_the_other():
                                                              == 1).all()
     assert (i1.AH == 1).all() and (i1.GH == 1).all()
     assert time_window(i1, 120e6, 150e6).AccZ.std() > 0.01
-    f = _Flight(t)
+    f = Flight(t)
     tp, err = f.ekf_error()
     assert err[(tp >= 120e6) & (tp <= 160e6)].max() < 0.5
     assert len(time_window(f.err, 120e6, 160e6)) == 0
@@ -371,6 +371,6 @@ def test_every_accel_masked_flies_on_held_samples():
     for i in (0, 1):
         w = time_window(_imu(t, i), 120.05e6, 149.95e6)
         assert (w.AH == 0).all() and w[["AccX", "AccY", "AccZ"]].std().max() == 0.0
-    f = _Flight(t)
+    f = Flight(t)
     assert not math.isnan(f.disarm_us)
     assert f.h[f.sel(120e6, 150e6)].min() > 5.0

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
-from tlm_process.fault_signatures import _Flight
+from tlm_process.fault_metrics import Flight
 from tlm_process.reference import time_window
 from tlm_sim.flightlog.texts import event_texts
 
@@ -60,7 +60,7 @@ def _err_times(t, t0, t1, subsys, code):
 
 
 def _motor(t, t0, t1):
-    f = _Flight(t)
+    f = Flight(t)
     sel = f.sel(t0, t1)
     tt, h = f.sim_t[sel], f.h[sel]
     ground = np.flatnonzero(h <= 0.5)

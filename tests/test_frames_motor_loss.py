@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tlm_process.fault_signatures import _Flight
+from tlm_process.fault_metrics import Flight
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import throttle_mix_update
 from tlm_sim.control.config import build_control_config
@@ -242,7 +242,7 @@ def _fly(frame_class: int, frame_type: int, extra: tuple = ()):
     params = {"FRAME_CLASS": frame_class, "FRAME_TYPE": frame_type, **dict(extra)}
     log = tlm_sim.fly(1, FaultSchedule((Fault("engine", T0, T1),)), params=params, seed=0)
     t = dict(log.tables)
-    return t, _Flight(t), event_texts(t)
+    return t, Flight(t), event_texts(t)
 
 
 def _measure(frame_class: int, frame_type: int, extra: dict | None = None) -> dict:

@@ -12,12 +12,12 @@ from tlm_process.cli import build_parser
 from tlm_process.commands.generate import build_config
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.scenario import (
-    MAGNITUDE_KNOBS,
-    NEW_TYPES,
     PAPER_TYPES,
     ScenarioConfig,
     fault_params,
     fault_preset,
+    magnitude_knobs,
+    new_types,
     sample_scenario,
 )
 from tlm_sim.faults import FAULT_TYPES, Fault, Trigger
@@ -56,7 +56,7 @@ def test_presets():
     assert set(fault_preset("all")["fault_weights"]) == set(FAULT_TYPES)
     assert fault_preset("all")["kinds"] == {"none": 0.2, "single": 0.4, "paper": 0.2,
                                             "sequence": 0.2}
-    assert set(fault_preset("new")["fault_weights"]) == set(NEW_TYPES) == set(
+    assert set(fault_preset("new")["fault_weights"]) == set(new_types()) == set(
         fault_preset("new")["sequence_types"])
     assert fault_preset("single")["kinds"] == {"none": 0.2, "single": 0.8}
     p = fault_preset("Battery, gps_glitch")
@@ -103,7 +103,7 @@ def test_sequence_flights_fly_distinct_types_in_paper_timing():
                        sequence_len=(3, 4))
 
 
-@pytest.mark.parametrize("ftype", sorted(MAGNITUDE_KNOBS))
+@pytest.mark.parametrize("ftype", sorted(magnitude_knobs()))
 def test_every_knob_maps_to_the_types_parameters(ftype):
     """fault_params gives parameters a Fault of the type accepts (name and range), clearing
     each to its type's end value or tlm's default."""

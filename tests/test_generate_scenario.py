@@ -11,10 +11,10 @@ import pytest
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.scenario import (
     DEFAULT_RANGES,
-    NEW_TYPES,
     Scenario,
     ScenarioConfig,
     mission_from_recipe,
+    new_types,
     sample_scenario,
 )
 from tlm_sim.flight import max_duration_s
@@ -61,7 +61,7 @@ def test_kinds_shares_and_fault_structure():
             assert 20 + 15 <= start <= 20 + 240
         elif s.kind == "sequence":
             assert 2 <= len(types) <= 4 and len(set(types)) == len(types)
-            assert set(types) <= set(NEW_TYPES)
+            assert set(types) <= set(new_types())
         else:
             assert sorted(types) == ["accel", "engine", "gps", "rc"] and types[-1] == "rc"
             orders.add(tuple(types))

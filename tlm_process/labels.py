@@ -3,8 +3,9 @@ and ``tlm evaluate``.
 
 Label 0 is normal flight and labels 1-4 the paper's four faults (Table 6), named as the paper
 writes them; labels 5 and up are the rest of SITL's fault catalogue, named by their
-``tlm_sim.faults.FAULT_TYPES`` type (``gyro`` 5 ... ``gps_jam`` 12, ``accel_samples`` 13). A
-label no type has (a data set from a newer tlm) is named ``label N``.
+``tlm_sim.faults.FAULT_TYPES`` type (``gyro`` 5 ... ``gps_jam`` 12, ``accel_samples`` 13, and
+any type registered since: the registry is read at each call). A label no type has (a data set
+from a newer tlm) is named ``label N``. Colours are the types' own (:func:`label_colour`).
 
 Which classes a table or matrix shows (:func:`class_labels`): the paper's five whenever every
 label present is one of them (the paper's Tables 7-8 and 12-18 layout, also for a data set that
@@ -17,7 +18,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from tlm_sim.faults.types import FAULT_TYPES, NORMAL_LABEL
+from tlm_sim.faults.types import NORMAL_LABEL, type_of_label
+from tlm_sim.faults.types import label_colour as _type_colour
 
 __all__ = ["PAPER_CLASS_NAMES", "PAPER_LABELS", "class_column", "class_labels", "class_name",
            "class_names", "label_colour", "long_name"]
@@ -30,10 +32,12 @@ PAPER_LABELS: tuple[int, ...] = tuple(range(len(PAPER_CLASS_NAMES)))
 _PAPER_COLUMNS = ("Normal", "GPS Fail", "Accelerometer Fail", "Engine Fail", "RC Fail")
 #: Plot names of labels 0-4.
 _PAPER_LONG = ("normal", "GPS", "accelerometer", "engine", "RC")
-_BY_LABEL = {t.label: t.name for t in FAULT_TYPES.values()}
-#: Colours of labels 0-4 (as before the catalogue) and then of the rest (tab20's others).
-_COLOURS = ("0.6", "tab:blue", "tab:orange", "tab:red", "tab:purple", "tab:green",
-            "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "gold", "navy", "lime", "teal")
+
+
+def _type_name(label: int) -> str:
+    """The registered type name of a label, ``label N`` when no type has it."""
+    ftype = type_of_label(label)
+    return ftype.name if ftype is not None else f"label {label}"
 
 
 def class_name(label: int) -> str:
@@ -41,7 +45,7 @@ def class_name(label: int) -> str:
     k = int(label)
     if 0 <= k < len(PAPER_CLASS_NAMES):
         return PAPER_CLASS_NAMES[k]
-    return _BY_LABEL.get(k, f"label {k}")
+    return _type_name(k)
 
 
 def long_name(label: int) -> str:
@@ -50,7 +54,7 @@ def long_name(label: int) -> str:
     k = int(label)
     if 0 <= k < len(_PAPER_LONG):
         return _PAPER_LONG[k]
-    return _BY_LABEL.get(k, f"label {k}")
+    return _type_name(k)
 
 
 def class_column(label: int) -> str:
@@ -58,12 +62,14 @@ def class_column(label: int) -> str:
     k = int(label)
     if 0 <= k < len(_PAPER_COLUMNS):
         return _PAPER_COLUMNS[k]
-    return f"{_BY_LABEL.get(k, f'label {k}')} Fail"
+    return f"{_type_name(k)} Fail"
 
 
 def label_colour(label: int) -> str:
-    """Matplotlib colour of a label (labels 0-4 keep the paper figures' colours)."""
-    return _COLOURS[int(label) % len(_COLOURS)]
+    """Matplotlib colour of a label: grey for normal, the fault type's ``colour`` (labels 0-4
+    keep the paper figures' colours), else a generated one that no other label has
+    (:func:`tlm_sim.faults.types.label_colour`)."""
+    return _type_colour(label)
 
 
 def class_labels(*labels: Iterable[int] | np.ndarray) -> list[int]:

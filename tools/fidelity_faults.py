@@ -7,8 +7,9 @@ For each fault reference (gps_s12, accel_s13, engine_s14, rc_s15, combined_s21 a
 set's gyro_s42, compass_s43, baro_s44, battery_s45, gps_glitch_s46, motor_partial_s47,
 vibration_s48) tlm flies the sidecar's mission with the same parameter changes at the same
 times relative to arming, and ``tlm_process.fault_signatures.fault_signature`` measures both
-logs. Writes the markdown tables (with each metric's relative difference and issue 19's
-pass/fail at 35 %) and one figure per fault type (docs/img/fault_<type>.png, from the
+logs (each section is titled with the fault type's display name, ``FaultType.title``).
+Writes the markdown tables (with each metric's relative difference and issue 19's pass/fail
+at 35 %) and one figure per fault type (docs/img/fault_<type>.png, from the
 single-fault flights), and prints the tables. A parameter tlm does not model is left out of
 the tlm flight (the section says so): rerun once it is modelled.
 """
@@ -26,6 +27,7 @@ import pandas as pd
 
 from tlm_process.fault_signatures import SIGNATURE_MESSAGES, fault_signature, truth_timeline
 from tlm_sim import ardupilot as AP
+from tlm_sim.faults.types import FAULT_TYPES
 
 SINGLE = ("gps_s12", "accel_s13", "engine_s14", "rc_s15")
 COMBINED = "combined_s21"
@@ -39,11 +41,6 @@ TYPES = [*SIGNATURE_MESSAGES, "RATE", "MSG"]
 REL_CLOSE = 0.25
 #: absolute floor of "close" by metric-name suffix (s, m, deg, m/s); flags/fractions: 0.02
 ABS_CLOSE = {"_s": 0.5, "_m": 3.0, "_deg": 5.0, "_ms": 1.0}
-#: section titles by fault type
-TITLES = {"gps": "GPS", "accel": "Accelerometer", "engine": "Engine", "rc": "RC",
-          "gyro": "Gyro", "baro": "Barometer", "compass": "Compass", "gps_glitch": "GPS glitch",
-          "motor_partial": "Partial motor", "vibration": "Vibration", "battery": "Battery",
-          "gps_jam": "GPS jamming", "accel_samples": "Accelerometer samples"}
 #: metrics compared for equality only (besides the *_kept flags)
 CATEGORICAL = {"rtl_reason", "auto_after_end", "nsats_max_in", "nsats_min_out"}
 
@@ -392,7 +389,8 @@ def main() -> None:
             route = flight["route"]
             df = comparison(signature(flight["tlm"], ft, route),
                             signature(flight["ref"], fr, route))
-            title = f"{TITLES[kind]} fault" + (" (combined flight)" if name == COMBINED else "")
+            title = f"{FAULT_TYPES[kind].title} fault" + (
+                " (combined flight)" if name == COMBINED else "")
             t_ref = fr["start_time_us"] * 1e-6
             t_tlm = ft["start_time_us"] * 1e-6
             head = (f"## {title}: `{name}.bin` vs tlm\n\n"

@@ -223,11 +223,11 @@ def _fault_entry(tlm: Mapping[str, pd.DataFrame], sitl: Mapping[str, pd.DataFram
                  route: Any) -> dict[str, Any]:
     """One fault's signatures on both sides and their comparison (a fault held to the end of
     the log is measured to the end of the armed flight)."""
-    from tlm_process.fault_signatures import FAULT_TYPES, fault_signature
+    from tlm_process.fault_signatures import fault_signature, signature_types
 
     entry: dict[str, Any] = {"type": fs.get("type"), "label": fs.get("label"),
                              "tlm": {}, "sitl": {}}
-    if fs.get("type") in FAULT_TYPES:
+    if fs.get("type") in signature_types():
         def until(f: Mapping[str, Any], end: float) -> dict[str, Any]:
             e = f.get("end_time_us")
             return dict(f, end_time_us=end if e is None or e <= f["start_time_us"] else e)

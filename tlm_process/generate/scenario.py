@@ -35,10 +35,11 @@ any fault time. Streams:
    (wind speed, direction and turbulence, sensor noise amplitudes; rounded to 0.001).
 4. **flight seed**: the seed of all the flight's own noise draws (IMU, GPS, baro, compass,
    gusts), 0 .. 2**31 - 1.
-5. **magnitudes**: each fault's parameters, for the types with knobs in
-   :data:`MAGNITUDE_KNOBS` (GPS glitch offset, partial motor multiplier, battery voltage,
-   vibration amplitude, which baro / compass / IMU fails, ...), drawn from
-   :attr:`ScenarioConfig.magnitudes` (uniform in a range, or one of a list), fault by fault.
+5. **magnitudes**: each fault's parameters, for the types whose record has knobs
+   (:func:`magnitude_knobs`, :mod:`tlm_process.fault_types`: GPS glitch offset, partial
+   motor multiplier, battery voltage, vibration amplitude, which baro / compass / IMU
+   fails, ...), drawn from :attr:`ScenarioConfig.magnitudes` (uniform in a range, or one of
+   a list), fault by fault, and turned into SITL parameters by the record's ``params``.
    The paper's four types have no knobs, so their flights draw nothing here and fly the
    type's parameters (the default data set is the same flight for flight as before the
    catalogue: same seed, same flights).
@@ -57,7 +58,9 @@ Streams 6 and 7 came last, so every draw of streams 0-5 of a flight is what it w
 
 :func:`fault_preset` names the usual choices of fault types (``--faults`` of ``tlm
 generate``, or ``faults:`` in a configuration): ``paper`` (the default: the paper's four
-types), ``all``, ``new``, ``single``, or a list of types.
+types), ``all``, ``new``, ``single``, or a list of types. Every fault type comes from the
+registry (:data:`tlm_sim.faults.FAULT_TYPES` and :mod:`tlm_process.fault_types`): a type
+registered there is drawn like the built-in ones.
 
 A :class:`Scenario` holds the outcome as plain data (a mission recipe, the fault schedule's
 file form, parameter overrides, the flight seed, the profile), so a flight can be re-flown
@@ -75,8 +78,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from tlm_process.fault_types import Knob, fault_type_record, fault_type_records
 from tlm_process.generate.errors import GenerateError
-from tlm_sim.ardupilot import M_PER_DEG_LAT
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
 from tlm_sim.flight import max_duration_s
 from tlm_sim.frames import FRAMES, FrameError, frame_name
@@ -98,12 +101,12 @@ __all__ = [
     "DEFAULT_WIND",
     "FRAME_PARAMS",
     "KINDS",
-    "MAGNITUDE_KNOBS",
-    "NEW_TYPES",
     "PAPER_TYPES",
     "fault_params",
     "fault_preset",
     "frame_params",
+    "magnitude_knobs",
+    "new_types",
     "MISSION_SOURCES",
     "FlightSpec",
     "Scenario",
@@ -125,25 +128,25 @@ _S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE, _S_FRAME, _S_WIND
 
 #: The paper's four fault types (labels 1-4).
 PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
-#: The rest of SITL's catalogue (labels 5-13).
-NEW_TYPES: tuple[str, ...] = tuple(t for t in FAULT_TYPES if t not in PAPER_TYPES)
 
-#: What can be drawn per fault type: knob -> ("range", (low, high)) drawn uniformly, or
-#: ("choice", allowed values) drawn with equal chances from the configured list; the default
-#: of each knob is given second. Units: offset_m metres (horizontal, direction uniform),
-#: mul the SIM_ENGINE_MUL multiplier, volt volts, amplitude m/s/s (SIM_ACCn_RND), instance
-#: 1-based sensor number ("both" for both baros / IMUs), mode SIM_MAGn_FAIL (1 no data, 2
-#: frozen).
-MAGNITUDE_KNOBS: dict[str, dict[str, tuple[str, Any, Any]]] = {
-    "gyro": {"instance": ("choice", (1, 2), [1])},  # both gyros masked: refused (no flight)
-    "accel_samples": {"instance": ("choice", (1, 2, "both"), [1])},
-    "baro": {"instance": ("choice", (1, 2, "both"), ["both"])},
-    "compass": {"instance": ("choice", (1, 2, 3), [1]), "mode": ("choice", (1, 2), [1])},
-    "gps_glitch": {"offset_m": ("range", (0.0, 1000.0), (20.0, 60.0))},
-    "motor_partial": {"mul": ("range", (0.0, 1.0), (0.4, 0.8))},
-    "vibration": {"amplitude": ("range", (0.0, 50.0), (2.0, 6.0))},
-    "battery": {"volt": ("range", (0.0, 30.0), (9.9, 10.4))},
-}
+
+def new_types() -> tuple[str, ...]:
+    """Every registered fault type but the paper's four (labels 5-13 and any registered
+    since), in label order."""
+    return tuple(t for t in FAULT_TYPES if t not in PAPER_TYPES)
+
+
+def magnitude_knobs() -> dict[str, dict[str, Knob]]:
+    """The configurable magnitude knobs of every registered type that has any (fault type ->
+    knob -> :class:`~tlm_process.fault_types.Knob`), in label order: what
+    :attr:`ScenarioConfig.magnitudes` may set."""
+    out = {}
+    for r in fault_type_records():
+        knobs = {k: v for k, v in r.knobs.items() if v.configurable}
+        if knobs:
+            out[r.name] = knobs
+    return out
+
 
 #: Default draws of the environment (uniform, per flight): sensor noise amplitudes on top of
 #: the simulator's built-in noise (the wind has its own setting, :data:`DEFAULT_WIND`).
@@ -224,7 +227,7 @@ class ScenarioConfig:
         sequence_types: fault types of ``sequence`` flights (default: labels 5-13).
         sequence_len: (low, high) number of faults of a ``sequence`` flight.
         magnitudes: fault type -> knob -> range or list of choices (see
-            :data:`MAGNITUDE_KNOBS`; missing knobs keep their defaults).
+            :func:`magnitude_knobs`; missing knobs keep their defaults).
         frames: share of each frame of :data:`tlm_sim.frames.FRAMES` (``+``, ``x``, ``hexa``,
             ``hexax``, ``octa``; normalised), or a list of names (equal shares). The drawn
             frame sets ``FRAME_CLASS`` / ``FRAME_TYPE``, which ``params`` and ``ranges`` may
@@ -258,7 +261,7 @@ class ScenarioConfig:
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=lambda: dict(DEFAULT_RANGES))
     params: Mapping[str, float] = field(default_factory=dict)
     profile: str = "current"
-    sequence_types: tuple[str, ...] = NEW_TYPES
+    sequence_types: tuple[str, ...] = field(default_factory=new_types)
     sequence_len: tuple[int, int] = (2, 4)
     magnitudes: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     frames: Mapping[str, float] | str | list[str] = field(
@@ -545,10 +548,11 @@ def fault_preset(name: Any) -> dict[str, Any]:
                 "fault_weights": {t: 1.0 for t in PAPER_TYPES}}
     if key == "all":
         return {"kinds": {"none": 0.2, "single": 0.4, "paper": 0.2, "sequence": 0.2},
-                "fault_weights": every, "sequence_types": list(NEW_TYPES)}
+                "fault_weights": every, "sequence_types": list(new_types())}
     if key == "new":
         return {"kinds": {"none": 0.2, "single": 0.4, "sequence": 0.4},
-                "fault_weights": {t: 1.0 for t in NEW_TYPES}, "sequence_types": list(NEW_TYPES)}
+                "fault_weights": {t: 1.0 for t in new_types()},
+                "sequence_types": list(new_types())}
     if key == "single":
         return {"kinds": {"none": 0.2, "single": 0.8}, "fault_weights": every}
     types = _types([x for x in name.split(",") if x.strip()] if isinstance(name, str)
@@ -561,17 +565,18 @@ def fault_preset(name: Any) -> dict[str, Any]:
 
 
 def _magnitudes(d: Any) -> dict[str, dict[str, Any]]:
-    """Every knob of :data:`MAGNITUDE_KNOBS`: the configured value (validated) or its
+    """Every knob of :func:`magnitude_knobs`: the configured value (validated) or its
     default; ranges as (low, high), choices as lists."""
     if not isinstance(d, Mapping):
         raise GenerateError(f"magnitudes must be a mapping fault type -> knob -> value, got "
                             f"{type(d).__name__}")
-    unknown = [t for t in d if t not in MAGNITUDE_KNOBS]
+    every = magnitude_knobs()
+    unknown = [t for t in d if t not in every]
     if unknown:
         raise GenerateError(f"magnitudes: no knobs for {unknown[0]!r}; types with knobs: "
-                            f"{', '.join(MAGNITUDE_KNOBS)}")
+                            f"{', '.join(every)}")
     out: dict[str, dict[str, Any]] = {}
-    for t, knobs in MAGNITUDE_KNOBS.items():
+    for t, knobs in every.items():
         given = d.get(t) or {}
         if not isinstance(given, Mapping):
             raise GenerateError(f"magnitudes of {t} must be a mapping knob -> value")
@@ -580,7 +585,7 @@ def _magnitudes(d: Any) -> dict[str, dict[str, Any]]:
             raise GenerateError(f"magnitudes of {t}: unknown knob {bad[0]!r}; known: "
                                 f"{', '.join(knobs)}")
         out[t] = {}
-        for k, (how, limits, default) in knobs.items():
+        for k, (how, limits, default, _, _) in knobs.items():
             v = given.get(k, default)
             what = f"magnitudes {t}.{k}"
             if how == "range":
@@ -603,37 +608,16 @@ def _magnitudes(d: Any) -> dict[str, dict[str, Any]]:
 
 def fault_params(ftype: str, knobs: Mapping[str, Any], lat_deg: float
                  ) -> tuple[dict[str, float], dict[str, float]] | None:
-    """(params_start, params_end) of a fault of ``ftype`` with drawn knob values, None for a
-    type without knobs (it flies its type's parameters)."""
+    """(params_start, params_end) of a fault of ``ftype`` with drawn knob values (its record's
+    ``params`` at home latitude ``lat_deg`` [deg]; each is cleared to the type's
+    ``params_end`` value, else tlm's default), None for a type without knobs (it flies its
+    type's parameters)."""
     from tlm_sim.params import Params
 
-    if ftype not in MAGNITUDE_KNOBS:
+    record = fault_type_record(ftype)
+    if record is None or record.params is None:
         return None
-    if ftype in ("gyro", "accel_samples"):
-        inst = knobs["instance"]
-        mask = 3 if inst == "both" else 1 << (int(inst) - 1)
-        name = "SIM_GYR_FAIL_MSK" if ftype == "gyro" else "SIM_ACC_FAIL_MSK"
-        start = {name: float(mask)}
-    elif ftype == "baro":
-        inst = knobs["instance"]
-        names = {1: ["SIM_BARO_DISABLE"], 2: ["SIM_BAR2_DISABLE"],
-                 "both": ["SIM_BARO_DISABLE", "SIM_BAR2_DISABLE"]}[inst]
-        start = {n: 1.0 for n in names}
-    elif ftype == "compass":
-        start = {f"SIM_MAG{int(knobs['instance'])}_FAIL": float(knobs["mode"])}
-    elif ftype == "gps_glitch":
-        dn = knobs["offset_m"] * math.cos(math.radians(knobs["bearing_deg"]))
-        de = knobs["offset_m"] * math.sin(math.radians(knobs["bearing_deg"]))
-        start = {"SIM_GPS1_GLTCH_X": round(dn / M_PER_DEG_LAT, 7),
-                 "SIM_GPS1_GLTCH_Y": round(de / (M_PER_DEG_LAT * math.cos(math.radians(lat_deg))),
-                                           7)}
-    elif ftype == "motor_partial":
-        start = {"SIM_ENGINE_MUL": knobs["mul"]}
-    elif ftype == "vibration":
-        start = {"SIM_ACC1_RND": knobs["amplitude"], "SIM_ACC2_RND": knobs["amplitude"],
-                 "SIM_VIB_MOT_MAX": 350.0}
-    else:  # battery
-        start = {"SIM_BATT_VOLTAGE": knobs["volt"]}
+    start = dict(record.params(knobs, lat_deg))
     ends = FAULT_TYPES[ftype].params_end
     defaults = Params.defaults()
     return start, {n: float(ends[n]) if n in ends else float(defaults[n]) for n in start}
@@ -641,17 +625,17 @@ def fault_params(ftype: str, knobs: Mapping[str, Any], lat_deg: float
 
 def _draw_magnitudes(rng: np.random.Generator, ftype: str, cfg: ScenarioConfig
                      ) -> dict[str, Any]:
-    """One draw of every knob of ``ftype`` (in :data:`MAGNITUDE_KNOBS` order; ranges rounded
-    to 3 decimals)."""
+    """One draw of every knob of ``ftype``'s record, in its order: a range uniformly in the
+    configured (low, high) (a knob no configuration sets: its default), rounded to the knob's
+    decimals; a choice one of the configured values."""
     out: dict[str, Any] = {}
-    for k, (how, _, _) in MAGNITUDE_KNOBS[ftype].items():
-        v = cfg.magnitudes[ftype][k]
-        if how == "range":
-            out[k] = round(float(rng.uniform(*v)), 3)
+    record = fault_type_record(ftype)
+    for k, knob in (record.knobs if record is not None else {}).items():
+        v = cfg.magnitudes[ftype][k] if knob.configurable else knob.default
+        if knob.how == "range":
+            out[k] = round(float(rng.uniform(*v)), knob.decimals)
         else:
             out[k] = v[int(rng.integers(len(v)))]
-    if ftype == "gps_glitch":
-        out["bearing_deg"] = round(float(rng.uniform(0.0, 360.0)), 1)
     return out
 
 
@@ -886,8 +870,7 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     mag = _stream(run_seed, flight, _S_MAGNITUDE)
     faults = []
     for t, s, e in kept:
-        p = fault_params(t, _draw_magnitudes(mag, t, cfg), mission.home[0]) \
-            if t in MAGNITUDE_KNOBS else None
+        p = fault_params(t, _draw_magnitudes(mag, t, cfg), mission.home[0])
         try:
             faults.append(Fault(t, Trigger("time", s), Trigger("time", e),
                                 params_start=p[0] if p else None,

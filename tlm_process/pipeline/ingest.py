@@ -23,11 +23,12 @@ Kinds of input (:func:`detect_kind` decides from the path):
   datasets) is expanded one level.
 
 A fault record (:class:`FaultRecord`) needs ``type`` (``gps``/``accel``/``engine``/``rc`` or
-any other ``tlm_sim.faults.FAULT_TYPES`` name) or ``label`` (1-13), and a start and an end
-given as log times (``start_time_us`` / ``end_time_us``, microseconds since boot, as tlm and
-the SITL sidecars write) and/or as positions (``start_lat``, ``start_lon``, ``start_alt`` ...
-with the altitude in metres above home, as the paper recorded them). A record without any end
-(or ``"end_by": "flight end"``) is held until the log ends.
+any other ``tlm_sim.faults.FAULT_TYPES`` name) or its ``label`` (1-13, or a registered
+type's), and a start and an end given as log times (``start_time_us`` / ``end_time_us``,
+microseconds since boot, as tlm and the SITL sidecars write) and/or as positions
+(``start_lat``, ``start_lon``, ``start_alt`` ... with the altitude in metres above home, as the
+paper recorded them). A record without any end (or ``"end_by": "flight end"``) is held until
+the log ends.
 
 Adding an input kind: write ``_read_<kind>(path) -> list[Flight]``, teach
 :func:`detect_kind` to recognise it and add it to ``_READERS``.
@@ -46,7 +47,7 @@ import pandas as pd
 
 from tlm_process.pipeline.errors import IngestError
 from tlm_sim import ardupilot as AP
-from tlm_sim.faults.types import FAULT_TYPES
+from tlm_sim.faults.types import FAULT_TYPES, type_of_label
 from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = [
@@ -69,7 +70,6 @@ DATA_TABLES: tuple[str, ...] = ("GPS", "IMU", "RATE", "VIBE")
 #: flight phase), ATT (attitude, for the per-fault plots), MODE (flight modes, for reports).
 AUX_TABLES: tuple[str, ...] = ("POS", "EV", "ATT", "MODE")
 
-_LABEL_TO_TYPE = {t.label: t.name for t in FAULT_TYPES.values()}
 _POS_KEYS = ("lat", "lon", "alt")
 
 
@@ -176,6 +176,12 @@ def _time_us(d: Mapping[str, Any], key: str, where: str) -> int | None:
     return int(round(v))
 
 
+def _label_range() -> str:
+    """The registered fault labels as ``lowest-highest``."""
+    labels = [t.label for t in FAULT_TYPES.values()]
+    return f"{min(labels)}-{max(labels)}"
+
+
 def _record(d: Any, index: int, source: str) -> FaultRecord:
     where = f"fault {index + 1}"
     if not isinstance(d, Mapping):
@@ -185,7 +191,7 @@ def _record(d: Any, index: int, source: str) -> FaultRecord:
         label = d.get("label")
         if name is None and label is None:
             raise IngestError(f"{where}: needs 'type' (gps, accel, engine, rc, ...: "
-                              "tlm_sim.faults.FAULT_TYPES) or 'label' (1-13)")
+                              f"tlm_sim.faults.FAULT_TYPES) or 'label' ({_label_range()})")
         if name is not None:
             ftype = FAULT_TYPES.get(str(name).strip().lower())
             if ftype is None:
@@ -196,10 +202,11 @@ def _record(d: Any, index: int, source: str) -> FaultRecord:
                                   f"type (Table 6: {ftype.name} is {ftype.label})")
         else:
             lab = _number(label)
-            if lab is None or lab not in _LABEL_TO_TYPE:
+            found = type_of_label(int(lab)) if lab is not None and lab == int(lab) else None
+            if found is None:
                 raise IngestError(f"{where}: label {label!r} is not a fault label "
-                                  f"({min(_LABEL_TO_TYPE)}-{max(_LABEL_TO_TYPE)})")
-            ftype = FAULT_TYPES[_LABEL_TO_TYPE[int(lab)]]
+                                  f"({_label_range()})")
+            ftype = found
         where = f"fault {index + 1} ({ftype.name})"
         t0 = _time_us(d, "start_time_us", where)
         t1 = _time_us(d, "end_time_us", where)

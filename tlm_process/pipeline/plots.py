@@ -24,16 +24,9 @@ from tlm_process.labels import label_colour, long_name
 from tlm_process.pipeline.anchoring import FaultWindow
 from tlm_process.pipeline.ingest import FaultRecord
 from tlm_process.pipeline.stretching import class_counts
-from tlm_sim.faults.types import FAULT_TYPES
 from tlm_sim.geo import latlon_to_ne
 
-__all__ = ["LABEL_COLOURS", "plot_fault_traces", "plot_label_shares", "plot_trajectory"]
-
-_LABELS = range(max(t.label for t in FAULT_TYPES.values()) + 1)
-#: Colour per label (0 normal ... 4 RC, then SITL's other faults: ``labels.label_colour``).
-LABEL_COLOURS = tuple(label_colour(k) for k in _LABELS)
-#: Name per label in the plots (``labels.long_name``).
-LABEL_NAMES = tuple(long_name(k) for k in _LABELS)
+__all__ = ["plot_fault_traces", "plot_label_shares", "plot_trajectory"]
 
 
 def _plt():

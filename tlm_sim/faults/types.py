@@ -1,5 +1,14 @@
 """The fault types tlm injects and the SITL parameters that inject and clear them.
 
+Each fault type is one :class:`FaultType` record, kept in one registry
+(:data:`FAULT_TYPES`, in label order). This module registers the built-in catalogue;
+:func:`register_fault_type` adds a new type (``tlm_process.fault_types.register_fault_type``
+adds it together with its ``tlm generate`` draw and its signature metrics: see
+``docs/extending.md``, "A fault type"). Every consumer (schedules and the ``--fault``
+shorthand, Eq. 4 records, fault detection in SITL logs, ``tlm process`` labels, plot colours,
+``tlm evaluate`` / ``tlm detect`` class names) reads the registry, so a registered type is
+known everywhere at once.
+
 Labels 1-4 are the TLM paper's Table 6 class labels (0 is normal flight); labels 5-12 are the
 rest of SITL's fault catalogue under the type names of the second reference set (``gyro`` 5,
 ``baro`` 6, ``compass`` 7, ``gps_glitch`` 8, ``motor_partial`` 9, ``vibration`` 10,
@@ -17,23 +26,41 @@ e.g. ``SIM_MAG1_FAIL`` 2 for a frozen compass or ``SIM_RC_FAIL`` 2 for neutral s
 
 from __future__ import annotations
 
+import colorsys
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-__all__ = ["FAULT_TYPES", "NORMAL_LABEL", "FaultType"]
+__all__ = ["BUILTIN_TYPES", "FAULT_TYPES", "NORMAL_COLOUR", "NORMAL_LABEL", "FaultType",
+           "label_colour", "register_fault_type", "type_of_label", "unregister_fault_type"]
 
 #: Class label of samples outside every fault window (paper Table 6).
 NORMAL_LABEL = 0
+#: Plot colour of normal flight (label 0), a matplotlib grey.
+NORMAL_COLOUR = "0.6"
+#: A fault type's name: lower case letters, digits and underscores, starting with a letter.
+_NAME = re.compile(r"[a-z][a-z0-9_]*")
 
 
 @dataclass(frozen=True, slots=True)
 class FaultType:
-    """One kind of fault: its name, paper label and the parameter values that make it.
+    """One kind of fault: its name, label, the parameter values that make it and how it is
+    shown.
 
-    ``params_start`` is set when the fault begins and ``params_end`` when it is cleared
-    (``name -> value``, ArduPilot names and units).
+    Attributes:
+        name: the type name (schedules, shorthand ``name:60-110``, sidecars, class names of
+            labels 5 and up).
+        label: class label, >= 1, unique and stable (0 is normal flight).
+        params_start: set when the fault begins (``name -> value``, ArduPilot names and
+            units; any mapping, kept read-only).
+        params_end: set when the fault is cleared (the healthy values).
+        description: what happens, one sentence (data set cards, docs).
+        title: display name (section titles and figure captions, e.g. ``"GPS glitch"``);
+            empty: the name with spaces for underscores.
+        colour: matplotlib colour of the label in plots; None: a colour generated from the
+            label (:func:`label_colour`).
     """
 
     name: str
@@ -41,55 +68,155 @@ class FaultType:
     params_start: Mapping[str, float]
     params_end: Mapping[str, float]
     description: str
+    title: str = ""
+    colour: str | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for attr in ("params_start", "params_end"):
+            v = getattr(self, attr)
+            if not isinstance(v, Mapping):
+                raise TypeError(f"fault type {self.name!r}: {attr} must be a mapping NAME -> "
+                                f"value, got {type(v).__name__}")
+            set_(self, attr, MappingProxyType({str(k): float(x) for k, x in v.items()}))
+        if not self.title:
+            set_(self, "title", str(self.name).replace("_", " "))
 
     def __reduce__(self) -> tuple[Any, ...]:
         # mappingproxy cannot be pickled: rebuild from plain dicts (for process pools)
-        return (_type, (self.name, self.label, dict(self.params_start), dict(self.params_end),
-                        self.description))
+        return (FaultType, (self.name, self.label, dict(self.params_start),
+                            dict(self.params_end), self.description, self.title, self.colour))
 
 
-def _type(name: str, label: int, start: dict[str, float], end: dict[str, float],
-          description: str) -> FaultType:
-    return FaultType(name, label, MappingProxyType(start), MappingProxyType(end), description)
+#: The registry: name -> type, kept in label order (only this module writes it).
+_REGISTRY: dict[str, FaultType] = {}
+#: Every fault type by name, in label order (the paper's four first): a read-only, live view
+#: of the registry (a type registered later appears in it).
+FAULT_TYPES: Mapping[str, FaultType] = MappingProxyType(_REGISTRY)
 
 
-#: Every fault type by name, in label order (the paper's four first).
-FAULT_TYPES: Mapping[str, FaultType] = MappingProxyType({
-    t.name: t for t in (
-        _type("gps", 1, {"SIM_GPS1_ENABLE": 0.0}, {"SIM_GPS1_ENABLE": 1.0},
-              "GPS 1 streams 'no fix' with 3 satellites (paper: SIM_GPS_DISABLE 0 -> 1)"),
-        _type("accel", 2, {"SIM_ACCEL1_FAIL": 1.0, "SIM_ACCEL2_FAIL": 1.0},
+def _check(ftype: FaultType) -> None:
+    """ValueError unless ``ftype`` is a well-formed type whose parameters tlm knows."""
+    from tlm_sim.params import ParamError, Params
+
+    if not isinstance(ftype, FaultType):
+        raise TypeError(f"expected a FaultType, got {type(ftype).__name__}")
+    if not isinstance(ftype.name, str) or not _NAME.fullmatch(ftype.name):
+        raise ValueError(f"fault type name {ftype.name!r}: lower-case letters, digits and _, "
+                         "starting with a letter")
+    if isinstance(ftype.label, bool) or not isinstance(ftype.label, int) or ftype.label < 1:
+        raise ValueError(f"fault type {ftype.name!r}: label must be a whole number >= 1 "
+                         f"({NORMAL_LABEL} is normal flight), got {ftype.label!r}")
+    if not ftype.params_start or not ftype.params_end:
+        raise ValueError(f"fault type {ftype.name!r}: params_start and params_end must set "
+                         "at least one parameter each")
+    for what in ("params_start", "params_end"):
+        try:
+            Params(getattr(ftype, what))
+        except ParamError as exc:
+            raise ValueError(f"fault type {ftype.name!r}, {what}: {exc}") from None
+
+
+def register_fault_type(ftype: FaultType, *, replace: bool = False) -> FaultType:
+    """Add ``ftype`` to :data:`FAULT_TYPES` (kept in label order) and return it.
+
+    Registering a record equal to the registered one of its name does nothing. Raises
+    ValueError for a malformed type (name, label >= 1, parameters :class:`~tlm_sim.params.Params`
+    accepts), a name already registered with other values (unless ``replace``; a built-in
+    type cannot be replaced) or a label another type has."""
+    _check(ftype)
+    old = _REGISTRY.get(ftype.name)
+    if old == ftype:
+        return old
+    if old is not None and (not replace or ftype.name in BUILTIN_TYPES):
+        raise ValueError(f"fault type {ftype.name!r} is already registered (label "
+                         f"{old.label}); choose another name")
+    taken = type_of_label(ftype.label)
+    if taken is not None and taken.name != ftype.name:
+        free = max(t.label for t in _REGISTRY.values()) + 1
+        raise ValueError(f"fault type {ftype.name!r}: label {ftype.label} is {taken.name!r}'s; "
+                         f"the next free label is {free}")
+    items = {**_REGISTRY, ftype.name: ftype}
+    _REGISTRY.clear()
+    _REGISTRY.update(sorted(items.items(), key=lambda kv: kv[1].label))
+    return ftype
+
+
+def unregister_fault_type(name: str) -> FaultType:
+    """Remove a registered type (not a built-in one) and return it; KeyError if none."""
+    if name in BUILTIN_TYPES:
+        raise ValueError(f"{name!r} is a built-in fault type; it cannot be removed")
+    return _REGISTRY.pop(name)
+
+
+def type_of_label(label: int) -> FaultType | None:
+    """The registered type with class label ``label``, None if none has it."""
+    return next((t for t in _REGISTRY.values() if t.label == int(label)), None)
+
+
+def label_colour(label: int) -> str:
+    """Matplotlib colour of a class label: grey for normal flight, the type's ``colour``,
+    else one generated from the label (hues spaced by the golden angle, so no two labels
+    share a colour and none wraps round to an earlier one)."""
+    k = int(label)
+    if k == NORMAL_LABEL:
+        return NORMAL_COLOUR
+    ftype = type_of_label(k)
+    if ftype is not None and ftype.colour:
+        return ftype.colour
+    hue = (k * 0.6180339887498949) % 1.0
+    r, g, b = colorsys.hsv_to_rgb(hue, 0.75 if k % 2 else 0.55, 0.8 if k % 3 else 0.6)
+    return f"#{round(r * 255):02x}{round(g * 255):02x}{round(b * 255):02x}"
+
+
+_BUILTIN = (
+    FaultType("gps", 1, {"SIM_GPS1_ENABLE": 0.0}, {"SIM_GPS1_ENABLE": 1.0},
+              "GPS 1 streams 'no fix' with 3 satellites (paper: SIM_GPS_DISABLE 0 -> 1)",
+              "GPS", "tab:blue"),
+    FaultType("accel", 2, {"SIM_ACCEL1_FAIL": 1.0, "SIM_ACCEL2_FAIL": 1.0},
               {"SIM_ACCEL1_FAIL": 0.0, "SIM_ACCEL2_FAIL": 0.0},
-              "both accelerometers read a constant (1, 1, 1) m/s/s"),
-        _type("engine", 3, {"SIM_ENGINE_MUL": 0.0}, {"SIM_ENGINE_MUL": 1.0},
-              "the SIM_ENGINE_FAIL motors (motor 1) lose all thrust"),
-        _type("rc", 4, {"SIM_RC_FAIL": 1.0}, {"SIM_RC_FAIL": 0.0},
-              "no RC frames arrive: radio failsafe, RTL (the vehicle stays in RTL after)"),
-        _type("gyro", 5, {"SIM_GYR_FAIL_MSK": 1.0}, {"SIM_GYR_FAIL_MSK": 0.0},
+              "both accelerometers read a constant (1, 1, 1) m/s/s", "Accelerometer",
+              "tab:orange"),
+    FaultType("engine", 3, {"SIM_ENGINE_MUL": 0.0}, {"SIM_ENGINE_MUL": 1.0},
+              "the SIM_ENGINE_FAIL motors (motor 1) lose all thrust", "Engine", "tab:red"),
+    FaultType("rc", 4, {"SIM_RC_FAIL": 1.0}, {"SIM_RC_FAIL": 0.0},
+              "no RC frames arrive: radio failsafe, RTL (the vehicle stays in RTL after)",
+              "RC", "tab:purple"),
+    FaultType("gyro", 5, {"SIM_GYR_FAIL_MSK": 1.0}, {"SIM_GYR_FAIL_MSK": 0.0},
               "IMU 1's gyro stops producing samples (IMU.GH 0, its logged gyro frozen; the EKF "
-              "and controllers use IMU 2's); masking every gyro is refused (SITL freezes)"),
-        _type("baro", 6, {"SIM_BARO_DISABLE": 1.0, "SIM_BAR2_DISABLE": 1.0},
+              "and controllers use IMU 2's); masking every gyro is refused (SITL freezes)",
+              "Gyro", "tab:green"),
+    FaultType("baro", 6, {"SIM_BARO_DISABLE": 1.0, "SIM_BAR2_DISABLE": 1.0},
               {"SIM_BARO_DISABLE": 0.0, "SIM_BAR2_DISABLE": 0.0},
-              "both barometers stop (BARO.H 0); ~10 s later the height estimate is lost"),
-        _type("compass", 7, {"SIM_MAG1_FAIL": 1.0}, {"SIM_MAG1_FAIL": 0.0},
-              "compass 1 delivers no data (MAG.Health 0, ERR 3/4); the EKF switches compass"),
-        _type("gps_glitch", 8, {"SIM_GPS1_GLTCH_X": 0.0003, "SIM_GPS1_GLTCH_Y": 0.0003},
+              "both barometers stop (BARO.H 0); ~10 s later the height estimate is lost",
+              "Barometer", "tab:brown"),
+    FaultType("compass", 7, {"SIM_MAG1_FAIL": 1.0}, {"SIM_MAG1_FAIL": 0.0},
+              "compass 1 delivers no data (MAG.Health 0, ERR 3/4); the EKF switches compass",
+              "Compass", "tab:pink"),
+    FaultType("gps_glitch", 8, {"SIM_GPS1_GLTCH_X": 0.0003, "SIM_GPS1_GLTCH_Y": 0.0003},
               {"SIM_GPS1_GLTCH_X": 0.0, "SIM_GPS1_GLTCH_Y": 0.0},
-              "GPS 1 position offset by 0.0003 deg in latitude and longitude (~43 m)"),
-        _type("motor_partial", 9, {"SIM_ENGINE_MUL": 0.5}, {"SIM_ENGINE_MUL": 1.0},
-              "the SIM_ENGINE_FAIL motors (motor 1) deliver half their PWM above 1000 us"),
-        _type("vibration", 10,
+              "GPS 1 position offset by 0.0003 deg in latitude and longitude (~43 m)",
+              "GPS glitch", "tab:olive"),
+    FaultType("motor_partial", 9, {"SIM_ENGINE_MUL": 0.5}, {"SIM_ENGINE_MUL": 1.0},
+              "the SIM_ENGINE_FAIL motors (motor 1) deliver half their PWM above 1000 us",
+              "Partial motor", "tab:cyan"),
+    FaultType("vibration", 10,
               {"SIM_ACC1_RND": 4.8, "SIM_ACC2_RND": 4.8, "SIM_VIB_MOT_MAX": 350.0},
               {"SIM_VIB_MOT_MAX": 0.0, "SIM_ACC1_RND": 0.0, "SIM_ACC2_RND": 0.0},
-              "motor-rpm sinusoids of 4.8 m/s/s on both accelerometers (VIBE ~6 m/s/s)"),
-        _type("battery", 11, {"SIM_BATT_VOLTAGE": 10.2}, {"SIM_BATT_VOLTAGE": 12.6},
+              "motor-rpm sinusoids of 4.8 m/s/s on both accelerometers (VIBE ~6 m/s/s)",
+              "Vibration", "gold"),
+    FaultType("battery", 11, {"SIM_BATT_VOLTAGE": 10.2}, {"SIM_BATT_VOLTAGE": 12.6},
               "battery at 10.2 V: less thrust per PWM, the low-battery failsafe after "
-              "BATT_LOW_TIMER"),
-        _type("gps_jam", 12, {"SIM_GPS1_JAM": 1.0}, {"SIM_GPS1_JAM": 0.0},
+              "BATT_LOW_TIMER", "Battery", "navy"),
+    FaultType("gps_jam", 12, {"SIM_GPS1_JAM": 1.0}, {"SIM_GPS1_JAM": 0.0},
               "GPS 1 jammed: fix lost and regained at random, satellites, position, velocity "
-              "and accuracy jump"),
-        _type("accel_samples", 13, {"SIM_ACC_FAIL_MSK": 1.0}, {"SIM_ACC_FAIL_MSK": 0.0},
+              "and accuracy jump", "GPS jamming", "lime"),
+    FaultType("accel_samples", 13, {"SIM_ACC_FAIL_MSK": 1.0}, {"SIM_ACC_FAIL_MSK": 0.0},
               "IMU 1's accelerometer stops producing samples (IMU.AH 0, its logged accel "
-              "frozen)"),
-    )
-})
+              "frozen)", "Accelerometer samples", "teal"),
+)
+#: Names of the built-in catalogue (labels 1-13), which cannot be replaced or removed.
+BUILTIN_TYPES: tuple[str, ...] = tuple(t.name for t in _BUILTIN)
+for _t in _BUILTIN:
+    register_fault_type(_t)
+del _t
