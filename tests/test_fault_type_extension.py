@@ -137,6 +137,19 @@ def test_the_registry_refuses_clashes(baro_offset):
     assert "other" not in FAULT_TYPES
 
 
+def test_worker_processes_are_refused_before_anything_is_written(baro_offset, tmp_path):
+    """A process pool or a Dask cluster starts fresh interpreters that know the built-in
+    types only: generate refuses them for a registered type, up front."""
+    from tlm_process.generate import GenerateError, GenerateOptions, ScenarioConfig, generate
+
+    cfg = ScenarioConfig(kinds={"single": 1.0}, fault_weights={NAME: 1.0})
+    for kw in ({"executor": "process"}, {"executor": "auto", "workers": 8}, {"dask_local": 1}):
+        with pytest.raises(GenerateError, match="registered in this process only"):
+            generate(GenerateOptions(out=tmp_path / "ds", flights=1, config=cfg,
+                                     progress=False, **kw))
+    assert not (tmp_path / "ds").exists()
+
+
 def test_fly_and_score(baro_offset):
     from tlm_sim import fly
     from tlm_sim.faults import FaultSchedule

@@ -41,7 +41,7 @@ from typing import Any
 from tlm_process.generate.errors import ExecutorLost, GenerateError
 
 __all__ = ["AUTO_THREADS_MAX", "EXECUTORS", "ExecutorHandle", "check_executor_options",
-           "open_executor"]
+           "local_kind", "open_executor"]
 
 #: Local executor kinds.
 EXECUTORS: tuple[str, ...] = ("auto", "process", "thread")
@@ -205,6 +205,17 @@ def check_executor_options(kind: str = "auto", workers: int | None = None, *,
             _check_workers(workers, "--workers")
 
 
+def local_kind(kind: str, workers: int | None) -> str:
+    """``thread`` or ``process``: what a local executor ``kind`` (``auto`` resolved) with
+    ``workers`` workers (None: all cores) runs flights in."""
+    if kind not in EXECUTORS:
+        raise GenerateError(f"unknown executor {kind!r}; choose from {', '.join(EXECUTORS)}")
+    if kind == "auto":
+        n = default_workers() if workers is None else workers
+        return "thread" if n <= AUTO_THREADS_MAX else "process"
+    return kind
+
+
 def open_executor(kind: str = "auto", workers: int | None = None, *,
                   scheduler: str | None = None, dask_local: int | None = None,
                   timeout_s: float = 10.0) -> ExecutorHandle:
@@ -225,11 +236,8 @@ def open_executor(kind: str = "auto", workers: int | None = None, *,
         raise GenerateError("--scheduler and --dask-local are exclusive")
     if scheduler is not None or dask_local is not None:
         return _open_dask(scheduler, dask_local, timeout_s)
-    if kind not in EXECUTORS:
-        raise GenerateError(f"unknown executor {kind!r}; choose from {', '.join(EXECUTORS)}")
     n = default_workers() if workers is None else _check_workers(workers, "--workers")
-    if kind == "auto":
-        kind = "thread" if n <= AUTO_THREADS_MAX else "process"
+    kind = local_kind(kind, n)
     if kind == "process":
         return ExecutorHandle("process", _process_pool(n), n, f"{n} local processes",
                               _workers=n)

@@ -40,12 +40,14 @@ from tlm_process.generate.errors import ExecutorLost, GenerateError
 from tlm_process.generate.executors import (
     ExecutorHandle,
     check_executor_options,
+    local_kind,
     open_executor,
 )
 from tlm_process.generate.manifest import FORMAT, FORMAT_VERSION, HEADER, sim_fingerprint
 from tlm_process.generate.scenario import ScenarioConfig, flight_conditions, sample_scenario
 from tlm_process.generate.task import fly_job, make_job, peak_rss_mb
 from tlm_process.generate.writer import DatasetWriter
+from tlm_sim.faults.types import BUILTIN_TYPES
 from tlm_sim.flight import END_NOT_ARMED, END_TIME_CAP
 from tlm_sim.frames import FRAMES
 
@@ -247,6 +249,7 @@ def _check(opts: GenerateOptions) -> list[str] | None:
             raise GenerateError(f"{what} must be a whole number >= {lo}, got {v!r}")
     check_executor_options(opts.executor, opts.workers, scheduler=opts.scheduler,
                            dask_local=opts.dask_local)
+    _check_registered_types(opts)
     if opts.flights > MAX_FLIGHTS:
         raise GenerateError(f"--flights must be at most {MAX_FLIGHTS:_} (file names hold "
                             f"8-digit flight numbers), got {opts.flights:_}")
@@ -257,6 +260,21 @@ def _check(opts: GenerateOptions) -> list[str] | None:
         if opts.config.lam != 1.0:
             raise GenerateError("give --lambda or --target-fault-ratio, not both")
     return _check_tables(opts.tables)
+
+
+def _check_registered_types(opts: GenerateOptions) -> None:
+    """GenerateError when the settings draw a fault type registered in this process (not a
+    built-in one) and the flights would run in other processes (a process pool, Dask), whose
+    fresh interpreters know the built-in types only."""
+    extra = sorted(t for t in opts.config.drawn_types() if t not in BUILTIN_TYPES)
+    if not extra:
+        return
+    local = opts.scheduler is None and opts.dask_local is None
+    if local and local_kind(opts.executor, opts.workers) == "thread":
+        return
+    raise GenerateError(f"fault type {extra[0]!r} is registered in this process only, and "
+                        "worker processes know the built-in types: run its flights on threads "
+                        "(executor='thread', --executor thread)")
 
 
 def _settings(opts: GenerateOptions, tables: list[str] | None) -> dict[str, Any]:

@@ -325,6 +325,10 @@ class ScenarioConfig:
                                 f"{len(self.sequence_types)} types")
         set_(self, "sequence_len", (int(lo), int(hi)))
         set_(self, "magnitudes", _magnitudes(self.magnitudes))
+        _check_modelled(self.drawn_types())
+
+    def drawn_types(self) -> set[str]:
+        """The fault types these settings can draw (those of the kinds with a share)."""
         drawn = set()
         if self.kinds["single"] > 0:
             drawn |= {t for t, w in self.fault_weights.items() if w > 0}
@@ -332,7 +336,7 @@ class ScenarioConfig:
             drawn |= set(self.sequence_types)
         if self.kinds["paper"] > 0:
             drawn |= set(PAPER_TYPES)
-        _check_modelled(drawn)
+        return drawn
 
     def with_lambda(self, lam: float) -> ScenarioConfig:
         """The same configuration with λ = ``lam``."""
