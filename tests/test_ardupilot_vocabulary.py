@@ -117,7 +117,7 @@ def test_no_code_is_written_as_a_bare_number():
     ("MODE_NEEDS_GPS = (3, 4)\n", False),
     ("x = ev[ev.Id == 10]\n", True),
     ("x = err[err.Subsys == AP.ERR_GPS]\n", False),
-    ("log_err(events, n, t, 24, 1)\n", True),
+    ("log_err(ev, t, 24, 1)\n", True),
     ("g = 9.80665\n", True),
 ])
 def test_the_checks_find_what_they_look_for(src, found):

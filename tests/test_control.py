@@ -190,7 +190,7 @@ def _vibe_run(thresh, bad_imu, seconds=3.0):
     eo[EK.O_BAD_IMU] = bad_imu
     events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     for k in range(int(seconds / 0.1) + 1):
-        FS.failsafe_checks(c, g, k * 100000, eo, events, ev_counts)
+        FS.failsafe_checks(c, g, k * 100000, eo, (events, ev_counts))
     return events[L.E_ERR][: ev_counts[L.E_ERR]]
 
 
@@ -217,7 +217,7 @@ def _thrust_loss_run(g, roll_cmd, thr, vd, limit_hi=0.0, seconds=1.5):
     events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     dt = g[C.G_DT]
     hits = [k for k in range(int(seconds / dt))
-            if FS.thrust_loss_check(c, dt, q, vd, events, ev_counts, k * 2500)]
+            if FS.thrust_loss_check(c, dt, q, vd, (events, ev_counts), k * 2500)]
     return hits, events[L.E_ERR][: ev_counts[L.E_ERR]], c
 
 
@@ -236,8 +236,8 @@ def test_thrust_loss_check_fires_after_one_second_of_full_throttle_descent(cfg):
     # with headroom comes out of the mixer (mixer.motor_loss_monitor)
     events, ev_counts = L.event_buffers(*L.new_buffers(1.0))
     c[C.THRUST_LOSS_T] = 5.0
-    assert not FS.thrust_loss_check(c, g[C.G_DT], np.array([1.0, 0, 0, 0]), 2.0, events,
-                                    ev_counts, 0)
+    assert not FS.thrust_loss_check(c, g[C.G_DT], np.array([1.0, 0, 0, 0]), 2.0,
+                                    (events, ev_counts), 0)
     assert c[C.THRUST_BOOST] == 1.0 and ev_counts[L.E_ERR] == 0
     mix(c, g, 0.0, 0.0, 0.0, 0.4, 12.6)
     assert c[C.THRUST_BOOST] == 0.0

@@ -135,7 +135,7 @@ SUBTREE = ("imu_take_deltas", "gps_push_truth", "gps_measure", "baro_read", "mag
 P.JOBS = tuple(j for j in P.JOBS if j.target.split(":")[1] in SUBTREE)
 assert len(P.JOBS) == len(SUBTREE)
 P.RUN_FLIGHT = P.Job("tlm_sim.flight:_read_sensors",
-                     (P._STATE, F1, P._WORK, nt.int64, nt.Tuple((nt.UniTuple(F2, 3), I1))), 1.0)
+                     (P._STATE, F1, P._WORK, nt.int64, P._EV), 1.0)
 rep = P.precompile(2)
 again = P.precompile(2)
 hits = {j.target: sum(P.job_dispatcher(j).stats.cache_hits.values()) for j in P.JOBS}

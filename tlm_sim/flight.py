@@ -275,7 +275,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     acc_ned = rows[W_ACC_NED]
     events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
     ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    ev = (events, ev_counts)
+    ev = (events, ev_counts)  # the event buffers and their row counts
     _boot(state, cfg, ev, home[0])
     k_sched = 0
     t_us = 0
@@ -300,17 +300,17 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
                    c[C.ARMED] != 0.0, t_us)
         _estimate(state, ecfg, work, now, ev)
         if boot_texts_due(c, eo):
-            lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, events, ev_counts)
+            lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, ev)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
-            gps_glitch_check(events, ev_counts, t_us, ekf, sel)
+            gps_glitch_check(ev, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
-        battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], events, ev_counts)
+        battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], ev)
         vehicle_step(c, g, t_us, VehicleInputs(pos, vel, q, gyro, acc_ned, eo, s[S.PM_VOLT],
                                                s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2]),
-                     path, seg, events, ev_counts)
+                     path, seg, ev)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
-                c, g, float(t_us), s, gps, eo, q, txt, events, ev_counts):
-            arm_vehicle(c, t_us, q, events, ev_counts)
+                c, g, float(t_us), s, gps, eo, q, txt, ev):
+            arm_vehicle(c, t_us, q, ev)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(logs, state, cfg, plan, work, now, last_gps_ms)
@@ -337,7 +337,7 @@ def _boot(state, cfg, ev, home_lat):
     arming_init(state.c, cfg.g)
     gsf_init(state.gsf, cfg.ecfg)
     dcm_init(state.dcm)
-    log_mode(ev[0], ev[1], 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
+    log_mode(ev, 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
 
 
 @inline_jit
@@ -374,13 +374,13 @@ def _read_sensors(state, scfg, work, t_us, ev):
         s[S.B_NEXT_US] += BARO_PERIOD_US
         baro_new, err = baro_read(s, x, scfg, rng, float(t_us))
         if err >= 0:
-            log_err(ev[0], ev[1], t_us, AP.ERR_BARO, err)
+            log_err(ev, t_us, AP.ERR_BARO, err)
     mag_new = False
     if t_us >= s[S.M_NEXT_US]:
         s[S.M_NEXT_US] += MAG_PERIOD_US
         dh = mag_sample(s, x, scfg, rng[S.RNG_MAG], float(t_us))
         if dh != 0:
-            log_err(ev[0], ev[1], t_us, AP.ERR_COMPASS,
+            log_err(ev, t_us, AP.ERR_COMPASS,
                     AP.ERR_CODE_RESOLVED if dh > 0 else AP.ERR_CODE_UNHEALTHY)
         mag_new = True
     rc_update(s, scfg, float(t_us))
@@ -410,7 +410,7 @@ def _estimate(state, ecfg, work, now, ev):
     gsf_update(gsf, ekf, ecfg, inputs)
     ekf_output_nav(ekf, sel, work.eo)
     if switched:
-        log_lane_switch(ev[0], ev[1], t_us, work.eo)
+        log_lane_switch(ev, t_us, work.eo)
 
 
 @inline_jit

@@ -67,6 +67,7 @@ _U2 = nt.uint64[:, ::1]  # the sensor noise streams (tlm_sim.rng.new_streams)
 _f8, _i8, _b1 = nt.float64, nt.int64, nt.boolean
 _BUFS = nt.UniTuple(_F2, len(L.LOG_ORDER))
 _EVENTS = nt.UniTuple(_F2, 3)  # the event buffers (tlm_sim.logger E_*)
+_EV = nt.Tuple((_EVENTS, _I1))  # ... with their row counts, as the vehicle logic takes them
 # the flight loop's bundles (tlm_sim.bundles)
 _STATE = nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState)
 _CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
@@ -95,7 +96,7 @@ class Job:
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
         (_F1, _F1, _i8, nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs), _F2, _F2,
-         _EVENTS, _I1),
+         _EV),
         13.1),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, _EKF_INPUTS), 13.4),
@@ -118,22 +119,22 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.sensors.mag:mag_sample", (_F1, _F1, _F1, _U1, _f8), 0.8),
     # issue 19's main-loop callees: compiled by run_flight itself they made its serial tail
     # 6.6 s instead of 4.0 s
-    Job("tlm_sim.control.battery:battery_monitor", (_F1, _F1, _i8, _f8, _f8, _EVENTS, _I1),
+    Job("tlm_sim.control.battery:battery_monitor", (_F1, _F1, _i8, _f8, _f8, _EV),
         0.6),
     Job("tlm_sim.control.ahrs:ahrs_update", (_F1,) * 7, 0.4),
     Job("tlm_sim.ekf.lanes:ekf_gps_accuracy", (_F2, _F1, _f8, _f8, _f8), 0.2),
     Job("tlm_sim.ekf.lanes:ekf_output", (_F2, _F1, _F1), 0.4),  # with ekf_output_nav
-    Job("tlm_sim.ekf.log:gps_glitch_check", (_EVENTS, _I1, _i8, _F2, _F1), 0.1),
-    Job("tlm_sim.ekf.log:log_lane_switch", (_EVENTS, _I1, _i8, _F1), 0.1),
+    Job("tlm_sim.ekf.log:gps_glitch_check", (_EV, _i8, _F2, _F1), 0.1),
+    Job("tlm_sim.ekf.log:log_lane_switch", (_EV, _i8, _F1), 0.1),
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
     Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_BUFS, _I1, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",
-        (_F1, _F1, _f8, _F1, _F1, _F1, _F1, _F2, _EVENTS, _I1), 2.8),
+        (_F1, _F1, _f8, _F1, _F1, _F1, _F1, _F2, _EV), 2.8),
     Job("tlm_sim.control.arming:lifecycle_texts",
-        (_F1, _f8, _F1, _F1, _f8, _b1, _F2, _EVENTS, _I1), 0.5),
-    Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EVENTS, _I1), 0.1),
+        (_F1, _f8, _F1, _F1, _f8, _b1, _F2, _EV), 0.5),
+    Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EV), 0.1),
     Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 1.1),
     # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs
     Job("tlm_sim.control.dcm:dcm_update",

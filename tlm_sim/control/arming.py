@@ -357,7 +357,7 @@ def _prearm_update(c, g, t_us, s, gps, eo, txt):
 
 
 @inline_jit
-def _attempt(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
+def _attempt(c, g, t_us, s, gps, eo, q, txt, ev):
     """One arm attempt of the driver: the checks, then arming or an "Arm:" text row."""
     t_s = t_us * 1e-6
     r = txt_row(c, txt, t_us, AP.KIND_ARM, 0)
@@ -376,7 +376,7 @@ def _attempt(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
 
 
 @tick_jit
-def arming_step(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
+def arming_step(c, g, t_us, s, gps, eo, q, txt, ev):
     """The driver and the 1 Hz pre-arm checks, once per main-loop tick after the vehicle's
     step. Returns True on the tick an attempt passes: the caller arms the vehicle."""
     t_s = t_us * 1e-6
@@ -392,9 +392,9 @@ def arming_step(c, g, t_us, s, gps, eo, q, txt, events, ev_counts):
         if t_s >= g[C.G_ARM_GIVE_UP]:
             c[C.ARM_GAVE_UP] = 1.0
         else:
-            passed = _attempt(c, g, t_us, s, gps, eo, q, txt, events, ev_counts)
+            passed = _attempt(c, g, t_us, s, gps, eo, q, txt, ev)
     if switched and not passed:
-        E.log_mode(events, ev_counts, t_us, AP.MODE_GUIDED, AP.RSN_GCS)
+        E.log_mode(ev, t_us, AP.MODE_GUIDED, AP.RSN_GCS)
     return passed
 
 
@@ -412,7 +412,7 @@ def boot_texts_due(c, eo):
 
 
 @tick_jit
-def _lane_texts(c, t_us, eo, txt, events, ev_counts):
+def _lane_texts(c, t_us, eo, txt, ev):
     """The lifecycle events the lanes published this tick (eo's lane records) as text rows,
     event by event and lane by lane (the order EKF3's cores print them in one loop)."""
     for k in range(AP.N_EKF_EVT):
@@ -427,13 +427,13 @@ def _lane_texts(c, t_us, eo, txt, events, ev_counts):
                 txt[r, AP.A_MAG_FIELD] = eo[b + EK.LS_MAG]
             # Copter watches the primary
             if bit == AP.EKF_EVT_YAW and i == int(eo[EK.O_PRIMARY]):
-                E.log_ev(events, ev_counts, t_us, AP.EV_EKF_YAW_RESET)
+                E.log_ev(ev, t_us, AP.EV_EKF_YAW_RESET)
             if bit == AP.EKF_EVT_INIT and i == 0:
                 txt_row(c, txt, t_us + 2500.0, AP.KIND_AHRS_ACTIVE, 0)
 
 
 @tick_jit
-def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, events, ev_counts):
+def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, ev):
     """Every tick: the lanes' EKF lifecycle events into text rows (EV EKF_YAW_RESET at a yaw
     alignment, "AHRS: EKF3 active" after lane 0 starts); home set when the primary lane has
     its origin (EV SET_HOME); the baro's field elevation (and ground temperature) at its first
@@ -445,10 +445,10 @@ def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, events, ev_counts):
         origin = origin or eo[b + EK.LS_ORIGIN_OK] != 0.0
         pending |= int(eo[b + EK.LS_EVENTS])
     if pending != 0:
-        _lane_texts(c, t_us, eo, txt, events, ev_counts)
+        _lane_texts(c, t_us, eo, txt, ev)
     if c[C.HOME_SET] == 0.0 and eo[EK.O_ORIGIN_OK] != 0.0:
         c[C.HOME_SET] = 1.0
-        E.log_ev(events, ev_counts, t_us, AP.EV_SET_HOME)
+        E.log_ev(ev, t_us, AP.EV_SET_HOME)
     # AP_Baro sets the field elevation at its next reading after the origin (FIELD_SET 0.5:
     # an origin seen, the reading pending)
     if c[C.FIELD_SET] == 0.5 and baro_new:

@@ -126,7 +126,7 @@ def failsafe_state(c, g, t_s):
 
 
 @tick_jit
-def battery_monitor(c, g, t_us, volt, curr, events, ev_counts):
+def battery_monitor(c, g, t_us, volt, curr, ev):
     """The 10 Hz battery monitor and failsafe check at ``t_us``; ``volt`` [V], ``curr`` [A]:
     the simulated battery. Logs ERR 6/1 on an escalation that acts and leaves the action in
     ``c[BATT_FS_ACT]``."""
@@ -159,7 +159,7 @@ def battery_monitor(c, g, t_us, volt, curr, events, ev_counts):
     rank = ACTION_RANK[int(act)]
     if rank <= c[C.BATT_FS_RANK]:
         c[C.BATT_FS_RANK] = rank
-        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_BATT, AP.ERR_CODE_FAILSAFE)
+        E.log_err(ev, t_us, AP.ERR_FAILSAFE_BATT, AP.ERR_CODE_FAILSAFE)
         c[C.BATT_FS_ACT] = act
 
 

@@ -10,28 +10,28 @@ MODE, EV, ERR = L.MODE_COLS, L.EV_COLS, L.ERR_COLS
 
 
 @tick_jit
-def log_mode(events, ev_counts, t_us, mode, rsn):
+def log_mode(ev, t_us, mode, rsn):
     """Append a MODE row (mode number, reason) to the flight's log buffers."""
-    r = L.new_row(events, ev_counts, L.E_MODE, t_us)
+    r = L.new_row(ev[0], ev[1], L.E_MODE, t_us)
     if r >= 0:
-        b = events[L.E_MODE]
+        b = ev[0][L.E_MODE]
         b[r, MODE.Mode] = mode
         b[r, MODE.ModeNum] = mode
         b[r, MODE.Rsn] = rsn
 
 
 @tick_jit
-def log_err(events, ev_counts, t_us, subsys, code):
+def log_err(ev, t_us, subsys, code):
     """Append an ERR row (subsystem, error code)."""
-    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
     if r >= 0:
-        events[L.E_ERR][r, ERR.Subsys] = subsys
-        events[L.E_ERR][r, ERR.ECode] = code
+        ev[0][L.E_ERR][r, ERR.Subsys] = subsys
+        ev[0][L.E_ERR][r, ERR.ECode] = code
 
 
 @tick_jit
-def log_ev(events, ev_counts, t_us, ev_id):
+def log_ev(ev, t_us, ev_id):
     """Append an EV row (event id)."""
-    r = L.new_row(events, ev_counts, L.E_EV, t_us)
+    r = L.new_row(ev[0], ev[1], L.E_EV, t_us)
     if r >= 0:
-        events[L.E_EV][r, EV.Id] = ev_id
+        ev[0][L.E_EV][r, EV.Id] = ev_id

@@ -96,11 +96,11 @@ def ekf_position_ok(eo):
 
 
 @tick_jit
-def _vibration_check(c, g, t_s, eo, events, ev_counts, t_us):
+def _vibration_check(c, g, t_s, eo, ev, t_us):
     if g[C.G_FS_VIBE_ENABLE] == 0.0:
         if c[C.VIBE_COMP] != 0.0:
             c[C.VIBE_COMP] = 0.0
-            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
+            E.log_err(ev, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
         return
     # EKF3 innovations are prediction - measurement: both positive = "sinking and low"; the
     # filtered velocity ratio is only valid while ekf_check filters it (FS_EKF_THRESH > 0)
@@ -113,16 +113,16 @@ def _vibration_check(c, g, t_s, eo, events, ev_counts, t_us):
             c[C.VIBE_FAIL_T] = t_s
         if c[C.VIBE_COMP] == 0.0 and t_s - c[C.VIBE_FAIL_T] >= VIBE_TRIGGER_S - 1e-6:
             c[C.VIBE_COMP] = 1.0
-            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_FAILSAFE)
+            E.log_err(ev, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_FAILSAFE)
     else:
         c[C.VIBE_FAIL_T] = -1.0
         if c[C.VIBE_COMP] != 0.0 and t_s - c[C.VIBE_LAST_FAIL_T] >= VIBE_CLEAR_S - 1e-6:
             c[C.VIBE_COMP] = 0.0
-            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
+            E.log_err(ev, t_us, AP.ERR_FAILSAFE_VIBE, AP.ERR_CODE_RESOLVED)
 
 
 @tick_jit
-def _ekf_check(c, g, eo, events, ev_counts, t_us):
+def _ekf_check(c, g, eo, ev, t_us):
     """ekf_check at 10 Hz; returns FS_* when the EKF failsafe fires this cycle.
 
     With FS_EKF_THRESH <= 0 it only clears the failsafe and returns before filtering the test
@@ -133,7 +133,7 @@ def _ekf_check(c, g, eo, events, ev_counts, t_us):
         c[C.EKF_FAIL_COUNT] = 0.0
         if c[C.EKF_FAILSAFE] != 0.0:
             c[C.EKF_FAILSAFE] = 0.0
-            E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_RESOLVED)
+            E.log_err(ev, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_RESOLVED)
         return FS_NONE
     a = g[C.G_FS_EKF_ALPHA]
     c[C.EKF_VEL_TR_F] += a * (math.sqrt(max(eo[EK.O_VEL_TR], 0.0)) - c[C.EKF_VEL_TR_F])
@@ -156,8 +156,8 @@ def _ekf_check(c, g, eo, events, ev_counts, t_us):
             c[C.EKF_FAIL_COUNT] -= 1.0
             if c[C.EKF_FAIL_COUNT] == 0.0 and c[C.EKF_FAILSAFE] != 0.0:
                 c[C.EKF_FAILSAFE] = 0.0
-                E.log_err(events, ev_counts, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_RESOLVED)
-                E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV,
+                E.log_err(ev, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_RESOLVED)
+                E.log_err(ev, t_us, AP.ERR_FAILSAFE_EKFINAV,
                            AP.ERR_CODE_RESOLVED)
         return FS_NONE
     if c[C.EKF_CHECK_OK_ONCE] == 0.0 or c[C.EKF_FAILSAFE] != 0.0:
@@ -167,8 +167,8 @@ def _ekf_check(c, g, eo, events, ev_counts, t_us):
         return FS_NONE
     c[C.EKF_FAIL_COUNT] = EKF_CHECK_ITERATIONS
     c[C.EKF_FAILSAFE] = 1.0
-    E.log_err(events, ev_counts, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_EKF_BAD_VARIANCE)
-    E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_FAILSAFE)
+    E.log_err(ev, t_us, AP.ERR_EKFCHECK, AP.ERR_CODE_EKF_BAD_VARIANCE)
+    E.log_err(ev, t_us, AP.ERR_FAILSAFE_EKFINAV, AP.ERR_CODE_FAILSAFE)
     action = g[C.G_FS_EKF_ACTION]
     if action == 2.0:
         return FS_EKF_ALTHOLD
@@ -178,7 +178,7 @@ def _ekf_check(c, g, eo, events, ev_counts, t_us):
 
 
 @tick_jit
-def failsafe_checks(c, g, t_us, eo, events, ev_counts):
+def failsafe_checks(c, g, t_us, eo, ev):
     """The 10 Hz EKF and vibration checks (armed only, in that order); returns an FS_* action."""
     t_s = t_us * 1e-6
     c[C.EKF_POS_OK] = 1.0 if ekf_position_ok(eo) else 0.0
@@ -188,8 +188,8 @@ def failsafe_checks(c, g, t_us, eo, events, ev_counts):
     if c[C.ARMED] == 0.0:
         c[C.VIBE_FAIL_T] = -1.0
         return FS_NONE
-    fs = _ekf_check(c, g, eo, events, ev_counts, t_us)
-    _vibration_check(c, g, t_s, eo, events, ev_counts, t_us)
+    fs = _ekf_check(c, g, eo, ev, t_us)
+    _vibration_check(c, g, t_s, eo, ev, t_us)
     return fs
 
 
@@ -218,7 +218,7 @@ def crash_check(c, g, dt, cos_tilt, roll, pitch, ground_speed):
 
 
 @tick_jit
-def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
+def thrust_loss_check(c, dt, q, vd, ev, t_us):
     """ArduCopter's thrust-loss check, once per main-loop tick (after the mixer).
 
     q: EKF attitude quaternion body -> NED; vd: EKF down velocity [m/s]. Uses the attitude
@@ -249,5 +249,5 @@ def thrust_loss_check(c, dt, q, vd, events, ev_counts, t_us):
         return False
     c[C.THRUST_LOSS_T] = 0.0
     c[C.THRUST_BOOST] = 1.0
-    E.log_err(events, ev_counts, t_us, AP.ERR_THRUST_LOSS_CHECK, AP.ERR_CODE_FAILSAFE)
+    E.log_err(ev, t_us, AP.ERR_THRUST_LOSS_CHECK, AP.ERR_CODE_FAILSAFE)
     return True

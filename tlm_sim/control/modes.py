@@ -88,10 +88,10 @@ LAND_CRITERIA_MASK = LAND_CRITERIA | AP.LDET_LARGE_ANGLE
 
 
 @tick_jit
-def set_mode(c, mode, rsn, t_us, events, ev_counts):
+def set_mode(c, mode, rsn, t_us, ev):
     """Change flight mode and write the MODE row."""
     c[C.MODE] = mode
-    E.log_mode(events, ev_counts, t_us, mode, rsn)
+    E.log_mode(ev, t_us, mode, rsn)
 
 
 @tick_jit
@@ -163,7 +163,7 @@ def _start_land(c, pos, failsafe):
 
 
 @tick_jit
-def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
+def vehicle_step(c, g, t_us, inputs, path, seg, ev):
     """One 400 Hz main-loop tick of the autopilot; leaves motor PWMs in c[MIX_PWM:MIX_PWM+4].
 
     inputs: the tick's :class:`tlm_sim.bundles.VehicleInputs` (the AHRS view: EKF position and
@@ -171,8 +171,8 @@ def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
     bias [rad/s], kinematic acceleration NED without gravity [m/s^2]; the EKF's output block
     for the failsafe checks; battery voltage [V]; the last RC frame's time [us] and throttle
     channel [us]); path: the mission as NED points (path[0] = the takeoff point above home);
-    seg: (>=2, 3) scratch path for takeoff/RTL segments; events/ev_counts: the flight's event
-    log buffers and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
+    seg: (>=2, 3) scratch path for takeoff/RTL segments; ev: the flight's event log
+    buffers and their row counts (tlm_sim.logger E_*: MODE, EV, ERR).
     """
     pos, q, acc_ned, eo, v_batt = inputs.pos, inputs.q, inputs.acc_ned, inputs.eo, inputs.v_batt
     dt = g[C.G_DT]
@@ -183,24 +183,23 @@ def vehicle_step(c, g, t_us, inputs, path, seg, events, ev_counts):
         _motors_at_rest(c, g, v_batt)
         return
     c[C.SUB_TIMER] += dt
-    sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), inputs, seg, events, ev_counts)
-    sub = _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts)
-    sub = _battery_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts)
+    sub = _radio_failsafe(c, g, t_us, int(c[C.SUBMODE]), inputs, seg, ev)
+    sub = _nav_failsafes(c, g, t_us, sub, pos, eo, ev)
+    sub = _battery_failsafe(c, g, t_us, sub, inputs, seg, ev)
     if c[C.ARMED] == 0.0:
         return
     if sub == C.SUB_GROUND_IDLE:
-        _ground_idle(c, g, t_us, inputs, seg, events, ev_counts)
+        _ground_idle(c, g, t_us, inputs, seg, ev)
         _motors_at_rest(c, g, v_batt)
         return
-    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, path, seg, events,
-                                                    ev_counts)
+    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, path, seg, ev)
     sub = int(c[C.SUBMODE])
-    if sub == C.SUB_LAND and _land_descent(c, g, t_us, pos, land_vertical, events, ev_counts):
+    if sub == C.SUB_LAND and _land_descent(c, g, t_us, pos, land_vertical, ev):
         return
     thr = _controllers(c, g, sub, inputs, cos_tilt, yaw_cmd, yaw_rate_ff)
     _hover_learning(c, g, sub, thr, inputs)
-    _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts)
-    _crash_checks(c, g, t_us, inputs, cos_tilt, events, ev_counts)
+    _land_detector(c, g, t_us, sub, thr, inputs, ev)
+    _crash_checks(c, g, t_us, inputs, cos_tilt, ev)
 
 
 @inline_jit
@@ -235,11 +234,11 @@ def _disarmed_step(c, g):
 
 
 @tick_jit
-def arm_vehicle(c, t_us, q, events, ev_counts):
+def arm_vehicle(c, t_us, q, ev):
     """Arm in GUIDED (the mode is logged again, as AP_Arming_Copter::arm does) once the
     driver's attempt passed the checks (tlm_sim.control.arming): motors to ground idle, the
     takeoff follows the arming delay. q: EKF attitude body->NED (the home heading)."""
-    set_mode(c, AP.MODE_GUIDED, AP.RSN_GCS, t_us, events, ev_counts)
+    set_mode(c, AP.MODE_GUIDED, AP.RSN_GCS, t_us, ev)
     c[C.ARMED] = 1.0
     c[C.ARM_TIME_S] = t_us * 1e-6
     c[C.LANDED] = 1.0
@@ -247,7 +246,7 @@ def arm_vehicle(c, t_us, q, events, ev_counts):
     c[C.SUBMODE] = C.SUB_GROUND_IDLE
     c[C.SUB_TIMER] = 0.0
     c[C.SPOOL] = 1.0
-    E.log_ev(events, ev_counts, t_us, AP.EV_ARMED)
+    E.log_ev(ev, t_us, AP.EV_ARMED)
 
 
 @tick_jit
@@ -268,7 +267,7 @@ def _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle):
 
 
 @inline_jit
-def _radio_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
+def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
     """The radio failsafe: no RC frame for RC_FS_TIMEOUT (ERR 2/2 and 5/1) or three frames with
     throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> RTL (LAND without a
     position); frames again with a good throttle -> ERR 5/0. Returns the submode to continue
@@ -280,34 +279,33 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
     if (rc_late or thr_low) and c[C.RC_FAILSAFE] == 0.0 and g[C.G_FS_THR_ENABLE] != 0.0:
         c[C.RC_FAILSAFE] = 1.0
         if rc_late:
-            E.log_err(events, ev_counts, t_us, AP.ERR_RADIO, AP.ERR_CODE_LATE_FRAME)
-        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_FAILSAFE)
+            E.log_err(ev, t_us, AP.ERR_RADIO, AP.ERR_CODE_LATE_FRAME)
+        E.log_err(ev, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_FAILSAFE)
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != AP.MODE_RTL:
-            return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_RADIO_FAILSAFE, events,
-                                ev_counts)
+            return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_RADIO_FAILSAFE, ev)
     elif not rc_late and thr_ok and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
-        E.log_err(events, ev_counts, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED)
+        E.log_err(ev, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED)
     return sub
 
 
 @inline_jit
-def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, events, ev_counts):
+def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, ev):
     """A failsafe's RTL, or LAND after a pause when there is no position; returns the new
     submode."""
     if _position_ok(c):
-        set_mode(c, AP.MODE_RTL, rsn, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_RTL, rsn, t_us, ev)
         _start_rtl(c, g, pos, vel, seg)
         return C.SUB_RTL_CLIMB
-    set_mode(c, AP.MODE_LAND, rsn, t_us, events, ev_counts)
+    set_mode(c, AP.MODE_LAND, rsn, t_us, ev)
     _start_land(c, pos, True)
     return C.SUB_LAND
 
 
 @inline_jit
-def _battery_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
+def _battery_failsafe(c, g, t_us, sub, inputs, seg, ev):
     """The battery failsafe's action (Copter's handle_battery_failsafe), once the monitor has
     asked for one (c[BATT_FS_ACT], tlm_sim.control.battery): on the ground disarm; else Land
     (with a pause), RTL (or Land without a position), Terminate (disarm in the air). tlm has
@@ -321,24 +319,23 @@ def _battery_failsafe(c, g, t_us, sub, inputs, seg, events, ev_counts):
     landed = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
     if landed or act == B.ACT_TERMINATE:
         method = AP.ARM_METHOD_BATTERYFAILSAFE if landed else AP.ARM_METHOD_TERMINATE
-        _disarm(c, g, t_us, method, events, ev_counts)
+        _disarm(c, g, t_us, method, ev)
         return C.SUB_LANDED
     if act == B.ACT_LAND or act == B.ACT_SMARTRTL_LAND or act == B.ACT_BRAKE_LAND:
         if c[C.MODE] != AP.MODE_LAND:
-            set_mode(c, AP.MODE_LAND, AP.RSN_BATTERY_FAILSAFE, t_us, events, ev_counts)
+            set_mode(c, AP.MODE_LAND, AP.RSN_BATTERY_FAILSAFE, t_us, ev)
             _start_land(c, pos, True)
             return C.SUB_LAND
     elif act != B.ACT_NONE and c[C.MODE] != AP.MODE_RTL and c[C.MODE] != AP.MODE_LAND:
-        return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_BATTERY_FAILSAFE, events,
-                            ev_counts)
+        return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_BATTERY_FAILSAFE, ev)
     return sub
 
 
 @inline_jit
-def _disarm(c, g, t_us, method, events, ev_counts):
+def _disarm(c, g, t_us, method, ev):
     """Disarm now by AP_Arming::Method ``method`` (EV DISARMED, ARM.Method; motors stopped;
     the flight ends 2 s later)."""
-    E.log_ev(events, ev_counts, t_us, AP.EV_DISARMED)
+    E.log_ev(ev, t_us, AP.EV_DISARMED)
     c[C.DISARM_METHOD] = method
     c[C.ARMED] = 0.0
     c[C.SUBMODE] = C.SUB_LANDED
@@ -347,10 +344,10 @@ def _disarm(c, g, t_us, method, events, ev_counts):
 
 
 @inline_jit
-def _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts):
+def _nav_failsafes(c, g, t_us, sub, pos, eo, ev):
     """The vibration and EKF failsafes (10 Hz): an EKF failsafe in flight -> LAND (or AltHold
     with FS_EKF_ACTION 2) where the mode needs a position. Returns the submode."""
-    fs = failsafe_checks(c, g, t_us, eo, events, ev_counts)
+    fs = failsafe_checks(c, g, t_us, eo, ev)
     if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
         return sub
     needs_position = c[C.MODE] == AP.MODE_AUTO or c[C.MODE] == AP.MODE_GUIDED or (
@@ -358,17 +355,17 @@ def _nav_failsafes(c, g, t_us, sub, pos, eo, events, ev_counts):
     if not (needs_position or g[C.G_FS_EKF_ACTION] == 3.0):
         return sub
     if fs == FS_EKF_ALTHOLD:
-        set_mode(c, AP.MODE_ALT_HOLD, AP.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_ALT_HOLD, AP.RSN_EKF_FAILSAFE, t_us, ev)
         _start_land(c, pos, True)
         c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
     elif c[C.MODE] != AP.MODE_LAND:
-        set_mode(c, AP.MODE_LAND, AP.RSN_EKF_FAILSAFE, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_LAND, AP.RSN_EKF_FAILSAFE, t_us, ev)
         _start_land(c, pos, True)
     return C.SUB_LAND
 
 
 @inline_jit
-def _ground_idle(c, g, t_us, inputs, seg, events, ev_counts):
+def _ground_idle(c, g, t_us, inputs, seg, ev):
     """Armed on the ground: motors at MOT_SPIN_ARM, EV AUTO_ARMED, then after ARMING_DELAY the
     takeoff starts (controllers reset here, a vertical segment to the takeoff altitude)."""
     dt = g[C.G_DT]
@@ -376,7 +373,7 @@ def _ground_idle(c, g, t_us, inputs, seg, events, ev_counts):
     output_idle(c, g, g[C.G_MOT_SPIN_ARM])
     attitude_reset(c, 0.0, 0.0, _yaw(q))
     if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
-        E.log_ev(events, ev_counts, t_us, AP.EV_AUTO_ARMED)
+        E.log_ev(ev, t_us, AP.EV_AUTO_ARMED)
     if c[C.SUB_TIMER] >= ARMING_DELAY_S:
         c[C.SUBMODE] = C.SUB_TAKEOFF
         c[C.SUB_TIMER] = 0.0
@@ -389,7 +386,7 @@ def _ground_idle(c, g, t_us, inputs, seg, events, ev_counts):
 
 
 @inline_jit
-def _navigate(c, g, t_us, sub, inputs, path, seg, events, ev_counts):
+def _navigate(c, g, t_us, sub, inputs, path, seg, ev):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
     [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
@@ -398,7 +395,7 @@ def _navigate(c, g, t_us, sub, inputs, path, seg, events, ev_counts):
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
     if sub == C.SUB_TAKEOFF:
-        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts)
+        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, ev)
     elif sub == C.SUB_WP:
         heading = _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg)
         if not math.isnan(heading):
@@ -414,7 +411,7 @@ def _navigate(c, g, t_us, sub, inputs, path, seg, events, ev_counts):
 
 
 @inline_jit
-def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
+def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, ev):
     """GUIDED takeoff up the vertical segment; AUTO at TAKEOFF_AUTO_FRAC of the altitude, the
     route once the first waypoint has been held TAKEOFF_WP_DWELL_S."""
     # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
@@ -422,7 +419,7 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, events, ev_counts):
     heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
     if c[C.MODE] != AP.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
         # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
-        set_mode(c, AP.MODE_AUTO, AP.RSN_GCS, t_us, events, ev_counts)
+        set_mode(c, AP.MODE_AUTO, AP.RSN_GCS, t_us, ev)
         c[C.TAKEOFF_DONE_T] = -1.0
     if c[C.MODE] == AP.MODE_AUTO and done > 0.0:
         if c[C.TAKEOFF_DONE_T] < 0.0:
@@ -505,7 +502,7 @@ def _nav_rtl_loiter(c, g):
 
 
 @inline_jit
-def _land_descent(c, g, t_us, pos, land_vertical, events, ev_counts):
+def _land_descent(c, g, t_us, pos, land_vertical, ev):
     """LAND: hold the height through a failsafe's pause, else hold the landing point and
     descend; disarm once landed. Returns True when it disarmed (the tick ends)."""
     t_s, dt = t_us * 1e-6, g[C.G_DT]
@@ -539,8 +536,8 @@ def _land_descent(c, g, t_us, pos, land_vertical, events, ev_counts):
         c[C.PZ_VEL_FF] = 0.0
         c[C.PZ_POS_T] = pos[2]
     if c[C.LANDED] != 0.0 and c[C.LAND_TIMER] >= LAND_DETECT_S:
-        E.log_ev(events, ev_counts, t_us, AP.EV_LAND_COMPLETE)
-        E.log_ev(events, ev_counts, t_us, AP.EV_DISARMED)
+        E.log_ev(ev, t_us, AP.EV_LAND_COMPLETE)
+        E.log_ev(ev, t_us, AP.EV_DISARMED)
         # AUTO disarms when its last item (RTL) completes on the ground, LAND/RTL on landing,
         # as AUTO's NAV_LAND does (ModeAuto::verify_land)
         c[C.DISARM_METHOD] = (AP.ARM_METHOD_MISSIONEXIT if c[C.MODE] == AP.MODE_AUTO
@@ -630,7 +627,7 @@ def _hover_learning(c, g, sub, thr, inputs):
 
 
 @inline_jit
-def _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts):
+def _land_detector(c, g, t_us, sub, thr, inputs, ev):
     """Copter::update_land_detector: the motors at their lower limit (or the throttle below
     0.05), the attitude controller's mix at its minimum, no lean target above 15 deg and no
     attitude error above 30 deg, the 1 Hz acceleration at most 1 m/s^2 and the EKF's climb
@@ -645,7 +642,7 @@ def _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts):
         c[C.LAND_TIMER] += dt
         if c[C.LAND_TIMER] >= LAND_MAYBE_S and c[C.MAYBE_LANDED] == 0.0:
             c[C.MAYBE_LANDED] = 1.0
-            E.log_ev(events, ev_counts, t_us, AP.EV_LAND_COMPLETE_MAYBE)
+            E.log_ev(ev, t_us, AP.EV_LAND_COMPLETE_MAYBE)
         if c[C.LAND_TIMER] >= LAND_DETECT_S:
             c[C.LANDED] = 1.0
     elif c[C.LAND_TIMER] != 0.0 or c[C.LANDED] != 0.0:
@@ -653,7 +650,7 @@ def _land_detector(c, g, t_us, sub, thr, inputs, events, ev_counts):
         c[C.MAYBE_LANDED] = 0.0
         if c[C.LANDED] != 0.0 and -pos[2] > 0.5:
             c[C.LANDED] = 0.0
-            E.log_ev(events, ev_counts, t_us, AP.EV_NOT_LANDED)
+            E.log_ev(ev, t_us, AP.EV_NOT_LANDED)
     if c[C.LANDED] != 0.0:
         flags = (0 if was_landed else flags) | (AP.LDET_LANDED | AP.LDET_LANDED_MAYBE)
         c[C.LDET_COUNT] = 0.0
@@ -684,15 +681,15 @@ def _land_conditions(c, g, thr, vd):
 
 
 @inline_jit
-def _crash_checks(c, g, t_us, inputs, cos_tilt, events, ev_counts):
+def _crash_checks(c, g, t_us, inputs, cos_tilt, ev):
     """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
     (ERR 12/1, EV DISARMED)."""
     dt, q, vel = g[C.G_DT], inputs.q, inputs.vel
-    thrust_loss_check(c, dt, q, vel[2], events, ev_counts, t_us)
+    thrust_loss_check(c, dt, q, vel[2], ev, t_us)
     if cos_tilt < CRASH_LEAN_COS:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
-            E.log_err(events, ev_counts, t_us, AP.ERR_CRASH_CHECK, AP.ERR_CODE_FAILSAFE)
-            _disarm(c, g, t_us, AP.ARM_METHOD_CRASH, events, ev_counts)
+            E.log_err(ev, t_us, AP.ERR_CRASH_CHECK, AP.ERR_CODE_FAILSAFE)
+            _disarm(c, g, t_us, AP.ARM_METHOD_CRASH, ev)
     else:
         c[C.CRASH_TIMER] = 0.0

@@ -30,17 +30,17 @@ TERRAIN_VAR_INIT = 0.25
 
 
 @tick_jit
-def log_lane_switch(events, ev_counts, t_us, eo):
+def log_lane_switch(ev, t_us, eo):
     """ERR EKF_PRIMARY with the new primary lane (from the output block eo) into the event
     buffers (tlm_sim.logger E_*)."""
-    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
     if r >= 0:
-        events[L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_EKF_PRIMARY
-        events[L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
+        ev[0][L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_EKF_PRIMARY
+        ev[0][L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
 
 
 @tick_jit
-def gps_glitch_check(events, ev_counts, t_us, ekf, sel):
+def gps_glitch_check(ev, t_us, ekf, sel):
     """ArduCopter's gpsglitch_check (10 Hz): an edge of the primary lane's gps_glitching flag
     logs ERR GPS 2 ("GPS Glitch or Compass error") or 0 ("Glitch cleared"). No mode change:
     Copter has no GPS failsafe of its own."""
@@ -48,10 +48,10 @@ def gps_glitch_check(events, ev_counts, t_us, ekf, sel):
     if g == sel[EK.SEL_GPS_GLITCH]:
         return
     sel[EK.SEL_GPS_GLITCH] = g
-    r = L.new_row(events, ev_counts, L.E_ERR, t_us)
+    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
     if r >= 0:
-        events[L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_GPS
-        events[L.E_ERR][r, L.ERR_COLS.ECode] = (AP.ERR_CODE_GPS_GLITCH if g != 0.0
+        ev[0][L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_GPS
+        ev[0][L.E_ERR][r, L.ERR_COLS.ECode] = (AP.ERR_CODE_GPS_GLITCH if g != 0.0
                                                  else AP.ERR_CODE_RESOLVED)
 
 
