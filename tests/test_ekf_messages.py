@@ -297,7 +297,7 @@ def test_xkf3_holds_the_innovations_of_the_last_fusion():
         dang, dvel, np.ones(4), True, np.array([2.0, 0.0, 0.0]), np.array([0.0, 0.3, 0.0]), True,
         False, 0.0, False, mag, True))
     bufs, counts = LG.new_buffers(1.0)
-    log_ekf_evidence(bufs, counts, k * 2500, ekf, sel, cfg)
+    log_ekf_evidence((bufs, counts), k * 2500, ekf, sel, cfg)
     x3 = bufs[LG.K_XKF3][: counts[LG.K_XKF3]]
     assert counts[LG.K_XKF3] == 2 and counts[LG.K_XKF2] == 2 and counts[LG.K_XKQ] == 2
     assert counts[LG.K_XKF5] == 1 and counts[LG.K_XKV1] == 1 and counts[LG.K_XKV2] == 1
@@ -326,7 +326,7 @@ def test_xkv_maps_the_error_states_onto_ekf3s():
     ekf, sel, cfg, k, _ = _aided_lanes()
     e = ekf[0]
     bufs, counts = LG.new_buffers(1.0)
-    log_ekf_evidence(bufs, counts, k * 2500, ekf, sel, cfg)
+    log_ekf_evidence((bufs, counts), k * 2500, ekf, sel, cfg)
     v1, v2 = bufs[LG.K_XKV1][0], bufs[LG.K_XKV2][0]
     p = e[L.P0:L.P0 + L.NS * L.NS].reshape(L.NS, L.NS)
     jac = np.zeros((4, 3))
@@ -348,7 +348,7 @@ def test_xkv_maps_the_error_states_onto_ekf3s():
     np.testing.assert_allclose(v2[c2.V13:c2.V15 + 1], np.diag(p)[12:15] * dt**2)
     assert (v2[c2.V16:c2.V23 + 1] == 0).all()
     # the 0.5 s timer: no second pair within 0.49 s, one after
-    log_ekf_evidence(bufs, counts, k * 2500 + 400000, ekf, sel, cfg)
+    log_ekf_evidence((bufs, counts), k * 2500 + 400000, ekf, sel, cfg)
     assert counts[LG.K_XKV1] == 1
-    log_ekf_evidence(bufs, counts, k * 2500 + 500000, ekf, sel, cfg)
+    log_ekf_evidence((bufs, counts), k * 2500 + 500000, ekf, sel, cfg)
     assert counts[LG.K_XKV1] == 2 and counts[LG.K_XKV2] == 2

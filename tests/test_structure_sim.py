@@ -53,7 +53,7 @@ def test_no_function_is_over_100_lines():
 OVER_EIGHT = {
     "control/arming:_attempt", "control/arming:arming_step", "control/attitude:_feed_forward",
     "control/attitude:_rate_targets", "control/dcm:_drift_correction", "control/dcm:dcm_update",
-    "control/log:log_dcm_10hz", "control/mixer:_yaw_allowed", "ekf/fusion:reset_vel_pos_to_gps",
+    "control/mixer:_yaw_allowed", "ekf/fusion:reset_vel_pos_to_gps",
     "sensors/imu:_accel_sample", "sensors/imu:_accel_sample_vib", "sensors/imu:_gyro_sample",
     "sensors/imu:_gyro_sample_vib",
 }
@@ -150,7 +150,7 @@ def test_one_row_appender():
 def test_new_row_appends_until_the_buffer_is_full():
     bufs, counts = L.new_buffers(0.1)
     cap = bufs[L.K_EV].shape[0]
-    rows = [L.new_row(bufs, counts, L.K_EV, t) for t in range(cap + 2)]
+    rows = [L.new_row((bufs, counts), L.K_EV, t) for t in range(cap + 2)]
     assert rows[:cap] == list(range(cap)) and rows[cap:] == [-1, -1]
     assert counts[L.K_EV] == cap and bufs[L.K_EV][cap - 1, L.TIME_US] == cap - 1
 

@@ -419,29 +419,29 @@ def _log_tick(logs, state, cfg, plan, work, now, last_gps_ms):
     messages (ORGN once home is set from the EKF's origin, ARM, LDET, MISE), GPS/GPA per epoch,
     SIM2 at 50 Hz, IMU at 25 Hz, each subsystem's 10 Hz messages. Returns the last GPS epoch's
     ms of week."""
-    bufs, counts = logs.bufs, logs.counts
+    counts = logs.counts
     x, s, ekf, sel, c = state.x, state.s, state.ekf, state.sel, state.c
     scfg, ecfg, g, home = cfg.scfg, cfg.ecfg, cfg.g, plan.home
     eo, pos, gps = work.eo, work.rows[W_POS], work.rows[W_GPS]
     t_us, tick = now.t_us, now.tick
     origin_ready = counts[L.K_ORGN] == 0 and c[C.HOME_SET] != 0.0
     if vehicle_events_due(c, origin_ready):
-        log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home)
+        log_vehicle_events(logs, t_us, c, pos, origin_ready, home)
     if tick % SIM2_TICKS == 0:  # SIM2 at 50 Hz (LOG_FILE_RATEMAX)
-        log_sim2(bufs, counts, t_us, x)
+        log_sim2(logs, t_us, x)
     if now.gps_new:
-        last_gps_ms = log_gps(bufs, counts, t_us, gps, scfg, home, plan.gps_time, last_gps_ms)
+        last_gps_ms = log_gps(logs, t_us, gps, scfg, home, plan.gps_time, last_gps_ms)
     if tick % IMU_LOG_TICKS == 0:  # IMU at 25 Hz, both instances
-        log_imu(bufs, counts, t_us, s, scfg)
+        log_imu(logs, t_us, s, scfg)
     if tick % TEN_HZ_LOG_TICKS == 0:  # 10 Hz messages
         ekf_output(ekf, sel, eo)  # all of the output block (the per-tick part is fresh)
-        log_sensors_10hz(bufs, counts, t_us, s, home[2])
-        log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home)
-        log_ekf_evidence(bufs, counts, t_us, ekf, sel, ecfg)
-        log_control_10hz(bufs, counts, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
-        log_dynamics_10hz(bufs, counts, t_us, x, home)
-        log_dcm_10hz(bufs, counts, t_us, state.dcm, g, s, gps, eo, home)
-        log_gsf(bufs, counts, t_us, state.gsf)
+        log_sensors_10hz(logs, t_us, s, home[2])
+        log_ekf_10hz(logs, t_us, ekf, sel, eo, home)
+        log_ekf_evidence(logs, t_us, ekf, sel, ecfg)
+        log_control_10hz(logs, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
+        log_dynamics_10hz(logs, t_us, x, home)
+        log_dcm_10hz(logs, t_us, state.dcm, g, s, gps, eo, home)
+        log_gsf(logs, t_us, state.gsf)
     return last_gps_ms
 
 

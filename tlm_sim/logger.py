@@ -9,9 +9,9 @@ exceed the buffer size). Each subsystem writes its own messages (``sensors.log``
 ``ekf.log``, ``control.log``, ``control.events``, ``dynamics.log``), addressing columns by
 name through the ``*_COLS`` constants here, made from the schema at import::
 
-    r = new_row(bufs, counts, K_GPS, t_us)
+    r = new_row(log, K_GPS, t_us)  # log: (buffers, row counts)
     if r >= 0:
-        bufs[K_GPS][r, GPS_COLS.Lat] = lat
+        log[0][K_GPS][r, GPS_COLS.Lat] = lat
 
 (a NamedTuple of ints is a compile-time constant to numba: ``GPS_COLS.Lat`` compiles to 7).
 """
@@ -88,8 +88,11 @@ def new_buffers(duration_s: float) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
 
 
 @tick_jit
-def new_row(bufs, counts, k, t_us):
-    """Reserve the next row of buffer k, write TimeUS; returns the row index or -1 when full."""
+def new_row(log, k, t_us):
+    """Reserve the next row of buffer k of log (the buffers and their row counts: the flight's
+    :class:`tlm_sim.bundles.FlightLogs`, :func:`new_buffers`' pair or the event buffers of
+    :func:`event_buffers`), write TimeUS; returns the row index or -1 when full."""
+    bufs, counts = log[0], log[1]
     n = counts[k]
     buf = bufs[k]
     if n >= buf.shape[0]:

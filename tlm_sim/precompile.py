@@ -72,6 +72,7 @@ _EV = nt.Tuple((_EVENTS, _I1))  # ... with their row counts, as the vehicle logi
 _STATE = nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleState)
 _CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
 _WORK = nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork)
+_LOGS = nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs)
 _EKF_INPUTS = nt.NamedTuple((_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1),
                             B.EkfInputs)
 _PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan)
@@ -102,14 +103,14 @@ JOBS: tuple[Job, ...] = (
         (_F2, _F1, _F1, _f8, _EKF_INPUTS), 13.4),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.1),
     Job("tlm_sim.control.log:log_control_10hz",
-        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1), 1.8),
-    Job("tlm_sim.ekf.log:log_ekf_10hz", (_BUFS, _I1, _i8, _F2, _F1, _F1, _F1), 1.5),
-    Job("tlm_sim.sensors.log:log_sensors_10hz", (_BUFS, _I1, _i8, _F1, _f8), 0.8),
-    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_BUFS, _I1, _i8, _F1, _F1), 1.0),
+        (_LOGS, _i8, _F1, _F1, _F1, _F1, _F1), 1.8),
+    Job("tlm_sim.ekf.log:log_ekf_10hz", (_LOGS, _i8, _F2, _F1, _F1, _F1), 1.5),
+    Job("tlm_sim.sensors.log:log_sensors_10hz", (_LOGS, _i8, _F1, _f8), 0.8),
+    Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_LOGS, _i8, _F1, _F1), 1.0),
     Job("tlm_sim.dynamics.body:init_state", (_F1, _F1, _f8), 0.2),
     Job("tlm_sim.sensors.imu:imu_sample", (_F1, _F1, _F1, _f8, _f8, _F1, _U2), 1.6),
-    Job("tlm_sim.sensors.log:log_imu", (_BUFS, _I1, _i8, _F1, _F1), 0.8),
-    Job("tlm_sim.sensors.log:log_gps", (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _f8), 0.6),
+    Job("tlm_sim.sensors.log:log_imu", (_LOGS, _i8, _F1, _F1), 0.8),
+    Job("tlm_sim.sensors.log:log_gps", (_LOGS, _i8, _F1, _F1, _F1, _F1, _f8), 0.6),
     Job("tlm_sim.sensors.gps:gps_push_truth", (_F1, _F1, _f8), 0.1),
     Job("tlm_sim.sensors.gps:gps_measure", (_F1, _F1, _f8, _F1, _U1), 0.9),
     Job("tlm_sim.flight:_apply_schedule", (_PLAN, _CONFIG, _i8, _i8, _f8), 0.3),
@@ -128,7 +129,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_lane_switch", (_EV, _i8, _F1), 0.1),
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
     Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8), 0.1),
-    Job("tlm_sim.ekf.log:log_ekf_evidence", (_BUFS, _I1, _i8, _F2, _F1, _F1), 1.9),
+    Job("tlm_sim.ekf.log:log_ekf_evidence", (_LOGS, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",
         (_F1, _F1, _f8, _F1, _F1, _F1, _F1, _F2, _EV), 2.8),
@@ -141,17 +142,17 @@ JOBS: tuple[Job, ...] = (
         (_F1, _F1, _F1, _F2, _F2, _F1, _F1, _b1, _i8, _b1, _i8), 3.9),
     Job("tlm_sim.ekf.gsf:gsf_update", (_F2, _F2, _F1, _EKF_INPUTS), 2.7),
     Job("tlm_sim.control.log:log_dcm_10hz",
-        (_BUFS, _I1, _i8, _F1, _F1, _F1, _F1, _F1, _F1), 0.7),
-    Job("tlm_sim.ekf.log:log_gsf", (_BUFS, _I1, _i8, _F2), 0.8),
+        (_LOGS, _i8, _F1, _F1, _F1, _F1, _F1, _F1), 0.7),
+    Job("tlm_sim.ekf.log:log_gsf", (_LOGS, _i8, _F2), 0.8),
     # issue 21's evidence messages (ARM, ORGN, LDET, MISE every tick; SIM2 at 50 Hz)
     Job("tlm_sim.control.log:log_vehicle_events",
-        (_BUFS, _I1, _i8, _F1, _F1, _b1, _F1), 1.5),
-    Job("tlm_sim.dynamics.log:log_sim2", (_BUFS, _I1, _i8, _F1), 0.4),
+        (_LOGS, _i8, _F1, _F1, _b1, _F1), 1.5),
+    Job("tlm_sim.dynamics.log:log_sim2", (_LOGS, _i8, _F1), 0.4),
 )
 
 RUN_FLIGHT = Job(
     "tlm_sim.flight:run_flight",
-    (_STATE, _CONFIG, _PLAN, nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs), _WORK, _i8), 8.4)
+    (_STATE, _CONFIG, _PLAN, _LOGS, _WORK, _i8), 8.4)
 
 
 @dataclass

@@ -12,7 +12,7 @@ MODE, EV, ERR = L.MODE_COLS, L.EV_COLS, L.ERR_COLS
 @tick_jit
 def log_mode(ev, t_us, mode, rsn):
     """Append a MODE row (mode number, reason) to the flight's log buffers."""
-    r = L.new_row(ev[0], ev[1], L.E_MODE, t_us)
+    r = L.new_row(ev, L.E_MODE, t_us)
     if r >= 0:
         b = ev[0][L.E_MODE]
         b[r, MODE.Mode] = mode
@@ -23,7 +23,7 @@ def log_mode(ev, t_us, mode, rsn):
 @tick_jit
 def log_err(ev, t_us, subsys, code):
     """Append an ERR row (subsystem, error code)."""
-    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
+    r = L.new_row(ev, L.E_ERR, t_us)
     if r >= 0:
         ev[0][L.E_ERR][r, ERR.Subsys] = subsys
         ev[0][L.E_ERR][r, ERR.ECode] = code
@@ -32,6 +32,6 @@ def log_err(ev, t_us, subsys, code):
 @tick_jit
 def log_ev(ev, t_us, ev_id):
     """Append an EV row (event id)."""
-    r = L.new_row(ev[0], ev[1], L.E_EV, t_us)
+    r = L.new_row(ev, L.E_EV, t_us)
     if r >= 0:
         ev[0][L.E_EV][r, EV.Id] = ev_id

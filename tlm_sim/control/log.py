@@ -34,29 +34,31 @@ CMD_TAKEOFF = 1
 
 
 @tick_jit
-def log_control_10hz(bufs, counts, t_us, c, eo, s, pos, acc):
+def log_control_10hz(log, t_us, c, eo, s, pos, acc):
     """The autopilot's 10 Hz rows from its state c, the EKF output eo, the baro altitude in the
     sensor state s, its position estimate pos [m, NED] and the acceleration NED acc [m/s^2]."""
-    _log_rate(bufs, counts, t_us, c)
-    _log_att(bufs, counts, t_us, c, eo)
-    r = L.new_row(bufs, counts, L.K_RCOU, t_us)
+    bufs = log[0]  # the log buffers
+    _log_rate(log, t_us, c)
+    _log_att(log, t_us, c, eo)
+    r = L.new_row(log, L.K_RCOU, t_us)
     if r >= 0:
         for k in range(MAX_MOTORS):  # outputs beyond the frame's motors read 0, as in SITL
             bufs[L.K_RCOU][r, RCOU.C1 + k] = round(c[C.MIX_PWM + k])
-    _log_ctun(bufs, counts, t_us, c, eo, s, pos)
+    _log_ctun(log, t_us, c, eo, s, pos)
     for ax in range(3):
-        _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax)
-    _log_bat(bufs, counts, t_us, c)
-    _log_motb(bufs, counts, t_us, c)
+        _log_psc(log, t_us, c, eo, pos, acc, ax)
+    _log_bat(log, t_us, c)
+    _log_motb(log, t_us, c)
 
 
 @inline_jit
-def _log_motb(bufs, counts, t_us, c):
+def _log_motb(log, t_us, c):
     """MOTB: the motors' lift_max and voltage ratio (tlm_sim.control.mixer.voltage_compensation),
     throttle limit (1: MOT_BAT_CURR_MAX 0, the current limit is off, as in SITL), the average
     throttle limit the attitude controller gives the mixer, the throttle the mixer placed, and
     the motor-loss flags: thrust boost | thrust balanced << 1."""
-    r = L.new_row(bufs, counts, L.K_MOTB, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_MOTB, t_us)
     if r >= 0:
         b = bufs[L.K_MOTB]
         b[r, MOTB.LiftMax] = c[C.MOT_LIFT_MAX]
@@ -90,34 +92,36 @@ def vehicle_events_due(c, origin_ready):
 
 
 @tick_jit
-def log_vehicle_events(bufs, counts, t_us, c, pos, origin_ready, home):
+def log_vehicle_events(log, t_us, c, pos, origin_ready, home):
     """The on-event messages, when :func:`vehicle_events_due` (after the autopilot's step):
     ORGN once home is set from the EKF's origin (``origin_ready``; EV SET_HOME is the arming
     driver's, :mod:`tlm_sim.control.arming`), ARM (and ORGN:
     ArduCopter sets home to the current position when arming) on a change of the armed state,
     LDET, MISE. pos: the EKF position NED [m] from the origin; home: the EKF origin (degrees,
     m AMSL)."""
+    counts = log[1]  # the log buffers' row counts
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     if origin_ready and counts[L.K_ORGN] == 0:
-        _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
+        _log_home_and_origin(log, t_us, pos, home_lat, home_lon, home_alt)
     armed = c[C.ARMED]
     if armed != c[C.ARM_LOGGED]:
         c[C.ARM_LOGGED] = armed
-        _log_arm(bufs, counts, t_us, c, armed)
+        _log_arm(log, t_us, c, armed)
         if armed != 0.0:
-            _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt)
+            _log_home_and_origin(log, t_us, pos, home_lat, home_lon, home_alt)
     if c[C.LDET_FLAGS] != c[C.LDET_LOG_FLAGS] or c[C.LDET_COUNT] != c[C.LDET_LOG_COUNT]:
-        _log_ldet(bufs, counts, t_us, c)
+        _log_ldet(log, t_us, c)
     if c[C.MODE] == AP.MODE_AUTO:
-        _log_mise(bufs, counts, t_us, c)
+        _log_mise(log, t_us, c)
 
 
 @inline_jit
-def _log_arm(bufs, counts, t_us, c, armed):
+def _log_arm(log, t_us, c, armed):
     """ARM: the new state, not forced, by MAVLink (the GCS arms, as the reference driver did)
     or by the disarm's method; ArmChecks 0 here (on arming: ARMING_CHECK, filled after the
     flight)."""
-    r = L.new_row(bufs, counts, L.K_ARM, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_ARM, t_us)
     if r >= 0:
         b = bufs[L.K_ARM]
         b[r, ARM.ArmState] = armed
@@ -127,12 +131,13 @@ def _log_arm(bufs, counts, t_us, c, armed):
 
 
 @inline_jit
-def _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt):
+def _log_home_and_origin(log, t_us, pos, home_lat, home_lon, home_alt):
     """ORGN Type 0 (the EKF origin: the mission's home at ground level, tlm's NED origin) and
     Type 1 (the AHRS home: the EKF's current position, lat/lon/alt AMSL)."""
+    bufs = log[0]  # the log buffers
     lat, lon = ne_to_latlon_scalar(pos[0], pos[1], home_lat, home_lon)
     for k in range(2):
-        r = L.new_row(bufs, counts, L.K_ORGN, t_us)
+        r = L.new_row(log, L.K_ORGN, t_us)
         if r >= 0:
             b = bufs[L.K_ORGN]
             b[r, ORGN.Type] = k
@@ -142,13 +147,14 @@ def _log_home_and_origin(bufs, counts, t_us, pos, home_lat, home_lon, home_alt):
 
 
 @inline_jit
-def _log_ldet(bufs, counts, t_us, c):
+def _log_ldet(log, t_us, c):
     """LDET as Copter::Log_LDET: the land detector's flags and count, changed since the last
     row, at most every 20 ms (whole milliseconds; the first row at once)."""
+    bufs, counts = log[0], log[1]  # the log buffers and their row counts
     ms = t_us // 1000
     if counts[L.K_LDET] > 0 and ms - c[C.LDET_LOG_MS] < 20:
         return
-    r = L.new_row(bufs, counts, L.K_LDET, t_us)
+    r = L.new_row(log, L.K_LDET, t_us)
     if r >= 0:
         bufs[L.K_LDET][r, LDET.Flags] = c[C.LDET_FLAGS]
         bufs[L.K_LDET][r, LDET.Count] = c[C.LDET_COUNT]
@@ -158,12 +164,13 @@ def _log_ldet(bufs, counts, t_us, c):
 
 
 @inline_jit
-def _log_mise(bufs, counts, t_us, c):
+def _log_mise(log, t_us, c):
     """MISE for each mission item AUTO has started since the last row (:func:`mission_item`):
     the row's TimeUS and CNum; the item's fields are filled in after the flight."""
+    bufs = log[0]  # the log buffers
     idx = mission_item(c)
     while c[C.MISE_LOGGED] < idx:
-        r = L.new_row(bufs, counts, L.K_MISE, t_us)
+        r = L.new_row(log, L.K_MISE, t_us)
         if r < 0:
             return
         c[C.MISE_LOGGED] += 1.0
@@ -171,10 +178,11 @@ def _log_mise(bufs, counts, t_us, c):
 
 
 @inline_jit
-def _log_bat(bufs, counts, t_us, c):
+def _log_bat(log, t_us, c):
     """BAT: the battery monitor's voltage, resting voltage, current, consumed mAh and Wh,
     resistance estimate and remaining percentage."""
-    r = L.new_row(bufs, counts, L.K_BAT, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_BAT, t_us)
     if r >= 0:
         b = bufs[L.K_BAT]
         b[r, BAT.Inst] = 0.0
@@ -191,11 +199,12 @@ def _log_bat(bufs, counts, t_us, c):
 
 
 @inline_jit
-def _log_rate(bufs, counts, t_us, c):
+def _log_rate(log, t_us, c):
     """RATE: rate targets, measurements and outputs per axis [deg/s], vertical acceleration,
     throttle and its slew rate (tlm_sim.control.mixer.throttle_slew_update)."""
+    bufs = log[0]  # the log buffers
     d = L.RAD2DEG
-    r = L.new_row(bufs, counts, L.K_RATE, t_us)
+    r = L.new_row(log, L.K_RATE, t_us)
     if r >= 0:
         b = bufs[L.K_RATE]
         for k in range(3):  # (RDes, R, ROut), (PDes, P, POut), (YDes, Y, YOut)
@@ -210,10 +219,11 @@ def _log_rate(bufs, counts, t_us, c):
 
 
 @inline_jit
-def _log_att(bufs, counts, t_us, c, eo):
+def _log_att(log, t_us, c, eo):
     """ATT: attitude targets and the EKF's attitude [deg, yaw 0..360]."""
+    bufs = log[0]  # the log buffers
     d = L.RAD2DEG
-    r = L.new_row(bufs, counts, L.K_ATT, t_us)
+    r = L.new_row(log, L.K_ATT, t_us)
     if r >= 0:
         b = bufs[L.K_ATT]
         yaw = eo[EK.O_YAW] * d
@@ -228,10 +238,11 @@ def _log_att(bufs, counts, t_us, c, eo):
 
 
 @inline_jit
-def _log_ctun(bufs, counts, t_us, c, eo, s, pos):
+def _log_ctun(log, t_us, c, eo, s, pos):
     """CTUN: throttle, altitude target and estimates (the position controller's: 0 while the
     EKF has no valid height), climb rates."""
-    r = L.new_row(bufs, counts, L.K_CTUN, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_CTUN, t_us)
     if r >= 0:
         b = bufs[L.K_CTUN]
         b[r, CTUN.ThI] = c[C.THR_IN_RAW]
@@ -249,11 +260,12 @@ def _log_ctun(bufs, counts, t_us, c, eo, s, pos):
 
 
 @inline_jit
-def _log_psc(bufs, counts, t_us, c, eo, pos, acc, ax):
+def _log_psc(log, t_us, c, eo, pos, acc, ax):
     """PSCN (ax 0), PSCE (1) or PSCD (2): position, velocity and acceleration desired, target
     and actual. The three messages share one column order (PSC names PSCN's columns)."""
+    bufs = log[0]  # the log buffers
     kbuf = L.K_PSCN + ax
-    r = L.new_row(bufs, counts, kbuf, t_us)
+    r = L.new_row(log, kbuf, t_us)
     if r < 0:
         return
     b = bufs[kbuf]
@@ -280,19 +292,20 @@ DCMC, AHR2 = L.DCM_COLS, L.AHR2_COLS
 
 
 @tick_jit
-def log_dcm_10hz(bufs, counts, t_us, d, g, s, gps, eo, home):
+def log_dcm_10hz(log, t_us, d, g, s, gps, eo, home):
     """DCM (the estimator's state) and AHR2 (the AHRS's secondary solution: the DCM's, while the
     EKF is the active one) at 10 Hz from the DCM array d (:mod:`tlm_sim.control.dcm`); g: the
     controller configuration, s: sensor state (baro), gps: the latest GPS epoch, eo: the EKF
     output block, home: degrees, m AMSL. AHR2's angles are truncated to centidegrees as the
     firmware's integer casts do."""
+    bufs = log[0]  # the log buffers
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     if d[DL.D_INIT] == 0.0:
         return
     dcm_eulers(d)
     rd = L.RAD2DEG
     yaw = (d[DL.D_YAW] * rd) % 360.0
-    r = L.new_row(bufs, counts, L.K_DCM, t_us)
+    r = L.new_row(log, L.K_DCM, t_us)
     if r >= 0:
         b = bufs[L.K_DCM]
         b[r, DCMC.Roll] = d[DL.D_ROLL] * rd
@@ -305,7 +318,7 @@ def log_dcm_10hz(bufs, counts, t_us, d, g, s, gps, eo, home):
         b[r, DCMC.VWD] = 0.0
     if eo[EK.O_F_ATTITUDE] == 0.0:  # the DCM is the active solution: no secondary to log
         return
-    r = L.new_row(bufs, counts, L.K_AHR2, t_us)
+    r = L.new_row(log, L.K_AHR2, t_us)
     if r >= 0:
         b = bufs[L.K_AHR2]
         have, north, east, alt = dcm_location(d, g, s, gps, t_us * 1e-6, home_alt)

@@ -18,10 +18,11 @@ PITOT_GAIN = 0.5 * math.pi / (0.5 * math.pi - PITOT_AOA_MAX)  # ... then falls o
 
 
 @tick_jit
-def log_dynamics_10hz(bufs, counts, t_us, x, home):
+def log_dynamics_10hz(log, t_us, x, home):
     """The SIM row from the truth state x (home: degrees, m AMSL)."""
+    bufs = log[0]  # the log buffers
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
-    r = L.new_row(bufs, counts, L.K_SIM, t_us)
+    r = L.new_row(log, L.K_SIM, t_us)
     if r >= 0:
         b = bufs[L.K_SIM]
         tr, tp, ty = L.euler_deg(x[X.QW], x[X.QX], x[X.QY], x[X.QZ])
@@ -37,13 +38,14 @@ def log_dynamics_10hz(bufs, counts, t_us, x, home):
 
 
 @tick_jit
-def log_sim2(bufs, counts, t_us, x):
+def log_sim2(log, t_us, x):
     """The SIM2 row from the truth state x: NED position from home [m] and velocity [m/s], the
     airspeed a forward pitot tube would read (SITL's airspeed_pitot: the equivalent airspeed,
     cut by the flow's angle to the body x axis beyond 20 deg, 0 beyond 90 deg) and the
     serial-output pauses (none). ASpdU, SITL's achieved wall-clock speed-up, is SIM_SPEEDUP,
     filled in after the flight (tlm's time is simulated only; tlm_sim.flight.fill_evidence)."""
-    r = L.new_row(bufs, counts, L.K_SIM2, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_SIM2, t_us)
     if r < 0:
         return
     b = bufs[L.K_SIM2]

@@ -33,7 +33,7 @@ TERRAIN_VAR_INIT = 0.25
 def log_lane_switch(ev, t_us, eo):
     """ERR EKF_PRIMARY with the new primary lane (from the output block eo) into the event
     buffers (tlm_sim.logger E_*)."""
-    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
+    r = L.new_row(ev, L.E_ERR, t_us)
     if r >= 0:
         ev[0][L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_EKF_PRIMARY
         ev[0][L.E_ERR][r, L.ERR_COLS.ECode] = eo[EK.O_PRIMARY]
@@ -48,7 +48,7 @@ def gps_glitch_check(ev, t_us, ekf, sel):
     if g == sel[EK.SEL_GPS_GLITCH]:
         return
     sel[EK.SEL_GPS_GLITCH] = g
-    r = L.new_row(ev[0], ev[1], L.E_ERR, t_us)
+    r = L.new_row(ev, L.E_ERR, t_us)
     if r >= 0:
         ev[0][L.E_ERR][r, L.ERR_COLS.Subsys] = AP.ERR_GPS
         ev[0][L.E_ERR][r, L.ERR_COLS.ECode] = (AP.ERR_CODE_GPS_GLITCH if g != 0.0
@@ -56,14 +56,15 @@ def gps_glitch_check(ev, t_us, ekf, sel):
 
 
 @tick_jit
-def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home):
+def log_ekf_10hz(log, t_us, ekf, sel, eo, home):
     """The EKF's 10 Hz rows: XKF1, XKF4 and XKFS for every lane, POS of the output (home:
     degrees, m AMSL)."""
+    bufs = log[0]  # the log buffers
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     for ln in range(int(sel[EK.SEL_N_LANES])):
-        _log_lane(bufs, counts, t_us, ekf[ln], ln, sel[EK.SEL_PRIMARY], home_alt)
-        _log_sources(bufs, counts, t_us, ekf[ln], ln)
-    r = L.new_row(bufs, counts, L.K_POS, t_us)
+        _log_lane(log, t_us, ekf[ln], ln, sel[EK.SEL_PRIMARY], home_alt)
+        _log_sources(log, t_us, ekf[ln], ln)
+    r = L.new_row(log, L.K_POS, t_us)
     if r >= 0:
         b = bufs[L.K_POS]
         lat, lon = ne_to_latlon_scalar(eo[EK.O_PN], eo[EK.O_PE], home_lat, home_lon)
@@ -75,10 +76,11 @@ def log_ekf_10hz(bufs, counts, t_us, ekf, sel, eo, home):
 
 
 @inline_jit
-def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
+def _log_lane(log, t_us, el, ln, primary, home_alt):
     """XKF1 and XKF4 rows of lane ln (its row el of the ekf array)."""
+    bufs = log[0]  # the log buffers
     d = L.RAD2DEG
-    r = L.new_row(bufs, counts, L.K_XKF1, t_us)
+    r = L.new_row(log, L.K_XKF1, t_us)
     if r >= 0:
         b = bufs[L.K_XKF1]
         lr, lp, ly = L.euler_deg(el[EK.QW], el[EK.QX], el[EK.QY], el[EK.QZ])
@@ -97,7 +99,7 @@ def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
         b[r, XKF1.GY] = el[EK.BGY] * d
         b[r, XKF1.GZ] = el[EK.BGZ] * d
         b[r, XKF1.OH] = home_alt
-    r = L.new_row(bufs, counts, L.K_XKF4, t_us)
+    r = L.new_row(log, L.K_XKF4, t_us)
     if r >= 0:
         b = bufs[L.K_XKF4]
         b[r, XKF4.C] = ln
@@ -115,10 +117,11 @@ def _log_lane(bufs, counts, t_us, el, ln, primary, home_alt):
 
 
 @inline_jit
-def _log_sources(bufs, counts, t_us, el, ln):
+def _log_sources(log, t_us, el, ln):
     """XKFS row of lane ln: the compass it reads (MI), one baro, GPS and airspeed (index 0),
     GPS good to align (once it has fused GPS), magnetometer fusion state."""
-    r = L.new_row(bufs, counts, L.K_XKFS, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_XKFS, t_us)
     if r >= 0:
         b = bufs[L.K_XKFS]
         b[r, XKFS.C] = ln
@@ -134,7 +137,7 @@ def _log_sources(bufs, counts, t_us, el, ln):
 
 
 @tick_jit
-def log_ekf_evidence(bufs, counts, t_us, ekf, sel, cfg):
+def log_ekf_evidence(log, t_us, ekf, sel, cfg):
     """The EKF's evidence rows (10 Hz): XKF2, XKF3 and XKQ of every lane, XKF5 of the primary
     lane, and XKV1/XKV2 of the primary when its last ones are more than 0.49 s old (EKF3's
     per-core timer: 2 Hz, and at once after a primary change). cfg: the EKF configuration
@@ -142,22 +145,23 @@ def log_ekf_evidence(bufs, counts, t_us, ekf, sel, cfg):
     p = int(sel[EK.SEL_PRIMARY])
     for ln in range(int(sel[EK.SEL_N_LANES])):
         el = ekf[ln]
-        _log_states(bufs, counts, t_us, el, ln, cfg)
-        _log_innovations(bufs, counts, t_us, el, ln, sel[EK.SEL_REL_ERR + ln])
-    _log_xkf5(bufs, counts, t_us, ekf[p], p)
+        _log_states(log, t_us, el, ln, cfg)
+        _log_innovations(log, t_us, el, ln, sel[EK.SEL_REL_ERR + ln])
+    _log_xkf5(log, t_us, ekf[p], p)
     t = t_us * 1e-6
     if t - ekf[p, EK.T_XKV_LOG] > XKV_INTERVAL_S:
         ekf[p, EK.T_XKV_LOG] = t
-        _log_variances(bufs, counts, t_us, ekf[p], p)
+        _log_variances(log, t_us, ekf[p], p)
 
 
 @inline_jit
-def _log_states(bufs, counts, t_us, el, ln, cfg):
+def _log_states(log, t_us, el, ln, cfg):
     """XKF2 and XKQ rows of lane ln. XKF2: the accel bias states; the earth field tlm's filter
     predicts the compass with (fixed, from TLM_MAG_*; 0 before alignment as EKF3's field
     states); body field, wind and the drag/sideslip innovations 0 (tlm has no such states or
     measurements; EKF3 on a copter without EK3_DRAG_BCOEF logs wind and drag 0 too)."""
-    r = L.new_row(bufs, counts, L.K_XKF2, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_XKF2, t_us)
     if r >= 0:
         b = bufs[L.K_XKF2]
         b[r, XKF2.C] = ln
@@ -176,7 +180,7 @@ def _log_states(bufs, counts, t_us, el, ln, cfg):
         b[r, XKF2.IDX] = 0.0
         b[r, XKF2.IDY] = 0.0
         b[r, XKF2.IS] = 0.0
-    r = L.new_row(bufs, counts, L.K_XKQ, t_us)
+    r = L.new_row(log, L.K_XKQ, t_us)
     if r >= 0:
         b = bufs[L.K_XKQ]
         b[r, XKQ.C] = ln
@@ -187,13 +191,14 @@ def _log_states(bufs, counts, t_us, el, ln, cfg):
 
 
 @inline_jit
-def _log_innovations(bufs, counts, t_us, el, ln, rel_err):
+def _log_innovations(log, t_us, el, ln, rel_err):
     """XKF3 row of lane ln: the innovations the lane computed at its last GPS (velocity NED,
     position NE; or constant-position pseudo-measurement), baro (D) and compass fusion, sign
     flipped to EKF3's predicted minus measured, compass in mGauss; yaw and airspeed 0 (tlm
     fuses no yaw angle and has no airspeed sensor); the lane's relative error (rel_err) and
     error score."""
-    r = L.new_row(bufs, counts, L.K_XKF3, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_XKF3, t_us)
     if r >= 0:
         b = bufs[L.K_XKF3]
         b[r, XKF3.C] = ln
@@ -213,13 +218,14 @@ def _log_innovations(bufs, counts, t_us, el, ln, rel_err):
 
 
 @inline_jit
-def _log_xkf5(bufs, counts, t_us, el, ln):
+def _log_xkf5(log, t_us, el, ln):
     """XKF5 row of lane ln (the primary): no optical flow or range finder (their fields 0, as
     SITL logs them), height above the terrain state and the terrain state, the terrain
     height's standard deviation (EKF3's initial one once aligned), the output observer's
     tracking errors (velocity, position: magnitudes of filter minus output; angle 0: tlm
     applies attitude corrections to the output at once)."""
-    r = L.new_row(bufs, counts, L.K_XKF5, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_XKF5, t_us)
     if r >= 0:
         b = bufs[L.K_XKF5]
         b[r, XKF5.C] = ln
@@ -253,7 +259,7 @@ def _quat_var(el, g0, g1, g2):
 
 
 @inline_jit
-def _log_variances(bufs, counts, t_us, el, ln):
+def _log_variances(log, t_us, el, ln):
     """XKV1 and XKV2 rows of lane ln: the covariance diagonal in EKF3's 24-state order.
 
     0-3 quaternion: tlm's attitude error is a rotation vector phi in the earth frame
@@ -263,8 +269,9 @@ def _log_variances(bufs, counts, t_us, el, ln):
     DT_EKF_AVG^2; 16-21 earth and body magnetic field, 22-23 wind: 0, states tlm's filter does
     not have (EKF3 logs 0 for its magnetic field states while they are inhibited, on the
     ground, and for wind on a copter)."""
+    bufs = log[0]  # the log buffers
     d = EK.NS + 1
-    r = L.new_row(bufs, counts, L.K_XKV1, t_us)
+    r = L.new_row(log, L.K_XKV1, t_us)
     if r >= 0:
         b = bufs[L.K_XKV1]
         w, x, y, z = el[EK.QW], el[EK.QX], el[EK.QY], el[EK.QZ]
@@ -278,7 +285,7 @@ def _log_variances(bufs, counts, t_us, el, ln):
         dt2 = el[EK.DT_EKF_AVG] ** 2
         b[r, XKV1.V10] = el[EK.P0 + EK.ES_BG * d] * dt2
         b[r, XKV1.V11] = el[EK.P0 + (EK.ES_BG + 1) * d] * dt2
-    r = L.new_row(bufs, counts, L.K_XKV2, t_us)
+    r = L.new_row(log, L.K_XKV2, t_us)
     if r >= 0:
         b = bufs[L.K_XKV2]
         dt2 = el[EK.DT_EKF_AVG] ** 2
@@ -299,17 +306,18 @@ def _deg360(a):
 
 
 @tick_jit
-def log_gsf(bufs, counts, t_us, gsf):
+def log_gsf(log, t_us, gsf):
     """XKY0 and XKY1 rows (10 Hz) of every lane whose EKF-GSF yaw estimator (:mod:`tlm_sim.ekf.gsf`)
     fuses GPS velocity, as EKF3 logs them: composite yaw and sqrt(degrees(variance)) (the
     firmware's conversion of a rad^2 variance), each model's yaw and weight; each model's NE
     velocity innovations."""
+    bufs = log[0]  # the log buffers
     for ln in range(gsf.shape[0]):
         g = gsf[ln]
         if g[GL.G_FUSING] == 0.0:
             continue
         gsf_refresh(g)
-        r = L.new_row(bufs, counts, L.K_XKY0, t_us)
+        r = L.new_row(log, L.K_XKY0, t_us)
         if r >= 0:
             b = bufs[L.K_XKY0]
             b[r, XKY0.C] = ln
@@ -319,7 +327,7 @@ def log_gsf(bufs, counts, t_us, gsf):
                 mb = GL.MODEL_BASE + m * GL.MODEL_STRIDE
                 b[r, XKY0.Y0 + m] = _deg360(g[mb + GL.M_YAW])
                 b[r, XKY0.W0 + m] = g[GL.G_W + m]
-        r = L.new_row(bufs, counts, L.K_XKY1, t_us)
+        r = L.new_row(log, L.K_XKY1, t_us)
         if r >= 0:
             b = bufs[L.K_XKY1]
             b[r, XKY1.C] = ln

@@ -14,11 +14,12 @@ VIBE, BARO, MAG, RCIN = L.VIBE_COLS, L.BARO_COLS, L.MAG_COLS, L.RCIN_COLS
 
 
 @tick_jit
-def log_gps(bufs, counts, t_us, gps, scfg, home, gps_time, last_ms):
+def log_gps(log, t_us, gps, scfg, home, gps_time, last_ms):
     """GPS and GPA rows for one GPS epoch gps (layout GE_*); home in degrees and m AMSL;
     gps_time: (week, ms of week at boot). Returns the epoch's ms of week."""
+    bufs = log[0]  # the log buffers
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
-    r = L.new_row(bufs, counts, L.K_GPS, t_us)
+    r = L.new_row(log, L.K_GPS, t_us)
     ms = gps_time[1] + round(t_us / 200000.0) * 200.0
     week = gps_time[0] + math.floor(ms / 604800000.0)
     ms = ms % 604800000.0
@@ -40,15 +41,16 @@ def log_gps(bufs, counts, t_us, gps, scfg, home, gps_time, last_ms):
         b[r, GPS.VZ] = gps[S.GE_VD]
         b[r, GPS.Yaw] = 0.0
         b[r, GPS.U] = 1.0
-    _log_gpa(bufs, counts, t_us, gps, scfg, ms, last_ms)
+    _log_gpa(log, t_us, gps, scfg, ms, last_ms)
     return ms
 
 
 @inline_jit
-def _log_gpa(bufs, counts, t_us, gps, scfg, ms, last_ms):
+def _log_gpa(log, t_us, gps, scfg, ms, last_ms):
     """The GPA row of a GPS epoch gps at ms of week (last_ms: the previous epoch's, 0 for
     none): the accuracies the receiver reports."""
-    r = L.new_row(bufs, counts, L.K_GPA, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_GPA, t_us)
     if r >= 0:
         b = bufs[L.K_GPA]
         b[r, GPA.I] = 0.0
@@ -63,12 +65,13 @@ def _log_gpa(bufs, counts, t_us, gps, scfg, ms, last_ms):
 
 
 @tick_jit
-def log_imu(bufs, counts, t_us, s, scfg):
+def log_imu(log, t_us, s, scfg):
     """IMU rows (one per instance): filtered gyro/accel (held while the sensor is stopped),
     error counts, temperature, health (GH/AH: a sample in the last main-loop tick), rates."""
+    bufs = log[0]  # the log buffers
     temp = 45.0 - 20.0 * math.exp(-t_us * 1e-6 / 300.0)
     for i in range(S.N_IMU):
-        r = L.new_row(bufs, counts, L.K_IMU, t_us)
+        r = L.new_row(log, L.K_IMU, t_us)
         if r < 0:
             return
         b = bufs[L.K_IMU]
@@ -87,10 +90,11 @@ def log_imu(bufs, counts, t_us, s, scfg):
 
 
 @tick_jit
-def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
+def log_sensors_10hz(log, t_us, s, home_alt):
     """The sensors' 10 Hz rows: VIBE (per IMU), BARO (two instances), MAG (three), RCIN."""
+    bufs = log[0]  # the log buffers
     for i in range(S.N_IMU):
-        r = L.new_row(bufs, counts, L.K_VIBE, t_us)
+        r = L.new_row(log, L.K_VIBE, t_us)
         if r >= 0:
             b = bufs[L.K_VIBE]
             b[r, VIBE.IMU] = i
@@ -98,10 +102,10 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
                 b[r, VIBE.VibeX + k] = vibe(s, i, k)
             b[r, VIBE.Clip] = s[S.IMU_BASE + i * S.IMU_STRIDE + S.I_CLIP]
     for i in range(S.N_BARO):
-        _log_baro(bufs, counts, t_us, s, home_alt, i)
+        _log_baro(log, t_us, s, home_alt, i)
     for i in range(S.N_MAG):
-        _log_mag(bufs, counts, t_us, s, i)
-    r = L.new_row(bufs, counts, L.K_RCIN, t_us)
+        _log_mag(log, t_us, s, i)
+    r = L.new_row(log, L.K_RCIN, t_us)
     if r >= 0:
         b = bufs[L.K_RCIN]
         for k in range(8):
@@ -109,9 +113,10 @@ def log_sensors_10hz(bufs, counts, t_us, s, home_alt):
 
 
 @inline_jit
-def _log_baro(bufs, counts, t_us, s, home_alt, i):
+def _log_baro(log, t_us, s, home_alt, i):
     """One BARO row of instance i: its last sample (held while it delivers none), health."""
-    r = L.new_row(bufs, counts, L.K_BARO, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_BARO, t_us)
     if r >= 0:
         b = bufs[L.K_BARO]
         sb = S.BARO_BASE + i * S.BARO_STRIDE
@@ -131,10 +136,11 @@ def _log_baro(bufs, counts, t_us, s, home_alt, i):
 
 
 @inline_jit
-def _log_mag(bufs, counts, t_us, s, i):
+def _log_mag(log, t_us, s, i):
     """One MAG row (compass i): its reading [mGauss] (held while it delivers nothing), health,
     the time of its last sample [us]."""
-    r = L.new_row(bufs, counts, L.K_MAG, t_us)
+    bufs = log[0]  # the log buffers
+    r = L.new_row(log, L.K_MAG, t_us)
     if r >= 0:
         b = bufs[L.K_MAG]
         m = S.MAG_BASE + i * S.MAG_STRIDE
