@@ -514,7 +514,7 @@ def test_resets_move_output_and_filter_together():
     e, cfg = _resting_lane()
     e[L.OUT_EVN] = 0.3
     e[L.OUT_EPN] = -0.7
-    reset_vel_pos_to_gps(e, cfg, 1.0, 50.0, -20.0, 2.0, 1.0, -0.5, 0)
+    reset_vel_pos_to_gps(e, cfg, 1.0, np.array([50.0, -20.0, 0.0]), np.array([2.0, 1.0, -0.5]), 0)
     assert e[L.OUT_EVN] == 0.3 and e[L.OUT_EPN] == -0.7
     np.testing.assert_allclose(_filter_vp(e), [2.0, 1.0, -0.5, 50.0, -20.0, 0.0], atol=1e-12)
     assert e[L.PN] == pytest.approx(50.7) and e[L.VN] == pytest.approx(1.7)

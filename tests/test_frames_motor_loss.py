@@ -184,13 +184,13 @@ def test_yaw_headroom_without_the_lost_motor():
     assert g[C.G_MOT_YAW_HEADROOM] == pytest.approx(0.2)
     # hexa (+), pitch 0.7 at thr_best 0.6: motor 1 (front, CW) at 0.95 has 0.05 / 0.5 = 0.1
     # of room up; the tightest of the others are motors 4 and 5 at 0.775: 0.45
-    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, -1, 0.0, -0.3) == pytest.approx(0.2)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, (n, -1, 0.0), -0.3) == pytest.approx(0.2)
     # boosted, ratio 0: a yaw left (negative) raises the CW motor 1 -> its 0.1, below the floor
-    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.0, -0.3) == pytest.approx(0.1)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, (n, 0, 0.0), -0.3) == pytest.approx(0.1)
     # ... a yaw right lowers it (room 1.9): the other motors' 0.45
-    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.0, 0.3) == pytest.approx(0.45)
-    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 1.0, -0.3) == pytest.approx(0.5)
-    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, n, 0, 0.5, -0.3) == pytest.approx(
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, (n, 0, 0.0), 0.3) == pytest.approx(0.45)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, (n, 0, 1.0), -0.3) == pytest.approx(0.5)
+    assert _yaw_allowed(g, 0.0, 0.7, 1.0, 0.6, (n, 0, 0.5), -0.3) == pytest.approx(
         0.5 * 0.45 + 0.5 * 0.1)  # floor 0.35 < 0.45
 
 

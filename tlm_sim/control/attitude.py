@@ -176,11 +176,11 @@ def attitude_update(c, g, q, gyro, body_rate_out):
         ex = sh * (ax * hc + ay * hs)
         ey = sh * (ay * hc - ax * hs)
         ez = ch * hs
-    ff0, ff1, ff2 = _feed_forward(c, sr, cr, sp, cp, dy - dy_axis, dy_axis, ew, ex, ey, ez)
+    ff = _feed_forward(c, (sr, cr, sp, cp), dy - dy_axis, dy_axis, (ew, ex, ey, ez))
     r0 = sqrt_ctrl(e0, g[C.G_ANG_P], g[C.G_ANG_ACCEL], dt)
     r1 = sqrt_ctrl(e1, g[C.G_ANG_P + 1], g[C.G_ANG_ACCEL + 1], dt)
     r2 = sqrt_ctrl(e2, g[C.G_ANG_P + 2], g[C.G_ANG_ACCEL + 2], dt)
-    _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro[2])
+    _rate_targets(body_rate_out, te, (r0, r1, r2), ff, gyro[2])
 
 
 @inline_jit
@@ -217,13 +217,15 @@ def _keep_thrust_direction(c, shift):
 
 
 @inline_jit
-def _feed_forward(c, sr, cr, sp, cp, dye, dy_axis, ew, ex, ey, ez):
+def _feed_forward(c, half_angles, dye, dy_axis, q_err):
     """Rate feed-forward in the body frame [rad/s]: the target's euler rates (roll, pitch and
     the heading rate dye that turns the euler heading target) as an angular velocity in the
     target frame, plus dy_axis about the target's thrust axis, rotated into the body frame by
-    the error rotation (ew, ex, ey, ez) (AC_AttitudeControl's rotation_target_to_body: it
-    matters when the copter is far off its target). sr, cr, sp, cp: sines and cosines of half
-    the target roll and pitch."""
+    the error rotation q_err = (ew, ex, ey, ez) (AC_AttitudeControl's rotation_target_to_body:
+    it matters when the copter is far off its target). half_angles: (sr, cr, sp, cp), the sines
+    and cosines of half the target roll and pitch."""
+    sr, cr, sp, cp = half_angles
+    ew, ex, ey, ez = q_err
     sin_r = 2.0 * sr * cr
     cos_r = cr * cr - sr * sr
     sin_p = 2.0 * sp * cp
@@ -262,10 +264,13 @@ def _shape_yaw(c, g, tc, dt):
 
 
 @inline_jit
-def _rate_targets(body_rate_out, te, r0, r1, r2, ff0, ff1, ff2, gyro_z):
-    """Body-rate targets [rad/s] from the angle controllers' rates r0..r2 and the
-    feed-forward ff0..ff2: the feed-forward fades out while the thrust-vector error te [rad]
-    is beyond THRUST_ERROR_ANGLE, the yaw target blending into the measured yaw rate gyro_z."""
+def _rate_targets(body_rate_out, te, rates, ff, gyro_z):
+    """Body-rate targets [rad/s] from the angle controllers' rates (r0, r1, r2) and the
+    feed-forward ff (ff0, ff1, ff2): the feed-forward fades out while the thrust-vector error
+    te [rad] is beyond THRUST_ERROR_ANGLE, the yaw target blending into the measured yaw rate
+    gyro_z."""
+    r0, r1, r2 = rates
+    ff0, ff1, ff2 = ff
     if te <= THRUST_ERROR_ANGLE:
         body_rate_out[0] = r0 + ff0
         body_rate_out[1] = r1 + ff1

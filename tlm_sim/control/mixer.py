@@ -139,11 +139,13 @@ def boost_ratio_update(c, g):
 
 
 @tick_jit
-def _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r):
+def _high_low(g, roll, pitch, rp_scale, yaw, motors):
     """Highest and lowest motor output of a roll/pitch (times rp_scale) plus yaw demand. With
     a lost motor (index ``lost``, -1: none) the highest is taken over the others, and the lost
     motor's output, where higher, is blended in by 1 - r (r: THRUST_BOOST_RATIO): at r = 1
-    the lost motor may go past the top of the range, the others keep their authority."""
+    the lost motor may go past the top of the range, the others keep their authority. motors:
+    (n, lost, r), the frame's motor count, the lost motor and the boost ratio."""
+    n, lost, r = motors
     hi = -1e9
     lo = 1e9
     v_lost = -1e9
@@ -162,13 +164,15 @@ def _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r):
 
 
 @tick_jit
-def _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r, yaw):
+def _yaw_allowed(g, roll, pitch, rp_scale, thr_best, motors, yaw):
     """The yaw demand that fits around thr_best: the least room of the motors with a yaw
     factor (either way), at least the floor MOT_YAW_HEADROOM. While the thrust boost is on
     (``lost``: the lost motor, -1 when off) that motor's room does not count, the floor is
     r 0.5 + (1 - r) MOT_YAW_HEADROOM (r: THRUST_BOOST_RATIO), and afterwards the lost motor's
     room in the direction the yaw demand moves it limits the result by 1 - r, floor or not
-    (AP_MotorsMatrix::output_armed_stabilizing)."""
+    (AP_MotorsMatrix::output_armed_stabilizing). motors: (n, lost, r) as for
+    :func:`_high_low`."""
+    n, lost, r = motors
     allowed = 1.0
     room_lost = 1.0
     for i in range(n):
@@ -238,7 +242,8 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     r = c[C.THRUST_BOOST_RATIO]
     lost = int(c[C.MOTOR_LOST]) if c[C.THRUST_BOOST] != 0.0 else -1
     # roll/pitch first
-    rp_hi, rp_lo = _high_low(g, roll, pitch, 1.0, 0.0, n, lost, r)
+    motors = (n, lost, r)
+    rp_hi, rp_lo = _high_low(g, roll, pitch, 1.0, 0.0, motors)
     rp_scale = 1.0
     if rp_hi - rp_lo > 1.0:
         rp_scale = 1.0 / (rp_hi - rp_lo)
@@ -246,11 +251,11 @@ def mix(c, g, roll, pitch, yaw, throttle, v_batt):
     # yaw headroom: keep every motor within [0, 1] around the best throttle
     thr_best = 0.5 * (1.0 - (rp_hi + rp_lo) * rp_scale)
     thr_best = min(max(thr_best, 0.0), 1.0)
-    yaw_allowed = _yaw_allowed(g, roll, pitch, rp_scale, thr_best, n, lost, r, yaw)
+    yaw_allowed = _yaw_allowed(g, roll, pitch, rp_scale, thr_best, motors, yaw)
     if abs(yaw) > yaw_allowed:
         yaw = math.copysign(yaw_allowed, yaw)
         lim_yaw = 1.0
-    hi, lo = _high_low(g, roll, pitch, rp_scale, yaw, n, lost, r)
+    hi, lo = _high_low(g, roll, pitch, rp_scale, yaw, motors)
     scale = 1.0
     if hi - lo > 1.0:
         scale = 1.0 / (hi - lo)

@@ -168,13 +168,16 @@ def _delay_ticks(cfg, delay_s):
 
 
 @tick_jit
-def reset_vel_pos_to_gps(e, cfg, t, pn, pe, vn, ve, vd, k):
-    """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago.
+def reset_vel_pos_to_gps(e, cfg, t, pos, vel, k):
+    """Reset horizontal position and 3-D velocity to a GPS sample describing ``k`` ticks ago
+    (pos: its position NE(D) [m], vel: its velocity NED [m/s]).
 
     The jump (GPS minus the past filter state) moves the filter state and the whole output
     history alike (the output tracking error is kept, as EKF3's resets shift the output
     buffer); the states are decorrelated and given the GPS noise variances.
     """
+    pn, pe = pos[0], pos[1]
+    vn, ve, vd = vel[0], vel[1], vel[2]
     dn = pn - filter_get(e, k, 0)
     de = pe - filter_get(e, k, 1)
     dvn = vn - filter_get(e, k, 3)
@@ -393,7 +396,7 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     if e[AID_MODE] == AID_NONE:
         if not ready_to_use_gps(e, cfg):  # the boot phase's conditions (tlm_sim.ekf.lifecycle)
             return
-        reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        reset_vel_pos_to_gps(e, cfg, t, pos, vel, k)
         started_using_gps(e)
         update_flags(e, cfg, t)
         return
@@ -425,7 +428,7 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     vel_out = t - e[T_VEL_PASS] > cfg[C_POS_RETRY]
     pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
     if vel_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
-        reset_vel_pos_to_gps(e, cfg, t, pos[0], pos[1], vel[0], vel[1], vel[2], k)
+        reset_vel_pos_to_gps(e, cfg, t, pos, vel, k)
         update_flags(e, cfg, t)
         return
     if t - e[T_POS_PASS] > cfg[C_POS_RETRY_VEL]:
