@@ -472,12 +472,15 @@ def _static_dcm(seconds: float, tilt0: tuple[float, float], gyro_bias: np.ndarra
     gps = np.zeros(S.N_GPS_EPOCH)
     d = np.zeros(DL.N_DCM)
     D.dcm_init(d)
+    no_mag = np.zeros(1)
     n = int(seconds / dt)
     for k in range(n):
         t_us = (k + 1) * 2500
         if k % 40 == 0:
             s[S.MAG_BASE + S.M_T_US] = t_us
-        D.dcm_update(d, g, s, dang, dvel, imu_ok, gps, False, 0, armed, t_us)
+        inputs = EkfInputs(dang, dvel, imu_ok, False, gps[:3], gps[:3], False, False, 0.0,
+                           False, no_mag, armed)  # (the DCM reads no position, baro, compass)
+        D.dcm_update(d, g, s, inputs, gps, 0, t_us)
         if k == 0:  # the tilt error to correct (the heading is the compass's already)
             D.dcm_eulers(d)
             assert math.degrees(d[DL.D_YAW]) == pytest.approx(math.degrees(yaw), abs=0.01)

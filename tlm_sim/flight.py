@@ -296,20 +296,20 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(state, scfg, work, t_us, ev)
         now = LoopTick(t_us, tick, gps_new, baro_new, mag_new)
-        dcm_update(dcm, g, s, dang, dvel, rows[W_IMU_OK], gps, gps_new, int(eo[EK.O_IMU]),
-                   c[C.ARMED] != 0.0, t_us)
-        _estimate(state, ecfg, work, now, ev)
+        inputs = _ekf_inputs(state, work, now)
+        dcm_update(dcm, g, s, inputs, gps, int(eo[EK.O_IMU]), t_us)
+        _estimate(state, ecfg, work, now, inputs, ev)
         if boot_texts_due(c, eo):
             lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, ev)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(ev, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)
         battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], ev)
-        vehicle_step(c, g, t_us, VehicleInputs(pos, vel, q, gyro, acc_ned, eo, s[S.PM_VOLT],
-                                               s[S.RC_LAST_FRAME_US], s[S.RC_CH + 2]),
-                     path, seg, ev)
+        vin = VehicleInputs(pos, vel, q, gyro, acc_ned, eo, s[S.PM_VOLT], s[S.RC_LAST_FRAME_US],
+                            s[S.RC_CH + 2])
+        vehicle_step(c, g, t_us, vin, path, seg, ev)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
-                c, g, float(t_us), s, gps, eo, q, txt, ev):
+                c, g, float(t_us), s, gps, vin, txt, ev):
             arm_vehicle(c, t_us, q, ev)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
@@ -388,24 +388,32 @@ def _read_sensors(state, scfg, work, t_us, ev):
 
 
 @inline_jit
-def _estimate(state, ecfg, work, now, ev):
+def _ekf_inputs(state, work, now):
+    """This tick's :class:`~tlm_sim.bundles.EkfInputs` (now: the
+    :class:`~tlm_sim.bundles.LoopTick`): the IMU deltas and health and the GPS epoch of work,
+    the primary baro's altitude and the compass block of the sensor state, whether armed. The
+    DCM estimator, the EKF and its yaw estimators all take them."""
+    s, gps = state.s, work.rows[W_GPS]
+    return EkfInputs(
+        work.dang, work.dvel, work.rows[W_IMU_OK],
+        now.gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
+        now.baro_new, s[S.B_ALT], now.mag_new,
+        s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], state.c[C.ARMED] != 0.0,
+    )
+
+
+@inline_jit
+def _estimate(state, ecfg, work, now, inputs, ev):
     """The EKF's main-loop update with this tick's sensor data (now: the
-    :class:`~tlm_sim.bundles.LoopTick`), its lanes' yaw estimators (:mod:`tlm_sim.ekf.gsf`), the
-    per-tick part of its output block work.eo filled (ekf.layout O_*, :func:`ekf_output_nav`)
-    and a primary-lane change logged into the event buffers ev (events, counts)."""
-    ekf, sel, s, gsf = state.ekf, state.sel, state.s, state.gsf
-    dang, dvel, imu_ok, gps = work.dang, work.dvel, work.rows[W_IMU_OK], work.rows[W_GPS]
-    t_us, gps_new = now.t_us, now.gps_new
-    armed = state.c[C.ARMED] != 0.0
-    if gps_new and gps[S.GE_FIX_3D] > 0.5:
+    :class:`~tlm_sim.bundles.LoopTick`; inputs: its :func:`_ekf_inputs`), its lanes' yaw
+    estimators (:mod:`tlm_sim.ekf.gsf`), the per-tick part of its output block work.eo filled
+    (ekf.layout O_*, :func:`ekf_output_nav`) and a primary-lane change logged into the event
+    buffers ev (events, counts)."""
+    ekf, sel, gsf, gps = state.ekf, state.sel, state.gsf, work.rows[W_GPS]
+    t_us = now.t_us
+    if now.gps_new and gps[S.GE_FIX_3D] > 0.5:
         ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
-    inputs = EkfInputs(
-        dang, dvel, imu_ok,
-        gps_new, gps[S.GE_PN:S.GE_PN + 3], gps[S.GE_VN:S.GE_VN + 3], gps[S.GE_FIX_3D] > 0.5,
-        now.baro_new, s[S.B_ALT], now.mag_new,
-        s[S.MAG_BASE:S.MAG_BASE + S.N_MAG * S.MAG_STRIDE], armed,
-    )
     switched = ekf_update(ekf, sel, ecfg, float(t_us), inputs)
     gsf_update(gsf, ekf, ecfg, inputs)
     ekf_output_nav(ekf, sel, work.eo)

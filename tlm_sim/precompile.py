@@ -73,6 +73,7 @@ _STATE = nt.NamedTuple((_F1, _F1, _F2, _F1, _F1, _F1, _F2, _U2, _U1), B.VehicleS
 _CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
 _WORK = nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork)
 _LOGS = nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs)
+_VIN = nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs)
 _EKF_INPUTS = nt.NamedTuple((_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1),
                             B.EkfInputs)
 _PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan)
@@ -96,8 +97,7 @@ class Job:
 #: each caller's job, where it is needed, instead.
 JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.modes:vehicle_step",
-        (_F1, _F1, _i8, nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs), _F2, _F2,
-         _EV),
+        (_F1, _F1, _i8, _VIN, _F2, _F2, _EV),
         13.1),
     Job("tlm_sim.ekf.lanes:ekf_update",
         (_F2, _F1, _F1, _f8, _EKF_INPUTS), 13.4),
@@ -132,14 +132,13 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_LOGS, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",
-        (_F1, _F1, _f8, _F1, _F1, _F1, _F1, _F2, _EV), 2.8),
+        (_F1, _F1, _f8, _F1, _F1, _VIN, _F2, _EV), 2.8),
     Job("tlm_sim.control.arming:lifecycle_texts",
         (_F1, _f8, _F1, _F1, _f8, _b1, _F2, _EV), 0.5),
     Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EV), 0.1),
     Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 1.1),
     # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs
-    Job("tlm_sim.control.dcm:dcm_update",
-        (_F1, _F1, _F1, _F2, _F2, _F1, _F1, _b1, _i8, _b1, _i8), 3.9),
+    Job("tlm_sim.control.dcm:dcm_update", (_F1, _F1, _F1, _EKF_INPUTS, _F1, _i8, _i8), 3.9),
     Job("tlm_sim.ekf.gsf:gsf_update", (_F2, _F2, _F1, _EKF_INPUTS), 2.7),
     Job("tlm_sim.control.log:log_dcm_10hz",
         (_LOGS, _i8, _F1, _F1, _F1, _F1, _F1, _F1), 0.7),

@@ -92,15 +92,16 @@ def dcm_init(d):
 
 
 @tick_jit
-def dcm_update(d, g, s, dang, dvel, imu_ok, gps, gps_new, imu, armed, t_us):
+def dcm_update(d, g, s, inputs, gps, imu, t_us):
     """One main-loop tick of the DCM estimator at t_us [us].
 
     d: its state (control.dcm_layout D_*); g: controller configuration (G_AHRS_*, G_MAG_DEC,
-    G_DT); s: sensor state (filtered IMU samples, compasses); dang/dvel[imu, 0:3]: this tick's
-    IMU deltas [rad, m/s, body FRD], imu_ok[i] accel i delivered samples; gps: the latest GPS
-    epoch (sensors.layout GE_*), gps_new: it arrived this tick; imu: the primary IMU (the EKF
-    primary lane's); armed: the vehicle is armed.
+    G_DT); s: sensor state (filtered IMU samples, compasses); inputs: the tick's
+    :class:`tlm_sim.bundles.EkfInputs`, what the EKF takes too (the IMU deltas [rad, m/s, body
+    FRD] and health, whether a GPS epoch arrived, whether armed); gps: the latest GPS epoch
+    (sensors.layout GE_*); imu: the primary IMU (the EKF primary lane's).
     """
+    dang, gps_new, armed = inputs.dang, inputs.gps_new, inputs.armed
     t = t_us * 1e-6
     dt = g[C.G_DT]
     if gps_new:
@@ -121,7 +122,7 @@ def dcm_update(d, g, s, dang, dvel, imu_ok, gps, gps_new, imu, armed, t_us):
     if not _normalize(d):
         _reset(d, t)
     _yaw_correction(d, g, s, ab, armed, t)
-    _drift_correction(d, g, s, dvel, imu_ok, gps, ab, gb, armed, t, dt)
+    _drift_correction(d, g, s, inputs, gps, ab, gb, t)
     _check_matrix(d, t)
 
 
@@ -349,10 +350,12 @@ def _yaw_error(d, mx, my, mz, dec):
 
 
 @inline_jit
-def _drift_correction(d, g, s, dvel, imu_ok, gps, ab, gb, armed, t, dt):
-    """Roll/pitch drift correction (see the module docstring): integrate the accels in NED;
-    at a new GPS fix (or every 0.2 s without GPS) compare them with gravity plus the GPS
-    velocity change and update omega_P, the drift integrator and error_rp."""
+def _drift_correction(d, g, s, inputs, gps, ab, gb, t):
+    """Roll/pitch drift correction (see the module docstring): integrate the accels (the
+    tick's delta velocities of inputs, :class:`tlm_sim.bundles.EkfInputs`) in NED; at a new GPS
+    fix (or every 0.2 s without GPS) compare them with gravity plus the GPS velocity change and
+    update omega_P, the drift integrator and error_rp."""
+    dvel, imu_ok, armed, dt = inputs.dvel, inputs.imu_ok, inputs.armed, g[C.G_DT]
     r = D_R
     for i in range(S.N_IMU):
         if imu_ok[i] != 0.0:
