@@ -98,16 +98,16 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
     drift = gyro_drift(t_s, cfg)
     gyr_mask = int(cfg[S.C_GYR_FAIL_MSK])
     acc_mask = int(cfg[S.C_ACC_FAIL_MSK])
+    now = (t_s, drift, motors_on, throttle, pwm)  # this sampling call (_gyro_sample's now)
     for i in range(S.N_IMU):
         b = S.IMU_BASE + i * S.IMU_STRIDE
         s[b + S.I_T_SAMPLE_US] = t_us
         if t_us >= s[b + S.I_NEXT_GYR_US] and (gyr_mask >> i) & 1 == 0:
             _advance_timer(s, b + S.I_NEXT_GYR_US, cfg[S.C_GYR_PERIOD_US + i], t_us)
-            _gyro_sample(s, b, i, x, cfg, t_s, drift, motors_on, throttle, pwm,
-                         rng[S.RNG_GYRO + i])
+            _gyro_sample(s, x, cfg, (b, i), now, rng[S.RNG_GYRO + i])
         if t_us >= s[b + S.I_NEXT_ACC_US] and (acc_mask >> i) & 1 == 0:
             _advance_timer(s, b + S.I_NEXT_ACC_US, cfg[S.C_ACC_PERIOD_US + i], t_us)
-            _accel_sample(s, b, i, x, cfg, t_s, motors_on, pwm, rng[S.RNG_ACC + i])
+            _accel_sample(s, x, cfg, (b, i), now, rng[S.RNG_ACC + i])
 
 
 @inline_jit
@@ -120,21 +120,24 @@ def _advance_timer(s, slot, period, t_us):
 
 
 @inline_jit
-def _gyro_sample(s, b, i, x, cfg, t_s, drift, motors_on, throttle, pwm, rng):
-    """One published gyro sample of IMU i (record at b), SITL's pipeline (§2.2): truth rates +
+def _gyro_sample(s, x, cfg, imu, now, rng):
+    """One published gyro sample of IMU i (imu: (b, i), its record at b; now: (t_s, drift,
+    motors_on, throttle, pwm) of :func:`imu_sample`'s call), SITL's pipeline (§2.2): truth rates +
     drift + base noise, the second noise term (no SIM_VIB_*) or the vibration terms (with
     SIM_VIB_*, motors on, amplitude radians(SIM_GYRn_RND) x throttle), x (1 + SCALE/100),
     + BIAS; then accumulated for the EKF and low-pass filtered. With a SIM_VIB_* set the
     sample is :func:`_gyro_sample_vib`'s: this loop, run at every sample of every flight,
     holds no call (libm's sin, the motor model), which cost the per-sample path about 2 % of
     the flight loop."""
+    b, i = imu
+    drift, motors_on, throttle = now[1], now[2], now[3]
     sc = cfg[S.C_NOISE_SCALE + i]
     if motors_on:
         a_g = cfg[S.C_GYR_RND + i] * throttle
     else:
         a_g = cfg[S.C_GYR_NOISE] * sc
     if cfg[S.C_VIB_ON] != 0.0:
-        _gyro_sample_vib(s, b, i, x, cfg, t_s, drift, motors_on, a_g, pwm, rng)
+        _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng)
         return
     for k in range(3):
         g = x[X.SWX + k] + drift
@@ -146,9 +149,11 @@ def _gyro_sample(s, b, i, x, cfg, t_s, drift, motors_on, throttle, pwm, rng):
 
 
 @tick_jit
-def _gyro_sample_vib(s, b, i, x, cfg, t_s, drift, motors_on, a_g, pwm, rng):
+def _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng):
     """:func:`_gyro_sample` with a SIM_VIB_* set: the vibration terms replace the second
     noise term (while the motors run and the amplitude a_g is not 0)."""
+    b, i = imu
+    t_s, drift, motors_on, pwm = now[0], now[1], now[2], now[4]
     sc = cfg[S.C_NOISE_SCALE + i]
     v_mot = 0.0
     vib = motors_on and a_g != 0.0
@@ -176,16 +181,20 @@ def _gyro_store(s, b, i, cfg, k, g):
 
 
 @inline_jit
-def _accel_sample(s, b, i, x, cfg, t_s, motors_on, pwm, rng):
+def _accel_sample(s, x, cfg, imu, now, rng):
     """One published accel sample of IMU i (record at b), SITL's pipeline (§2.2): truth specific
     force / SCAL (per non-zero axis) + BIAS + base noise + the vibration terms (SIM_VIB_*,
     motors on, amplitude SIM_ACCn_RND), all replaced by SIM_ACCELn_FAIL when that is set; then
     accumulated for the EKF, low-pass filtered, and the VIBE metric and clip count. A
-    vibrating sample is :func:`_accel_sample_vib`'s (no call in this loop, as for the gyro)."""
+    vibrating sample is :func:`_accel_sample_vib`'s (no call in this loop, as for the gyro).
+    imu: (b, i), IMU i's record at b; now: :func:`imu_sample`'s (t_s, drift, motors_on,
+    throttle, pwm)."""
+    b, i = imu
+    motors_on = now[2]
     fail = cfg[S.C_ACC_FAIL + i]
     amp = cfg[S.C_ACC_RND + i]
     if motors_on and amp != 0.0 and cfg[S.C_VIB_ON] != 0.0 and abs(fail) <= 1e-6:
-        _accel_sample_vib(s, b, i, x, cfg, t_s, amp, pwm, rng)
+        _accel_sample_vib(s, x, cfg, imu, now, amp, rng)
         return
     clipped = False
     for k in range(3):
@@ -200,9 +209,11 @@ def _accel_sample(s, b, i, x, cfg, t_s, motors_on, pwm, rng):
 
 
 @tick_jit
-def _accel_sample_vib(s, b, i, x, cfg, t_s, amp, pwm, rng):
+def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
     """:func:`_accel_sample` of a vibrating accelerometer (motors on, SIM_ACCn_RND amp, a
     SIM_VIB_* set, no SIM_ACCELn_FAIL): the motor and fixed-frequency terms added."""
+    b, i = imu
+    t_s, pwm = now[0], now[4]
     v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
                              cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i], rng)
     clipped = False
