@@ -28,7 +28,8 @@ LAYOUTS = [
     (L, L.CONFIG, "N_CFG"), (L, L.OUTPUT, "N_OUT"),
     (C, C.RATE, "RATE_STRIDE"), (C, C.STATE, "N_CONTROL_STATE"), (C, C.CONFIG, "N_CONTROL_CFG"),
     (DL, DL.DCM, "N_DCM"), (GL, GL.MODEL, "MODEL_STRIDE"), (GL, GL.GSF, "N_GSF"),
-    (FL, FL.WORK, "N_WORK_ROWS"), (FR, FR.FRAME, "N_FRAME"), (AP, AP.TEXT_ROW, "N_TXT_COLS"),
+    (FL, FL.WORK, "N_WORK_ROWS"), (FL, FL.SCHEDULE_ROW, "N_SCH"), (FR, FR.FRAME, "N_FRAME"),
+    (AP, AP.TEXT_ROW, "N_TXT_COLS"),
 ]
 IDS = [f"{m.__name__.split('.')[1]}.{lay.name}" for m, lay, _ in LAYOUTS]
 

@@ -145,9 +145,18 @@ TGT_FRAME, TGT_SENSOR, TGT_EKF, TGT_CONTROL = (
     VehicleConfig._fields.index(name) for name in ("frame", "scfg", "ecfg", "g"))
 TGT_NONE = -1  # marks a change that alters no configuration entry (its time is still recorded)
 
-# schedule row columns and trigger kinds
-SCH_AT, SCH_KIND, SCH_TGT, SCH_IDX, SCH_VAL, SCH_CHANGE = 0, 1, 2, 3, 4, 5
-N_SCH = 6
+#: The columns of a row of the change schedule (:func:`build_schedule`)
+SCHEDULE_ROW = Layout("schedule row", "one scheduled write into a configuration array")
+SCH_AT = SCHEDULE_ROW.add("SCH_AT", 1, "us or waypoints",
+                          "when it is due: a time since boot, or a count of waypoints reached")
+SCH_KIND = SCHEDULE_ROW.add("SCH_KIND", 1, "", "trigger kind (TRIG_TIME, TRIG_WP)")
+SCH_TGT = SCHEDULE_ROW.add("SCH_TGT", 1, "", "target configuration array (TGT_*)")
+SCH_IDX = SCHEDULE_ROW.add("SCH_IDX", 1, "", "the slot written in that array")
+SCH_VAL = SCHEDULE_ROW.add("SCH_VAL", 1, "", "the value written (the array's units)")
+SCH_CHANGE = SCHEDULE_ROW.add("SCH_CHANGE", 1, "",
+                              "the parameter change it realises (its position in the changes)")
+N_SCH = SCHEDULE_ROW.close()
+# trigger kinds
 TRIG_TIME = 0  # SCH_AT is a time [us since boot]
 TRIG_WP = 1  # SCH_AT is a waypoint number: due once that many mission waypoints are reached
 
