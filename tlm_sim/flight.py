@@ -309,7 +309,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         dcm_update(dcm, g, s, inputs, gps, int(eo[EK.O_IMU]), t_us)
         _estimate(state, ecfg, work, now, inputs, ev)
         if boot_texts_due(c, eo):
-            lifecycle_texts(c, float(t_us), eo, s, home[2], baro_new, txt, ev)
+            lifecycle_texts(c, now, eo, s, home[2], txt, ev)
         if tick % GLITCH_CHECK_TICKS == 0:  # ArduCopter's 10 Hz GPS glitch check
             gps_glitch_check(ev, t_us, ekf, sel)
         ahrs_update(eo, s, pos, vel, q, gyro, acc_ned)

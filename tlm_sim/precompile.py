@@ -74,6 +74,7 @@ _CONFIG = nt.NamedTuple((_F1,) * 4, B.VehicleConfig)
 _WORK = nt.NamedTuple((_F2, _F2, _F2, _F1), B.LoopWork)
 _LOGS = nt.NamedTuple((_BUFS, _I1, _F2), B.FlightLogs)
 _VIN = nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs)
+_TICK = nt.NamedTuple((_i8, _i8, _b1, _b1, _b1), B.LoopTick)
 _EKF_INPUTS = nt.NamedTuple((_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1),
                             B.EkfInputs)
 _PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1), B.FlightPlan)
@@ -134,7 +135,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.arming:arming_step",
         (_F1, _F1, _f8, _F1, _F1, _VIN, _F2, _EV), 2.8),
     Job("tlm_sim.control.arming:lifecycle_texts",
-        (_F1, _f8, _F1, _F1, _f8, _b1, _F2, _EV), 0.5),
+        (_F1, _TICK, _F1, _F1, _f8, _F2, _EV), 0.5),
     Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EV), 0.1),
     Job("tlm_sim.ekf.lanes:ekf_gps_checks", (_F2, _F1, _f8, _F1), 1.1),
     # issue 21: the DCM estimator and the EKF lanes' yaw estimators, their logs

@@ -275,11 +275,12 @@ def _battery_checks(c, g, txt, r):
 
 
 @tick_jit
-def prearm_checks(c, g, t_s, s, gps, eo, txt, r):
+def prearm_checks(c, g, t_s, s, gps, eo, report):
     """ArduCopter's pre-arm checks now; returns the mask of failing checks (F_*), their
     details written into text row r (-1: none). A function of its own, not an inline_jit
     section: numba inlined it, with its five inlined check groups, into both its callers, and
     ``arming_step``'s cold compile took 9.9 s of CPU instead of 2.5 s (same flights)."""
+    txt, r = report  # the text log and the row for the details (-1: none)
     mode = c[C.MODE]
     mask = 0
     if _enabled(g, AP.CHK_RC) and g[C.G_FS_THR_ENABLE] != 0.0:
@@ -344,7 +345,7 @@ def _prearm_update(c, g, t_us, s, gps, eo, txt):
         c[C.PREARM_LAST_OK] = 1.0
         return
     r = txt_row(c, txt, t_us, AP.KIND_PREARM, 0) if show else -1
-    mask = prearm_checks(c, g, t_s, s, gps, eo, txt, r)
+    mask = prearm_checks(c, g, t_s, s, gps, eo, (txt, r))
     if r >= 0:
         if mask != 0:
             txt[r, AP.TXT_MASK] = mask
@@ -362,7 +363,7 @@ def _attempt(c, g, t_us, s, gps, vin, txt, ev):
     eo, q = vin.eo, vin.q  # the autopilot's inputs (tlm_sim.bundles.VehicleInputs)
     t_s = t_us * 1e-6
     r = txt_row(c, txt, t_us, AP.KIND_ARM, 0)
-    mask = prearm_checks(c, g, t_s, s, gps, eo, txt, r)
+    mask = prearm_checks(c, g, t_s, s, gps, eo, (txt, r))
     if mask == 0:
         mask = arm_checks(c, g, s, q, eo)
     if mask != 0:
@@ -435,11 +436,12 @@ def _lane_texts(c, t_us, eo, txt, ev):
 
 
 @tick_jit
-def lifecycle_texts(c, t_us, eo, s, home_alt, baro_new, txt, ev):
+def lifecycle_texts(c, now, eo, s, home_alt, txt, ev):
     """Every tick: the lanes' EKF lifecycle events into text rows (EV EKF_YAW_RESET at a yaw
     alignment, "AHRS: EKF3 active" after lane 0 starts); home set when the primary lane has
     its origin (EV SET_HOME); the baro's field elevation (and ground temperature) at its first
     reading after an origin is set ("Field Elevation Set")."""
+    t_us, baro_new = float(now.t_us), now.baro_new  # this tick (tlm_sim.bundles.LoopTick)
     origin = False
     pending = 0
     for i in range(int(eo[EK.O_N_LANES])):

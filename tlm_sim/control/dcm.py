@@ -122,7 +122,7 @@ def dcm_update(d, g, s, inputs, gps, imu, t_us):
     if not _normalize(d):
         _reset(d, t)
     _yaw_correction(d, g, s, ab, armed, t)
-    _drift_correction(d, g, s, inputs, gps, ab, gb, t)
+    _drift_correction(d, g, s, inputs, gps, (ab, gb), t)
     _check_matrix(d, t)
 
 
@@ -350,11 +350,12 @@ def _yaw_error(d, mx, my, mz, dec):
 
 
 @inline_jit
-def _drift_correction(d, g, s, inputs, gps, ab, gb, t):
+def _drift_correction(d, g, s, inputs, gps, imus, t):
     """Roll/pitch drift correction (see the module docstring): integrate the accels (the
     tick's delta velocities of inputs, :class:`tlm_sim.bundles.EkfInputs`) in NED; at a new GPS
     fix (or every 0.2 s without GPS) compare them with gravity plus the GPS velocity change and
     update omega_P, the drift integrator and error_rp."""
+    ab, gb = imus  # the record bases of the IMUs whose accel and gyro it reads
     dvel, imu_ok, armed, dt = inputs.dvel, inputs.imu_ok, inputs.armed, g[C.G_DT]
     r = D_R
     for i in range(S.N_IMU):
@@ -383,7 +384,7 @@ def _drift_correction(d, g, s, inputs, gps, ab, gb, t):
         _keep_velocity(d, vn, ve, vd)
         return
     ra_scale = 1.0 / (d[D_RA_DT] * GRAVITY_MSS)
-    ex, ey, ez, best_err = _tilt_error(d, g, imu_ok, vn, ve, vd, ra_scale, armed)
+    ex, ey, ez, best_err = _tilt_error(d, g, imu_ok, (vn, ve, vd), ra_scale, armed)
     if best_err < 0.0:
         return
     if _compass(s) >= 0:  # the compass owns yaw: the accels correct it only when banked
@@ -439,11 +440,12 @@ def _reference_velocity(d, g, gps, have_gps, t):
 
 
 @inline_jit
-def _tilt_error(d, g, imu_ok, vn, ve, vd, ra_scale, armed):
+def _tilt_error(d, g, imu_ok, v_gps, ra_scale, armed):
     """(ex, ey, ez, error): the smallest tilt error over the healthy accels, earth frame, as
     the cross product of the accel's direction with the reference (gravity, plus the GPS
     velocity change when armed with a GPS lock, the accel then one interval late), and its
     length (1 when they point apart); error -1 when no accel could be used."""
+    vn, ve, vd = v_gps  # the GPS velocity NED [m/s]
     gx, gy, gz = 0.0, 0.0, -1.0
     delayed = False
     if armed and d[D_GPS_LOCK] != 0.0:

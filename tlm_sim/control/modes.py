@@ -113,8 +113,10 @@ def _yaw(q):
 
 
 @tick_jit
-def _set_segment(seg, g, a0, a1, a2, b0, b1, b2):
-    """Two-point path seg[0] -> seg[1] (NED, m), legs prepared for path_update."""
+def _set_segment(seg, g, a, b):
+    """Two-point path seg[0] = a -> seg[1] = b (NED points, m), legs prepared for path_update."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
     seg[0, 0] = a0
     seg[0, 1] = a1
     seg[0, 2] = a2
@@ -139,7 +141,7 @@ def _start_rtl(c, g, pos, vel, seg):
     c[C.SUB_TIMER] = 0.0
     # the climb starts from the stopping point, the controller restarted without a bump
     sn, se = xy_init_stopping_point(c, g, pos, vel)
-    _set_segment(seg, g, sn, se, pos[2], sn, se, -target)
+    _set_segment(seg, g, (sn, se, pos[2]), (sn, se, -target))
     path_start(c)
 
 
@@ -272,7 +274,6 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
     throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> RTL (LAND without a
     position); frames again with a good throttle -> ERR 5/0. Returns the submode to continue
     with."""
-    pos, vel = inputs.pos, inputs.vel
     rc_last_frame_us, rc_throttle = inputs.rc_last_frame_us, inputs.rc_throttle
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     thr_low, thr_ok = _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle)
@@ -284,7 +285,7 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != AP.MODE_RTL:
-            return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_RADIO_FAILSAFE, ev)
+            return _rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_RADIO_FAILSAFE, ev)
     elif not rc_late and thr_ok and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
         E.log_err(ev, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED)
@@ -292,9 +293,10 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
 
 
 @inline_jit
-def _rtl_or_land(c, g, t_us, pos, vel, seg, rsn, ev):
+def _rtl_or_land(c, g, t_us, inputs, seg, rsn, ev):
     """A failsafe's RTL, or LAND after a pause when there is no position; returns the new
     submode."""
+    pos, vel = inputs.pos, inputs.vel
     if _position_ok(c):
         set_mode(c, AP.MODE_RTL, rsn, t_us, ev)
         _start_rtl(c, g, pos, vel, seg)
@@ -311,7 +313,7 @@ def _battery_failsafe(c, g, t_us, sub, inputs, seg, ev):
     (with a pause), RTL (or Land without a position), Terminate (disarm in the air). tlm has
     no SmartRTL, DO_LAND_START or Brake: their fallbacks fly (RTL, RTL, Land). Returns the
     submode."""
-    pos, vel = inputs.pos, inputs.vel
+    pos = inputs.pos
     act = int(c[C.BATT_FS_ACT])
     if act < 0:
         return sub
@@ -327,7 +329,7 @@ def _battery_failsafe(c, g, t_us, sub, inputs, seg, ev):
             _start_land(c, pos, True)
             return C.SUB_LAND
     elif act != B.ACT_NONE and c[C.MODE] != AP.MODE_RTL and c[C.MODE] != AP.MODE_LAND:
-        return _rtl_or_land(c, g, t_us, pos, vel, seg, AP.RSN_BATTERY_FAILSAFE, ev)
+        return _rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_BATTERY_FAILSAFE, ev)
     return sub
 
 
@@ -381,7 +383,7 @@ def _ground_idle(c, g, t_us, inputs, seg, ev):
         xy_reset(c, pos[0], pos[1], vel[0], vel[1])
         z_reset(c, g, pos[2], vel[2], 0.0)
         c[C.THR_OUT] = 0.0
-        _set_segment(seg, g, pos[0], pos[1], pos[2], pos[0], pos[1], -c[C.TAKEOFF_ALT])
+        _set_segment(seg, g, (pos[0], pos[1], pos[2]), (pos[0], pos[1], -c[C.TAKEOFF_ALT]))
         path_start(c)
 
 
@@ -390,14 +392,13 @@ def _navigate(c, g, t_us, sub, inputs, path, seg, ev):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
     [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
-    dt = g[C.G_DT]
-    pos, vel, n_path = inputs.pos, inputs.vel, path.shape[0]
+    pos, vel = inputs.pos, inputs.vel
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
     if sub == C.SUB_TAKEOFF:
-        _nav_takeoff(c, g, t_us, dt, pos, vel, seg, ev)
+        _nav_takeoff(c, g, t_us, pos, vel, seg, ev)
     elif sub == C.SUB_WP:
-        heading = _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg)
+        heading = _nav_waypoints(c, g, t_us, pos, vel, path, seg)
         if not math.isnan(heading):
             yaw_cmd = heading
             yaw_rate_ff = c[C.YAW_RATE_CMD]
@@ -411,9 +412,10 @@ def _navigate(c, g, t_us, sub, inputs, path, seg, ev):
 
 
 @inline_jit
-def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, ev):
+def _nav_takeoff(c, g, t_us, pos, vel, seg, ev):
     """GUIDED takeoff up the vertical segment; AUTO at TAKEOFF_AUTO_FRAC of the altitude, the
     route once the first waypoint has been held TAKEOFF_WP_DWELL_S."""
+    dt = g[C.G_DT]
     # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
     # runs it outside AC_WPNav)
     heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
@@ -433,7 +435,7 @@ def _nav_takeoff(c, g, t_us, dt, pos, vel, seg, ev):
 
 
 @inline_jit
-def _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg):
+def _nav_waypoints(c, g, t_us, pos, vel, path, seg):
     """AUTO along the mission. At a point the path stops at (a hold, a LOITER_TIME, the point
     before a LAND, the last one), once the target has stopped there and the copter is within
     WP_RADIUS: hold it the point's P_HOLD seconds (ModeAuto::verify_nav_wp and
@@ -441,6 +443,7 @@ def _nav_waypoints(c, g, t_us, pos, vel, path, n_path, seg):
     milliseconds), then go on: the next leg from rest, or at the last point RTL (the mission's
     RETURN_TO_LAUNCH) or its NAV_LAND. Returns the path's heading [rad] (NaN: keep the
     yaw)."""
+    n_path = path.shape[0]
     heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
     if done > 0.0:
         i = int(c[C.WP_INDEX])
@@ -472,7 +475,7 @@ def _nav_rtl_climb(c, g, pos, vel, seg):
     if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
         c[C.SUBMODE] = C.SUB_RTL_RETURN
         c[C.SUB_TIMER] = 0.0
-        _set_segment(seg, g, seg[1, 0], seg[1, 1], seg[1, 2], 0.0, 0.0, seg[1, 2])
+        _set_segment(seg, g, (seg[1, 0], seg[1, 1], seg[1, 2]), (0.0, 0.0, seg[1, 2]))
         path_start(c)
 
 

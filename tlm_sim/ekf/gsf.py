@@ -326,12 +326,14 @@ def _ekf_predict(g, b, dvn, dve, dt):
     n11 = max(p11 + 2.0 * n * p12 + n * n * p22 + q, MIN_VAR)
     n12 = p12 + n * p22
     n22 = max(p22 + q_yaw, MIN_VAR)
-    _set_sym(g, p, n00, n01, n02, n11, n12, n22)
+    _set_sym(g, p, (n00, n01, n02, n11, n12, n22))
 
 
 @tick_jit
-def _set_sym(g, p, n00, n01, n02, n11, n12, n22):
-    """Store a symmetric 3x3 matrix row-major at g[p:p + 9]."""
+def _set_sym(g, p, n):
+    """Store a symmetric 3x3 matrix row-major at g[p:p + 9]; n: its upper triangle (n00, n01,
+    n02, n11, n12, n22)."""
+    n00, n01, n02, n11, n12, n22 = n
     g[p], g[p + 1], g[p + 2] = n00, n01, n02
     g[p + 3], g[p + 4], g[p + 5] = n01, n11, n12
     g[p + 6], g[p + 7], g[p + 8] = n02, n12, n22
@@ -370,7 +372,7 @@ def _correct(g, b, vn, ve, obs_var):
     n11 = max(g[p + 4] - (g[p + 3] * k10 + g[p + 4] * k11), MIN_VAR)
     n12 = g[p + 5] - (g[p + 3] * k20 + g[p + 4] * k21)
     n22 = max(g[p + 8] - (g[p + 6] * k20 + g[p + 7] * k21), MIN_VAR)
-    _set_sym(g, p, n00, n01, n02, n11, n12, n22)
+    _set_sym(g, p, (n00, n01, n02, n11, n12, n22))
     g[b + M_VN] -= (k00 * i0 + k01 * i1) * scale
     g[b + M_VE] -= (k10 * i0 + k11 * i1) * scale
     dyaw = -(k20 * i0 + k21 * i1) * scale

@@ -159,7 +159,7 @@ def _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng):
     vib = motors_on and a_g != 0.0
     if vib:
         v_mot = _motor_vibration(s, b + S.I_GYR_PHASE, cfg, pwm, a_g * cfg[S.C_VIB_MOT_MULT],
-                                 cfg[S.C_IMU_NSUB + i], cfg[S.C_GYR_PERIOD_US + i], rng)
+                                 (cfg[S.C_IMU_NSUB + i], cfg[S.C_GYR_PERIOD_US + i]), rng)
     for k in range(3):
         g = x[X.SWX + k] + drift
         g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
@@ -215,7 +215,7 @@ def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
     b, i = imu
     t_s, pwm = now[0], now[4]
     v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
-                             cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i], rng)
+                             (cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i]), rng)
     clipped = False
     for k in range(3):
         a = _accel_truth(x, cfg, i, k, rng)
@@ -266,13 +266,14 @@ def _fixed_vibration(cfg, k, t_s, amp, rng):
 
 
 @tick_jit
-def _motor_vibration(s, ph, cfg, pwm, amp, nsub, period_us, rng):
+def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
     """SITL's motor vibration (SIM_VIB_MOT_*), the same on every axis: the mean over the nsub
     sub-samples of one published sample of, for each vibrating motor m and each harmonic h
     (SIM_VIB_MOT_HMNC bit h - 1), sin(h phi_m) amp (1 + 0.05 U). Motor m's phase phi_m (s[ph + m])
     advances each sub-sample by 2 pi f_m (1 + 0.12 U) / sub-sample rate, f_m = command_m x
     SIM_VIB_MOT_MAX with command_m = (PWM_m - 1000) / 1000: rpm-locked, smeared like real
     motors. 0 when SIM_VIB_MOT_MAX is 0."""
+    nsub, period_us = sampling  # sub-samples per published sample, its period [us]
     f_max = cfg[S.C_VIB_MOT_MAX]
     if f_max <= 0.0:
         return 0.0
