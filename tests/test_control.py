@@ -260,7 +260,7 @@ def _fly_path(g, points, ticks=40000):
     rows = []
     for _ in range(ticks):
         vel = np.array([c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF]])
-        heading, done = path_update(c, g, path, len(points), pos, vel, 0.0, True)
+        heading, done = path_update(c, g, path, len(points), (pos, vel), 0.0, True)
         pos[:] = c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T]
         rows.append([*pos, c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF],
                      c[C.PXY_ACC_FF], c[C.PXY_ACC_FF + 1], c[C.PZ_ACC_FF], c[C.YAW_RATE_CMD],
@@ -409,7 +409,7 @@ def test_track_scaler_freezes_the_path_but_keeps_the_feed_forward(cfg):
     pos = np.array(points[0])
     for _ in range(4000):  # 10 s of perfect tracking: up to cruise, scaler 1
         vel = np.array([c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF]])
-        path_update(c, g, path, 2, pos, vel, 0.0, True)
+        path_update(c, g, path, 2, (pos, vel), 0.0, True)
         pos[:] = c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T]
     assert c[C.TRACK_K] == pytest.approx(1.0)
     v_ff = c[C.PXY_VEL_FF]
@@ -419,7 +419,7 @@ def test_track_scaler_freezes_the_path_but_keeps_the_feed_forward(cfg):
     s0 = c[C.PATH_S]
     k = []
     for _ in range(4000):
-        path_update(c, g, path, 2, pos, np.zeros(3), 0.0, True)
+        path_update(c, g, path, 2, (pos, np.zeros(3)), 0.0, True)
         c[C.PXY_POS_T] = pos[0] - 8.45  # (as the position controller's error limit leaves it)
         k.append(c[C.TRACK_K])
     tc = g[C.G_WP_ACCEL] / g[C.G_WP_JERK]

@@ -78,7 +78,7 @@ def test_callees_of_the_flight_loop_run_when_called_directly_after_a_flight():
         done = False
         while not done:  # a perfectly tracking vehicle flies the path to its end
             vel = np.array([c[C.PXY_VEL_FF], c[C.PXY_VEL_FF + 1], c[C.PZ_VEL_FF]])
-            _, done = path_update(c, g, path, 2, pos, vel, 0.0, True)
+            _, done = path_update(c, g, path, 2, (pos, vel), 0.0, True)
             pos[:] = c[C.PXY_POS_T], c[C.PXY_POS_T + 1], c[C.PZ_POS_T]
         print(pos[0])
     """)

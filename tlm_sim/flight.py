@@ -318,7 +318,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
                             s[S.RC_CH + 2])
         vehicle_step(c, g, t_us, vin, path, seg, ev)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
-                c, g, float(t_us), s, gps, vin, txt, ev):
+                c, g, float(t_us), (s, gps), vin, txt, ev):
             arm_vehicle(c, t_us, q, ev)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
@@ -457,7 +457,7 @@ def _log_tick(logs, state, cfg, plan, work, now, last_gps_ms):
         log_ekf_evidence(logs, t_us, ekf, sel, ecfg)
         log_control_10hz(logs, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
         log_dynamics_10hz(logs, t_us, x, home)
-        log_dcm_10hz(logs, t_us, state.dcm, g, s, gps, eo, home)
+        log_dcm_10hz(logs, t_us, state.dcm, g, (s, gps), eo, home)
         log_gsf(logs, t_us, state.gsf)
     return last_gps_ms
 

@@ -133,7 +133,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_LOGS, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",
-        (_F1, _F1, _f8, _F1, _F1, _VIN, _F2, _EV), 2.8),
+        (_F1, _F1, _f8, nt.UniTuple(_F1, 2), _VIN, _F2, _EV), 2.8),
     Job("tlm_sim.control.arming:lifecycle_texts",
         (_F1, _TICK, _F1, _F1, _f8, _F2, _EV), 0.5),
     Job("tlm_sim.control.modes:arm_vehicle", (_F1, _i8, _F1, _EV), 0.1),
@@ -142,7 +142,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.dcm:dcm_update", (_F1, _F1, _F1, _EKF_INPUTS, _F1, _i8, _i8), 3.9),
     Job("tlm_sim.ekf.gsf:gsf_update", (_F2, _F2, _F1, _EKF_INPUTS), 2.7),
     Job("tlm_sim.control.log:log_dcm_10hz",
-        (_LOGS, _i8, _F1, _F1, _F1, _F1, _F1, _F1), 0.7),
+        (_LOGS, _i8, _F1, _F1, nt.UniTuple(_F1, 2), _F1, _F1), 0.7),
     Job("tlm_sim.ekf.log:log_gsf", (_LOGS, _i8, _F2), 0.8),
     # issue 21's evidence messages (ARM, ORGN, LDET, MISE every tick; SIM2 at 50 Hz)
     Job("tlm_sim.control.log:log_vehicle_events",

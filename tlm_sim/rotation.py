@@ -51,8 +51,11 @@ def rotation_half_angle(wx, wy, wz, dt):
 
 
 @tick_jit
-def quat_mul_normalised(qw, qx, qy, qz, c, ux, uy, uz):
-    """q * (c, u), renormalised (one Newton step of 1/sqrt near 1, else the exact root)."""
+def quat_mul_normalised(q, r):
+    """q * r, renormalised (one Newton step of 1/sqrt near 1, else the exact root); q = (qw,
+    qx, qy, qz), r = (c, ux, uy, uz)."""
+    qw, qx, qy, qz = q
+    c, ux, uy, uz = r
     nw = qw * c - qx * ux - qy * uy - qz * uz
     nx = qw * ux + qx * c + qy * uz - qz * uy
     ny = qw * uy - qx * uz + qy * c + qz * ux

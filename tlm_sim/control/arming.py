@@ -358,9 +358,10 @@ def _prearm_update(c, g, t_us, s, gps, eo, txt):
 
 
 @inline_jit
-def _attempt(c, g, t_us, s, gps, vin, txt, ev):
+def _attempt(c, g, t_us, sensors, vin, txt, ev):
     """One arm attempt of the driver: the checks, then arming or an "Arm:" text row."""
     eo, q = vin.eo, vin.q  # the autopilot's inputs (tlm_sim.bundles.VehicleInputs)
+    s, gps = sensors  # the sensor state and the latest GPS epoch
     t_s = t_us * 1e-6
     r = txt_row(c, txt, t_us, AP.KIND_ARM, 0)
     mask = prearm_checks(c, g, t_s, s, gps, eo, (txt, r))
@@ -378,10 +379,11 @@ def _attempt(c, g, t_us, s, gps, vin, txt, ev):
 
 
 @tick_jit
-def arming_step(c, g, t_us, s, gps, vin, txt, ev):
+def arming_step(c, g, t_us, sensors, vin, txt, ev):
     """The driver and the 1 Hz pre-arm checks, once per main-loop tick after the vehicle's
     step. Returns True on the tick an attempt passes: the caller arms the vehicle."""
     eo = vin.eo  # the autopilot's inputs (tlm_sim.bundles.VehicleInputs)
+    s, gps = sensors  # the sensor state and the latest GPS epoch
     t_s = t_us * 1e-6
     if t_s >= c[C.PREARM_NEXT_T]:
         _prearm_update(c, g, t_us, s, gps, eo, txt)
@@ -395,7 +397,7 @@ def arming_step(c, g, t_us, s, gps, vin, txt, ev):
         if t_s >= g[C.G_ARM_GIVE_UP]:
             c[C.ARM_GAVE_UP] = 1.0
         else:
-            passed = _attempt(c, g, t_us, s, gps, vin, txt, ev)
+            passed = _attempt(c, g, t_us, sensors, vin, txt, ev)
     if switched and not passed:
         E.log_mode(ev, t_us, AP.MODE_GUIDED, AP.RSN_GCS)
     return passed

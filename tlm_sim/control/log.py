@@ -292,12 +292,14 @@ DCMC, AHR2 = L.DCM_COLS, L.AHR2_COLS
 
 
 @tick_jit
-def log_dcm_10hz(log, t_us, d, g, s, gps, eo, home):
+def log_dcm_10hz(log, t_us, d, g, sensors, eo, home):
     """DCM (the estimator's state) and AHR2 (the AHRS's secondary solution: the DCM's, while the
     EKF is the active one) at 10 Hz from the DCM array d (:mod:`tlm_sim.control.dcm`); g: the
-    controller configuration, s: sensor state (baro), gps: the latest GPS epoch, eo: the EKF
+    controller configuration, sensors: (s, gps), the sensor state (baro) and the latest GPS
+    epoch, eo: the EKF
     output block, home: degrees, m AMSL. AHR2's angles are truncated to centidegrees as the
     firmware's integer casts do."""
+    s, gps = sensors
     bufs = log[0]  # the log buffers
     home_lat, home_lon, home_alt = home[0], home[1], home[2]  # deg, deg, m AMSL
     if d[DL.D_INIT] == 0.0:

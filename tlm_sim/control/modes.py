@@ -194,7 +194,7 @@ def vehicle_step(c, g, t_us, inputs, path, seg, ev):
         _ground_idle(c, g, t_us, inputs, seg, ev)
         _motors_at_rest(c, g, v_batt)
         return
-    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, path, seg, ev)
+    yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, (path, seg), ev)
     sub = int(c[C.SUBMODE])
     if sub == C.SUB_LAND and _land_descent(c, g, t_us, pos, land_vertical, ev):
         return
@@ -388,11 +388,13 @@ def _ground_idle(c, g, t_us, inputs, seg, ev):
 
 
 @inline_jit
-def _navigate(c, g, t_us, sub, inputs, path, seg, ev):
+def _navigate(c, g, t_us, sub, inputs, route, ev):
     """Navigation of the submode sub (takeoff, waypoints, RTL climb / return / loiter, land):
     moves the position targets along its path and switches submodes. Returns (yaw command
-    [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically)."""
+    [rad], yaw rate feed-forward [rad/s], whether LAND descends vertically). route: (path,
+    seg), the mission path and the segment scratch."""
     pos, vel = inputs.pos, inputs.vel
+    path, seg = route
     yaw_cmd = c[C.ATT_YAW_CMD]
     yaw_rate_ff = 0.0
     if sub == C.SUB_TAKEOFF:
@@ -418,7 +420,7 @@ def _nav_takeoff(c, g, t_us, pos, vel, seg, ev):
     dt = g[C.G_DT]
     # (the takeoff's own vertical profile, not slowed by the S-curve time scaler: ArduCopter
     # runs it outside AC_WPNav)
-    heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, False)
+    heading, done = path_update(c, g, seg, 2, (pos, vel), 0.0, False)
     if c[C.MODE] != AP.MODE_AUTO and -pos[2] >= TAKEOFF_AUTO_FRAC * c[C.TAKEOFF_ALT]:
         # the driver's "altitude reached" -> AUTO; NAV_TAKEOFF runs on to the altitude
         set_mode(c, AP.MODE_AUTO, AP.RSN_GCS, t_us, ev)
@@ -444,7 +446,7 @@ def _nav_waypoints(c, g, t_us, pos, vel, path, seg):
     RETURN_TO_LAUNCH) or its NAV_LAND. Returns the path's heading [rad] (NaN: keep the
     yaw)."""
     n_path = path.shape[0]
-    heading, done = path_update(c, g, path, n_path, pos, vel, 0.0, True)
+    heading, done = path_update(c, g, path, n_path, (pos, vel), 0.0, True)
     if done > 0.0:
         i = int(c[C.WP_INDEX])
         dn = path[i, 0] - pos[0]
@@ -471,7 +473,7 @@ def _nav_waypoints(c, g, t_us, pos, vel, path, seg):
 @inline_jit
 def _nav_rtl_climb(c, g, pos, vel, seg):
     """RTL's climb to the return altitude, then the return leg home at that altitude."""
-    heading, done = path_update(c, g, seg, 2, pos, vel, 0.0, True)
+    heading, done = path_update(c, g, seg, 2, (pos, vel), 0.0, True)
     if done > 0.0 and abs(pos[2] - seg[1, 2]) < 0.5:
         c[C.SUBMODE] = C.SUB_RTL_RETURN
         c[C.SUB_TIMER] = 0.0
@@ -483,7 +485,7 @@ def _nav_rtl_climb(c, g, pos, vel, seg):
 def _nav_rtl_return(c, g, pos, vel, seg):
     """RTL's return leg at RTL_SPEED; loiter once within WP_RADIUS of home."""
     speed_cap = g[C.G_RTL_SPEED]
-    heading, done = path_update(c, g, seg, 2, pos, vel, speed_cap, True)
+    heading, done = path_update(c, g, seg, 2, (pos, vel), speed_cap, True)
     if done > 0.0 and pos[0] * pos[0] + pos[1] * pos[1] <= g[C.G_WP_RADIUS] ** 2:
         c[C.SUBMODE] = C.SUB_RTL_LOITER
         c[C.SUB_TIMER] = 0.0

@@ -347,10 +347,10 @@ def stop_profile(g, v0, tau, amax):
 
 
 @tick_jit
-def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
+def path_update(c, g, path, n, nav, speed_cap, scale_time):
     """Advance the target along path[0:n] (prepared by prepare_path) and set the position
-    controller targets and feed-forwards. pos, vel: the position controller's position and
-    velocity estimates NED [m, m/s]; speed_cap [m/s] (<= 0: none). Sets c[YAW_RATE_CMD] to the
+    controller targets and feed-forwards. nav: (pos, vel), the position controller's position
+    and velocity estimates NED [m, m/s]; speed_cap [m/s] (<= 0: none). Sets c[YAW_RATE_CMD] to the
     heading's rate [rad/s] (0 without a heading).
 
     With scale_time (AC_WPNav legs) the target's speed profile runs on the S-curve time of
@@ -364,6 +364,7 @@ def path_update(c, g, path, n, pos, vel, speed_cap, scale_time):
     Returns (heading of the horizontal velocity [rad], nan for a vertical leg; 1.0 when the end
     or a stop is reached).
     """
+    pos, vel = nav
     dt = g[C.G_DT] * track_scaler(c, g, pos, vel) if scale_time else g[C.G_DT]
     i = int(c[C.WP_INDEX])
     if i >= n:

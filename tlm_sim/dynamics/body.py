@@ -249,7 +249,7 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     # rotation over the step: dq = (c, u) = (cos(th/2), w_hat sin(th/2)), th = |w| dt
     c, k = rotation_half_angle(wx, wy, wz, dt)
     ux, uy, uz = k * wx, k * wy, k * wz
-    qw, qx, qy, qz = quat_mul_normalised(qw, qx, qy, qz, c, ux, uy, uz)
+    qw, qx, qy, qz = quat_mul_normalised((qw, qx, qy, qz), (c, ux, uy, uz))
     x[X.QW], x[X.QX], x[X.QY], x[X.QZ] = qw, qx, qy, qz
 
     if frame[F_GYRO] >= 0.5:

@@ -133,7 +133,7 @@ def smooth_sensors(x: np.ndarray, dt: float) -> None:
     # integrate the shadow's attitude with its own rate (exact exponential over the tick)
     c, kk = rotation_half_angle(wx, wy, wz, dt)
     x[X.SQW], x[X.SQX], x[X.SQY], x[X.SQZ] = quat_mul_normalised(
-        sw, sx, sy, sz, c, kk * wx, kk * wy, kk * wz)
+        (sw, sx, sy, sz), (c, kk * wx, kk * wy, kk * wz))
 
     # translation
     vn, ve, vd = step_translation(x, X.SPN, an, ae, ad, dt)
