@@ -282,9 +282,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     gps, pwm = rows[W_GPS], rows[W_PWM]
     pos, vel, q, gyro = rows[W_POS], rows[W_VEL], rows[W_Q], rows[W_GYRO]
     acc_ned = rows[W_ACC_NED]
-    events = (bufs[L.K_MODE], bufs[L.K_EV], bufs[L.K_ERR])  # tlm_sim.logger E_*
-    ev_counts = counts[L.K_MODE:L.K_ERR + 1]
-    ev = (events, ev_counts)  # the event buffers and their row counts
+    ev = L.event_buffers(bufs, counts)  # the event buffers (E_* order) and their row counts
     _boot(state, cfg, ev, home[0])
     k_sched = 0
     t_us = 0

@@ -73,9 +73,12 @@ __all__ = [
 ]
 
 
+@tick_jit
 def event_buffers(bufs: tuple[np.ndarray, ...], counts: np.ndarray
                   ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
-    """The event buffers (E_* order) of a log-buffer tuple and a view of their row counts."""
+    """The event buffers (E_* order) of a log-buffer tuple and a view of their row counts: the
+    ``ev`` pair the vehicle logic writes MODE, EV and ERR rows through (the flight loop's, and
+    tests')."""
     k = _K_EVENTS
     return (bufs[k + E_MODE], bufs[k + E_EV], bufs[k + E_ERR]), counts[k:k + 3]
 
