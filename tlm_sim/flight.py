@@ -453,7 +453,7 @@ def _log_tick(logs, state, cfg, plan, work, now, last_gps_ms):
         log_sensors_10hz(logs, t_us, s, home[2])
         log_ekf_10hz(logs, t_us, ekf, sel, eo, home)
         log_ekf_evidence(logs, t_us, ekf, sel, ecfg)
-        log_control_10hz(logs, t_us, c, eo, s, pos, x[X.AN:X.AN + 3])
+        log_control_10hz(logs, t_us, c, eo, s, pos)
         log_dynamics_10hz(logs, t_us, x, home)
         log_dcm_10hz(logs, t_us, state.dcm, g, (s, gps), eo, home)
         log_gsf(logs, t_us, state.gsf)

@@ -104,7 +104,7 @@ JOBS: tuple[Job, ...] = (
         (_F2, _F1, _F1, _f8, _EKF_INPUTS), 13.4),
     Job("tlm_sim.dynamics.body:physics_step", (_F1, _F1, _F1, _f8, _f8, _U1), 4.1),
     Job("tlm_sim.control.log:log_control_10hz",
-        (_LOGS, _i8, _F1, _F1, _F1, _F1, _F1), 1.8),
+        (_LOGS, _i8, _F1, _F1, _F1, _F1), 1.8),
     Job("tlm_sim.ekf.log:log_ekf_10hz", (_LOGS, _i8, _F2, _F1, _F1, _F1), 1.5),
     Job("tlm_sim.sensors.log:log_sensors_10hz", (_LOGS, _i8, _F1, _f8), 0.8),
     Job("tlm_sim.dynamics.log:log_dynamics_10hz", (_LOGS, _i8, _F1, _F1), 1.0),

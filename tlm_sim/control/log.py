@@ -34,9 +34,9 @@ CMD_TAKEOFF = 1
 
 
 @tick_jit
-def log_control_10hz(log, t_us, c, eo, s, pos, acc):
+def log_control_10hz(log, t_us, c, eo, s, pos):
     """The autopilot's 10 Hz rows from its state c, the EKF output eo, the baro altitude in the
-    sensor state s, its position estimate pos [m, NED] and the acceleration NED acc [m/s^2]."""
+    sensor state s and its position estimate pos [m, NED]."""
     bufs = log[0]  # the log buffers
     _log_rate(log, t_us, c)
     _log_att(log, t_us, c, eo)
@@ -46,7 +46,7 @@ def log_control_10hz(log, t_us, c, eo, s, pos, acc):
             bufs[L.K_RCOU][r, RCOU.C1 + k] = round(c[C.MIX_PWM + k])
     _log_ctun(log, t_us, c, eo, s, pos)
     for ax in range(3):
-        _log_psc(log, t_us, c, eo, pos, acc, ax)
+        _log_psc(log, t_us, c, eo, pos, ax)
     _log_bat(log, t_us, c)
     _log_motb(log, t_us, c)
 
@@ -260,7 +260,7 @@ def _log_ctun(log, t_us, c, eo, s, pos):
 
 
 @inline_jit
-def _log_psc(log, t_us, c, eo, pos, acc, ax):
+def _log_psc(log, t_us, c, eo, pos, ax):
     """PSCN (ax 0), PSCE (1) or PSCD (2): position, velocity and acceleration desired, target
     and actual. The three messages share one column order (PSC names PSCN's columns)."""
     bufs = log[0]  # the log buffers
@@ -285,7 +285,23 @@ def _log_psc(log, t_us, c, eo, pos, acc, ax):
         b[r, PSC.TAN] = -c[C.PZ_ACC_T]
     b[r, PSC.PN] = pos[ax]
     b[r, PSC.VN] = eo[EK.O_VN + ax]
-    b[r, PSC.AN] = acc[ax]
+    b[r, PSC.AN] = (lean_angles_to_accel(c[C.ATT_ROLL_T], c[C.ATT_PITCH_T], eo[EK.O_YAW], ax)
+                    if ax < 2 else -c[C.PZ_ACC_MEAS])
+
+
+@inline_jit
+def lean_angles_to_accel(roll, pitch, yaw, ax):
+    """Horizontal acceleration [m/s^2] north (ax 0) or east (1) that a thrust holding the
+    weight at lean angles roll, pitch [rad] and heading yaw [rad] gives (AC_PosControl's
+    lean-angles-to-acceleration: g x the NE thrust components over the vertical one, the
+    vertical one floored at 0.1)."""
+    sr, cr = math.sin(roll), math.cos(roll)
+    sp, cp = math.sin(pitch), math.cos(pitch)
+    sy, cy = math.sin(yaw), math.cos(yaw)
+    vertical = max(cr * cp, 0.1)
+    if ax == 0:
+        return AP.GRAVITY_MSS * (-cy * sp * cr - sy * sr) / vertical
+    return AP.GRAVITY_MSS * (-sy * sp * cr + cy * sr) / vertical
 
 
 DCMC, AHR2 = L.DCM_COLS, L.AHR2_COLS
