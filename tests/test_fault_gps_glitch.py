@@ -193,13 +193,15 @@ def test_jamming_blacks_out_then_flickers_as_sitl_draws_it():
     assert ((late.Status == 1) == (late.NSats == 3)).all()
     assert locked.NSats.between(4, 16).all() and locked.NSats.nunique() >= 4
     assert (locked.NSats == 10).mean() > 0.4  # no draw on most epochs: NUMSATS
-    # velocities jump to +-400 m/s, accuracies to 300 m / 50 m/s, on some epochs only
+    # velocities jump to +-400 m/s, accuracies to 300 m / 50 m/s, on some epochs only; the
+    # autopilot reads a tenth of the speed accuracy (SITL's u-blox encoding: GPA.SAcc at most
+    # 4.95 m/s in gps_jam_s80/s81.bin)
     assert g.Spd.max() > 100 and g.Spd.max() <= 400 * math.sqrt(2) + 1
     assert g.VZ.abs().max() > 50 and g.VZ.abs().max() <= 400
     assert (g.Spd < 20).mean() > 0.4
     gpa = _short().tables["GPA"]
     gpa = gpa[(gpa.TimeUS >= JAM_ON * 1e6) & (gpa.TimeUS < JAM_OFF * 1e6)]
-    assert 30 < gpa.HAcc.max() <= 300 and 5 < gpa.SAcc.max() <= 50
+    assert 30 < gpa.HAcc.max() <= 300 and 0.5 < gpa.SAcc.max() <= 5
     assert np.isclose(gpa.HAcc, 0.3).mean() > 0.3
 
 
@@ -228,7 +230,9 @@ def test_jamming_raises_the_gps_glitch_without_failsafe():
     err = log.tables["ERR"]
     w = err[(err.TimeUS >= JAM_ON * 1e6) & (err.TimeUS < LOSS_ON * 1e6)]
     glitch = w[w.Subsys == AP.ERR_GPS]
-    assert list(glitch.ECode) == [2, 0]
+    # raised in the jam, cleared after it (the EKF, dragged towards the jammed fix, may fail
+    # its position gate again for a while once the fix is true again: raised and cleared twice)
+    assert list(glitch.ECode[:2]) == [2, 0] and list(glitch.ECode) in ([2, 0], [2, 0, 2, 0])
     assert glitch.TimeUS.iloc[0] < JAM_OFF * 1e6 < glitch.TimeUS.iloc[1]
     mode = log.tables["MODE"]
     assert not ((mode.TimeUS > JAM_ON * 1e6) & (mode.TimeUS < LOSS_ON * 1e6)).any()

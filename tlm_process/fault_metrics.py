@@ -92,9 +92,13 @@ Metrics by fault type
   (BAT.Volt), ``thr_before`` (20 s) / ``thr_in`` (from 3 s in) / ``thr_after`` (5-25 s
   after) (CTUN.ThO), ``err6_1_s`` (battery failsafe), ``err6_0_after_end`` (count, 60 s),
   ``auto_kept``.
-* gps_jam: ``fix_frac_in`` / ``fix_frac_out`` (GPS rows with Status >= 3; out: armed,
-  before the start or 10 s after the end), ``nsats_min_in``, ``nsats_max_in``,
-  ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
+* gps_jam: ``nofix_frac`` (share of GPS rows in the jam window with Status < 3),
+  ``gps_truth_med_m`` / ``gps_truth_max_m`` (GPS minus truth, every GPS row in the window),
+  ``err11_2_s`` (first "GPS Glitch" ERR after the start), ``offroute_max_m`` (truth from the
+  route lines, to ``JAM_AFTER_S`` after the end), ``fix_frac_in`` / ``fix_frac_out`` (GPS
+  rows with Status >= 3; out: armed, before the start or 10 s after the end),
+  ``nsats_min_in``, ``nsats_max_in``, ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
+  Jamming is random: its metrics are judged over seeds (``tlm crosscheck --seeds``).
 
 Settling
 --------
@@ -164,6 +168,8 @@ SIGNATURE_MESSAGES = ("GPS", "IMU", "CTUN", "XKF1", "XKF4", "XKFS", "SIM", "MODE
 BEFORE_S = 20.0
 #: seconds after a fault's end over which recoveries (lane switches, glitch, descent) are seen
 AFTER_S = 60.0
+#: how long after a GPS jam the truth's distance from the route still counts [s]
+JAM_AFTER_S = 30.0
 #: height difference from the start height within which the vehicle counts as back [m]
 BACK_M = 1.5
 
@@ -755,10 +761,33 @@ def battery_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, Any],
     }
 
 
+def _gps1(f: Flight) -> pd.DataFrame:
+    """The GPS rows of the first receiver."""
+    gps = f.t["GPS"]
+    return gps[gps.I == 0] if "I" in gps else gps
+
+
+def _gps_truth_distance(f: Flight, t0: float, t1: float) -> np.ndarray:
+    """Horizontal distance [m] of every GPS 1 row in [t0, t1] (with or without a fix) from the
+    truth (SIM) at its time."""
+    g = time_window(_gps1(f), t0, t1)
+    n, e = latlon_to_ne(g.Lat.to_numpy(float), g.Lng.to_numpy(float), *f.home)
+    tg = g.TimeUS.to_numpy(float)
+    return np.hypot(np.asarray(n) - np.interp(tg, f.sim_t, f.n),
+                    np.asarray(e) - np.interp(tg, f.sim_t, f.e))
+
+
 def gps_jam_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, Any],
                     route: np.ndarray | None) -> dict[str, float]:
     inside, outside = _gps_rows(f, t0, t1, 10e6)
+    window = time_window(_gps1(f), t0, t1)
+    dist = _gps_truth_distance(f, t0, t1)
     return {
+        "nofix_frac": float((window.Status < 3).mean()) if len(window) else float("nan"),
+        "gps_truth_med_m": float(np.median(dist)) if len(dist) else float("nan"),
+        "gps_truth_max_m": float(dist.max()) if len(dist) else float("nan"),
+        "err11_2_s": _rel_s(f.first_err(AP.ERR_GPS, AP.ERR_CODE_GPS_GLITCH, t0, t1), t0),
+        "offroute_max_m": f.route_distance(route, t0, t1 + JAM_AFTER_S * 1e6),
         "fix_frac_in": float((inside.Status >= 3).mean()) if len(inside) else float("nan"),
         "fix_frac_out": float((outside.Status >= 3).mean()) if len(outside) else float("nan"),
         "nsats_min_in": float(inside.NSats.min()) if len(inside) else float("nan"),

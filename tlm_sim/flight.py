@@ -419,7 +419,7 @@ def _estimate(state, ecfg, work, now, inputs, ev):
     ekf, sel, gsf, gps = state.ekf, state.sel, state.gsf, work.rows[W_GPS]
     t_us = now.t_us
     if now.gps_new and gps[S.GE_FIX_3D] > 0.5:
-        ekf_gps_accuracy(ekf, ecfg, float(t_us), gps[S.GE_HACC], gps[S.GE_SACC])
+        ekf_gps_accuracy(ekf, ecfg, float(t_us), gps)
         ekf_gps_checks(ekf, ecfg, float(t_us), gps)
     switched = ekf_update(ekf, sel, ecfg, float(t_us), inputs)
     gsf_update(gsf, ekf, ecfg, inputs)

@@ -124,7 +124,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.control.battery:battery_monitor", (_F1, _F1, _i8, _f8, _f8, _EV),
         0.6),
     Job("tlm_sim.control.ahrs:ahrs_update", (_F1,) * 7, 0.4),
-    Job("tlm_sim.ekf.lanes:ekf_gps_accuracy", (_F2, _F1, _f8, _f8, _f8), 0.2),
+    Job("tlm_sim.ekf.lanes:ekf_gps_accuracy", (_F2, _F1, _f8, _F1), 0.2),
     Job("tlm_sim.ekf.lanes:ekf_output", (_F2, _F1, _F1), 0.4),  # with ekf_output_nav
     Job("tlm_sim.ekf.log:gps_glitch_check", (_EV, _i8, _F2, _F1), 0.1),
     Job("tlm_sim.ekf.log:log_lane_switch", (_EV, _i8, _F1), 0.1),

@@ -77,8 +77,10 @@ from tlm_sim.ekf.layout import (
     F_VERT_VEL,
     FAULT,
     GPS_GLITCHING,
+    GPS_GOOD,
     GPS_HACC_F,
     GPS_INNOV_FAIL,
+    GPS_NOISE_SCALE,
     GPS_SACC_F,
     GPS_SPD_FAIL,
     HGT_RESET_COUNT,
@@ -112,6 +114,7 @@ from tlm_sim.ekf.layout import (
     POS_RESET_COUNT,
     POS_RESET_DE,
     POS_RESET_DN,
+    POS_TIMEOUT,
     POS_TR,
     QW,
     QX,
@@ -160,6 +163,7 @@ from tlm_sim.ekf.lifecycle import (
     yaw_align,
 )
 from tlm_sim.rotation import quat_to_euler
+from tlm_sim.sensors.layout import GE_HACC, GE_NSATS, GE_SACC
 
 
 @tick_jit
@@ -201,6 +205,7 @@ def reset_vel_pos_to_gps(e, cfg, t, pos, vel, k):
     e[T_POS_PASS] = t
     e[T_VEL_PASS] = t
     e[T_GPS_FUSED] = t
+    e[POS_TIMEOUT] = 0.0
 
 
 @tick_jit
@@ -222,6 +227,7 @@ def reset_pos_to_gps(e, cfg, t, pn, pe, k):
     e[VEL_TR] = 0.0
     e[T_POS_PASS] = t
     e[T_GPS_FUSED] = t
+    e[POS_TIMEOUT] = 0.0
 
 
 @tick_jit
@@ -232,53 +238,70 @@ def gps_pos_var(e, cfg):
 
 
 @tick_jit
-def lane_gps_accuracy(e, cfg, t, hacc, sacc):
-    """A 3-D-fix GPS sample's reported accuracies: hacc [m] horizontal, sacc [m/s] speed.
+def lane_gps_accuracy(e, cfg, t, gps):
+    """A 3-D-fix GPS sample's quality, as EKF3's readGpsData sees it before fusing the sample
+    (gps: the epoch, ``tlm_sim.sensors.layout`` GE_*: reported accuracies, satellites).
 
-    EKF3 readGpsData: decaying peak-hold envelopes (alpha = 0.0002 per ms since the previous
-    sample, tau 5 s) limited to [EK3_*_M_NSE, 100 m] and [.., 50 m/s]: the measurement noise
-    of the position and velocity fusion. calcGpsGoodForFlight's speed-accuracy test: sacc
-    low-passed (0.2 per sample), peak-held with a 10 s decay; fails above 1.5 m/s, passes
-    again below 1.0 m/s.
+    The reported horizontal and speed accuracies' decaying peak-hold envelopes (alpha = 0.0002
+    per ms since the previous sample, tau 5 s) limited to [EK3_*_M_NSE, 100 m] and
+    [.., 50 m/s]: the measurement noise of the position and velocity fusion; the noise scaler
+    of the satellite count (gpsNoiseScaler). calcGpsGoodForFlight's two tests: the speed
+    accuracy low-passed (0.2 per sample), peak-held with a 10 s decay, fails above 1.5 m/s and
+    passes again below 1.0 m/s; the innovation consistency test (:func:`_gps_innovation_test`).
     """
+    hacc, sacc, nsats = gps[GE_HACC], gps[GE_SACC], gps[GE_NSATS]
     dt = t - e[T_GPS_ACC] if e[T_GPS_ACC] > 0.0 else 0.0
     e[T_GPS_ACC] = t
     a = min(max(0.2 * dt, 0.0), 1.0)
     e[GPS_HACC_F] = max(min(max(e[GPS_HACC_F] * (1.0 - a), hacc), 100.0), cfg[C_POSNE_NSE])
     e[GPS_SACC_F] = max(min(max(e[GPS_SACC_F] * (1.0 - a), sacc), 50.0), cfg[C_VELNE_NSE])
+    absolute = e[AID_MODE] == AID_ABSOLUTE
+    if nsats >= 6.0 and absolute:
+        e[GPS_NOISE_SCALE] = 1.0
+    elif nsats >= 5.0 and absolute:
+        e[GPS_NOISE_SCALE] = 1.4
+    else:
+        e[GPS_NOISE_SCALE] = 2.0
     e[SACC_LPF] = min(max(0.2 * sacc + 0.8 * e[SACC_LPF], 0.0), 10.0)
     e[SACC_PEAK] = max(e[SACC_LPF], (1.0 - min(dt / 10.0, 1.0)) * e[SACC_PEAK])
     if e[SACC_PEAK] > 1.5:
         e[GPS_SPD_FAIL] = 1.0
     elif e[SACC_PEAK] < 1.0:
         e[GPS_SPD_FAIL] = 0.0
+    _gps_innovation_test(e, t)
+
+
+@tick_jit
+def _gps_innovation_test(e, t):
+    """calcGpsGoodForFlight's innovation consistency test at a 3-D-fix sample, on the test
+    ratios of the last fused sample: it fails when they have not both been below 1 at a sample
+    for 1 s, and passes again after 10 s of samples without either reaching 1. While the
+    bad-IMU response fuses GPS without gates the ratios count as passing (tlm model choice:
+    SITL's accelerometer-failure flight accel_s13 reports no GPS glitch while tlm's ratios
+    exceed 1 there). Outside absolute aiding the test is reset (:func:`gps_glitch_check`)."""
+    if e[AID_MODE] != AID_ABSOLUTE or e[T_INNOV_PASS] <= 0.0:
+        return
+    if (e[VEL_TR] < 1.0 and e[POS_TR] < 1.0) or e[BAD_IMU] != 0.0:
+        e[T_INNOV_PASS] = t
+    elif e[VEL_TR] > 0.7 or e[POS_TR] > 0.7:
+        e[T_INNOV_HIGH] = t
+    if t - e[T_INNOV_PASS] > 1.0:
+        e[GPS_INNOV_FAIL] = 1.0
+    elif t - e[T_INNOV_HIGH] > 10.0:
+        e[GPS_INNOV_FAIL] = 0.0
 
 
 @tick_jit
 def gps_glitch_check(e, t):
-    """EKF3's GPS innovation consistency test and gps_glitching flag (every tick).
-
-    While aiding with GPS: the test fails when the velocity and position test ratios have not
-    both been below 1 for 1 s, and passes again after 10 s in which neither exceeded 0.7.
-    gps_glitching = (innovation test or speed-accuracy test failing) while aiding with GPS.
-    Outside GPS aiding the test is reset (passing). While the bad-IMU response fuses GPS
-    without gates the ratios count as passing (tlm model choice: SITL's accelerometer-failure
-    flight accel_s13 reports no GPS glitch while tlm's ratios exceed 1 there).
-    """
+    """EKF3's gps_glitching flag: a GPS quality test of the last sample (speed accuracy or
+    innovation consistency, :func:`lane_gps_accuracy`) failing while aiding with GPS. Outside
+    absolute aiding the innovation test is reset (passing)."""
     if e[AID_MODE] != AID_ABSOLUTE or e[T_INNOV_PASS] <= 0.0:
         e[T_INNOV_PASS] = t
         e[T_INNOV_HIGH] = t
         e[GPS_INNOV_FAIL] = 0.0
         e[GPS_GLITCHING] = 0.0
         return
-    if (e[VEL_TR] < 1.0 and e[POS_TR] < 1.0) or e[BAD_IMU] != 0.0:
-        e[T_INNOV_PASS] = t
-    if e[VEL_TR] > 0.7 or e[POS_TR] > 0.7:
-        e[T_INNOV_HIGH] = t
-    if t - e[T_INNOV_PASS] > 1.0:
-        e[GPS_INNOV_FAIL] = 1.0
-    elif t - e[T_INNOV_HIGH] > 10.0:
-        e[GPS_INNOV_FAIL] = 0.0
     fail = e[GPS_INNOV_FAIL] != 0.0 or e[GPS_SPD_FAIL] != 0.0
     e[GPS_GLITCHING] = 1.0 if fail else 0.0
 
@@ -401,10 +424,13 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
         update_flags(e, cfg, t)
         return
     r_vne = cfg[C_VELNE_NSE] ** 2
-    r_vne_fuse = max(e[GPS_SACC_F], cfg[C_VELNE_NSE]) ** 2
     r_vd = cfg[C_VELD_NSE] ** 2
+    # the fusion's noises: the reported accuracies' envelopes, scaled for few satellites
+    scale2 = e[GPS_NOISE_SCALE] ** 2
+    r_vne_fuse = max(e[GPS_SACC_F], cfg[C_VELNE_NSE]) ** 2 * scale2
+    r_vd_obs = max(e[GPS_SACC_F], cfg[C_VELD_NSE]) ** 2
     r_p = gps_pos_var(e, cfg)
-    bad = _bad_imu_check(e, cfg, t, vel[2], k, r_vd)
+    bad = _bad_imu_check(e, cfg, t, vel[2], k, r_vd_obs)
     yvn = vel[0] - filter_get(e, k, 3)
     yve = vel[1] - filter_get(e, k, 4)
     yvd = vel[2] - filter_get(e, k, 5)
@@ -425,33 +451,59 @@ def lane_fuse_gps(e, cfg, t, pos, vel):
     e[INNOV_VD] = yvd
     e[INNOV_PN] = ypn
     e[INNOV_PE] = ype
-    vel_out = t - e[T_VEL_PASS] > cfg[C_POS_RETRY]
-    pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
-    if vel_out or pos_var > cfg[C_GLITCH_RAD] ** 2:
-        reset_vel_pos_to_gps(e, cfg, t, pos, vel, k)
-        update_flags(e, cfg, t)
-        return
-    if t - e[T_POS_PASS] > cfg[C_POS_RETRY_VEL]:
-        reset_pos_to_gps(e, cfg, t, pos[0], pos[1], k)
+    if _gps_reset(e, cfg, t, pos, vel, k):
         update_flags(e, cfg, t)
         return
     fuse_vel = vel_tr < 1.0 or bad
-    fuse_pos = pos_tr < 1.0 or bad
+    pos_pass = pos_tr < 1.0 or bad
+    fuse_pos = pos_pass or e[POS_TIMEOUT] != 0.0
     if not (fuse_vel or fuse_pos):
         return
     clear_dx(e)
     if fuse_vel:
         fuse_index(e, ES_VEL + 0, yvn, r_vne_fuse)
         fuse_index(e, ES_VEL + 1, yve, r_vne_fuse)
-        fuse_index(e, ES_VEL + 2, yvd, r_vd)
+        fuse_index(e, ES_VEL + 2, yvd, r_vd_obs * scale2)
         e[T_VEL_PASS] = t
     if fuse_pos:
-        fuse_index(e, ES_POS + 0, ypn, r_p)
-        fuse_index(e, ES_POS + 1, ype, r_p)
-        e[T_POS_PASS] = t
+        fuse_index(e, ES_POS + 0, ypn, r_p * scale2)
+        fuse_index(e, ES_POS + 1, ype, r_p * scale2)
         e[T_GPS_FUSED] = t
+        if pos_pass:
+            e[T_POS_PASS] = t
     apply_correction(e, cfg[C_GBIAS_LIM], cfg[C_ABIAS_LIM])
     update_flags(e, cfg, t)
+
+
+@tick_jit
+def _gps_reset(e, cfg, t, pos, vel, k):
+    """EKF3's GPS timeouts and resets before a sample is fused; returns True after a reset.
+
+    Velocity aiding counts while a GPS velocity or position passed within C_POS_RETRY
+    (EKF3's velAiding over its minTestTime, 7 s). The position times out (POS_TIMEOUT, held
+    until a reset) when no position passed for C_POS_RETRY_VEL with velocity aiding,
+    C_POS_RETRY without. A reset to GPS needs no velocity aiding or a good GPS
+    (gpsGoodToAlign, ``GPS_GOOD``): position and velocity when no velocity passed for
+    C_POS_RETRY or the position variance exceeds EK3_GLITCH_RAD^2, the position alone when it
+    timed out. Otherwise a timed-out position is fused without its gate
+    (:func:`lane_fuse_gps`), weighted by the reported accuracy: while GPS jamming makes the
+    GPS bad the estimate is drawn towards the jammed fix instead of jumping to it."""
+    vel_used = t - e[T_VEL_PASS] <= cfg[C_POS_RETRY]
+    vel_aiding = vel_used or t - e[T_POS_PASS] <= cfg[C_POS_RETRY]
+    retry = cfg[C_POS_RETRY_VEL] if vel_aiding else cfg[C_POS_RETRY]
+    if t - e[T_POS_PASS] > retry:
+        e[POS_TIMEOUT] = 1.0
+    if vel_aiding and e[GPS_GOOD] == 0.0:
+        return False
+    d = NS + 1
+    pos_var = e[P0 + (ES_POS + 0) * d] + e[P0 + (ES_POS + 1) * d]
+    if not vel_used or pos_var > cfg[C_GLITCH_RAD] ** 2:
+        reset_vel_pos_to_gps(e, cfg, t, pos, vel, k)
+        return True
+    if e[POS_TIMEOUT] != 0.0:
+        reset_pos_to_gps(e, cfg, t, pos[0], pos[1], k)
+        return True
+    return False
 
 
 @tick_jit

@@ -91,6 +91,7 @@ from tlm_sim.ekf.layout import (
     F_VERT_POS,
     FAULT,
     GPS_GLITCHING,
+    GPS_NOISE_SCALE,
     HEALTHY,
     HGT_TR,
     IMU_INDEX,
@@ -154,6 +155,7 @@ from tlm_sim.ekf.layout import (
     OUT_IPN,
     P0,
     POS_RESET_COUNT,
+    POS_TIMEOUT,
     POS_TR,
     QW,
     QX,
@@ -283,6 +285,8 @@ def _align(e, cfg, t):
     e[T_VEL_PASS] = t
     e[T_MAG_PASS] = t
     e[T_GPS_FUSED] = -1.0e9
+    e[POS_TIMEOUT] = 0.0
+    e[GPS_NOISE_SCALE] = 1.0
     e[T_BAD_IMU] = -1.0e9
     e[BAD_IMU] = 0.0
     e[T_BARO_LAST] = -1.0e9
@@ -459,23 +463,23 @@ def ekf_fuse_gps(ekf, cfg, t_us, pos, vel, fix_3d):
 
 
 @tick_jit
-def ekf_gps_accuracy(ekf, cfg, t_us, hacc, sacc):
-    """A new 3-D-fix GPS sample's reported accuracies (call before :func:`ekf_update` fuses
-    it): hacc horizontal [m], sacc speed [m/s]. Without calls the fusion uses the EK3_*_M_NSE
-    noises and the speed-accuracy test passes."""
+def ekf_gps_accuracy(ekf, cfg, t_us, gps):
+    """A new 3-D-fix GPS sample's quality (call before :func:`ekf_update` fuses it): the
+    reported accuracies, the satellite count and the flight checks of every lane
+    (:func:`tlm_sim.ekf.fusion.lane_gps_accuracy`). gps: the epoch (``tlm_sim.sensors.layout``
+    GE_*). Without calls the fusion uses the EK3_*_M_NSE noises and the tests pass."""
     t = t_us * 1e-6
     for i in range(ekf.shape[0]):
-        lane_gps_accuracy(ekf[i], cfg, t, hacc, sacc)
+        lane_gps_accuracy(ekf[i], cfg, t, gps)
 
 
 @tick_jit
 def ekf_gps_checks(ekf, cfg, t_us, gps):
-    """A new 3-D-fix GPS sample through each aligned lane's pre-alignment GPS checks and origin
-    (:func:`tlm_sim.ekf.lifecycle.lane_gps_checks`; nothing with the boot phase off). gps: the
-    epoch (``tlm_sim.sensors.layout`` GE_*: position NE [m], velocity NED [m/s], satellites,
-    HDOP, accuracies [m])."""
-    if cfg[C_BOOT] == 0.0:
-        return
+    """A new 3-D-fix GPS sample through each aligned lane's GPS checks (EKF3's
+    calcGpsGoodToAlign, run on every sample, in flight too) and, with the boot phase, the
+    origin (:func:`tlm_sim.ekf.lifecycle.lane_gps_checks`). gps: the epoch
+    (``tlm_sim.sensors.layout`` GE_*: position NE [m], velocity NED [m/s], satellites, HDOP,
+    accuracies [m])."""
     t = t_us * 1e-6
     for i in range(ekf.shape[0]):
         e = ekf[i]

@@ -176,6 +176,14 @@ GPS_INNOV_FAIL = _l.add("GPS_INNOV_FAIL", 1, "",
                         "1 while the GPS innovation consistency test fails")
 GPS_GLITCHING = _l.add("GPS_GLITCHING", 1, "",
                        "EKF3's gps_glitching flag: a GPS test fails while aiding with GPS")
+GPS_NOISE_SCALE = _l.add("GPS_NOISE_SCALE", 1, "",
+                         "EKF3 gpsNoiseScaler of the last 3-D-fix sample: 1 with 6 or more "
+                         "satellites, 1.4 with 5, 2 with fewer or outside absolute aiding; "
+                         "scales the GPS measurement noise (standard deviation) of the fusion")
+POS_TIMEOUT = _l.add("POS_TIMEOUT", 1, "",
+                     "EKF3 posTimeout: 1 once no GPS position passed its gate for the retry "
+                     "time (C_POS_RETRY_VEL while GPS velocity is used, else C_POS_RETRY); "
+                     "position is then fused ungated until a reset to GPS clears it")
 # what only the log reads (XKF5, XKV1/XKV2: tlm_sim.ekf.log)
 DT_EKF_AVG = _l.add("DT_EKF_AVG", 1, "s",
                     "average covariance prediction interval (EKF3 dtEkfAvg: 0.98/0.02 filter "

@@ -230,13 +230,12 @@ def _gps_check_fails(e, cfg, t, gps):
 
 @tick_jit
 def lane_gps_checks(e, cfg, t, gps):
-    """One 3-D-fix GPS sample through EKF3's readGpsData checks, with the boot phase: the
-    GPS quality tests, gpsGoodToAlign (10 s of passing, 5 s of failing to clear it) and the
-    origin, set once when the GPS is good (EKF_EVT_ORIGIN). gps: the epoch
+    """One 3-D-fix GPS sample through EKF3's readGpsData checks: the GPS quality tests and
+    gpsGoodToAlign (10 s of passing, 5 s of failing to clear it), on the ground and in flight
+    (a bad GPS stops resets to it, :func:`tlm_sim.ekf.fusion.lane_fuse_gps`); with the boot
+    phase also the origin, set once when the GPS is good (EKF_EVT_ORIGIN). gps: the epoch
     (``tlm_sim.sensors.layout`` GE_*: position NE [m], velocity NED [m/s], satellites, HDOP,
     horizontal / vertical accuracy [m])."""
-    if cfg[C_BOOT] == 0.0:
-        return
     fails = _gps_check_fails(e, cfg, t, gps)
     e[GPS_CHK_FAILS] = fails
     if e[T_GPS_CHK_FAIL] < 0.0:
@@ -249,7 +248,7 @@ def lane_gps_checks(e, cfg, t, gps):
         e[GPS_GOOD] = 1.0
     elif e[GPS_GOOD] != 0.0 and t - e[T_GPS_CHK_PASS] > GPS_GOOD_FAIL_S:
         e[GPS_GOOD] = 0.0
-    if e[GPS_GOOD] != 0.0 and e[ORIGIN_OK] == 0.0:
+    if e[GPS_GOOD] != 0.0 and e[ORIGIN_OK] == 0.0 and cfg[C_BOOT] != 0.0:
         e[ORIGIN_OK] = 1.0
         life_event(e, AP.EKF_EVT_ORIGIN)
 

@@ -29,6 +29,8 @@ JAM_VZ_HZ = 0.5
 JAM_VEL_HZ = 0.8
 JAM_POS_HZ = 1.1
 JAM_ACC_HZ = 3.0
+#: speed accuracy the autopilot reads per m/s the simulator reports (cm/s written, mm/s read)
+UBLOX_SACC_SCALE = 0.1
 
 
 @tick_jit
@@ -178,6 +180,10 @@ def gps_measure(s, cfg, t_us, out, rng):
     out[S.GE_PD] -= cfg[S.C_GPS_GLITCH + 2]
     if cfg[S.C_GPS_JAM] != 0.0:
         lock = gps_jam(s, t_us, out, lock, rng)
+    # SITL's u-blox encoding writes the speed accuracy in cm/s into NAV-PVT's sAcc, which
+    # AP_GPS_UBLOX reads as mm/s: the autopilot sees a tenth of it (GPA.SAcc at most 4.95 m/s
+    # in gps_jam_s80/s81.bin, where the jamming model draws 50 x |U| m/s)
+    out[S.GE_SACC] *= UBLOX_SACC_SCALE
     out[S.GE_STATUS] = GPS_STATUS_RTK_FIXED if lock else GPS_STATUS_NO_FIX
     out[S.GE_FIX_3D] = 1.0 if lock else 0.0
     if not lock:
