@@ -40,7 +40,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "are. Exit code 1 when a --max-* threshold is exceeded.")
     c.add_argument("log", help="the SITL .bin")
     c.add_argument("--sidecar", help="fault sidecar JSON (default: LOG.json beside the log)")
-    c.add_argument("--seed", type=int, help="tlm seed (default: the sidecar's, else 0)")
+    c.add_argument("--seed", type=int, help="tlm seed (default: the sidecar's, else 0; with "
+                                             "--seeds the first seed, default 1)")
+    c.add_argument("--seeds", type=int, metavar="N",
+                   help="re-fly the log with N tlm seeds and report per signature metric tlm's "
+                        "10/50/90 %% values and range beside SITL's value (random faults such as "
+                        "GPS jamming are judged by distribution)")
     c.add_argument("--param", action="append", metavar="NAME=VALUE",
                    help="fly with this parameter over the log's (repeatable): another frame "
                         "(--param FRAME_TYPE=1), a wind, or SITL's start-up (--param "
@@ -73,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
         check_writable_file(args.json, "--json")
     out = prepare_out(args.out, "crosscheck", args.overwrite,
                       inputs=[args.log, args.sidecar]) if args.out else None
+    if args.seeds is not None:
+        return _run_seeds(args, overrides, out)
     try:
         r = crosscheck(args.log, args.sidecar, args.seed, params=overrides or None)
     except ScenarioError as e:
@@ -105,3 +112,39 @@ def run(args: argparse.Namespace) -> int:
     for b in bad:
         print(f"tlm crosscheck: FAIL: {b}")
     return 1 if bad else 0
+
+
+def _run_seeds(args: argparse.Namespace, overrides: dict[str, float], out: Path | None) -> int:
+    """``tlm crosscheck LOG --seeds N`` (:mod:`tlm_process.crosscheck.seeds`)."""
+    from tqdm import tqdm
+
+    from tlm_process.crosscheck.compare import to_json
+    from tlm_process.crosscheck.scenario import ScenarioError
+    from tlm_process.crosscheck.seeds import (
+        DEFAULT_FIRST_SEED,
+        crosscheck_seeds,
+        format_seeds_report,
+        plot_seeds,
+    )
+
+    if args.seeds < 2:
+        raise UsageError(f"--seeds needs at least 2 seeds (got {args.seeds})")
+    if args.max_flight_time_diff is not None or args.max_trajectory_rms is not None:
+        raise UsageError("--max-* gates judge one flight; leave them out with --seeds")
+    first = DEFAULT_FIRST_SEED if args.seed is None else args.seed
+    with tqdm(total=args.seeds, desc="seeds", unit="flight") as bar:
+        try:
+            d = crosscheck_seeds(args.log, args.sidecar, args.seeds, first,
+                                 params=overrides or None,
+                                 progress=lambda k: bar.update(k - bar.n))
+        except ScenarioError as e:
+            raise UsageError(str(e)) from None
+    text = format_seeds_report(d)
+    print(text.split("\n![")[0])
+    if out is not None:
+        plot_seeds(d, out)
+        (out / "report.md").write_text(text)
+        print(f"written            {out}/report.md (+ seeds.png)")
+    if args.json:
+        Path(args.json).write_text(json.dumps(to_json(d), indent=1) + "\n")
+    return 0
