@@ -29,6 +29,9 @@ JAM_VZ_HZ = 0.5
 JAM_VEL_HZ = 0.8
 JAM_POS_HZ = 1.1
 JAM_ACC_HZ = 3.0
+#: SITL's get_random16 state at start-up (AP_Math)
+MWC_Z0 = 1234.0
+MWC_W0 = 76542.0
 #: speed accuracy the autopilot reads per m/s the simulator reports (cm/s written, mm/s read)
 UBLOX_SACC_SCALE = 0.1
 
@@ -43,12 +46,26 @@ def gps_init(s, t_us, home_lat=0.0):
         s[g + k] = 0.0
     s[g + S.G_NEXT_US] = t_us
     s[g + S.G_LON_SCALE] = max(math.cos(math.radians(home_lat)), 0.01)
+    s[g + S.G_MWC_Z] = MWC_Z0
+    s[g + S.G_MWC_W] = MWC_W0
 
 
 @tick_jit
-def _rand16(rng):
-    """A uniform integer 0..65535 (SITL's get_random16)."""
-    return min(int((uniform_pm1(rng) + 1.0) * 32768.0), 65535)
+def _rand16(s):
+    """SITL's get_random16: a 16-bit draw of two multiply-with-carry generators whose state
+    starts at (1234, 76542) when the program starts and, in SITL, only the jamming model
+    draws from. So every SITL jamming flight starts with the same draws (its blackout: no
+    signal up to 1.4 s, one jammed epoch, none again to 3.0 s: gps_jam_s80/s81.bin alike);
+    the flights part once SITL's other random source (rand_float, here the seeded stream)
+    makes the satellite event fire at other epochs."""
+    g = S.GPS_BASE
+    z = int(s[g + S.G_MWC_Z])
+    w = int(s[g + S.G_MWC_W])
+    z = 36969 * (z & 0xFFFF) + (z >> 16)
+    w = 18000 * (w & 0xFFFF) + (w >> 16)
+    s[g + S.G_MWC_Z] = z
+    s[g + S.G_MWC_W] = w
+    return ((z << 16) + w) & 0xFFFF
 
 
 @tick_jit
@@ -81,14 +98,14 @@ def gps_jam(s, t_us, out, lock, rng):
         s[g + S.G_JAM_PN] = out[S.GE_PN]
         s[g + S.G_JAM_PE] = out[S.GE_PE]
     s[g + S.G_JAM_LAST_MS] = now_ms
-    if now_ms - s[g + S.G_JAM_START_MS] < 1000 + _rand16(rng) % 5000:
+    if now_ms - s[g + S.G_JAM_START_MS] < 1000 + _rand16(s) % 5000:
         out[S.GE_NSATS] = 0.0
         lock = False
     else:
         if _jam_fires(s, g + S.G_JAM_T_SATS, now_ms, JAM_SATS_HZ, rng):
-            n = 2 + _rand16(rng) % 15
+            n = 2 + _rand16(s) % 15
             out[S.GE_NSATS] = n
-            lock = n >= 4 and _rand16(rng) % 2 != 0
+            lock = n >= 4 and _rand16(s) % 2 != 0
         if _jam_fires(s, g + S.G_JAM_T_VZ, now_ms, JAM_VZ_HZ, rng):
             out[S.GE_VD] = 400.0 * uniform_pm1(rng)
         if _jam_fires(s, g + S.G_JAM_T_VEL, now_ms, JAM_VEL_HZ, rng):

@@ -91,6 +91,9 @@ G_JAM_T_VZ = GPS.add("G_JAM_T_VZ", 1, "ms", "last change of the jammed vertical 
 G_JAM_T_VEL = GPS.add("G_JAM_T_VEL", 1, "ms", "last change of the jammed horizontal velocity")
 G_JAM_T_POS = GPS.add("G_JAM_T_POS", 1, "ms", "last step of the jammed position walk")
 G_JAM_T_ACC = GPS.add("G_JAM_T_ACC", 1, "ms", "last change of the jammed accuracies")
+G_MWC_Z, G_MWC_W = GPS.vector(("G_MWC_Z", "G_MWC_W"), "",
+                              "state of SITL's get_random16 (two multiply-with-carry "
+                              "generators, 1234 and 76542 at start-up), drawn only by jamming")
 GPS_SIZE = GPS.close()
 
 # ---- one GPS epoch: what gps_measure produces, the EKF fuses and the GPS log writes ----------
