@@ -38,28 +38,17 @@ def test_distribution_rows_percentiles_range_and_nan():
 
 
 @lru_cache(maxsize=1)
-def _jam_metrics() -> dict[str, list[dict[str, float]]]:
-    """tlm's gps_jam signature over seeds 1-8 for each shared SITL jamming flight."""
-    from tlm_process.crosscheck.scenario import reconstruct
-    from tlm_process.fault_metrics import Flight, gps_jam_metrics
-    from tlm_sim import fly
+def _jam_metrics() -> dict[str, dict[str, list[float]]]:
+    """tlm's gps_jam signature over seeds 1-8 for each shared SITL jamming flight
+    (``tlm crosscheck LOG --seeds 8``): metric -> value per seed."""
+    from tlm_process.crosscheck.seeds import crosscheck_seeds
 
-    out = {}
-    for name in SITL_JAM:
-        path = reference_path(f"{name}.bin")
-        runs = []
-        for seed in SEEDS:
-            sc = reconstruct(path, None, seed)
-            log = fly(sc.mission, faults=sc.fly_faults, params=sc.params, seed=sc.seed)
-            rec = sc.tlm_fault_records(log.faults)[0]
-            runs.append(gps_jam_metrics(Flight(log.tables), rec["start_time_us"],
-                                        rec["end_time_us"], rec, sc.mission.waypoints[:, :2]))
-        out[name] = runs
-    return out
+    return {name: crosscheck_seeds(reference_path(f"{name}.bin"), None, len(SEEDS),
+                                   SEEDS[0])["faults"][0]["values"] for name in SITL_JAM}
 
 
 def _pooled(key: str) -> np.ndarray:
-    return np.array([m[key] for runs in _jam_metrics().values() for m in runs], float)
+    return np.array([v for values in _jam_metrics().values() for v in values[key]], float)
 
 
 def test_sitl_figures_are_the_readmes():

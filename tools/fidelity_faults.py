@@ -431,9 +431,7 @@ def jam_section(ref_dir: Path, img_dir: Path) -> str:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from tlm_process.crosscheck.scenario import reconstruct
-    from tlm_process.fault_metrics import Flight, gps_jam_metrics
-    from tlm_sim import fly
+    from tlm_process.crosscheck.seeds import crosscheck_seeds
 
     tlm: dict[str, list[float]] = {k: [] for k, _ in JAM_METRICS}
     sitl: dict[str, list[float]] = {k: [] for k, _ in JAM_METRICS}
@@ -441,21 +439,12 @@ def jam_section(ref_dir: Path, img_dir: Path) -> str:
     if not logs:
         return ""
     for name in logs:
-        path = ref_dir / f"{name}.bin"
-        sc = reconstruct(path)
-        f = sc.faults[0]
-        route = sc.mission.waypoints[:, :2]
-        m = gps_jam_metrics(Flight(sc.tables), f["start_time_us"], f["end_time_us"], f, route)
+        d = crosscheck_seeds(ref_dir / f"{name}.bin", None, len(JAM_SEEDS), JAM_SEEDS[0])
+        fault = d["faults"][0]
+        rows = {r["metric"]: r for r in fault["rows"]}
         for k, _ in JAM_METRICS:
-            sitl[k].append(m[k])
-        for seed in JAM_SEEDS:
-            sct = reconstruct(path, None, seed)
-            log = fly(sct.mission, faults=sct.fly_faults, params=sct.params, seed=seed)
-            rec = sct.tlm_fault_records(log.faults)[0]
-            m = gps_jam_metrics(Flight(log.tables), rec["start_time_us"], rec["end_time_us"],
-                                rec, route)
-            for k, _ in JAM_METRICS:
-                tlm[k].append(m[k])
+            sitl[k].append(rows[k]["sitl"])
+            tlm[k] += fault["values"][k]
         print(f"gps jamming: {name} over {len(JAM_SEEDS)} seeds")
     fig, axs = plt.subplots(1, len(JAM_METRICS), figsize=(3.0 * len(JAM_METRICS), 3.2))
     for ax, (k, lab) in zip(axs, JAM_METRICS, strict=True):
