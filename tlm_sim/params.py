@@ -175,6 +175,34 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
     ("TLM_GYR_NOISE", 0.04, ParamInfo(
         "deg/s", 0.0, 100.0,
         "base gyro noise amplitude, uniform +-a per axis (AP_InertialSensor_SITL.cpp, §2.3)")),
+    # A real copter's vibration and noise structure (issue 40): SITL has none of these; each
+    # default leaves SITL's model exactly as it is
+    *((f"TLM_VIB_ACC_{a}", 1.0, ParamInfo(
+        "", 0.0, 20.0,
+        f"gain of the accelerometers' vibration (SIM_VIB_MOT_*, SIM_VIB_FREQ_*) on body axis {a}:"
+        " a frame passes its motors' vibration unequally to the three axes (ArduPilot's "
+        "vibration guide: Z usually the largest); 1 = SITL's equal axes")) for a in "XYZ"),
+    *((f"TLM_VIB_GYR_{a}", 1.0, ParamInfo(
+        "", 0.0, 20.0,
+        f"gain of the gyros' vibration (SIM_VIB_MOT_*, SIM_VIB_FREQ_*) on body axis {a}; 1 = "
+        "SITL's equal axes")) for a in "XYZ"),
+    ("TLM_VIB_IMB_MOT", 0.0, ParamInfo(
+        "", 0.0, 8.0,
+        "motor (output 1..8) whose propeller is out of balance, 0 = none; its rotor runs at "
+        "command x SIM_VIB_MOT_MAX Hz, so SIM_VIB_MOT_MAX must be set with it",
+        integer=True)),
+    ("TLM_VIB_IMB", 0.0, ParamInfo(
+        "m/s/s", 0.0, 500.0,
+        "propeller imbalance of TLM_VIB_IMB_MOT: a force rotating with that rotor in the body "
+        "x-y plane, once per revolution, its specific force this at full command and scaling "
+        "with the square of the command (a centrifugal force, as rpm squared)")),
+    ("TLM_GYR_WALK", 0.0, ParamInfo(
+        "deg/s/s^0.5", 0.0, 10.0,
+        "gyro bias random walk per axis and IMU (white noise of this density integrated into "
+        "the bias); 0 = SITL's (none)")),
+    ("TLM_ACC_WALK", 0.0, ParamInfo(
+        "m/s/s/s^0.5", 0.0, 10.0,
+        "accelerometer bias random walk per axis and IMU; 0 = SITL's (none)")),
     ("TLM_GPS_HDOP", 1.21, ParamInfo(
         "", 0.5, 99.99, "constant HDOP the simulated u-blox reports (SIM_GPS_UBLOX.cpp, §2.2)")),
     ("TLM_GPS_VDOP", 2.0, ParamInfo(
@@ -876,6 +904,13 @@ def _check_consistency(values: Mapping[str, float]) -> None:
             raise ParamError(
                 f"{lo} ({_format_number(values[lo])}) must be less than "
                 f"{hi} ({_format_number(values[hi])})")
+    if values["TLM_VIB_IMB"] > 0.0:
+        n = frame_for(values["FRAME_CLASS"], values["FRAME_TYPE"]).n_motors
+        if not 1 <= values["TLM_VIB_IMB_MOT"] <= n:
+            raise ParamError(f"TLM_VIB_IMB needs TLM_VIB_IMB_MOT, the imbalanced motor (1..{n})")
+        if values["SIM_VIB_MOT_MAX"] <= 0.0:
+            raise ParamError("TLM_VIB_IMB needs SIM_VIB_MOT_MAX, the rotor frequency at full "
+                             "command [Hz]")
 
 
 def _unmodelled_message(source: str, ignored: Mapping[str, float], shown: int = 12) -> str:

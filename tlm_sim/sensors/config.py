@@ -46,6 +46,8 @@ def _imu_config(c: np.ndarray, p: Params) -> None:
         c[S.C_ACC_LPF + 5 * i : S.C_ACC_LPF + 5 * i + 5] = lpf2p_coefficients(
             a_hz, p["INS_ACCEL_FILTER"]
         )
+        c[S.C_GYR_WALK_STEP + i] = math.radians(p["TLM_GYR_WALK"]) / math.sqrt(g_hz)
+        c[S.C_ACC_WALK_STEP + i] = p["TLM_ACC_WALK"] / math.sqrt(a_hz)
         c[S.C_VIB_FLOOR_A + i] = 1.0 / (1.0 + a_hz / (2.0 * math.pi * 5.0))
         c[S.C_VIB_SQ_A + i] = 1.0 / (1.0 + a_hz / (2.0 * math.pi * 2.0))
     c[S.C_DRIFT_SPEED] = math.radians(p["SIM_DRIFT_SPEED"])
@@ -70,6 +72,12 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
     n_motors = frame_for(p["FRAME_CLASS"], p["FRAME_TYPE"]).n_motors
     c[S.C_VIB_MOT_MASK] = float((1 << n_motors) - 1 | int(p["SIM_VIB_MOT_MASK"]))
     c[S.C_IMU_NSUB:S.C_IMU_NSUB + 4] = IMU_SUBSAMPLES
+    # a real copter's structure (issue 40): per-axis gains, one imbalanced propeller
+    for k, ax in enumerate("XYZ"):
+        c[S.C_VIB_ACC_AX + k] = p[f"TLM_VIB_ACC_{ax}"]
+        c[S.C_VIB_GYR_AX + k] = p[f"TLM_VIB_GYR_{ax}"]
+    c[S.C_VIB_IMB] = p["TLM_VIB_IMB"]
+    c[S.C_VIB_IMB_MOT] = p["TLM_VIB_IMB_MOT"] - 1.0  # -1: none
 
 
 def _gps_config(c: np.ndarray, p: Params) -> None:

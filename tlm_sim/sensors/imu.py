@@ -19,7 +19,7 @@ from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.dynamics import layout as X
 from tlm_sim.frames import MAX_MOTORS
-from tlm_sim.rng import uniform_pm1
+from tlm_sim.rng import normal_pair, uniform_pm1
 from tlm_sim.sensors import layout as S
 
 CLIP_LIMIT = (16.0 - 0.5) * GRAVITY_MSS  # m/s^2, a sample beyond this on any axis counts as a clip
@@ -105,9 +105,25 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
         if t_us >= s[b + S.I_NEXT_GYR_US] and (gyr_mask >> i) & 1 == 0:
             _advance_timer(s, b + S.I_NEXT_GYR_US, cfg[S.C_GYR_PERIOD_US + i], t_us)
             _gyro_sample(s, x, cfg, (b, i), now, rng[S.RNG_GYRO + i])
+            if cfg[S.C_GYR_WALK_STEP + i] != 0.0:
+                _bias_walk(s, b + S.I_GYR_WALK, cfg[S.C_GYR_WALK_STEP + i], rng[S.RNG_GYRO + i])
         if t_us >= s[b + S.I_NEXT_ACC_US] and (acc_mask >> i) & 1 == 0:
             _advance_timer(s, b + S.I_NEXT_ACC_US, cfg[S.C_ACC_PERIOD_US + i], t_us)
             _accel_sample(s, x, cfg, (b, i), now, rng[S.RNG_ACC + i])
+            if cfg[S.C_ACC_WALK_STEP + i] != 0.0:
+                _bias_walk(s, b + S.I_ACC_WALK, cfg[S.C_ACC_WALK_STEP + i], rng[S.RNG_ACC + i])
+
+
+@tick_jit
+def _bias_walk(s, slot, step, rng):
+    """One sample's step of a bias random walk (TLM_GYR_WALK / TLM_ACC_WALK): each axis of
+    s[slot:slot + 3] moves by a normal draw of standard deviation step (the walk's density
+    x sqrt(sample period))."""
+    n0, n1 = normal_pair(rng)
+    n2 = normal_pair(rng)[0]
+    s[slot] += step * n0
+    s[slot + 1] += step * n1
+    s[slot + 2] += step * n2
 
 
 @inline_jit
@@ -164,16 +180,17 @@ def _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng):
         g = x[X.SWX + k] + drift
         g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
         if vib:
-            g += v_mot + _fixed_vibration(cfg, k, t_s, a_g, rng)
+            g += (v_mot + _fixed_vibration(cfg, k, t_s, a_g, rng)) * cfg[S.C_VIB_GYR_AX + k]
         _gyro_store(s, b, i, cfg, k, g)
     s[b + S.I_GYR_COUNT] += 1.0
 
 
 @inline_jit
 def _gyro_store(s, b, i, cfg, k, g):
-    """Axis k of a gyro sample g before scale and bias: x (1 + SCALE/100) + BIAS, then the
-    last sample, the EKF's accumulator and the low-pass filter."""
-    g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k]
+    """Axis k of a gyro sample g before scale and bias: x (1 + SCALE/100) + BIAS + the bias
+    walk (TLM_GYR_WALK), then the last sample, the EKF's accumulator and the low-pass
+    filter."""
+    g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k] + s[b + S.I_GYR_WALK + k]
     s[b + S.I_LAST_GYR + k] = g
     s[b + S.I_DANG + k] += g
     d = b + S.I_GYR_LPF + 2 * k
@@ -193,7 +210,8 @@ def _accel_sample(s, x, cfg, imu, now, rng):
     motors_on = now[2]
     fail = cfg[S.C_ACC_FAIL + i]
     amp = cfg[S.C_ACC_RND + i]
-    if motors_on and amp != 0.0 and cfg[S.C_VIB_ON] != 0.0 and abs(fail) <= 1e-6:
+    if (motors_on and (amp != 0.0 or cfg[S.C_VIB_IMB] > 0.0) and cfg[S.C_VIB_ON] != 0.0
+            and abs(fail) <= 1e-6):
         _accel_sample_vib(s, x, cfg, imu, now, amp, rng)
         return
     clipped = False
@@ -201,7 +219,7 @@ def _accel_sample(s, x, cfg, imu, now, rng):
         if abs(fail) > 1e-6:
             a = fail
         else:
-            a = _accel_truth(x, cfg, i, k, rng)
+            a = _accel_truth(s, b, x, cfg, (i, k), rng)
         clipped |= _accel_store(s, b, i, cfg, k, a)
     if clipped:
         s[b + S.I_CLIP] += 1.0
@@ -214,12 +232,18 @@ def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
     SIM_VIB_* set, no SIM_ACCELn_FAIL): the motor and fixed-frequency terms added."""
     b, i = imu
     t_s, pwm = now[0], now[4]
+    sampling = (cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i])
     v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
-                             (cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i]), rng)
+                             sampling, rng)
+    imb = (0.0, 0.0)
+    if cfg[S.C_VIB_IMB] > 0.0:
+        imb = _imbalance(s, b + S.I_ACC_PHASE, cfg, pwm, sampling)
     clipped = False
     for k in range(3):
-        a = _accel_truth(x, cfg, i, k, rng)
-        a += v_mot + _fixed_vibration(cfg, k, t_s, amp, rng)
+        a = _accel_truth(s, b, x, cfg, (i, k), rng)
+        a += (v_mot + _fixed_vibration(cfg, k, t_s, amp, rng)) * cfg[S.C_VIB_ACC_AX + k]
+        if k < 2:
+            a += imb[k]
         clipped |= _accel_store(s, b, i, cfg, k, a)
     if clipped:
         s[b + S.I_CLIP] += 1.0
@@ -227,14 +251,15 @@ def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
 
 
 @inline_jit
-def _accel_truth(x, cfg, i, k, rng):
-    """Axis k of IMU i's accel sample before vibration: truth / SCAL (when not 0) + BIAS +
-    base noise."""
+def _accel_truth(s, b, x, cfg, axis, rng):
+    """Axis k of IMU i's accel sample (axis: (i, k); its record at b) before vibration: truth /
+    SCAL (when not 0) + BIAS + the bias walk (TLM_ACC_WALK) + base noise."""
+    i, k = axis
     a = x[X.SFX + k]
     scal = cfg[S.C_ACC_SCAL + 3 * i + k]
     if scal != 0.0:
         a /= scal
-    a += cfg[S.C_ACC_BIAS + 3 * i + k]
+    a += cfg[S.C_ACC_BIAS + 3 * i + k] + s[b + S.I_ACC_WALK + k]
     a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng))
     return a
 
@@ -296,6 +321,32 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
                     total += (math.sin(h * p) * amp
                               * (1.0 + VIB_AMP_VARIATION * uniform_pm1(rng)))
     return total / nsub
+
+
+@tick_jit
+def _imbalance(s, ph, cfg, pwm, sampling):
+    """Specific force [m/s^2] body (x, y) of the imbalanced propeller (TLM_VIB_IMB_MOT,
+    TLM_VIB_IMB): a force turning with its rotor, once per revolution, TLM_VIB_IMB x command^2
+    (centrifugal: rpm squared), averaged over the sample's sub-samples. The rotor's phase is
+    the motor vibration's (s[ph + m], advanced by :func:`_motor_vibration` over the same
+    sub-samples; here stepped back through them at the mean rate). A planar force at the rotor
+    only adds a yaw moment, so the gyros are left alone."""
+    nsub, period_us = sampling
+    m = int(cfg[S.C_VIB_IMB_MOT])
+    if m < 0 or pwm[m] <= 0.0:
+        return 0.0, 0.0
+    cmd = min(max((pwm[m] - 1000.0) * 1e-3, 0.0), 1.0)
+    amp = cfg[S.C_VIB_IMB] * cmd * cmd
+    n = int(nsub)
+    w = TWO_PI * cfg[S.C_VIB_MOT_MAX] * cmd * period_us * 1e-6 / nsub
+    p = s[ph + m]
+    fx = 0.0
+    fy = 0.0
+    for j in range(n):
+        q = p - j * w
+        fx += math.cos(q)
+        fy += math.sin(q)
+    return amp * fx / nsub, amp * fy / nsub
 
 
 @tick_jit

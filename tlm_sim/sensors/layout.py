@@ -47,6 +47,8 @@ I_ACC_PHASE = _i.add("I_ACC_PHASE", MAX_MOTORS, "rad",
                      "motor vibration phase per motor, accelerometer (SITL's accel_motor_phase)")
 I_GYR_PHASE = _i.add("I_GYR_PHASE", MAX_MOTORS, "rad",
                      "motor vibration phase per motor, gyro (SITL's gyro_motor_phase)")
+I_GYR_WALK = _i.add("I_GYR_WALK", 3, "rad/s", "gyro bias random walk (TLM_GYR_WALK)")
+I_ACC_WALK = _i.add("I_ACC_WALK", 3, "m/s^2", "accel bias random walk (TLM_ACC_WALK)")
 IMU_STRIDE = IMU.close()
 
 # ---- per-barometer record (at BARO_BASE + i * BARO_STRIDE) ---------------------------------
@@ -220,6 +222,19 @@ C_VIB_MOT_MULT = _c.add("C_VIB_MOT_MULT", 1, "",
                         "SIM_VIB_MOT_MULT: motor vibration amplitude scale")
 C_VIB_MOT_HMNC = _c.add("C_VIB_MOT_HMNC", 1, "",
                         "SIM_VIB_MOT_HMNC: harmonics bit mask (bit k-1 -> harmonic k)")
+C_VIB_ACC_AX = _c.add("C_VIB_ACC_AX", 3, "", "accelerometer vibration gain per body axis "
+                      "(TLM_VIB_ACC_X/Y/Z)")
+C_VIB_GYR_AX = _c.add("C_VIB_GYR_AX", 3, "", "gyro vibration gain per body axis "
+                      "(TLM_VIB_GYR_X/Y/Z)")
+C_VIB_IMB_MOT = _c.add("C_VIB_IMB_MOT", 1, "",
+                       "imbalanced motor, output index 0..7 (-1: none); acts while C_VIB_IMB > 0")
+C_VIB_IMB = _c.add("C_VIB_IMB", 1, "m/s^2", "its imbalance force at full command (TLM_VIB_IMB)")
+C_GYR_WALK_STEP = _c.add("C_GYR_WALK_STEP", 2, "rad/s",
+                         "gyro bias random-walk step per sample per IMU (TLM_GYR_WALK x "
+                         "sqrt(sample period))")
+C_ACC_WALK_STEP = _c.add("C_ACC_WALK_STEP", 2, "m/s^2",
+                         "accel bias random-walk step per sample per IMU (TLM_ACC_WALK x "
+                         "sqrt(sample period))")
 C_VIB_MOT_MASK = _c.add("C_VIB_MOT_MASK", 1, "",
                         "motors that vibrate: the frame's motors OR SIM_VIB_MOT_MASK (bit mask)")
 C_IMU_NSUB = _c.add("C_IMU_NSUB", 4, "",
