@@ -1,0 +1,119 @@
+"""The statistics ``tlm fit`` matches: what a steady segment of any ArduCopter log says about
+the vehicle's noise, vibration and hover (issue 40).
+
+Works on tables as :func:`tlm_process.logread.read_log_tables` gives them (Copter 3.x to 4.x,
+real, SITL or tlm): ``TimeUS`` everywhere, extra IMUs folded into ``IMU`` with ``I``. Per
+segment ``[t0, t1]`` (µs):
+
+* ``hover_thr``: mean motor throttle (CTUN ``ThO``, Copter 3.x ``ThrOut`` / 1000), 0..1;
+* ``roll_std_deg`` / ``pitch_std_deg``: standard deviation of ATT Roll / Pitch [deg];
+* ``acc_{x,y,z}_std``: IMU 0's logged accelerations, standard deviation per axis [m/s^2];
+* ``gyr_{x,y,z}_std_dps``: IMU 0's logged rates, standard deviation per axis [deg/s];
+* ``rate_{roll,pitch}_err_std_dps``: RATE achieved minus desired rate [deg/s] (Copter 3.x
+  logs RATE in centidegrees per second: the unit is read from the log itself, see
+  :func:`rate_unit`);
+* ``vibe_{x,y,z}``: mean VIBE of IMU 0 [m/s^2] (NaN where the log has no VIBE, as Copter 3.3).
+
+A standard deviation over a segment mixes the sensor's noise with the flight's own motion;
+a steady segment (:mod:`tlm_process.fit.segment`) keeps the motion small.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["STAT_NAMES", "StatsError", "rate_unit", "segment_stats"]
+
+#: every statistic :func:`segment_stats` returns, in report order
+STAT_NAMES = ("hover_thr", "roll_std_deg", "pitch_std_deg",
+              "acc_x_std", "acc_y_std", "acc_z_std",
+              "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps",
+              "rate_roll_err_std_dps", "rate_pitch_err_std_dps",
+              "vibe_x", "vibe_y", "vibe_z")
+
+
+#: RATE-per-gyro regression slope above which RATE is in centidegrees per second (between the
+#: slopes of 1 and 100 the two units give, on a log scale)
+CENTI_SLOPE = 10.0
+
+
+class StatsError(ValueError):
+    """The log lacks what a statistic needs in the segment (one line, for the command)."""
+
+
+def _window(df: pd.DataFrame | None, t0: float, t1: float) -> pd.DataFrame:
+    if df is None or "TimeUS" not in df:
+        return pd.DataFrame()
+    return df[(df.TimeUS >= t0) & (df.TimeUS <= t1)]
+
+
+def _imu0(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame | None:
+    imu = tables.get("IMU")
+    if imu is None:
+        return None
+    return imu[imu.I == 0] if "I" in imu else imu
+
+
+def _std(s: pd.Series) -> float:
+    s = pd.to_numeric(s, errors="coerce").dropna()
+    return float(s.std()) if len(s) > 2 else math.nan
+
+
+def rate_unit(tables: Mapping[str, pd.DataFrame]) -> float:
+    """Degrees per second per unit of the log's RATE ``R``/``P`` columns: 1 (Copter 4.x, deg/s)
+    or 0.01 (Copter 3.x, centidegrees/s), whichever makes RATE's roll rate agree in size with
+    IMU 0's gyro (a regression over the whole log); 1 when either is missing."""
+    rate, imu = tables.get("RATE"), _imu0(tables)
+    if rate is None or imu is None or len(rate) < 10 or len(imu) < 10 or "R" not in rate:
+        return 1.0
+    g = np.degrees(np.interp(rate.TimeUS.to_numpy(float), imu.TimeUS.to_numpy(float),
+                             imu.GyrX.to_numpy(float)))
+    r = rate.R.to_numpy(float)
+    ok = np.isfinite(g) & np.isfinite(r)
+    if ok.sum() < 10 or not np.any(g[ok]):
+        return 1.0
+    slope = float(np.dot(r[ok], g[ok]) / max(np.dot(g[ok], g[ok]), 1e-12))
+    return 0.01 if abs(slope) > CENTI_SLOPE else 1.0
+
+
+def _throttle(ctun: pd.DataFrame) -> pd.Series:
+    if "ThO" in ctun:
+        return pd.to_numeric(ctun.ThO, errors="coerce")
+    if "ThrOut" in ctun:  # Copter 3.x: 0..1000
+        return pd.to_numeric(ctun.ThrOut, errors="coerce") / 1000.0
+    raise StatsError("the log's CTUN has no throttle output (ThO or ThrOut)")
+
+
+def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float,
+                  unit: float | None = None) -> dict[str, float]:
+    """Every :data:`STAT_NAMES` statistic over ``[t0_us, t1_us]``; ``unit``: degrees per second
+    per RATE unit (default :func:`rate_unit` of the tables). Raises :class:`StatsError` when the
+    segment has no IMU, ATT or CTUN rows."""
+    imu = _window(_imu0(tables), t0_us, t1_us)
+    att = _window(tables.get("ATT"), t0_us, t1_us)
+    ctun = _window(tables.get("CTUN"), t0_us, t1_us)
+    for name, df in (("IMU", imu), ("ATT", att), ("CTUN", ctun)):
+        if len(df) < 3:
+            raise StatsError(f"no {name} rows between {t0_us * 1e-6:.1f} s and "
+                             f"{t1_us * 1e-6:.1f} s")
+    out = {"hover_thr": float(_throttle(ctun).mean()),
+           "roll_std_deg": _std(att.Roll), "pitch_std_deg": _std(att.Pitch)}
+    for ax in "xyz":
+        out[f"acc_{ax}_std"] = _std(imu[f"Acc{ax.upper()}"])
+        out[f"gyr_{ax}_std_dps"] = math.degrees(_std(imu[f"Gyr{ax.upper()}"]))
+    rate = _window(tables.get("RATE"), t0_us, t1_us)
+    u = rate_unit(tables) if unit is None else unit
+    for name, des, got in (("roll", "RDes", "R"), ("pitch", "PDes", "P")):
+        ok = len(rate) > 2 and des in rate and got in rate
+        out[f"rate_{name}_err_std_dps"] = _std((rate[got] - rate[des]) * u) if ok else math.nan
+    vibe = _window(tables.get("VIBE"), t0_us, t1_us)
+    if len(vibe) and "IMU" in vibe:
+        vibe = vibe[vibe.IMU == 0]
+    for ax in "xyz":
+        col = f"Vibe{ax.upper()}"
+        out[f"vibe_{ax}"] = float(vibe[col].mean()) if len(vibe) and col in vibe else math.nan
+    return {k: out[k] for k in STAT_NAMES}
