@@ -69,3 +69,58 @@ def test_stats_need_rows_and_segment_text_is_checked():
     for bad in ("10", "a:b", "20:10", "-1:5"):
         with pytest.raises(StatsError):
             parse_segment(bad)
+
+
+# ---------------------------------------------------------------------------- the fit itself
+KNOWN = {"TLM_HOVER_THR": 0.45, "TLM_VIB_ACC_X": 1.2, "TLM_VIB_ACC_Y": 0.6,
+         "TLM_VIB_ACC_Z": 0.8, "TLM_VIB_GYR_X": 3.0, "TLM_VIB_GYR_Y": 1.5, "TLM_VIB_GYR_Z": 1.0}
+
+
+@pytest.mark.slow
+def test_fit_recovers_known_parameters_from_a_tlm_flight():
+    """Issue 40: a tlm flight of a vehicle with known hover thrust and per-axis vibration (one
+    4-minute hover, another seed than the fit's), fitted: every parameter back within 10 %."""
+    from tlm_process.fit.fit import ACC_AMP, GYR_AMP, ROTOR_HZ, fit_vehicle, fly_hover_stats
+
+    true = {"SIM_VIB_MOT_MAX": ROTOR_HZ, "SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
+            "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, **KNOWN}
+    target = fly_hover_stats(true, seed=5, hold_s=240)
+    r = fit_vehicle(target, {}, seed=1)
+    for name, want in KNOWN.items():
+        assert r.params[name] == pytest.approx(want, rel=0.10), name
+
+
+@pytest.mark.slow
+def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
+    """``tlm fit log171.bin``: its steady LOITER hover, fitted statistics within 15 % of the
+    log's, a .parm file tlm loads (the log's gains and frame, the fitted knobs) and a plot."""
+    from tlm_process.cli import main
+    from tlm_process.fit.fit import FIT_STATS
+    from tlm_sim.params import Params
+
+    out = tmp_path / "v.parm"
+    assert main(["fit", str(real_path("log171.bin")), "--out", str(out),
+                 "--iterations", "6"]) == 0
+    text = capsys.readouterr().out
+    assert "segment            197.5-216.5 s" in text
+    rows = {ln.split()[0]: ln.split() for ln in text.splitlines()
+            if ln.split() and ln.split()[0] in FIT_STATS}
+    for name in FIT_STATS:
+        log, tlm = float(rows[name][1]), float(rows[name][2])
+        assert tlm == pytest.approx(log, rel=0.15), name
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = Params.from_parm(out)
+    assert p["FRAME_TYPE"] == 1 and p["ANGLE_MAX"] == 3500 and p["TLM_VIB_ACC_X"] > 1.0
+    assert (tmp_path / "v.png").is_file()
+
+
+@pytest.mark.parametrize("extra,msg", [(["--segment", "5000:5010"], "no IMU rows"),
+                                       (["--iterations", "0"], "--iterations"),
+                                       (["--segment", "10"], "START:END")])
+def test_tlm_fit_refuses_bad_input(extra, msg, tmp_path, capsys):
+    from tlm_process.cli import main
+
+    assert main(["fit", str(real_path("log171.bin")), "--out", str(tmp_path / "v.parm"),
+                 *extra]) == 2
+    assert msg in capsys.readouterr().err

@@ -22,7 +22,7 @@ PACKAGE = "tlm_process"
 
 #: every ``tlm`` subcommand and the module that implements it
 SUBCOMMANDS = ("fly", "demo", "convert", "info", "generate", "process", "evaluate", "train",
-               "detect", "crosscheck", "params")
+               "detect", "crosscheck", "fit", "params")
 
 
 def _modules(root: Path = ROOT, package: str = PACKAGE) -> dict[str, Path]:

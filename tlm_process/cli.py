@@ -24,7 +24,7 @@ __all__ = ["COMMANDS", "UsageError", "build_parser", "command_module", "main"]
 #: subcommand -> its module, in the order ``tlm --help`` lists them
 COMMANDS: dict[str, str] = {name: f"tlm_process.commands.{name}" for name in (
     "fly", "demo", "convert", "info", "generate", "process", "evaluate", "train", "detect",
-    "crosscheck", "params")}
+    "crosscheck", "fit", "params")}
 
 
 def command_module(name: str) -> ModuleType:

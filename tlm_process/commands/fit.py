@@ -1,0 +1,135 @@
+"""``tlm fit LOG --out vehicle.parm``: the vehicle of one ArduCopter log, for tlm to fly (issue 40).
+
+Finds the log's steady segment (or takes ``--segment START:END``), measures it
+(:mod:`tlm_process.fit.stats`), and fits tlm's vehicle to it by flying hovers
+(:mod:`tlm_process.fit.fit`): the log's own parameters tlm models, the hover thrust, and the
+vibration per axis of the accelerometers and gyros. Prints each statistic, log against the
+fitted tlm flight; writes the parameter file and a comparison plot. ``tlm fly --params
+vehicle.parm`` and ``tlm generate --params vehicle.parm`` then fly that vehicle.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from tlm_process.cliutil import UsageError, check_writable_file
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``fit`` to ``tlm``'s subcommands; returns its parser."""
+    p = sub.add_parser(
+        "fit", help="fit tlm's vehicle (noise, vibration, hover) to one real ArduCopter log",
+        description="Measure a steady segment of an ArduCopter log (hover throttle, attitude "
+                    "noise, IMU accel and gyro noise per axis, rate-tracking error) and fit "
+                    "tlm's vehicle to it by flying hovers: the log's parameters tlm models, "
+                    "the hover thrust, and the vibration per axis. Writes a .parm file that "
+                    "tlm fly / tlm generate take with --params.")
+    p.add_argument("log", help="the ArduCopter log (.bin or text .log; Copter 3.x to 4.x)")
+    p.add_argument("--out", required=True, metavar="vehicle.parm", help="the fitted parameters")
+    p.add_argument("--segment", metavar="START:END",
+                   help="the segment to fit, seconds of log time (default: the log's longest "
+                        "steady segment)")
+    p.add_argument("--iterations", type=int, default=10,
+                   help="fitting steps, each two hover flights (default 10)")
+    p.add_argument("--seed", type=int, default=1, help="first seed of tlm's hovers (default 1)")
+    p.add_argument("--plot", metavar="PNG",
+                   help="comparison plot (default: beside --out, with .png)")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``tlm fit``."""
+    import warnings
+
+    from tqdm import tqdm
+
+    from tlm_process.fit.fit import fit_vehicle
+    from tlm_process.fit.segment import parse_segment, steady_segments
+    from tlm_process.fit.stats import StatsError, segment_stats
+    from tlm_process.logread import LogReadError, read_log_tables, warn_damage
+
+    if not Path(args.log).is_file():
+        raise FileNotFoundError(2, "no such log", args.log)
+    if args.iterations < 1:
+        raise UsageError(f"--iterations must be at least 1 (got {args.iterations})")
+    check_writable_file(args.out, "--out")
+    plot = Path(args.plot) if args.plot else Path(args.out).with_suffix(".png")
+    check_writable_file(plot, "--plot")
+    try:
+        lt = read_log_tables(args.log)
+    except LogReadError as exc:
+        raise UsageError(str(exc)) from None
+    warn_damage(lt)
+    try:
+        if args.segment:
+            t0, t1 = parse_segment(args.segment)
+        else:
+            segs = steady_segments(lt.tables)
+            if not segs:
+                raise StatsError("the log has no steady segment (airborne, upright, one mode, "
+                                 "steady attitude and altitude for 6 s); give --segment")
+            t0, t1 = segs[0]
+        target = segment_stats(lt.tables, t0, t1)
+    except StatsError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
+    with tqdm(total=2 * (args.iterations + 1), desc="fit", unit="hover") as bar, \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = fit_vehicle(target, lt.params, args.iterations, args.seed,
+                        progress=lambda k: bar.update(2 * k - bar.n))
+    print(format_table(r.log, r.tlm))
+    for name, why in r.dropped.items():
+        print(f"note: the log's {name} is not flown: {why}")
+    from tlm_sim.params import Params
+
+    p = Params(r.params)
+    header = (f"tlm fit {Path(args.log).name} segment {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s: "
+              "the log's parameters tlm models, the hover thrust and the vibration per axis")
+    Path(args.out).write_text(p.to_parm_text(only_changed=True, header=header))
+    plot_fit(r.log, r.tlm, plot, f"{Path(args.log).name} {t0 * 1e-6:.0f}-{t1 * 1e-6:.0f} s")
+    print(f"written            {args.out} (+ {plot})")
+    return 0
+
+
+def format_table(log: dict[str, float], tlm: dict[str, float]) -> str:
+    """statistic | log | tlm | tlm / log - 1, one line each."""
+    from tlm_process.fit.fit import FIT_STATS
+
+    lines = [f"{'statistic':<24} {'log':>9} {'tlm':>9} {'diff':>7}  fitted"]
+    for k, v in log.items():
+        t = tlm[k]
+        d = f"{t / v - 1:+.0%}" if math.isfinite(v) and v and math.isfinite(t) else "-"
+        lines.append(f"{k:<24} {_n(v):>9} {_n(t):>9} {d:>7}  {'yes' if k in FIT_STATS else ''}")
+    return "\n".join(lines)
+
+
+def _n(v: float) -> str:
+    return "-" if not math.isfinite(v) else f"{v:.3g}"
+
+
+def plot_fit(log: dict[str, float], tlm: dict[str, float], path: Path, title: str) -> None:
+    """Bars per statistic: the log's and the fitted tlm flight's."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    keys = [k for k in log if math.isfinite(log[k]) or math.isfinite(tlm[k])]
+    x = np.arange(len(keys))
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ax.bar(x - 0.2, [log[k] for k in keys], 0.4, label="log")
+    ax.bar(x + 0.2, [tlm[k] for k in keys], 0.4, label="tlm, fitted")
+    ax.set_xticks(x, keys, rotation=40, ha="right", fontsize=8)
+    ax.set_yscale("log")
+    ax.set_title(f"tlm fit: {title}")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
