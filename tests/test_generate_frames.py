@@ -366,3 +366,17 @@ def test_fly_frame_sets_the_frame_parameters():
     assert _frame_params(None, {"FRAME_TYPE": 1.0}) == {}
     with pytest.raises(UsageError, match="--param sets FRAME_CLASS=2"):
         _frame_params("x", {"FRAME_CLASS": 2.0})
+
+
+def test_params_file_fixes_its_parameters_for_every_flight(tmp_path):
+    """``--params vehicle.parm`` (a ``tlm fit`` vehicle): its modelled changes are fixed
+    parameters of every flight (a drawn range of the same name gives way), --param beats it,
+    and its frame is left to --frame."""
+    parm = tmp_path / "v.parm"
+    parm.write_text("TLM_VIB_ACC_X 1.5\nSIM_ACC1_RND 5\nTLM_HOVER_THR 0.45\nFRAME_TYPE 1\n")
+    cfg = _build("--params", str(parm), "--param", "TLM_HOVER_THR=0.42")
+    assert cfg.params["TLM_VIB_ACC_X"] == 1.5 and cfg.params["SIM_ACC1_RND"] == 5.0
+    assert cfg.params["TLM_HOVER_THR"] == 0.42
+    assert "FRAME_TYPE" not in cfg.params and "SIM_ACC1_RND" not in cfg.ranges
+    with pytest.raises(UsageError, match="no such file"):
+        _build("--params", str(tmp_path / "missing.parm"))

@@ -175,6 +175,25 @@ def _config_file(path: str) -> dict[str, Any]:
     return doc
 
 
+def _vehicle_params(path: str | None) -> dict[str, float]:
+    """The changes a ``--params`` file (e.g. ``tlm fit``'s vehicle) makes that tlm models, as
+    fixed parameters of every flight; its frame is --frame's to choose (FRAME_CLASS /
+    FRAME_TYPE are left out)."""
+    if not path:
+        return {}
+    import warnings
+
+    from tlm_sim.params import Params, is_modelled
+
+    if not Path(path).is_file():
+        raise UsageError(f"--params {path}: no such file")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = Params.from_parm(path)
+    return {k: v for k, v in p.changed().items()
+            if is_modelled(k) and k not in ("FRAME_CLASS", "FRAME_TYPE")}
+
+
 def build_config(args: argparse.Namespace) -> Any:
     """The ScenarioConfig of the command line (``--config`` file, then the flags)."""
     from tlm_process.generate.scenario import ScenarioConfig
@@ -203,7 +222,8 @@ def build_config(args: argparse.Namespace) -> Any:
         ranges = {}
     flag_ranges = _ranges(args.range or [])
     ranges.update(flag_ranges)
-    params = {**dict(d.get("params") or {}), **parse_param_args(args.param or [])}
+    params = {**dict(d.get("params") or {}), **_vehicle_params(getattr(args, "params", None)),
+              **parse_param_args(args.param or [])}
     for name in params:  # a fixed value replaces a drawn one
         ranges.pop(name, None)
     d["wind"] = _wind_setting(args, d, ranges, flag_ranges)
@@ -272,6 +292,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                          "(default 0:360)")
     sc.add_argument("--wind-turb", metavar="LOW:HIGH",
                     help="SIM_WIND_TURB of the windy flights, m/s (default 0:2)")
+    sc.add_argument("--params", metavar="F.parm",
+                    help="an ArduPilot .parm file whose parameters every flight flies (a "
+                         "vehicle from tlm fit; --param beats it; its frame is --frame's)")
     sc.add_argument("--param", action="append", metavar="NAME=VALUE",
                     help="fixed parameter for every flight (repeatable); not FRAME_CLASS / "
                          "FRAME_TYPE (--frame) nor, unless --no-env, the drawn SIM_WIND_SPD / "
