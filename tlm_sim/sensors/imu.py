@@ -190,7 +190,9 @@ def _gyro_store(s, b, i, cfg, k, g):
     """Axis k of a gyro sample g before scale and bias: x (1 + SCALE/100) + BIAS + the bias
     walk (TLM_GYR_WALK), then the last sample, the EKF's accumulator and the low-pass
     filter."""
-    g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k] + s[b + S.I_GYR_WALK + k]
+    g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k]
+    if cfg[S.C_GYR_WALK_STEP + i] != 0.0:  # loop-invariant: off, every flight SITL's
+        g += s[b + S.I_GYR_WALK + k]
     s[b + S.I_LAST_GYR + k] = g
     s[b + S.I_DANG + k] += g
     d = b + S.I_GYR_LPF + 2 * k
@@ -210,7 +212,7 @@ def _accel_sample(s, x, cfg, imu, now, rng):
     motors_on = now[2]
     fail = cfg[S.C_ACC_FAIL + i]
     amp = cfg[S.C_ACC_RND + i]
-    if (motors_on and (amp != 0.0 or cfg[S.C_VIB_IMB] > 0.0) and cfg[S.C_VIB_ON] != 0.0
+    if (cfg[S.C_VIB_ON] != 0.0 and motors_on and (amp != 0.0 or cfg[S.C_VIB_IMB] > 0.0)
             and abs(fail) <= 1e-6):
         _accel_sample_vib(s, x, cfg, imu, now, amp, rng)
         return
@@ -259,7 +261,9 @@ def _accel_truth(s, b, x, cfg, axis, rng):
     scal = cfg[S.C_ACC_SCAL + 3 * i + k]
     if scal != 0.0:
         a /= scal
-    a += cfg[S.C_ACC_BIAS + 3 * i + k] + s[b + S.I_ACC_WALK + k]
+    a += cfg[S.C_ACC_BIAS + 3 * i + k]
+    if cfg[S.C_ACC_WALK_STEP + i] != 0.0:
+        a += s[b + S.I_ACC_WALK + k]
     a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng))
     return a
 
