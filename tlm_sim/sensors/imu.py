@@ -152,7 +152,7 @@ def _gyro_sample(s, x, cfg, imu, now, rng):
         a_g = cfg[S.C_GYR_RND + i] * throttle
     else:
         a_g = cfg[S.C_GYR_NOISE] * sc
-    if cfg[S.C_VIB_ON] != 0.0:
+    if cfg[S.C_VIB_ON] != 0.0 or cfg[S.C_GYR_WALK_STEP + i] != 0.0:
         _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng)
         return
     for k in range(3):
@@ -166,33 +166,37 @@ def _gyro_sample(s, x, cfg, imu, now, rng):
 
 @tick_jit
 def _gyro_sample_vib(s, x, cfg, imu, now, a_g, rng):
-    """:func:`_gyro_sample` with a SIM_VIB_* set: the vibration terms replace the second
-    noise term (while the motors run and the amplitude a_g is not 0)."""
+    """:func:`_gyro_sample` with a SIM_VIB_* set or the bias walk on (TLM_GYR_WALK): the
+    vibration terms replace the second noise term (while the motors run and the amplitude a_g
+    is not 0), each scaled by its axis's gain (TLM_VIB_GYR_X/Y/Z); the walk adds to the bias."""
     b, i = imu
     t_s, drift, motors_on, pwm = now[0], now[1], now[2], now[4]
     sc = cfg[S.C_NOISE_SCALE + i]
     v_mot = 0.0
-    vib = motors_on and a_g != 0.0
+    vib_on = cfg[S.C_VIB_ON] != 0.0
+    vib = vib_on and motors_on and a_g != 0.0
     if vib:
         v_mot = _motor_vibration(s, b + S.I_GYR_PHASE, cfg, pwm, a_g * cfg[S.C_VIB_MOT_MULT],
                                  (cfg[S.C_IMU_NSUB + i], cfg[S.C_GYR_PERIOD_US + i]), rng)
+    walk = cfg[S.C_GYR_WALK_STEP + i] != 0.0
     for k in range(3):
         g = x[X.SWX + k] + drift
         g += cfg[S.C_GYR_NOISE] * sc * uniform_pm1(rng)
         if vib:
             g += (v_mot + _fixed_vibration(cfg, k, t_s, a_g, rng)) * cfg[S.C_VIB_GYR_AX + k]
+        elif not vib_on and a_g != 0.0:  # no SIM_VIB_*: SITL's second noise term
+            g += a_g * uniform_pm1(rng)
+        if walk:  # before scale and bias: the walk is a rate error as the bias is
+            g += s[b + S.I_GYR_WALK + k] / cfg[S.C_GYR_SCALE + 3 * i + k]
         _gyro_store(s, b, i, cfg, k, g)
     s[b + S.I_GYR_COUNT] += 1.0
 
 
 @inline_jit
 def _gyro_store(s, b, i, cfg, k, g):
-    """Axis k of a gyro sample g before scale and bias: x (1 + SCALE/100) + BIAS + the bias
-    walk (TLM_GYR_WALK), then the last sample, the EKF's accumulator and the low-pass
-    filter."""
+    """Axis k of a gyro sample g before scale and bias: x (1 + SCALE/100) + BIAS, then the
+    last sample, the EKF's accumulator and the low-pass filter."""
     g = g * cfg[S.C_GYR_SCALE + 3 * i + k] + cfg[S.C_GYR_BIAS + 3 * i + k]
-    if cfg[S.C_GYR_WALK_STEP + i] != 0.0:  # loop-invariant: off, every flight SITL's
-        g += s[b + S.I_GYR_WALK + k]
     s[b + S.I_LAST_GYR + k] = g
     s[b + S.I_DANG + k] += g
     d = b + S.I_GYR_LPF + 2 * k
@@ -212,7 +216,7 @@ def _accel_sample(s, x, cfg, imu, now, rng):
     motors_on = now[2]
     fail = cfg[S.C_ACC_FAIL + i]
     amp = cfg[S.C_ACC_RND + i]
-    if (cfg[S.C_VIB_ON] != 0.0 and motors_on and (amp != 0.0 or cfg[S.C_VIB_IMB] > 0.0)
+    if ((motors_on and amp != 0.0 and cfg[S.C_VIB_ON] != 0.0 or cfg[S.C_ACC_SLOW + i] != 0.0)
             and abs(fail) <= 1e-6):
         _accel_sample_vib(s, x, cfg, imu, now, amp, rng)
         return
@@ -221,7 +225,7 @@ def _accel_sample(s, x, cfg, imu, now, rng):
         if abs(fail) > 1e-6:
             a = fail
         else:
-            a = _accel_truth(s, b, x, cfg, (i, k), rng)
+            a = _accel_truth(x, cfg, i, k, rng)
         clipped |= _accel_store(s, b, i, cfg, k, a)
     if clipped:
         s[b + S.I_CLIP] += 1.0
@@ -231,21 +235,31 @@ def _accel_sample(s, x, cfg, imu, now, rng):
 @tick_jit
 def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
     """:func:`_accel_sample` of a vibrating accelerometer (motors on, SIM_ACCn_RND amp, a
-    SIM_VIB_* set, no SIM_ACCELn_FAIL): the motor and fixed-frequency terms added."""
+    SIM_VIB_* set), of one with an imbalanced propeller (TLM_VIB_IMB) or a bias walk
+    (TLM_ACC_WALK), without SIM_ACCELn_FAIL: the motor and fixed-frequency terms, each scaled
+    by its axis's gain (TLM_VIB_ACC_X/Y/Z), the imbalance's turning force, the walk."""
     b, i = imu
-    t_s, pwm = now[0], now[4]
+    t_s, motors_on, pwm = now[0], now[2], now[4]
     sampling = (cfg[S.C_IMU_NSUB + 2 + i], cfg[S.C_ACC_PERIOD_US + i])
-    v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
-                             sampling, rng)
+    vib = (cfg[S.C_VIB_ON] != 0.0 and motors_on
+           and (amp != 0.0 or cfg[S.C_VIB_IMB] > 0.0))
+    v_mot = 0.0
     imb = (0.0, 0.0)
-    if cfg[S.C_VIB_IMB] > 0.0:
-        imb = _imbalance(s, b + S.I_ACC_PHASE, cfg, pwm, sampling)
+    if vib:
+        v_mot = _motor_vibration(s, b + S.I_ACC_PHASE, cfg, pwm, amp * cfg[S.C_VIB_MOT_MULT],
+                                 sampling, rng)
+        if cfg[S.C_VIB_IMB] > 0.0:
+            imb = _imbalance(s, b + S.I_ACC_PHASE, cfg, pwm, sampling)
+    walk = cfg[S.C_ACC_WALK_STEP + i] != 0.0
     clipped = False
     for k in range(3):
-        a = _accel_truth(s, b, x, cfg, (i, k), rng)
-        a += (v_mot + _fixed_vibration(cfg, k, t_s, amp, rng)) * cfg[S.C_VIB_ACC_AX + k]
-        if k < 2:
-            a += imb[k]
+        a = _accel_truth(x, cfg, i, k, rng)
+        if vib:
+            a += (v_mot + _fixed_vibration(cfg, k, t_s, amp, rng)) * cfg[S.C_VIB_ACC_AX + k]
+            if k < 2:
+                a += imb[k]
+        if walk:
+            a += s[b + S.I_ACC_WALK + k]
         clipped |= _accel_store(s, b, i, cfg, k, a)
     if clipped:
         s[b + S.I_CLIP] += 1.0
@@ -253,17 +267,14 @@ def _accel_sample_vib(s, x, cfg, imu, now, amp, rng):
 
 
 @inline_jit
-def _accel_truth(s, b, x, cfg, axis, rng):
-    """Axis k of IMU i's accel sample (axis: (i, k); its record at b) before vibration: truth /
-    SCAL (when not 0) + BIAS + the bias walk (TLM_ACC_WALK) + base noise."""
-    i, k = axis
+def _accel_truth(x, cfg, i, k, rng):
+    """Axis k of IMU i's accel sample before vibration: truth / SCAL (when not 0) + BIAS +
+    base noise."""
     a = x[X.SFX + k]
     scal = cfg[S.C_ACC_SCAL + 3 * i + k]
     if scal != 0.0:
         a /= scal
     a += cfg[S.C_ACC_BIAS + 3 * i + k]
-    if cfg[S.C_ACC_WALK_STEP + i] != 0.0:
-        a += s[b + S.I_ACC_WALK + k]
     a += (cfg[S.C_ACC_NOISE] * cfg[S.C_NOISE_SCALE + i] * uniform_pm1(rng))
     return a
 

@@ -235,6 +235,8 @@ C_GYR_WALK_STEP = _c.add("C_GYR_WALK_STEP", 2, "rad/s",
 C_ACC_WALK_STEP = _c.add("C_ACC_WALK_STEP", 2, "m/s^2",
                          "accel bias random-walk step per sample per IMU (TLM_ACC_WALK x "
                          "sqrt(sample period))")
+C_ACC_SLOW = _c.add("C_ACC_SLOW", 2, "", "1: IMU i's accel samples take the vibrating path "
+                    "for an imbalance or a bias walk (sensors.imu._accel_sample_vib)")
 C_VIB_MOT_MASK = _c.add("C_VIB_MOT_MASK", 1, "",
                         "motors that vibrate: the frame's motors OR SIM_VIB_MOT_MASK (bit mask)")
 C_IMU_NSUB = _c.add("C_IMU_NSUB", 4, "",
