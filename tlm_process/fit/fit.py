@@ -15,9 +15,9 @@ adjusts, a few flights in turn:
 A statistic is the flight's own motion and the sensor's noise together; the motion (the
 statistic of a first flight without vibration, the *floor*) is taken out in quadrature when a
 gain is scaled. Attitude noise and rate-tracking error are not fitted: they follow from the
-gyro noise through tlm's controllers, and the report compares them too. A 4.x log's rotor
-frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` stays at :data:`ROTOR_HZ`
-unless the log's parameters set it.
+gyro noise through tlm's controllers, and the report compares them too. A log's rotor
+frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ` (a SITL
+log's own SIM_* parameters are its simulator's, not its vehicle's, and are not taken).
 """
 
 from __future__ import annotations
@@ -62,7 +62,8 @@ END_S = 4.0
 @dataclass
 class FitResult:
     """``params``: the fitted parameters (the log's that tlm models, and the fitted ones);
-    ``log``: the log's statistics; ``tlm``: those of tlm's last flight with ``params``;
+    ``log``: the log's statistics; ``tlm``: tlm's with ``params`` (the best fitting step's,
+    a mean over its flights);
     ``history``: each flight's statistics and knobs; ``dropped``: the log's parameters tlm
     could not take, with why."""
 
@@ -172,7 +173,7 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     from tlm_sim.params import Params
 
     base, dropped = log_vehicle_params(log_params or {})
-    base.setdefault("SIM_VIB_MOT_MAX", ROTOR_HZ)
+    base["SIM_VIB_MOT_MAX"] = ROTOR_HZ
     floor = _mean_stats([fly_hover_stats(base, seed + j) for j in range(FIT_SEEDS)])
     if progress is not None:
         progress(1)
