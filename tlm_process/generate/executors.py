@@ -51,7 +51,10 @@ AUTO_THREADS_MAX = 4
 DASK_CLOSE_TIMEOUT_S = 2.0
 #: The loggers quieted while a Dask client is open: the client logs its lost connection as
 #: an error, its batched stream the closed connection with a traceback (seen once in a test).
-QUIET_LOGGERS = ("distributed.client", "distributed.batched")
+QUIET_LOGGERS = ("distributed.client", "distributed.batched",
+                 # the event loop's log of the client's gather that failed with the scheduler
+                 # (CommClosedError "Stream is closed", seen when a scheduler was stopped)
+                 "tornado.application")
 
 
 #: How often a worker process checks that the process that started it is alive [s].
