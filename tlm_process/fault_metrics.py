@@ -347,12 +347,17 @@ class Flight:
         return float(len(e))
 
 
+def _gps1(f: Flight) -> pd.DataFrame:
+    """The GPS rows of the first receiver."""
+    gps = f.t["GPS"]
+    return gps[gps.I == 0] if "I" in gps else gps
+
+
 def _gps_rows(f: Flight, t0: float, t1: float, after_us: float
               ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """GPS 1 rows inside the window (from the edge margin on) and the armed rows outside it
     (before ``t0`` or more than ``after_us`` after ``t1``)."""
-    gps = f.t["GPS"]
-    gps = gps[gps.I == 0] if "I" in gps else gps
+    gps = _gps1(f)
     inside = time_window(gps, t0 + EDGE_MARGIN_S * 1e6, t1)
     armed = time_window(gps, f.arm_us, f.disarm_us if np.isfinite(f.disarm_us) else np.inf)
     return inside, armed[(armed.TimeUS < t0) | (armed.TimeUS > t1 + after_us)]
@@ -651,8 +656,7 @@ def _compass_switch(f: Flight, t0: float, lost: Sequence[int]) -> dict[str, floa
 
 def _gps_truth_offset(f: Flight, t0: float, t1: float) -> tuple[float, float]:
     """Mean (north, east) [m] of the logged GPS position minus the truth in [t0, t1]."""
-    gps = f.t["GPS"]
-    gps = gps[gps.I == 0] if "I" in gps else gps
+    gps = _gps1(f)
     g = time_window(gps[gps.Status >= 3], t0, t1)
     if not len(g):
         return float("nan"), float("nan")
@@ -759,12 +763,6 @@ def battery_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, Any],
                                         AP.ERR_CODE_RESOLVED),
         "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     }
-
-
-def _gps1(f: Flight) -> pd.DataFrame:
-    """The GPS rows of the first receiver."""
-    gps = f.t["GPS"]
-    return gps[gps.I == 0] if "I" in gps else gps
 
 
 def _gps_truth_distance(f: Flight, t0: float, t1: float) -> np.ndarray:

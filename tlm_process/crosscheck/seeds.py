@@ -92,12 +92,10 @@ def crosscheck_seeds(bin_path: str | Path, sidecar: str | Path | None = None, se
     }
 
 
-def _c(v: float) -> str:
-    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.4g}"
-
-
 def format_seeds_report(d: dict[str, Any]) -> str:
     """Markdown report of :func:`crosscheck_seeds`."""
+    from tlm_process.crosscheck.compare import cell as _c
+
     sd = d["seeds"]
     ft = np.asarray(d["flight_time_s"]["values"], float)
     rms = np.asarray(d["trajectory_rms_m"]["values"], float)

@@ -305,6 +305,12 @@ def _fixed_vibration(cfg, k, t_s, amp, rng):
     return math.sin(TWO_PI * f * t_s) * amp * (1.0 + VIB_AMP_VARIATION * uniform_pm1(rng))
 
 
+@inline_jit
+def _motor_command(pwm):
+    """SITL's vibrating-motor command 0..1 of an output at pwm [us]: (PWM - 1000) / 1000."""
+    return min(max((pwm - 1000.0) * 1e-3, 0.0), 1.0)
+
+
 @tick_jit
 def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
     """SITL's motor vibration (SIM_VIB_MOT_*), the same on every axis: the mean over the nsub
@@ -326,7 +332,7 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
         for m in range(MAX_MOTORS):  # outputs 1..8; one without a PWM (0) has no motor
             if (mask >> m) & 1 == 0 or pwm[m] <= 0.0:
                 continue
-            cmd = min(max((pwm[m] - 1000.0) * 1e-3, 0.0), 1.0)
+            cmd = _motor_command(pwm[m])
             p = s[ph + m] + w * cmd * (1.0 + VIB_FREQ_VARIATION * uniform_pm1(rng))
             if p >= TWO_PI:
                 p %= TWO_PI
@@ -350,7 +356,7 @@ def _imbalance(s, ph, cfg, pwm, sampling):
     m = int(cfg[S.C_VIB_IMB_MOT])
     if m < 0 or pwm[m] <= 0.0:
         return 0.0, 0.0
-    cmd = min(max((pwm[m] - 1000.0) * 1e-3, 0.0), 1.0)
+    cmd = _motor_command(pwm[m])
     amp = cfg[S.C_VIB_IMB] * cmd * cmd
     n = int(nsub)
     w = TWO_PI * cfg[S.C_VIB_MOT_MAX] * cmd * period_us * 1e-6 / nsub
