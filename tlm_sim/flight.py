@@ -665,7 +665,7 @@ def fly(
     schedule = faults if isinstance(faults, FaultSchedule) else None
     if schedule is not None:
         schedule.validate(n_waypoints=mission.n_waypoints, max_time_s=duration)
-        changes: list[Any] = list(schedule.param_changes())
+        changes: list[Any] = list(schedule.param_changes(p))
     else:
         changes = list(faults or ())
         _check_changes(p, changes)  # a bad change fails before any compiling

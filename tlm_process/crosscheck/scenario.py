@@ -341,7 +341,9 @@ def _schedule(faults: list[dict[str, Any]], to_tlm_s, skip: set[str] = frozenset
             raise FaultScheduleError("a fault has no parameter tlm can fly")
     items = []
     for f in faults:
-        item: dict[str, Any] = {"fault": f["type"], "start": round(to_tlm_s(f["start_time_us"]), 3)}
+        # SITL set these values, whatever the vehicle's own: absolute
+        item: dict[str, Any] = {"fault": f["type"], "start": round(to_tlm_s(f["start_time_us"]), 3),
+                                "absolute": True}
         if f.get("end_time_us") is not None:
             item["end"] = round(to_tlm_s(f["end_time_us"]), 3)
         if f.get("params_start"):

@@ -73,7 +73,11 @@ class Fault:
     until the flight ends. ``params_start`` / ``params_end``: parameter values set at the
     boundaries (ArduPilot names and units; paper-era names are accepted and stored under the
     current names). They default to the type's; when only ``params_start`` is given,
-    ``params_end`` defaults to the type's clearing values of those parameters.
+    ``params_end`` defaults to the type's clearing values of those parameters. A type with
+    :attr:`~tlm_sim.faults.types.FaultType.relative` rules (``vibration``) sets those
+    parameters relative to the vehicle's own values when flown (:meth:`flown`);
+    ``absolute=True`` sets every value as given (re-flying a SITL log, whose values are what
+    SITL set).
     """
 
     type: str
@@ -81,6 +85,7 @@ class Fault:
     end: Trigger | None = None
     params_start: Mapping[str, float] | None = None
     params_end: Mapping[str, float] | None = None
+    absolute: bool = False
 
     def __post_init__(self) -> None:
         ftype = lookup_type(self.type)
@@ -111,6 +116,8 @@ class Fault:
                 raise FaultScheduleError(
                     f"give params_end: a {ftype.name} fault does not know how to clear "
                     f"{', '.join(missing)}")
+        if not isinstance(self.absolute, bool):
+            raise FaultScheduleError(f"absolute must be true or false, got {self.absolute!r}")
         set_ = object.__setattr__
         set_(self, "type", ftype.name)
         set_(self, "start", start)
@@ -121,13 +128,26 @@ class Fault:
     def __hash__(self) -> int:
         assert self.params_start is not None and self.params_end is not None
         return hash((self.type, self.start, self.end, tuple(self.params_start.items()),
-                     tuple(self.params_end.items())))
+                     tuple(self.params_end.items()), self.absolute))
 
     def __reduce__(self) -> tuple[Any, ...]:
         # mappingproxy cannot be pickled: rebuild from plain dicts (for process pools)
         assert self.params_start is not None and self.params_end is not None
         return (Fault, (self.type, self.start, self.end, dict(self.params_start),
-                        dict(self.params_end) if self.end is not None else None))
+                        dict(self.params_end) if self.end is not None else None,
+                        self.absolute))
+
+    def flown(self, own: Mapping[str, float] | None) -> tuple[dict[str, float],
+                                                               dict[str, float]]:
+        """(start, end) values this fault sets on a vehicle whose parameters are ``own``
+        (its type's ``relative`` rules applied; as given with ``absolute`` or ``own``
+        None). A vehicle at SITL's defaults gets the values as given."""
+        assert self.params_start is not None and self.params_end is not None
+        if own is None or self.absolute:
+            return dict(self.params_start), dict(self.params_end)
+        ftype = self.fault_type
+        return ({n: ftype.flown_value(n, v, float(own[n])) for n, v in self.params_start.items()},
+                {n: ftype.flown_value(n, v, float(own[n])) for n, v in self.params_end.items()})
 
     @property
     def fault_type(self) -> FaultType:
@@ -153,6 +173,8 @@ class Fault:
                 dict(self.params_end)
                 != _default_params_end(ftype, self.params_start, overridden)):
             d["params_end"] = {n: plain_number(v) for n, v in self.params_end.items()}
+        if self.absolute:
+            d["absolute"] = True
         return d
 
     def __str__(self) -> str:
@@ -166,4 +188,8 @@ class Fault:
         text += f"start {sets(self.params_start)}"
         if self.end is not None and self.params_end:
             text += f"; end {sets(self.params_end)}"
+        if self.absolute:
+            text += " (absolute)"
+        elif any(n in self.fault_type.relative for n in self.params_start):
+            text += " (relative to the vehicle's own values)"
         return text

@@ -61,7 +61,7 @@ def fault_records(
 ) -> list[dict[str, Any]]:
     """Eq. 4 records of a flown schedule.
 
-    changes: ``schedule.param_changes()`` as flown; applied_us[i]: TimeUS at which change i took
+    changes: ``schedule.param_changes(own)`` as flown (the records give the values flown); applied_us[i]: TimeUS at which change i took
     effect (< 0 if the flight ended first: the fault then ends with the log, ``end_by`` says
     so). tables: the flight's tables (``POS`` and ``SIM`` are read). home_alt: home altitude
     AMSL [m]. t_last_us: TimeUS of the log's last row (the end of a fault the flight outlived).
@@ -87,8 +87,11 @@ def fault_records(
             "label": int(fault.label),
             "start": _trigger_text(fault.start),
             "end": _trigger_text(fault.end),
-            "params_start": dict(fault.params_start or {}),
-            "params_end": dict(fault.params_end or {}),
+            "params_start": {ch.name: ch.value for ch in changes
+                             if ch.fault == i and ch.edge == "start"},
+            "params_end": ({ch.name: ch.value for ch in changes
+                            if ch.fault == i and ch.edge == "end"}
+                           if fault.end is not None else dict(fault.params_end or {})),
             "start_time_us": int(round(t0)),
             "end_time_us": int(round(t1)),
             "time_source": "tlm schedule",

@@ -68,7 +68,7 @@ PAPER_GAP_S: tuple[float, float] = (15.0, 25.0)
 #: Range of the time each fault of the paper sequence is held [s].
 PAPER_HOLD_S: tuple[float, float] = (20.0, 40.0)
 
-_FAULT_KEYS = ("fault", "start", "end", "params_start", "params_end")
+_FAULT_KEYS = ("fault", "start", "end", "params_start", "params_end", "absolute")
 _FILE_SUFFIXES = (".json", ".yaml", ".yml")
 _SHORT_RE = re.compile(
     r"^(?P<type>[A-Za-z_]\w*)\s*:\s*(?P<start>[^-+\s]+)\s*"
@@ -207,16 +207,18 @@ class FaultSchedule:
                     index=q.index, fault_type=self.faults[q.index].type)
 
     # -- what the simulation consumes -----------------------------------------------------
-    def param_changes(self) -> list[ParamChange]:
+    def param_changes(self, own: Mapping[str, float] | None = None) -> list[ParamChange]:
         """Every parameter change in the order the loop must apply them: fault 0's start
-        changes, fault 0's end changes, fault 1's start changes, ... (current names)."""
+        changes, fault 0's end changes, fault 1's start changes, ... (current names).
+        ``own``: the flight's parameters, against which relative faults are resolved
+        (:meth:`Fault.flown`); None: the values as given."""
         out: list[ParamChange] = []
         for i, f in enumerate(self.faults):
-            assert f.params_start is not None and f.params_end is not None
-            for name, value in f.params_start.items():
+            start, end = f.flown(own)
+            for name, value in start.items():
                 out.append(ParamChange(f.start.kind, f.start.value, name, value, i, "start"))
             if f.end is not None:
-                for name, value in f.params_end.items():
+                for name, value in end.items():
                     out.append(ParamChange(f.end.kind, f.end.value, name, value, i, "end"))
         return out
 
@@ -439,7 +441,7 @@ def _fault_from_dict(item: Any) -> Fault:
         if key not in item:
             raise FaultScheduleError(f"missing {key!r}", fault_type=fault_type)
     return Fault(item["fault"], item["start"], item.get("end"), item.get("params_start"),
-                 item.get("params_end"))
+                 item.get("params_end"), item.get("absolute", False))
 
 
 def _fault_from_shorthand(spec: Any) -> Fault:

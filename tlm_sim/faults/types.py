@@ -29,11 +29,12 @@ from __future__ import annotations
 import colorsys
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
 __all__ = ["BUILTIN_TYPES", "FAULT_TYPES", "NORMAL_COLOUR", "NORMAL_LABEL", "FaultType",
+           "RELATIVE_RULES",
            "label_colour", "register_fault_type", "type_of_label", "unregister_fault_type"]
 
 #: Class label of samples outside every fault window (paper Table 6).
@@ -61,6 +62,14 @@ class FaultType:
             empty: the name with spaces for underscores.
         colour: matplotlib colour of the label in plots; None: a colour generated from the
             label (:func:`label_colour`).
+        relative: how a fault of this type sets a parameter a vehicle may have a value of its
+            own (name -> rule; other parameters are set to the value given). ``"add"``: the
+            vehicle's own value plus the value given (so a fault's ``params_end`` 0 restores
+            the vehicle's own); ``"own"``: the vehicle's own value where it is not 0, else the
+            value given. For a vehicle at SITL's defaults (0) both give the value itself. The
+            ``vibration`` type is relative, so it stays a fault on an airframe that vibrates
+            of its own (issue 40). A :class:`~tlm_sim.faults.Fault` with ``absolute`` sets
+            the values as given (``tlm crosscheck`` re-flying a SITL log).
     """
 
     name: str
@@ -70,6 +79,7 @@ class FaultType:
     description: str
     title: str = ""
     colour: str | None = None
+    relative: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -79,13 +89,34 @@ class FaultType:
                 raise TypeError(f"fault type {self.name!r}: {attr} must be a mapping NAME -> "
                                 f"value, got {type(v).__name__}")
             set_(self, attr, MappingProxyType({str(k): float(x) for k, x in v.items()}))
+        if not isinstance(self.relative, Mapping):
+            raise TypeError(f"fault type {self.name!r}: relative must be a mapping NAME -> "
+                            f"rule, got {type(self.relative).__name__}")
+        set_(self, "relative", MappingProxyType({str(k): str(r)
+                                                 for k, r in self.relative.items()}))
         if not self.title:
             set_(self, "title", str(self.name).replace("_", " "))
 
     def __reduce__(self) -> tuple[Any, ...]:
         # mappingproxy cannot be pickled: rebuild from plain dicts (for process pools)
         return (FaultType, (self.name, self.label, dict(self.params_start),
-                            dict(self.params_end), self.description, self.title, self.colour))
+                            dict(self.params_end), self.description, self.title, self.colour,
+                            dict(self.relative)))
+
+    def flown_value(self, name: str, value: float, own: float) -> float:
+        """The value a fault of this type sets for ``name`` given as ``value`` on a vehicle
+        whose own value of it is ``own`` (the ``relative`` rule; ``value`` itself for a
+        parameter without one)."""
+        rule = self.relative.get(name)
+        if rule == "add":
+            return own + value
+        if rule == "own" and own != 0.0:
+            return own
+        return value
+
+
+#: The rules of :attr:`FaultType.relative`.
+RELATIVE_RULES: tuple[str, ...] = ("add", "own")
 
 
 #: The registry: name -> type, kept in label order (only this module writes it).
@@ -115,6 +146,13 @@ def _check(ftype: FaultType) -> None:
             Params(getattr(ftype, what))
         except ParamError as exc:
             raise ValueError(f"fault type {ftype.name!r}, {what}: {exc}") from None
+    for name, rule in ftype.relative.items():
+        if rule not in RELATIVE_RULES:
+            raise ValueError(f"fault type {ftype.name!r}: relative rule {rule!r} of {name}: "
+                             f"one of {', '.join(RELATIVE_RULES)}")
+        if name not in Params.defaults():
+            raise ValueError(f"fault type {ftype.name!r}: relative names {name!r}, not a "
+                             "parameter tlm knows")
 
 
 def register_fault_type(ftype: FaultType, *, replace: bool = False) -> FaultType:
@@ -203,8 +241,11 @@ _BUILTIN = (
     FaultType("vibration", 10,
               {"SIM_ACC1_RND": 4.8, "SIM_ACC2_RND": 4.8, "SIM_VIB_MOT_MAX": 350.0},
               {"SIM_VIB_MOT_MAX": 0.0, "SIM_ACC1_RND": 0.0, "SIM_ACC2_RND": 0.0},
-              "motor-rpm sinusoids of 4.8 m/s/s on both accelerometers (VIBE ~6 m/s/s)",
-              "Vibration", "gold"),
+              "motor-rpm sinusoids of 4.8 m/s/s more on both accelerometers (VIBE ~6 m/s/s "
+              "on a quiet airframe), at the airframe's own rotor frequency where it has one",
+              "Vibration", "gold",
+              relative={**{f"SIM_{s}{i}_RND": "add" for s in ("ACC", "GYR") for i in (1, 2)},
+                        "SIM_VIB_MOT_MAX": "own"}),
     FaultType("battery", 11, {"SIM_BATT_VOLTAGE": 10.2}, {"SIM_BATT_VOLTAGE": 12.6},
               "battery at 10.2 V: less thrust per PWM, the low-battery failsafe after "
               "BATT_LOW_TIMER", "Battery", "navy"),
