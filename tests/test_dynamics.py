@@ -725,6 +725,31 @@ def test_turbulence_statistics_are_sitls() -> None:
     assert abs(np.corrcoef(wn[:-1], wn[1:])[0, 1]) < 0.02
 
 
+def test_correlated_gusts_have_their_std_and_correlation_time() -> None:
+    """TLM_TURB_TC (issue 40): north, east and down gusts each a first-order Gauss-Markov
+    process of standard deviation SIM_WIND_TURB and correlation time TLM_TURB_TC, independent
+    of each other; 0 keeps SITL's gusts (the test above)."""
+    turb, tc = 1.5, 0.5
+    f = build_frame(Params({"SIM_WIND_TURB": turb, "TLM_TURB_TC": tc}))
+    x = wind_state(f, 30.0)
+    rng = new_rng(5, 2)
+    stride = 12  # 100 Hz of the 1200 Hz steps
+    n = 120_000
+    g = np.empty((n // stride, 3))
+    t = 10.0
+    for k in range(n):
+        t += DT
+        update_wind(x, f, t, rng)
+        if k % stride == 0:
+            g[k // stride] = (-x[X.WIND_N], -x[X.WIND_E], -x[X.WIND_D])
+    lag = round(tc / (stride * DT))  # one time constant, in kept samples
+    for j in range(3):
+        assert np.std(g[:, j]) == pytest.approx(turb, rel=0.15)
+        phi = np.corrcoef(g[:-lag, j], g[lag:, j])[0, 1]
+        assert phi == pytest.approx(math.exp(-1.0), abs=0.1)
+    assert abs(np.corrcoef(g[:, 0], g[:, 1])[0, 1]) < 0.15
+
+
 def test_turbulence_before_the_start_delay_when_airborne() -> None:
     """The turbulence is not delayed (only the mean wind is): airborne at 1 s the gusts blow,
     on their own."""

@@ -196,6 +196,17 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "propeller imbalance of TLM_VIB_IMB_MOT: a force rotating with that rotor in the body "
         "x-y plane, once per revolution, its specific force this at full command and scaling "
         "with the square of the command (a centrifugal force, as rpm squared)")),
+    ("TLM_TURB_TC", 0.0, ParamInfo(
+        "s", 0.0, 100.0,
+        "correlation time of SIM_WIND_TURB's gusts: > 0 makes the north, east and down gusts "
+        "each a first-order Gauss-Markov process of standard deviation SIM_WIND_TURB and this "
+        "time constant (gusts that move a copter's lean angle over seconds, as a real hover "
+        "shows); 0 = SITL's gusts (~41 ms, a new azimuth every step)")),
+    ("TLM_ROTOR_TC", 0.0, ParamInfo(
+        "s", 0.0, 1.0,
+        "time constant of the rotor speed that the vibration follows (motor, ESC and propeller "
+        "lag): the motor vibration's frequency and the imbalance follow each motor's command "
+        "through a first-order lag; 0 = SITL's (the command itself)")),
     ("TLM_GYR_WALK", 0.0, ParamInfo(
         "deg/s/s^0.5", 0.0, 10.0,
         "gyro bias random walk per axis and IMU (white noise of this density integrated into "

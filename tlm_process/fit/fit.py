@@ -10,14 +10,18 @@ adjusts, a few flights in turn:
   :data:`ACC_AMP`, motor-locked at ``SIM_VIB_MOT_MAX``) to IMU 0's accel standard deviation
   per axis;
 * the gyros' per axis (``TLM_VIB_GYR_X/Y/Z`` on ``SIM_GYRn_RND`` :data:`GYR_AMP`) to the gyro
-  standard deviation per axis.
+  standard deviation per axis;
+* the gusts (``SIM_WIND_TURB``, correlated over ``TLM_TURB_TC`` :data:`TURB_TC`) to the mean
+  of the ATT roll and pitch standard deviations (:func:`attitude_std`).
 
 A statistic is the flight's own motion and the sensor's noise together; the motion (the
-statistic of a first flight without vibration, the *floor*) is taken out in quadrature when a
-gain is scaled. Attitude noise and rate-tracking error are not fitted: they follow from the
-gyro noise through tlm's controllers, and the report compares them too. A log's rotor
-frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ` (a SITL
-log's own SIM_* parameters are its simulator's, not its vehicle's, and are not taken).
+statistic of a first flight without vibration or gusts, the *floor*) is taken out in
+quadrature when a gain is scaled. The rate-tracking error is not fitted: it follows from the
+gyro noise and the gusts through tlm's controllers, and the report compares it too; the gusts
+are the same on every axis, so roll and pitch are fitted as one. A log's rotor
+frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ`, and the
+rotors' speed lags their commands by :data:`ROTOR_TC` (a SITL log's own SIM_* parameters are
+its simulator's, not its vehicle's, and are not taken).
 """
 
 from __future__ import annotations
@@ -32,7 +36,8 @@ import numpy as np
 
 from tlm_process.fit.stats import STAT_NAMES, segment_stats
 
-__all__ = ["ACC_AMP", "FIT_STATS", "GYR_AMP", "ROTOR_HZ", "FitResult", "fit_vehicle",
+__all__ = ["ACC_AMP", "FIT_STATS", "GYR_AMP", "ROTOR_HZ", "ROTOR_TC", "TURB_TC", "FitResult",
+           "attitude_std", "copter33_params", "fit_vehicle",
            "fly_hover_stats", "hover_mission", "hover_window", "log_vehicle_params"]
 
 #: accelerometer vibration amplitude per motor [m/s^2] the per-axis gains scale (SITL's
@@ -45,8 +50,20 @@ GYR_AMP = 20.0
 #: pass the 20 Hz INS filters into the logged IMU rows as real logs show it (at SITL's
 #: autotest 350 Hz almost none does)
 ROTOR_HZ = 150.0
+#: rotor speed time constant [s] the vibration follows (``TLM_ROTOR_TC``): a motor, its ESC
+#: and its propeller answer a command change in tens of milliseconds; without it the rate
+#: controller's answer to the gyro vibration modulates the vibration's own frequency and
+#: rectifies it into a wandering gyro offset that tilts the EKF's attitude by degrees
+#: (tests/test_noise_structure.py)
+ROTOR_TC = 0.05
+#: correlation time [s] of the fitted gusts (``TLM_TURB_TC``): a real hover's lean angle follows
+#: the air over seconds (log171: most of the roll's variance below 2 Hz, the desired roll
+#: carrying it), where SITL's own gusts decorrelate in 41 ms
+TURB_TC = 1.0
+#: the gusts' standard deviation the fit starts from [m/s] (``SIM_WIND_TURB``)
+TURB_START = 0.5
 #: flights (seeds) each fitting step averages
-FIT_SEEDS = 2
+FIT_SEEDS = 3
 #: exponent of the excess ratio a gain follows per fitting flight (< 1: damped)
 DAMPING = 0.8
 #: statistics the fit drives to the log's (the others are compared, not fitted)
@@ -84,14 +101,53 @@ def hover_mission(alt_m: float = 10.0, hold_s: int = HOVER_S):
     return Mission(wp, hold_s=np.array([0.0, float(hold_s)]), name="hover")
 
 
+#: Copter 3.3's attitude-controller parameters and their 3.4+ names (Copter 3.4.0 release notes:
+#: RATE_ became ATC_RAT_, STB_ became ATC_ANG_); a 3.3 rate controller filtered only the D
+#: term's input (RATE_*_FILT_HZ: ATC_RAT_*_FLTD), the yaw one all of it (ATC_RAT_YAW_FLTE)
+COPTER33_NAMES: dict[str, str] = {
+    **{f"RATE_{a}_{t}": f"ATC_RAT_{a}_{t}" for a in ("RLL", "PIT", "YAW")
+       for t in ("P", "I", "D", "IMAX")},
+    "RATE_RLL_FILT_HZ": "ATC_RAT_RLL_FLTD", "RATE_PIT_FILT_HZ": "ATC_RAT_PIT_FLTD",
+    "RATE_YAW_FILT_HZ": "ATC_RAT_YAW_FLTE",
+    **{f"STB_{a}_P": f"ATC_ANG_{a}_P" for a in ("RLL", "PIT", "YAW")},
+}
+#: Copter 3.3's rate-controller output range: IMAX was in it, 3.4+ has 0..1
+COPTER33_OUTPUT = 4500.0
+
+
+def copter33_params(values: Mapping[str, float]) -> dict[str, float]:
+    """``values`` with Copter 3.3's attitude-controller parameters under their 3.4+ names and
+    scales (a log that has the 3.4+ names is returned unchanged). Copter 3.4 moved them
+    "automatically, scales adjusted": the rate P and D (and I, in the same output units) 10 %
+    lower on X, V and H quads and 27 % higher on other frames, IMAX from the 4500 output range
+    to 0..1 (ArduCopter release notes 3.4.0-rc1, item 5). ``FRAME`` (3.x: 0 +, 1 X, 2 V, 3 H)
+    picks the factor."""
+    out = dict(values)
+    if "RATE_RLL_P" not in out or "ATC_RAT_RLL_P" in out:
+        return out
+    frame = int(out.get("FRAME", out.get("FRAME_TYPE", 1)))
+    factor = 0.9 if frame in (1, 2, 3) else 1.27
+    for old, new in COPTER33_NAMES.items():
+        if old not in out:
+            continue
+        v = float(out.pop(old))
+        if old.endswith(("_P", "_I", "_D")) and old.startswith("RATE_"):
+            v *= factor
+        elif old.endswith("_IMAX"):
+            v /= COPTER33_OUTPUT
+        out[new] = v
+    return out
+
+
 def log_vehicle_params(log_params: Mapping[str, float]) -> tuple[dict[str, float], dict[str, str]]:
     """The log's parameters tlm models, where they differ from tlm's defaults, each checked
-    alone (a value out of tlm's range is dropped, with why); Copter 3.x's ``FRAME`` becomes
+    alone (a value out of tlm's range is dropped, with why); Copter 3.3's attitude controller
+    under its 3.4+ names (:func:`copter33_params`); Copter 3.x's ``FRAME`` becomes
     ``FRAME_CLASS`` 1 (quad) and ``FRAME_TYPE``."""
     from tlm_sim.params import PARAM_INFO, ParamError, Params
 
     defaults = Params.defaults()
-    values = dict(log_params)
+    values = copter33_params(log_params)
     if "FRAME" in values and "FRAME_CLASS" not in values:
         values["FRAME_CLASS"], values["FRAME_TYPE"] = 1.0, float(values.pop("FRAME"))
     keep: dict[str, float] = {}
@@ -174,14 +230,16 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
 
     base, dropped = log_vehicle_params(log_params or {})
     base["SIM_VIB_MOT_MAX"] = ROTOR_HZ
+    base["TLM_ROTOR_TC"] = ROTOR_TC
     floor = _mean_stats([fly_hover_stats(base, seed + j) for j in range(FIT_SEEDS)])
     if progress is not None:
         progress(1)
     knobs = {"TLM_HOVER_THR": Params(base)["TLM_HOVER_THR"],
              **{f"TLM_VIB_ACC_{a}": 1.0 for a in "XYZ"},
-             **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"}}
+             **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"},
+             "SIM_WIND_TURB": TURB_START if math.isfinite(attitude_std(log_stats)) else 0.0}
     fixed = {"SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
-             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP}
+             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_TURB_TC": TURB_TC}
     history, best, best_err = [], None, math.inf
     for k in range(iterations):
         params = {**base, **fixed, **knobs}
@@ -198,6 +256,9 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
             for kind, stat in (("ACC", f"acc_{a}_std"), ("GYR", f"gyr_{a}_std_dps")):
                 name = f"TLM_VIB_{kind}_{a.upper()}"
                 knobs[name] = _gain(knobs[name], log_stats[stat], got[stat], floor[stat])
+        if knobs["SIM_WIND_TURB"] > 0.0:
+            knobs["SIM_WIND_TURB"] = _gain(knobs["SIM_WIND_TURB"], attitude_std(log_stats),
+                                           attitude_std(got), attitude_std(floor))
     assert best is not None
     params, got = best
     return FitResult(params=params, log=dict(log_stats), tlm=got, history=history,
@@ -210,8 +271,16 @@ def _mean_stats(runs: list[dict[str, float]]) -> dict[str, float]:
     return {k: float(np.mean([r[k] for r in runs])) for k in runs[0]}
 
 
+def attitude_std(stats: Mapping[str, float]) -> float:
+    """The mean of the ATT roll and pitch standard deviations [deg] (what the gusts are fitted
+    to; NaN without ATT)."""
+    return 0.5 * (stats["roll_std_deg"] + stats["pitch_std_deg"])
+
+
 def _max_rel_err(got: Mapping[str, float], want: Mapping[str, float]) -> float:
-    """Largest |got / want - 1| over the :data:`FIT_STATS` the log has."""
-    errs = [abs(got[s] / want[s] - 1.0) for s in FIT_STATS
-            if math.isfinite(want[s]) and want[s] > 0]
+    """Largest |got / want - 1| over the :data:`FIT_STATS` the log has and the attitude
+    (:func:`attitude_std`)."""
+    pairs = [(got[s], want[s]) for s in FIT_STATS]
+    pairs.append((attitude_std(got), attitude_std(want)))
+    errs = [abs(g / w - 1.0) for g, w in pairs if math.isfinite(w) and w > 0]
     return max(errs) if errs else 0.0

@@ -33,11 +33,15 @@ import math
 
 import numpy as np
 
+from tlm_sim import ardupilot as AP
 from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density
 from tlm_sim.frames import MAX_MOTORS, FrameLayout, frame_for
 from tlm_sim.params import Params, require_params
 from tlm_sim.slots import Layout
+
+#: the physics step [s] (833 us, SITL's 1200 Hz), for the per-step filter gains
+PHYSICS_DT_S = (1_000_000 // AP.SIM_RATE_HZ) * 1e-6
 
 #: the frame configuration array (:func:`build_frame`), declared once
 FRAME = Layout("frame", "airframe, motor, environment and battery configuration of the physics")
@@ -52,6 +56,9 @@ F_PWM_MIN, F_PWM_MAX = _f.vector(("F_PWM_MIN", "F_PWM_MAX"), "us",
 F_SPIN_MIN, F_SPIN_MAX = _f.vector(("F_SPIN_MIN", "F_SPIN_MAX"), "",
                                    "reference MOT_SPIN_MIN / MOT_SPIN_MAX")
 F_SLEW_MAX = _f.add("F_SLEW_MAX", 1, "1/s", "max motor command rate (0 = no limit)")
+F_ROTOR_ALPHA = _f.add("F_ROTOR_ALPHA", 1, "",
+                       "per-physics-step gain 1 - exp(-dt / TLM_ROTOR_TC) of the rotor lag; 1 = "
+                       "none (SITL)")
 F_DISC_AREA = _f.add("F_DISC_AREA", 1, "m^2", "total rotor disc area")
 F_MAX_VOLT = _f.add("F_MAX_VOLT", 1, "V", "full-pack voltage, voltage_scale = V / this")
 F_FRAME_HEIGHT = _f.add("F_FRAME_HEIGHT", 1, "m",
@@ -90,6 +97,9 @@ F_WIND_DIR = _f.add("F_WIND_DIR", 1, "deg",
                     "SIM_WIND_DIR, direction the wind comes FROM, true (live)")
 F_WIND_TURB = _f.add("F_WIND_TURB", 1, "m/s", "SIM_WIND_TURB (live)")
 F_WIND_TC = _f.add("F_WIND_TC", 1, "s", "SIM_WIND_TC (live)")
+F_GUST_A = _f.add("F_GUST_A", 1, "",
+                  "per-physics-step decay exp(-dt / TLM_TURB_TC) of the correlated gusts, 0 = "
+                  "SITL's gusts (live)")
 F_WIND_DIR_Z = _f.add("F_WIND_DIR_Z", 1, "deg",
                       "SIM_WIND_DIR_Z, vertical wind angle, 90 = updraft (live)")
 F_WIND_T = _f.add("F_WIND_T", 1, "", "SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)")
@@ -154,6 +164,8 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_SPIN_MIN] = get("TLM_SPIN_MIN")
     f[F_SPIN_MAX] = get("TLM_SPIN_MAX")
     f[F_SLEW_MAX] = get("TLM_SLEW_MAX")
+    tc = get("TLM_ROTOR_TC")
+    f[F_ROTOR_ALPHA] = -math.expm1(-PHYSICS_DT_S / tc) if tc > 0.0 else 1.0
     f[F_DISC_AREA] = get("TLM_DISC_AREA")
     f[F_MAX_VOLT] = get("TLM_MAX_VOLT")
     f[F_FRAME_HEIGHT] = get("TLM_FRAME_HEIGHT")
@@ -247,6 +259,8 @@ def _environment(f: np.ndarray, p: Params) -> None:
                        (F_WIND_DIR_Z, "SIM_WIND_DIR_Z"), (F_WIND_T, "SIM_WIND_T"),
                        (F_WIND_T_ALT, "SIM_WIND_T_ALT"), (F_WIND_T_COEF, "SIM_WIND_T_COEF")):
         f[slot] = float(p[name])
+    tc = float(p["TLM_TURB_TC"])
+    f[F_GUST_A] = math.exp(-PHYSICS_DT_S / tc) if tc > 0.0 else 0.0
     for k, axis in enumerate("XYZ"):
         f[F_SHOVE + k] = float(p[f"SIM_SHOVE_{axis}"])
         f[F_TWIST + k] = float(p[f"SIM_TWIST_{axis}"])

@@ -92,13 +92,18 @@ WIND_STILL_KEY = _x.add("WIND_STILL_KEY", 7, "",
                         "wind model cache: SIM_WIND_SPD [m/s], SIM_WIND_DIR [deg], "
                         "SIM_WIND_DIR_Z [deg], SIM_WIND_TC [s] and WIND_SPD_F, WIND_DIR_F, "
                         "WIND_DIRZ_F when WIND_STILL_DT was found")
+GUST_E = _x.add("GUST_E", 1, "m/s",
+                "wind model: east gust speed of the correlated gusts (TLM_TURB_TC > 0; GUST_H "
+                "is then the north one)")
 
 N_STATE = STATE.close()
 
 #: What the sensors may sense of the truth state: the sensor shadow (SITL's smoothed position,
 #: velocity, specific force and body rate), the height and attitude, the battery's terminal
-#: voltage and current. Nothing above the sensors reads the truth (tests/test_structure_sim.py).
+#: voltage and current, the rotors' speeds (as motor commands M1..M8: SITL's state.rpm, which
+#: its IMU's motor vibration follows). Nothing above the sensors reads the truth
+#: (tests/test_structure_sim.py).
 PUBLISHED: frozenset[str] = frozenset({
     "PD", "QW", "QX", "QY", "QZ", "SPN", "SPE", "SPD", "SVN", "SVE", "SVD", "SFX", "SFY", "SFZ",
-    "SWX", "SWY", "SWZ", "BATT_V", "BATT_I",
+    "SWX", "SWY", "SWZ", "BATT_V", "BATT_I", "M1",
 })

@@ -1,6 +1,7 @@
 """Motor and frame force model of SITL's multicopter (ardupilot-reference.md §1.4-§1.8).
 
-Per motor: PWM -> command with a slew limit, thrust from momentum theory with inflow, rotor
+Per motor: PWM -> command with a slew limit (and the rotor lag, TLM_ROTOR_TC), thrust from
+momentum theory with inflow, rotor
 reaction (yaw) torque, per-motor momentum drag and current. Frame sum: total body force
 (thrust, momentum drag, parasitic body drag) and torque. All vectors are body FRD; every
 motor's thrust axis is body -z.
@@ -31,6 +32,7 @@ from tlm_sim.dynamics.frame import (
     F_PROFILE,
     F_PWM_HI,
     F_PWM_LO,
+    F_ROTOR_ALPHA,
     F_SLEW_MAX,
     F_VEL_MAX,
 )
@@ -89,8 +91,16 @@ def motor_forces(
     pwm_lo = frame[F_PWM_LO]
     per_us = 1.0 / (frame[F_PWM_HI] - pwm_lo)
     step = frame[F_SLEW_MAX] * dt
+    lag = frame[F_ROTOR_ALPHA]
     for i in range(int(frame[F_N_MOTORS])):
-        a = slew_command(pwm[i], x[X.M1 + i], pwm_lo, per_us, step)
+        last = x[X.M1 + i]
+        if lag < 1.0:  # TLM_ROTOR_TC: the rotor follows its command through a first-order lag
+            target = min(max((pwm[i] - pwm_lo) * per_us, 0.0), 1.0)
+            a = last + (target - last) * lag
+            if step > 0.0:
+                a = min(max(a, last - step), last + step)
+        else:
+            a = slew_command(pwm[i], last, pwm_lo, per_us, step)
         x[X.M1 + i] = a
         if dead:
             x[X.T1 + i] = 0.0

@@ -49,6 +49,7 @@ from tlm_sim._jit import tick_jit
 from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.frame import (
     F_FRAME_HEIGHT,
+    F_GUST_A,
     F_WIND_DIR,
     F_WIND_DIR_Z,
     F_WIND_SPD,
@@ -210,6 +211,27 @@ def _still(x: np.ndarray, frame: np.ndarray) -> bool:
 
 
 @tick_jit
+def _correlated_gusts(x: np.ndarray, a: float, turb: float,
+                      rng: np.ndarray) -> tuple[float, float, float]:
+    """One physics step of the correlated gusts (TLM_TURB_TC > 0): north, east and down gust
+    speeds [m/s] (x[GUST_H], x[GUST_E], x[GUST_V]), each a first-order Gauss-Markov process
+    g <- a g + sqrt(1 - a^2) TURB N(0, 1) with a = exp(-dt / TLM_TURB_TC): standard deviation
+    TURB on each axis and correlation time TLM_TURB_TC (SITL's gusts decorrelate in ~41 ms
+    and turn to a new azimuth every step, too fast to move a copter's attitude; a real
+    copter's hover shows its lean angle following gusts over seconds)."""
+    b = math.sqrt(1.0 - a * a) * turb
+    n0, n1 = normal_pair(rng)
+    n2 = normal_pair(rng)[0]
+    gn = a * x[X.GUST_H] + b * n0
+    ge = a * x[X.GUST_E] + b * n1
+    gd = a * x[X.GUST_V] + b * n2
+    x[X.GUST_H] = gn
+    x[X.GUST_E] = ge
+    x[X.GUST_V] = gd
+    return gn, ge, gd
+
+
+@tick_jit
 def update_wind(x: np.ndarray, frame: np.ndarray, t_s: float, rng: np.ndarray) -> None:
     """Advance the wind model to simulated time ``t_s`` [s] since boot (the start of the
     physics step) and write the air velocity ``WIND_N/E/D`` [m/s, NED].
@@ -230,7 +252,12 @@ def update_wind(x: np.ndarray, frame: np.ndarray, t_s: float, rng: np.ndarray) -
             we = s * x[X.WIND_UE]
             wd = s * x[X.WIND_UD]
     turb = frame[F_WIND_TURB]
-    if turb > 0.0 and hagl > AIRBORNE_HAGL_M:
+    if turb > 0.0 and hagl > AIRBORNE_HAGL_M and frame[F_GUST_A] > 0.0:
+        gn, ge, gd = _correlated_gusts(x, frame[F_GUST_A], turb, rng)
+        wn += gn
+        we += ge
+        wd += gd
+    elif turb > 0.0 and hagl > AIRBORNE_HAGL_M:
         amp = GUST_SCALE * turb * (1.0 - GUST_IIR)
         nh, nv = normal_pair(rng)
         gh = GUST_IIR * x[X.GUST_H] + amp * nh

@@ -61,7 +61,8 @@ def fault_records(
 ) -> list[dict[str, Any]]:
     """Eq. 4 records of a flown schedule.
 
-    changes: ``schedule.param_changes(own)`` as flown (the records give the values flown); applied_us[i]: TimeUS at which change i took
+    changes: ``schedule.param_changes(own)`` as flown (the records give the values flown);
+    applied_us[i]: TimeUS at which change i took
     effect (< 0 if the flight ended first: the fault then ends with the log, ``end_by`` says
     so). tables: the flight's tables (``POS`` and ``SIM`` are read). home_alt: home altitude
     AMSL [m]. t_last_us: TimeUS of the log's last row (the end of a fault the flight outlived).

@@ -98,6 +98,9 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
     drift = gyro_drift(t_s, cfg)
     gyr_mask = int(cfg[S.C_GYR_FAIL_MSK])
     acc_mask = int(cfg[S.C_ACC_FAIL_MSK])
+    if cfg[S.C_ROTOR_TC] > 0.0:
+        _rotor_pwm(s, x, pwm)
+        pwm = s[S.ROTOR_PWM:S.ROTOR_PWM + MAX_MOTORS]
     now = (t_s, drift, motors_on, throttle, pwm)  # this sampling call (_gyro_sample's now)
     for i in range(S.N_IMU):
         b = S.IMU_BASE + i * S.IMU_STRIDE
@@ -112,6 +115,15 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
             _accel_sample(s, x, cfg, (b, i), now, rng[S.RNG_ACC + i])
             if cfg[S.C_ACC_WALK_STEP + i] != 0.0:
                 _bias_walk(s, b + S.I_ACC_WALK, cfg[S.C_ACC_WALK_STEP + i], rng[S.RNG_ACC + i])
+
+
+@tick_jit
+def _rotor_pwm(s, x, pwm):
+    """With the rotor lag on (TLM_ROTOR_TC): each rotor's speed as a PWM, s[ROTOR_PWM + m] =
+    1000 + 1000 x the motor model's lagged command x[M1 + m] (SITL takes the vibration's rpm
+    from its motor's command likewise); 0 for an output without a PWM (no motor)."""
+    for m in range(MAX_MOTORS):
+        s[S.ROTOR_PWM + m] = 1000.0 + 1000.0 * x[X.M1 + m] if pwm[m] > 0.0 else 0.0
 
 
 @tick_jit
