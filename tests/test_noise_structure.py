@@ -148,9 +148,8 @@ def test_the_rotor_speed_lags_the_command():
 
 
 def test_with_the_rotor_lag_the_vibration_runs_at_the_rotor_speed():
-    """With TLM_ROTOR_TC the motor vibration's frequency is the rotor's lagged command (the
-    motor model's x[M1..]) x SIM_VIB_MOT_MAX, not the output's PWM (SITL takes its rpm from its
-    motor's command too)."""
+    """With TLM_ROTOR_TC the motor vibration follows the rotor (the motor model's lagged
+    command x[M1..], as the PWM that commands it at rest), not the output's PWM."""
     cfg = build_sensor_config(Params({**VIB, "TLM_ROTOR_TC": 0.05}))
     x = np.zeros(X.N_STATE)
     x[X.SQW] = 1.0
@@ -166,8 +165,10 @@ def test_with_the_rotor_lag_the_vibration_runs_at_the_rotor_speed():
         if s[S.IMU_BASE + S.I_ACC_COUNT] != last:
             last = s[S.IMU_BASE + S.I_ACC_COUNT]
             acc.append(s[S.IMU_BASE + S.I_LAST_ACC])
-    assert _peak_hz(np.array(acc), 1000.0) == pytest.approx(0.3 * 350.0, abs=6.0)
-    assert s[S.ROTOR_PWM:S.ROTOR_PWM + 8] == pytest.approx([1300.0] * 4 + [0.0] * 4)
+    rotor_pwm = 1150.0 + 0.3 * 800.0  # the default frame: command 0..1 is 1150..1950 us
+    assert s[S.ROTOR_PWM:S.ROTOR_PWM + 8] == pytest.approx([rotor_pwm] * 4 + [0.0] * 4)
+    assert _peak_hz(np.array(acc), 1000.0) == pytest.approx(
+        (rotor_pwm - 1000.0) / 1000.0 * 350.0, abs=6.0)
     _, _, s0 = _raw(VIB)
     assert not s0[S.ROTOR_PWM:S.ROTOR_PWM + 8].any()  # unused without the lag
 

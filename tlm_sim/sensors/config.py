@@ -79,6 +79,9 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
     c[S.C_VIB_IMB] = p["TLM_VIB_IMB"]
     c[S.C_VIB_IMB_MOT] = p["TLM_VIB_IMB_MOT"] - 1.0  # -1: none
     c[S.C_ROTOR_TC] = p["TLM_ROTOR_TC"]
+    span = p["TLM_PWM_MAX"] - p["TLM_PWM_MIN"]
+    c[S.C_ROTOR_PWM] = p["TLM_PWM_MIN"] + p["TLM_SPIN_MIN"] * span
+    c[S.C_ROTOR_PWM + 1] = (p["TLM_SPIN_MAX"] - p["TLM_SPIN_MIN"]) * span
     for i in range(2):
         c[S.C_ACC_SLOW + i] = 1.0 if (c[S.C_ACC_WALK_STEP + i] != 0.0
                                       or (p["TLM_VIB_IMB"] > 0.0 and c[S.C_VIB_ON] != 0.0)) else 0.0

@@ -99,7 +99,7 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
     gyr_mask = int(cfg[S.C_GYR_FAIL_MSK])
     acc_mask = int(cfg[S.C_ACC_FAIL_MSK])
     if cfg[S.C_ROTOR_TC] > 0.0:
-        _rotor_pwm(s, x, pwm)
+        _rotor_pwm(s, x, cfg, pwm)
         pwm = s[S.ROTOR_PWM:S.ROTOR_PWM + MAX_MOTORS]
     now = (t_s, drift, motors_on, throttle, pwm)  # this sampling call (_gyro_sample's now)
     for i in range(S.N_IMU):
@@ -118,12 +118,15 @@ def imu_sample(s, x, cfg, t_us, throttle, pwm, rng):
 
 
 @tick_jit
-def _rotor_pwm(s, x, pwm):
-    """With the rotor lag on (TLM_ROTOR_TC): each rotor's speed as a PWM, s[ROTOR_PWM + m] =
-    1000 + 1000 x the motor model's lagged command x[M1 + m] (SITL takes the vibration's rpm
-    from its motor's command likewise); 0 for an output without a PWM (no motor)."""
+def _rotor_pwm(s, x, cfg, pwm):
+    """With the rotor lag on (TLM_ROTOR_TC): each rotor's speed as the PWM that commands it at
+    rest, s[ROTOR_PWM + m], from the motor model's lagged command x[M1 + m] through the frame's
+    PWM range (so the vibration runs where :func:`_motor_command` puts it for a steady PWM,
+    and follows the rotor, not the output); 0 for an output without a PWM (no motor)."""
+    lo = cfg[S.C_ROTOR_PWM]
+    span = cfg[S.C_ROTOR_PWM + 1]
     for m in range(MAX_MOTORS):
-        s[S.ROTOR_PWM + m] = 1000.0 + 1000.0 * x[X.M1 + m] if pwm[m] > 0.0 else 0.0
+        s[S.ROTOR_PWM + m] = lo + span * x[X.M1 + m] if pwm[m] > 0.0 else 0.0
 
 
 @tick_jit

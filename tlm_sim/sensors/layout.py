@@ -141,8 +141,9 @@ G_EPOCHS = _s.add("G_EPOCHS", 1, "", "GPS epochs produced so far")
 PM_VOLT = _s.add("PM_VOLT", 1, "V", "battery voltage as the power module reads it this tick")
 PM_CURR = _s.add("PM_CURR", 1, "A", "battery current as the power module reads it this tick")
 ROTOR_PWM = _s.add("ROTOR_PWM", MAX_MOTORS, "us",
-                   "with TLM_ROTOR_TC > 0: each rotor's speed as a PWM (the motor model's lagged "
-                   "command), what the motor vibration runs at; unused otherwise")
+                   "with TLM_ROTOR_TC > 0: each rotor's speed as the PWM that commands it at "
+                   "rest (the motor model's lagged command), what the motor vibration runs at; "
+                   "unused otherwise")
 N_SENSOR_STATE = STATE.close()
 
 #: The sensors' output block: what the EKF and the autopilot may read of the sensor state, as
@@ -234,6 +235,8 @@ C_VIB_IMB_MOT = _c.add("C_VIB_IMB_MOT", 1, "",
 C_VIB_IMB = _c.add("C_VIB_IMB", 1, "m/s^2", "its imbalance force at full command (TLM_VIB_IMB)")
 C_ROTOR_TC = _c.add("C_ROTOR_TC", 1, "s", "rotor speed time constant of the vibration "
                     "(TLM_ROTOR_TC; 0: the command itself)")
+C_ROTOR_PWM = _c.add("C_ROTOR_PWM", 2, "us", "the frame's PWM at motor command 0 and its span "
+                     "to command 1 (TLM_PWM_MIN/MAX, TLM_SPIN_MIN/MAX, as the motor model)")
 C_GYR_WALK_STEP = _c.add("C_GYR_WALK_STEP", 2, "rad/s",
                          "gyro bias random-walk step per sample per IMU (TLM_GYR_WALK x "
                          "sqrt(sample period))")
