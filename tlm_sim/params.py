@@ -202,6 +202,11 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "each a first-order Gauss-Markov process of standard deviation SIM_WIND_TURB and this "
         "time constant (gusts that move a copter's lean angle over seconds, as a real hover "
         "shows); 0 = SITL's gusts (~41 ms, a new azimuth every step)")),
+    ("TLM_VIB_SPREAD", 0.0, ParamInfo(
+        "", 0.0, 0.5,
+        "spread of the rotors' speeds in the motor vibration: motor m of n turns at 1 + this x "
+        "(2 (m - 1) / (n - 1) - 1) times its command's frequency (a real copter's rotors turn a "
+        "few per cent apart, so their vibrations beat within seconds); 0 = SITL's (all alike)")),
     ("TLM_ROTOR_TC", 0.0, ParamInfo(
         "s", 0.0, 1.0,
         "time constant of the rotor speed that the vibration follows (motor, ESC and propeller "

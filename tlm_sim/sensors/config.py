@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from tlm_sim.boot import BOOT_GPS_DETECT_S
-from tlm_sim.frames import frame_for
+from tlm_sim.frames import MAX_MOTORS, frame_for
 from tlm_sim.params import Params, earth_field, require_params
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.imu import lpf2p_coefficients
@@ -79,6 +79,13 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
     c[S.C_VIB_IMB] = p["TLM_VIB_IMB"]
     c[S.C_VIB_IMB_MOT] = p["TLM_VIB_IMB_MOT"] - 1.0  # -1: none
     c[S.C_ROTOR_TC] = p["TLM_ROTOR_TC"]
+    # rotors that turn a little apart (TLM_VIB_SPREAD): motor m of n at 1 + spread x
+    # (2 m / (n - 1) - 1), -spread .. +spread in motor order
+    c[S.C_VIB_MOT_FMUL:S.C_VIB_MOT_FMUL + MAX_MOTORS] = 1.0
+    if p["TLM_VIB_SPREAD"] > 0.0 and n_motors > 1:
+        for m in range(n_motors):
+            c[S.C_VIB_MOT_FMUL + m] = 1.0 + p["TLM_VIB_SPREAD"] * (2.0 * m / (n_motors - 1)
+                                                                       - 1.0)
     span = p["TLM_PWM_MAX"] - p["TLM_PWM_MIN"]
     c[S.C_ROTOR_PWM] = p["TLM_PWM_MIN"] + p["TLM_SPIN_MIN"] * span
     c[S.C_ROTOR_PWM + 1] = (p["TLM_SPIN_MAX"] - p["TLM_SPIN_MIN"]) * span

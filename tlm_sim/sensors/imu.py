@@ -332,8 +332,9 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
     sub-samples of one published sample of, for each vibrating motor m and each harmonic h
     (SIM_VIB_MOT_HMNC bit h - 1), sin(h phi_m) amp (1 + 0.05 U). Motor m's phase phi_m (s[ph + m])
     advances each sub-sample by 2 pi f_m (1 + 0.12 U) / sub-sample rate, f_m = command_m x
-    SIM_VIB_MOT_MAX with command_m = (PWM_m - 1000) / 1000: rpm-locked, smeared like real
-    motors. 0 when SIM_VIB_MOT_MAX is 0."""
+    SIM_VIB_MOT_MAX with command_m = (PWM_m - 1000) / 1000 (times motor m's
+    TLM_VIB_SPREAD factor): rpm-locked, smeared like real motors. 0 when SIM_VIB_MOT_MAX
+    is 0."""
     nsub, period_us = sampling  # sub-samples per published sample, its period [us]
     f_max = cfg[S.C_VIB_MOT_MAX]
     if f_max <= 0.0:
@@ -347,7 +348,7 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
         for m in range(MAX_MOTORS):  # outputs 1..8; one without a PWM (0) has no motor
             if (mask >> m) & 1 == 0 or pwm[m] <= 0.0:
                 continue
-            cmd = _motor_command(pwm[m])
+            cmd = _motor_command(pwm[m]) * cfg[S.C_VIB_MOT_FMUL + m]
             p = s[ph + m] + w * cmd * (1.0 + VIB_FREQ_VARIATION * uniform_pm1(rng))
             if p >= TWO_PI:
                 p %= TWO_PI
@@ -374,7 +375,8 @@ def _imbalance(s, ph, cfg, pwm, sampling):
     cmd = _motor_command(pwm[m])
     amp = cfg[S.C_VIB_IMB] * cmd * cmd
     n = int(nsub)
-    w = TWO_PI * cfg[S.C_VIB_MOT_MAX] * cmd * period_us * 1e-6 / nsub
+    f = cfg[S.C_VIB_MOT_MAX] * cmd * cfg[S.C_VIB_MOT_FMUL + m]
+    w = TWO_PI * f * period_us * 1e-6 / nsub
     p = s[ph + m]
     fx = 0.0
     fy = 0.0

@@ -235,6 +235,9 @@ C_VIB_IMB_MOT = _c.add("C_VIB_IMB_MOT", 1, "",
 C_VIB_IMB = _c.add("C_VIB_IMB", 1, "m/s^2", "its imbalance force at full command (TLM_VIB_IMB)")
 C_ROTOR_TC = _c.add("C_ROTOR_TC", 1, "s", "rotor speed time constant of the vibration "
                     "(TLM_ROTOR_TC; 0: the command itself)")
+C_VIB_MOT_FMUL = _c.add("C_VIB_MOT_FMUL", MAX_MOTORS, "",
+                        "each motor's vibration frequency factor (1 + TLM_VIB_SPREAD x its "
+                        "place in -1..1; 1: SITL's)")
 C_ROTOR_PWM = _c.add("C_ROTOR_PWM", 2, "us", "the frame's PWM at motor command 0 and its span "
                      "to command 1 (TLM_PWM_MIN/MAX, TLM_SPIN_MIN/MAX, as the motor model)")
 C_GYR_WALK_STEP = _c.add("C_GYR_WALK_STEP", 2, "rad/s",
