@@ -62,7 +62,9 @@ BEFORE = {7: ["600243abfdfb", "d69342543ef8", "c9066e9388b8", "fc81292c511b", "d
 
 
 def test_the_new_streams_leave_every_earlier_draw_unchanged():
-    cfg = ScenarioConfig()
+    # the vibration stream (8) replaces the SIM_GYRn_RND draws of its real-level flights
+    # (tests/test_generate_vibration.py); without it every earlier draw is as before
+    cfg = ScenarioConfig(vibration=None)
     for seed, digests in BEFORE.items():
         assert [_digest(sample_scenario(seed, i, cfg)) for i in range(6)] == digests
     assert [sample_scenario(7, i, cfg).seed for i in range(3)] == [1171815639, 1025053882,

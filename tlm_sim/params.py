@@ -207,6 +207,12 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "spread of the rotors' speeds in the motor vibration: motor m of n turns at 1 + this x "
         "(2 (m - 1) / (n - 1) - 1) times its command's frequency (a real copter's rotors turn a "
         "few per cent apart, so their vibrations beat within seconds); 0 = SITL's (all alike)")),
+    ("TLM_VIB_CMD_REF", 0.0, ParamInfo(
+        "", 0.0, 1.0,
+        "motor command ((PWM - 1000) / 1000) at which each rotor's vibration has the "
+        "SIM_ACCn_RND / SIM_GYRn_RND amplitude; > 0 scales it with the rotor's command squared "
+        "(an imbalance's force goes with rpm squared: little on the ground at idle); 0 = "
+        "SITL's (the accel amplitude the same at any speed)")),
     ("TLM_ROTOR_TC", 0.0, ParamInfo(
         "s", 0.0, 1.0,
         "time constant of the rotor speed that the vibration follows (motor, ESC and propeller "

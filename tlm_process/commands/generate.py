@@ -48,7 +48,10 @@ of every type 1-13, the paper sequence, sequences of the new types); missions
 builtin=0.5,random=0.5; frames +=0.5,x=0.5 (FRAME_CLASS 1, FRAME_TYPE 0 or 1); wind:
 30 % calm (SIM_WIND_SPD 0, SIM_WIND_TURB 0), the others SIM_WIND_SPD 0-8 m/s, SIM_WIND_DIR
 0-360 deg, SIM_WIND_TURB 0-2 m/s; noise SIM_GYR1/2_RND 0-0.5 deg/s, SIM_BARO/BAR2_RND
-0-0.2 m, SIM_MAG_RND 0-20 mGauss (--no-env: no wind and no noise drawn).
+0-0.2 m, SIM_MAG_RND 0-20 mGauss; vibration: 50 % of the flights a real copter's (VIBE
+~2-20 m/s/s per axis, gyro noise ~0.5-7 deg/s, rotors lagging and turning apart, gusts
+correlated over 0.3-1 s; --real-share), the others SITL-quiet (--no-env: no wind, no noise
+and no vibration drawn).
 --config FILE (.json/.yaml) sets any scenario setting (docs/generate.md), e.g. the magnitude
 ranges of the new faults (magnitudes: {gps_glitch: {offset_m: [20, 60]}, battery: {volt:
 [9.9, 10.4]}, ...}), frames: {"+": 0.3, x: 0.7}, wind: {calm: 0.5, speed: [2, 8]}; flags
@@ -227,8 +230,24 @@ def build_config(args: argparse.Namespace) -> Any:
     for name in params:  # a fixed value replaces a drawn one
         ranges.pop(name, None)
     d["wind"] = _wind_setting(args, d, ranges, flag_ranges)
+    d["vibration"] = _vibration_setting(args, d)
     d["ranges"], d["params"] = ranges, params
     return ScenarioConfig.from_dict(d)
+
+
+def _vibration_setting(args: argparse.Namespace, d: dict[str, Any]) -> Any:
+    """The ``vibration`` setting of the command line: the file's (or the defaults) with
+    ``--real-share`` on top; None with ``--no-env``."""
+    share = getattr(args, "real_share", None)
+    vib = None if args.no_env else d.get("vibration", {})
+    if vib is None:
+        if share is not None:
+            why = "--no-env" if args.no_env else f"{args.config} (vibration: null)"
+            raise UsageError(f"{why} draws no vibration: drop --real-share")
+        return None
+    if share is not None and isinstance(vib, dict):
+        vib = {**vib, "real": share}
+    return vib
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -292,6 +311,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                          "(default 0:360)")
     sc.add_argument("--wind-turb", metavar="LOW:HIGH",
                     help="SIM_WIND_TURB of the windy flights, m/s (default 0:2)")
+    sc.add_argument("--real-share", type=float, metavar="F",
+                    help="share of flights with a real copter's vibration and noise, the rest "
+                         "SITL-quiet (default 0.5; 0 when --params gives the vehicle its own; "
+                         "docs/noise.md)")
     sc.add_argument("--params", metavar="F.parm",
                     help="an ArduPilot .parm file whose parameters every flight flies (a "
                          "vehicle from tlm fit; --param beats it; its frame is --frame's)")
@@ -304,8 +327,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                          "SIM_WIND_SPD / _DIR / _TURB is the windy flights' (as --wind-speed, "
                          "--wind-dir, --wind-turb)")
     sc.add_argument("--no-env", action="store_true",
-                    help="no drawn wind or extra sensor noise (the reference SITL settings; "
-                         "add --frame + for the paper's frame)")
+                    help="no drawn wind, extra sensor noise or vibration (the reference SITL "
+                         "settings; add --frame + for the paper's frame)")
     sc.add_argument("--config", metavar="FILE", help="scenario settings (.json/.yaml)")
     out = p.add_argument_group("output")
     out.add_argument("--tables", metavar="GPS,IMU,...",

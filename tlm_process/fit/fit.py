@@ -37,7 +37,8 @@ import numpy as np
 
 from tlm_process.fit.stats import STAT_NAMES, segment_stats
 
-__all__ = ["ACC_AMP", "FIT_STATS", "GYR_AMP", "ROTOR_HZ", "MOT_SPREAD", "ROTOR_TC", "TURB_TC",
+__all__ = ["ACC_AMP", "CMD_REF", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ", "ROTOR_TC",
+           "TURB_TC",
            "FitResult",
            "attitude_std", "copter33_params", "fit_vehicle",
            "fly_hover_stats", "hover_mission", "hover_window", "log_vehicle_params"]
@@ -63,6 +64,12 @@ ROTOR_TC = 0.05
 #: statistics scatter by 1-3 % between seeds instead of 8-18 % (rotors turning alike drift in
 #: and out of phase over tens of seconds)
 MOT_SPREAD = 0.03
+#: motor command at which the vibration amplitudes apply, each rotor's going with its command
+#: squared (``TLM_VIB_CMD_REF``): about a hover's, so the gains are the hover's, and on the
+#: ground at idle the vibration is a tenth (real rotors' imbalance forces go with rpm squared;
+#: SITL's accel vibration is as strong at idle, which on a real-level airframe upsets the
+#: EKF and the land detector after touchdown)
+CMD_REF = 0.55
 #: correlation time [s] of the fitted gusts (``TLM_TURB_TC``): a real hover's lean angle follows
 #: the air over seconds (log171: most of the roll's variance below 2 Hz, the desired roll
 #: carrying it), where SITL's own gusts decorrelate in 41 ms
@@ -239,6 +246,7 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     base["SIM_VIB_MOT_MAX"] = ROTOR_HZ
     base["TLM_ROTOR_TC"] = ROTOR_TC
     base["TLM_VIB_SPREAD"] = MOT_SPREAD
+    base["TLM_VIB_CMD_REF"] = CMD_REF
     floor = _mean_stats([fly_hover_stats(base, seed + j) for j in range(FIT_SEEDS)])
     if progress is not None:
         progress(1)

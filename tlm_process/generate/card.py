@@ -1,5 +1,5 @@
 """The data set card of a generated data set: ``DS/README.md`` (issue 22), so the folder says
-by itself how it was made, what its flights are (kinds, frames, wind, faults, how they
+by itself how it was made, what its flights are (kinds, frames, wind, vibration, faults, how they
 ended), what each table and column is (ArduPilot's message, units as ArduPilot logs them) and
 what the labels mean. Rewritten whenever a run closes the data set (:func:`generate_card`
 from the header and ``manifest.parquet``'s frame).
@@ -71,6 +71,10 @@ def generate_card(header: Mapping[str, Any], manifest: pd.DataFrame,
         f"* missions: {_counts(str(m).split('-')[0] for m in ok.get('mission', []))}",
         f"* frames: {_counts(ok.get('frame', []))}",
     ]
+    if "vibration" in ok:
+        vib = ok["vibration"].fillna("-")
+        lines.append(f"* vibration: {int((vib == 'real').sum())} with a real copter's vibration "
+                     f"and noise, {int((vib == 'quiet').sum())} SITL-quiet (docs/noise.md)")
     if "calm" in ok:
         windy = ok[~ok["calm"].fillna(False).astype(bool)]
         speeds = windy["wind_spd"] if len(windy) else pd.Series(dtype=float)

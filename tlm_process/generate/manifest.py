@@ -210,13 +210,14 @@ def _check_entry(rec: Any, where: str) -> None:
 #: The frame and wind columns of manifest.parquet (:func:`manifest_frame`), as
 #: :func:`~tlm_process.generate.scenario.flight_conditions` gives them.
 CONDITION_COLUMNS: tuple[str, ...] = ("frame", "frame_class", "frame_type", "calm", "wind_spd",
-                                      "wind_dir", "wind_turb")
+                                      "wind_dir", "wind_turb", "vibration")
 
 
 def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
     """One row per flight: status, kind, seeds, mission, frame (``frame`` name,
     ``frame_class``, ``frame_type``), wind (``calm``; ``wind_spd`` m/s, ``wind_dir`` deg
-    (empty when calm), ``wind_turb`` m/s: the SIM_WIND_* values flown), faults, λ, duration,
+    (empty when calm), ``wind_turb`` m/s: the SIM_WIND_* values flown), ``vibration``
+    (``real`` or ``quiet`` airframe), faults, λ, duration,
     landing, why the flight ended (``end_reason``: ``landed``, ``crash``, ``time_cap`` or
     ``not_armed``, see
     :data:`tlm_sim.flight.END_REASONS`), timings, error, scenario (JSON)."""
@@ -261,7 +262,7 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
         df[c] = pd.to_numeric(df[c], errors="coerce").round().astype("Int64")
     for c in ("lam", "duration_s", "wall_s", "fly_s", "wind_spd", "wind_dir", "wind_turb"):
         df[c] = pd.to_numeric(df[c], errors="coerce").astype("float64")
-    for c in ("kind", "mission", "frame", "worker", "error"):  # pandas made some None NaN
+    for c in ("kind", "mission", "frame", "vibration", "worker", "error"):  # None, not NaN
         df[c] = df[c].map(lambda v: None if v is None or v != v else str(v))
     for c in ("landed", "calm"):
         df[c] = df[c].map(lambda v: v if isinstance(v, bool) else pd.NA).astype("boolean")

@@ -53,7 +53,13 @@ any fault time. Streams:
    it draws its parameters in name order and the wind names sort last, so the sensor-noise
    draws are those of the tlm before frames and wind.
 
-Streams 6 and 7 came last, so every draw of streams 0-5 of a flight is what it was before
+8. **vibration**: a real copter's vibration and noise or SITL's quiet airframe, by
+   :attr:`ScenarioConfig.vibration`'s ``real`` share (one uniform draw), then every parameter
+   of its ``ranges`` uniform (name order, rounded to 0.001; always all draws, so the share
+   moves no real flight's values). A real-level flight flies the drawn airframe (they replace
+   the environment's SIM_GYRn_RND draws); a quiet one none of them (docs/noise.md).
+
+Streams 6 to 8 came last, so every draw of streams 0-5 of a flight is what it was before
 (``tests/test_generate_frames.py`` pins it against digests of the earlier sampler).
 
 :func:`fault_preset` names the usual choices of fault types (``--faults`` of ``tlm
@@ -98,10 +104,12 @@ from tlm_sim.profiles import PROFILES, profile_params
 __all__ = [
     "DEFAULT_FRAMES",
     "DEFAULT_RANGES",
+    "DEFAULT_VIBRATION",
     "DEFAULT_WIND",
     "FRAME_PARAMS",
     "KINDS",
     "PAPER_TYPES",
+    "REAL_VIBRATION",
     "fault_params",
     "fault_preset",
     "frame_params",
@@ -124,7 +132,8 @@ MISSION_SOURCES: tuple[str, ...] = ("builtin", "random")
 #: Faults of a paper-style flight before the RC fault (shuffled unless ``shuffle=False``).
 PAPER_FIRST: tuple[str, ...] = ("gps", "accel", "engine")
 
-_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE, _S_FRAME, _S_WIND = range(8)
+(_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE, _S_FRAME, _S_WIND,
+ _S_VIBRATION) = range(9)
 
 #: The paper's four fault types (labels 1-4).
 PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
@@ -172,6 +181,27 @@ WIND_PARAMS: dict[str, str] = {"speed": "SIM_WIND_SPD", "direction": "SIM_WIND_D
 #: SITL's held-back wind flights (up to 8 m/s, turbulence above the reference's 1).
 DEFAULT_WIND: dict[str, Any] = {"calm": 0.3, "speed": (0.0, 8.0), "direction": (0.0, 360.0),
                                 "turbulence": (0.0, 2.0)}
+
+#: The airframe of a real-level flight (issue 40, docs/noise.md): each parameter uniform in its
+#: range. SITL's motor vibration (amplitudes SIM_ACCn_RND 5 m/s^2 and SIM_GYRn_RND 20 deg/s
+#: per rotor, the autotest quad's) shaped per axis by the TLM_VIB_* gains: VIBE ~2-20 m/s^2
+#: per axis (ArduPilot's guide: below 15 good, below 30 acceptable) and gyro noise ~0.5-7
+#: deg/s, the range of real quads (issue 40's table; log171 fitted: accel gains 1.4 / 0.4 /
+#: 0.6, gyro 6.5 / 1.0 / 1.4) at hover (command ~0.55), each rotor's going with its speed
+#: squared; rotors at 120-250 Hz full command, lagging 30-80 ms, a few per cent apart; the
+#: drawn turbulence's gusts correlated over 0.3-1 s.
+REAL_VIBRATION: dict[str, tuple[float, float]] = {
+    "SIM_ACC1_RND": (5.0, 5.0), "SIM_ACC2_RND": (5.0, 5.0),
+    "SIM_GYR1_RND": (20.0, 20.0), "SIM_GYR2_RND": (20.0, 20.0),
+    "SIM_VIB_MOT_MAX": (120.0, 250.0),
+    "TLM_ROTOR_TC": (0.03, 0.08), "TLM_VIB_SPREAD": (0.01, 0.05), "TLM_TURB_TC": (0.3, 1.0),
+    "TLM_VIB_CMD_REF": (0.55, 0.55),
+    "TLM_VIB_ACC_X": (0.3, 3.0), "TLM_VIB_ACC_Y": (0.3, 3.0), "TLM_VIB_ACC_Z": (0.3, 3.0),
+    "TLM_VIB_GYR_X": (0.5, 8.0), "TLM_VIB_GYR_Y": (0.5, 8.0), "TLM_VIB_GYR_Z": (0.3, 3.0),
+}
+#: Default vibration setting: half the flights with a real copter's vibration, half
+#: SITL-quiet.
+DEFAULT_VIBRATION: dict[str, Any] = {"real": 0.5, "ranges": REAL_VIBRATION}
 
 
 def _shares(d: Mapping[str, Any], known: tuple[str, ...], what: str) -> dict[str, float]:
@@ -240,6 +270,13 @@ class ScenarioConfig:
             is taken as the wind setting's (so older configurations keep working); ``params``
             may not fix them. ``None``: no wind draw (the three are the simulator's defaults,
             calm, or what ``ranges`` / ``params`` give every flight).
+        vibration: ``real`` (share of flights with a real copter's vibration and noise, 0..1)
+            and their ``ranges`` (parameter -> (low, high)); missing keys take
+            :data:`DEFAULT_VIBRATION`'s (half the flights real, :data:`REAL_VIBRATION`). When
+            ``params`` fix any of these parameters (``--params vehicle.parm`` of a ``tlm fit``
+            vehicle) and no share is given, no flight draws them (the vehicle has its own);
+            a share > 0 with such ``params`` is refused. ``None``: no draw (every flight
+            SITL-quiet, or what ``params`` give).
     """
 
     kinds: Mapping[str, float] = field(
@@ -267,6 +304,7 @@ class ScenarioConfig:
     frames: Mapping[str, float] | str | list[str] = field(
         default_factory=lambda: dict(DEFAULT_FRAMES))
     wind: Mapping[str, Any] | None = field(default_factory=dict)
+    vibration: Mapping[str, Any] | None = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -314,6 +352,13 @@ class ScenarioConfig:
         _check_params(params, ranges, wind, frames)
         set_(self, "frames", frames)
         set_(self, "wind", wind)
+        vib = _vibration(self.vibration, params, ranges)
+        if vib is not None:
+            _check_params({**params, **{k: lo for k, (lo, _) in vib["ranges"].items()}}, {},
+                          None, frames)
+            _check_params({**params, **{k: hi for k, (_, hi) in vib["ranges"].items()}}, {},
+                          None, frames)
+        set_(self, "vibration", vib)
         set_(self, "ranges", ranges)
         set_(self, "params", {k: float(params[k]) for k in sorted(params)})
         set_(self, "sequence_types", _types(self.sequence_types, "sequence_types"))
@@ -444,6 +489,45 @@ def _wind(w: Any, ranges: dict[str, tuple[float, float]]) -> dict[str, Any] | No
     return out
 
 
+def _vibration(v: Any, params: Mapping[str, Any],
+               ranges: Mapping[str, tuple[float, float]]) -> dict[str, Any] | None:
+    """The validated vibration setting (see :class:`ScenarioConfig`), None for no draw."""
+    if v is None:
+        return None
+    if not isinstance(v, Mapping):
+        raise GenerateError(f"vibration must be a mapping (real, ranges) or null for no draw, "
+                            f"got {v!r}")
+    unknown = [k for k in v if k not in ("real", "ranges")]
+    if unknown:
+        raise GenerateError(f"vibration: unknown setting {unknown[0]!r}; known: real, ranges")
+    raw = v.get("ranges", DEFAULT_VIBRATION["ranges"])
+    if not isinstance(raw, Mapping):
+        raise GenerateError(f"vibration: ranges must be a mapping NAME -> [low, high], got "
+                            f"{raw!r}")
+    out_ranges: dict[str, tuple[float, float]] = {}
+    for name in sorted(raw):
+        r = raw[name]
+        if isinstance(r, int | float) and not isinstance(r, bool):
+            r = (r, r)
+        out_ranges[str(name)] = _range(r, f"vibration range of {name}", -math.inf)
+    fixed = sorted(n for n in out_ranges if n in params)
+    if "real" not in v and fixed:
+        return {"real": 0.0, "ranges": out_ranges}  # the vehicle has its own vibration
+    real = v.get("real", DEFAULT_VIBRATION["real"])
+    if isinstance(real, bool) or not isinstance(real, int | float) or not 0 <= real <= 1:
+        raise GenerateError(f"vibration: real (the share of real-level flights, --real-share) "
+                            f"must be a number in [0, 1], got {real!r}")
+    if real > 0 and fixed:
+        raise GenerateError(f"{fixed[0]} is both drawn (real-level vibration, --real-share) "
+                            "and fixed (params): give --real-share 0 to fly the vehicle's own "
+                            "on every flight")
+    drawn_twice = sorted(n for n in out_ranges if n in ranges and not n.startswith("SIM_GYR"))
+    if real > 0 and drawn_twice:
+        raise GenerateError(f"{drawn_twice[0]} is drawn twice (ranges and the real-level "
+                            "vibration); give it once")
+    return {"real": float(real), "ranges": out_ranges}
+
+
 def _check_params(params: Mapping[str, Any], ranges: Mapping[str, tuple[float, float]],
                   wind: Mapping[str, Any] | None, frames: Mapping[str, float]) -> None:
     """GenerateError unless every flight's parameters are valid: both ends of every draw, on
@@ -480,7 +564,9 @@ def flight_conditions(params: Mapping[str, Any]) -> dict[str, Any]:
     ``frame`` (name in :data:`tlm_sim.frames.FRAMES`, None for a combination it lacks),
     ``frame_class``, ``frame_type``, ``calm`` (no mean wind and no turbulence),
     ``wind_spd`` (m/s at full-strength height), ``wind_dir`` (deg, where the wind comes from;
-    NaN when calm) and ``wind_turb`` (m/s)."""
+    NaN when calm), ``wind_turb`` (m/s) and ``vibration`` (``"real"`` when the airframe
+    vibrates of itself, motor-locked, before any fault: SIM_VIB_MOT_MAX and an
+    accelerometer's SIM_ACCn_RND set; else ``"quiet"``)."""
     defaults = Params.defaults()
 
     def num(name: str) -> float:
@@ -495,9 +581,10 @@ def flight_conditions(params: Mapping[str, Any]) -> dict[str, Any]:
         name = None
     spd, turb = num("SIM_WIND_SPD"), num("SIM_WIND_TURB")
     calm = spd == 0 and turb == 0
+    real = num("SIM_VIB_MOT_MAX") > 0 and (num("SIM_ACC1_RND") > 0 or num("SIM_ACC2_RND") > 0)
     return {"frame": name, "frame_class": cls, "frame_type": typ, "calm": calm,
             "wind_spd": spd, "wind_dir": math.nan if calm else num("SIM_WIND_DIR"),
-            "wind_turb": turb}
+            "wind_turb": turb, "vibration": "real" if real else "quiet"}
 
 
 def _types(v: Any, what: str) -> tuple[str, ...]:
@@ -865,6 +952,8 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     params.update(frame_params(frame))
     if cfg.wind is not None:
         params.update(_draw_wind(_stream(run_seed, flight, _S_WIND), cfg.wind))
+    if cfg.vibration is not None:
+        params.update(_draw_vibration(_stream(run_seed, flight, _S_VIBRATION), cfg.vibration))
     params = dict(sorted(params.items()))
     seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
     seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
@@ -886,6 +975,16 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
                     faults=schedule.to_dict(), params=params, profile=cfg.profile,
                     lam=cfg.lam, mission_sha1=mission_hash(mission),
                     dropped=len(drawn) - len(kept), frame=frame)
+
+
+def _draw_vibration(rng: np.random.Generator, vib: Mapping[str, Any]) -> dict[str, float]:
+    """The airframe of one flight (stream 8): with the ``real`` share every parameter of the
+    ``ranges`` uniform (name order, rounded to 0.001), else none. All draws are made either
+    way."""
+    real = float(rng.random()) < vib["real"]
+    drawn = {name: round(float(rng.uniform(lo, hi)), 3)
+             for name, (lo, hi) in sorted(vib["ranges"].items())}
+    return drawn if real else {}
 
 
 def _draw_wind(rng: np.random.Generator, wind: Mapping[str, Any]) -> dict[str, float]:

@@ -67,6 +67,8 @@ AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs:
 # there (above 0.2 at 2.9-3.0 s) and NOT_LANDED at 3.28 s
 ARMING_DELAY_S = 2.0
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
+#: AC_PosControl's POSCONTROL_RELAX_TC [s]: the time constant of soften_for_landing's decay
+POSCONTROL_RELAX_TC = 0.16
 LAND_MAYBE_S = 0.2
 LAND_WITH_DELAY_S = 4.0  # failsafe LAND pauses this long before descending
 # AUTO after the GUIDED takeoff: the reference driver switches at ~91.5 % of the takeoff
@@ -523,6 +525,16 @@ def _land_descent(c, g, t_us, pos, land_vertical, ev):
     c[C.PXY_ACC_FF] = 0.0
     c[C.PXY_ACC_FF + 1] = 0.0
     c[C.PZ_ACC_FF] = 0.0
+    if c[C.MAYBE_LANDED] != 0.0:
+        # AC_PosControl::soften_for_landing_NE (Mode::land_run_horizontal_control while
+        # land_complete_maybe): the position target decays to the estimate with
+        # POSCONTROL_RELAX_TC and the velocity integrator may not grow along the acceleration
+        # target (set_externally_limited_NE), so a copter on the ground in wind does not wind
+        # its lean target up before the detector completes
+        k = dt / (dt + POSCONTROL_RELAX_TC)
+        for j in range(2):
+            c[C.PXY_POS_T + j] += (pos[j] - c[C.PXY_POS_T + j]) * k
+            c[C.PXY_LIMIT + j] = c[C.PXY_ACC_T + j]
     if land_vertical:
         # ArduCopter's land descent rate: the square-root controller (PSC_POSZ_P,
         # WPNAV_ACCEL_Z) towards LAND_ALT_LOW, kept between LAND_SPEED and LAND_SPEED_HIGH

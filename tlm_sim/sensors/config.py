@@ -79,6 +79,7 @@ def _vibration_config(c: np.ndarray, p: Params) -> None:
     c[S.C_VIB_IMB] = p["TLM_VIB_IMB"]
     c[S.C_VIB_IMB_MOT] = p["TLM_VIB_IMB_MOT"] - 1.0  # -1: none
     c[S.C_ROTOR_TC] = p["TLM_ROTOR_TC"]
+    c[S.C_VIB_CMD_REF] = p["TLM_VIB_CMD_REF"]
     # rotors that turn a little apart (TLM_VIB_SPREAD): motor m of n at 1 + spread x
     # (2 m / (n - 1) - 1), -spread .. +spread in motor order
     c[S.C_VIB_MOT_FMUL:S.C_VIB_MOT_FMUL + MAX_MOTORS] = 1.0

@@ -333,8 +333,8 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
     (SIM_VIB_MOT_HMNC bit h - 1), sin(h phi_m) amp (1 + 0.05 U). Motor m's phase phi_m (s[ph + m])
     advances each sub-sample by 2 pi f_m (1 + 0.12 U) / sub-sample rate, f_m = command_m x
     SIM_VIB_MOT_MAX with command_m = (PWM_m - 1000) / 1000 (times motor m's
-    TLM_VIB_SPREAD factor): rpm-locked, smeared like real motors. 0 when SIM_VIB_MOT_MAX
-    is 0."""
+    TLM_VIB_SPREAD factor): rpm-locked, smeared like real motors; with TLM_VIB_CMD_REF > 0
+    each rotor's amplitude x (command_m / TLM_VIB_CMD_REF)^2. 0 when SIM_VIB_MOT_MAX is 0."""
     nsub, period_us = sampling  # sub-samples per published sample, its period [us]
     f_max = cfg[S.C_VIB_MOT_MAX]
     if f_max <= 0.0:
@@ -343,6 +343,7 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
     hmnc = int(cfg[S.C_VIB_MOT_HMNC])
     n = int(nsub)
     w = TWO_PI * f_max * period_us * 1e-6 / nsub  # phase step per unit command
+    ref = cfg[S.C_VIB_CMD_REF]
     total = 0.0
     for _ in range(n):
         for m in range(MAX_MOTORS):  # outputs 1..8; one without a PWM (0) has no motor
@@ -353,9 +354,12 @@ def _motor_vibration(s, ph, cfg, pwm, amp, sampling, rng):
             if p >= TWO_PI:
                 p %= TWO_PI
             s[ph + m] = p
+            a = amp
+            if ref > 0.0:  # TLM_VIB_CMD_REF: the rotor's force goes with its speed squared
+                a = amp * (cmd / ref) * (cmd / ref)
             for h in range(1, 9):
                 if (hmnc >> (h - 1)) & 1:
-                    total += (math.sin(h * p) * amp
+                    total += (math.sin(h * p) * a
                               * (1.0 + VIB_AMP_VARIATION * uniform_pm1(rng)))
     return total / nsub
 

@@ -238,6 +238,9 @@ C_ROTOR_TC = _c.add("C_ROTOR_TC", 1, "s", "rotor speed time constant of the vibr
 C_VIB_MOT_FMUL = _c.add("C_VIB_MOT_FMUL", MAX_MOTORS, "",
                         "each motor's vibration frequency factor (1 + TLM_VIB_SPREAD x its "
                         "place in -1..1; 1: SITL's)")
+C_VIB_CMD_REF = _c.add("C_VIB_CMD_REF", 1, "", "motor command at which the motor vibration "
+                       "has its SIM_ACCn_RND / SIM_GYRn_RND amplitude, each rotor's scaling with "
+                       "its command squared (TLM_VIB_CMD_REF; 0: SITL's, no scaling)")
 C_ROTOR_PWM = _c.add("C_ROTOR_PWM", 2, "us", "the frame's PWM at motor command 0 and its span "
                      "to command 1 (TLM_PWM_MIN/MAX, TLM_SPIN_MIN/MAX, as the motor model)")
 C_GYR_WALK_STEP = _c.add("C_GYR_WALK_STEP", 2, "rad/s",
