@@ -84,6 +84,7 @@ def test_fit_recovers_known_parameters_from_a_tlm_flight():
     10 %."""
     from tlm_process.fit.fit import (
         ACC_AMP,
+        CMD_REF,
         GYR_AMP,
         MOT_SPREAD,
         ROTOR_HZ,
@@ -95,7 +96,8 @@ def test_fit_recovers_known_parameters_from_a_tlm_flight():
 
     true = {"SIM_VIB_MOT_MAX": ROTOR_HZ, "SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_ROTOR_TC": ROTOR_TC,
-            "TLM_VIB_SPREAD": MOT_SPREAD, "TLM_TURB_TC": TURB_TC, **KNOWN}
+            "TLM_VIB_SPREAD": MOT_SPREAD, "TLM_VIB_CMD_REF": CMD_REF, "TLM_TURB_TC": TURB_TC,
+            **KNOWN}
     target = fly_hover_stats(true, seed=5, hold_s=240)
     r = fit_vehicle(target, {}, seed=1)
     for name, want in KNOWN.items():
