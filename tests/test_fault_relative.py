@@ -106,3 +106,19 @@ def test_the_vibration_fault_stays_a_fault_on_a_vibrating_airframe():
                                    "SIM_VIB_MOT_MAX": 150.0}
     assert rec["params_end"] == {"SIM_VIB_MOT_MAX": 150.0, "SIM_ACC1_RND": 5.0,
                                  "SIM_ACC2_RND": 5.0}
+
+
+def test_a_fault_may_set_parameters_that_go_together():
+    """A fault's values are checked one by one (names, ranges); a rule between parameters
+    (TLM_VIB_IMB needs its motor and a rotor frequency) is checked against the flight's whole
+    set when it is flown: a damaged propeller as a vibration fault on a vibrating airframe
+    flies, the same without a rotor frequency is refused with the rule's message."""
+    prop = Fault("vibration", 60, 90,
+                 params_start={"TLM_VIB_IMB_MOT": 1, "TLM_VIB_IMB": 20.0, "SIM_ENGINE_MUL": 0.9},
+                 params_end={"TLM_VIB_IMB": 0.0, "SIM_ENGINE_MUL": 1.0})
+    log = fly(1, FaultSchedule((prop,)), params=NOISY, seed=3)
+    assert log.faults[0]["params_start"]["TLM_VIB_IMB"] == 20.0
+    with pytest.raises(ValueError, match="TLM_VIB_IMB needs SIM_VIB_MOT_MAX"):
+        fly(1, FaultSchedule((prop,)), seed=3)
+    with pytest.raises(FaultScheduleError, match="TLM_VIB_IMB"):
+        Fault("vibration", 60, 90, params_start={"TLM_VIB_IMB": -1.0})

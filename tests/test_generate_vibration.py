@@ -118,3 +118,15 @@ def test_real_level_flights_fly_and_land(tmp_path):
     vibe = pd.read_parquet(tmp_path / "ds" / "VIBE.parquet")
     cruise = vibe[(vibe.TimeUS > 60e6) & (vibe.TimeUS < 200e6)]
     assert cruise.groupby("flight")[["VibeX", "VibeY", "VibeZ"]].mean().max(axis=1).min() > 1.0
+
+
+def test_a_fitted_vehicle_file_leaves_its_air_to_the_drawn_wind(tmp_path, capsys):
+    """``--params vehicle.parm`` of ``tlm fit`` carries the gusts it fitted (its log's air):
+    while the wind is drawn they are left out with a note; with --no-env they are flown."""
+    parm = tmp_path / "v.parm"
+    parm.write_text("SIM_ACC1_RND 5\nSIM_VIB_MOT_MAX 150\nSIM_WIND_TURB 0.5\nTLM_TURB_TC 1\n")
+    cfg = build_config(_args(params=str(parm)))
+    assert "SIM_WIND_TURB" not in cfg.params and cfg.params["TLM_TURB_TC"] == 1.0
+    assert cfg.vibration["real"] == 0.0
+    assert "SIM_WIND_TURB left to the drawn wind" in capsys.readouterr().err
+    assert build_config(_args(params=str(parm), no_env=True)).params["SIM_WIND_TURB"] == 0.5

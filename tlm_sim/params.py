@@ -56,6 +56,7 @@ __all__ = [
     "ParamError",
     "ParamInfo",
     "Params",
+    "check_value",
     "UnknownParamError",
     "UnmodelledParamError",
     "UnmodelledParamWarning",
@@ -849,6 +850,14 @@ def is_modelled(name: str) -> bool:
     true). Parameters only in the default ``.parm`` file are not modelled."""
     info = PARAM_INFO.get(name)
     return info is not None and info.modelled
+
+
+def check_value(name: Any, value: Any) -> tuple[str, float]:
+    """One parameter set on its own (a fault's value, ``--param``): the canonical name (an
+    alias resolved, its value converted) and the value as float, ParamError for an unknown
+    or unmodelled name or a value out of range. Rules between parameters (TLM_VIB_IMB needs
+    its motor, ...) are checked where the whole set is known (:class:`Params`)."""
+    return _check(name, value, _defaults(), True)
 
 
 def _check(name: str, value: Any, defaults: Mapping[str, float],

@@ -178,14 +178,18 @@ def _config_file(path: str) -> dict[str, Any]:
     return doc
 
 
-def _vehicle_params(path: str | None) -> dict[str, float]:
+def _vehicle_params(path: str | None, wind_drawn: bool = False) -> dict[str, float]:
     """The changes a ``--params`` file (e.g. ``tlm fit``'s vehicle) makes that tlm models, as
     fixed parameters of every flight; its frame is --frame's to choose (FRAME_CLASS /
-    FRAME_TYPE are left out)."""
+    FRAME_TYPE are left out), and while the wind is drawn (``wind_drawn``) so is its wind:
+    the file's SIM_WIND_SPD / _DIR / _TURB (a fit's gusts are its log's air, not the vehicle)
+    are left out, with a note on stderr."""
     if not path:
         return {}
+    import sys
     import warnings
 
+    from tlm_process.generate.scenario import WIND_PARAMS
     from tlm_sim.params import Params, is_modelled
 
     if not Path(path).is_file():
@@ -193,8 +197,16 @@ def _vehicle_params(path: str | None) -> dict[str, float]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         p = Params.from_parm(path)
-    return {k: v for k, v in p.changed().items()
-            if is_modelled(k) and k not in ("FRAME_CLASS", "FRAME_TYPE")}
+    out = {k: v for k, v in p.changed().items()
+           if is_modelled(k) and k not in ("FRAME_CLASS", "FRAME_TYPE")}
+    air = sorted(k for k in out if wind_drawn and k in WIND_PARAMS.values())
+    if air:
+        for k in air:
+            del out[k]
+        print(f"tlm generate: --params {path}: {', '.join(air)} left to the drawn wind "
+              "(--no-env, or --calm-share 0 with --wind-* ranges, to fly the file's air)",
+              file=sys.stderr)
+    return out
 
 
 def build_config(args: argparse.Namespace) -> Any:
@@ -225,7 +237,9 @@ def build_config(args: argparse.Namespace) -> Any:
         ranges = {}
     flag_ranges = _ranges(args.range or [])
     ranges.update(flag_ranges)
-    params = {**dict(d.get("params") or {}), **_vehicle_params(getattr(args, "params", None)),
+    wind_drawn = not args.no_env and d.get("wind", {}) is not None
+    params = {**dict(d.get("params") or {}),
+              **_vehicle_params(getattr(args, "params", None), wind_drawn),
               **parse_param_args(args.param or [])}
     for name in params:  # a fixed value replaces a drawn one
         ranges.pop(name, None)

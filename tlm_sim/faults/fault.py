@@ -10,7 +10,7 @@ from typing import Any
 
 from tlm_sim.faults.trigger import FaultScheduleError, Trigger, fmt_number, plain_number
 from tlm_sim.faults.types import FAULT_TYPES, FaultType
-from tlm_sim.params import ALIASES, ParamError, Params
+from tlm_sim.params import ParamError, check_value
 
 __all__ = ["Fault"]
 
@@ -34,8 +34,8 @@ def lookup_type(name: Any) -> FaultType:
 
 
 def _canonical_params(given: Any, where: str) -> dict[str, float]:
-    """``given`` validated by :class:`~tlm_sim.params.Params` (names, finite values, ranges),
-    with paper-era names resolved to the current ones."""
+    """``given`` validated one by one (:func:`~tlm_sim.params.check_value`: names, finite
+    values, ranges), with paper-era names resolved to the current ones."""
     if not isinstance(given, Mapping):
         raise FaultScheduleError(
             f"{where} must be a mapping NAME -> value, got {type(given).__name__}")
@@ -43,15 +43,13 @@ def _canonical_params(given: Any, where: str) -> dict[str, float]:
         raise FaultScheduleError(f"{where} is empty")
     out: dict[str, float] = {}
     for name, value in given.items():
-        try:
-            checked = Params({name: value})
+        try:  # alone: a rule between parameters is checked with the flight's (build_schedule)
+            canonical, x = check_value(name, value)
         except ParamError as exc:
             raise FaultScheduleError(f"{where}: {exc}") from None
-        alias = ALIASES.get(name)
-        canonical = alias.target if alias is not None else name
         if canonical in out:
             raise FaultScheduleError(f"{where} sets {canonical} twice (via {name})")
-        out[canonical] = checked[canonical]
+        out[canonical] = x
     return out
 
 
