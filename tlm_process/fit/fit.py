@@ -20,9 +20,9 @@ quadrature when a gain is scaled. The rate-tracking error is not fitted: it foll
 gyro noise and the gusts through tlm's controllers, and the report compares it too; the gusts
 are the same on every axis, so roll and pitch are fitted as one. A log's rotor
 frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ`, the
-rotors' speed lags their commands by :data:`ROTOR_TC` and they turn :data:`MOT_SPREAD` apart
-(a SITL log's own SIM_* parameters are its simulator's, not its vehicle's, and are not
-taken).
+rotors' speed lags their commands by :data:`ROTOR_TC`, they turn :data:`MOT_SPREAD` apart and
+their vibration goes with their command squared about :data:`CMD_REF` (a SITL log's own SIM_*
+parameters are its simulator's, not its vehicle's, and are not taken).
 """
 
 from __future__ import annotations
@@ -38,9 +38,7 @@ import numpy as np
 from tlm_process.fit.stats import STAT_NAMES, segment_stats
 
 __all__ = ["ACC_AMP", "CMD_REF", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ", "ROTOR_TC",
-           "TURB_TC",
-           "FitResult",
-           "attitude_std", "copter33_params", "fit_vehicle",
+           "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_vehicle",
            "fly_hover_stats", "hover_mission", "hover_window", "log_vehicle_params"]
 
 #: accelerometer vibration amplitude per motor [m/s^2] the per-axis gains scale (SITL's
