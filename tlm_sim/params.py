@@ -855,9 +855,13 @@ def is_modelled(name: str) -> bool:
 def check_value(name: Any, value: Any) -> tuple[str, float]:
     """One parameter set on its own (a fault's value, ``--param``): the canonical name (an
     alias resolved, its value converted) and the value as float, ParamError for an unknown
-    or unmodelled name or a value out of range. Rules between parameters (TLM_VIB_IMB needs
-    its motor, ...) are checked where the whole set is known (:class:`Params`)."""
-    return _check(name, value, _defaults(), True)
+    or unmodelled name, a value out of range or one no flight can have (SIM_GYR_FAIL_MSK
+    masking every gyro). Rules between parameters (TLM_VIB_IMB needs its motor, ...) are
+    checked where the whole set is known (:class:`Params`)."""
+    key, x = _check(name, value, _defaults(), True)
+    if key == "SIM_GYR_FAIL_MSK":
+        _check_gyro_mask(x)
+    return key, x
 
 
 def _check(name: str, value: Any, defaults: Mapping[str, float],
@@ -919,13 +923,18 @@ def _to_float(name: str, value: Any) -> float:
 _ALL_GYROS = 0b11
 
 
-def _check_consistency(values: Mapping[str, float]) -> None:
-    if int(values["SIM_GYR_FAIL_MSK"]) & _ALL_GYROS == _ALL_GYROS:
+def _check_gyro_mask(mask: float) -> None:
+    """ParamError when SIM_GYR_FAIL_MSK ``mask`` masks every gyro tlm simulates."""
+    if int(mask) & _ALL_GYROS == _ALL_GYROS:
         raise ParamError(
-            f"SIM_GYR_FAIL_MSK = {_format_number(values['SIM_GYR_FAIL_MSK'])} masks every gyro "
+            f"SIM_GYR_FAIL_MSK = {_format_number(mask)} masks every gyro "
             f"(tlm simulates 2 IMUs, bits 0 and 1): SITL's firmware then waits for a gyro sample "
             f"forever and the simulation freezes, so there is no flight to simulate; keep bit 0 "
             f"or bit 1 clear")
+
+
+def _check_consistency(values: Mapping[str, float]) -> None:
+    _check_gyro_mask(values["SIM_GYR_FAIL_MSK"])
     try:
         frame_for(values["FRAME_CLASS"], values["FRAME_TYPE"])
     except FrameError as exc:
