@@ -80,7 +80,8 @@ def rate_unit(tables: Mapping[str, pd.DataFrame]) -> float:
     return 0.01 if abs(slope) > CENTI_SLOPE else 1.0
 
 
-def _throttle(ctun: pd.DataFrame) -> pd.Series:
+def throttle_out(ctun: pd.DataFrame) -> pd.Series:
+    """CTUN's throttle output 0..1 (ThO; Copter 3.x's ThrOut 0..1000 scaled)."""
     if "ThO" in ctun:
         return pd.to_numeric(ctun.ThO, errors="coerce")
     if "ThrOut" in ctun:  # Copter 3.x: 0..1000
@@ -100,7 +101,7 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
         if len(df) < 3:
             raise StatsError(f"no {name} rows between {t0_us * 1e-6:.1f} s and "
                              f"{t1_us * 1e-6:.1f} s")
-    out = {"hover_thr": float(_throttle(ctun).mean()),
+    out = {"hover_thr": float(throttle_out(ctun).mean()),
            "roll_std_deg": _std(att.Roll), "pitch_std_deg": _std(att.Pitch)}
     for ax in "xyz":
         out[f"acc_{ax}_std"] = _std(imu[f"Acc{ax.upper()}"])
