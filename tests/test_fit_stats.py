@@ -159,3 +159,19 @@ def test_copter33_attitude_parameters_take_their_34_names_and_scales():
     assert copter33_params(four) == four
     keep, _ = log_vehicle_params(old)
     assert keep["ATC_ANG_PIT_P"] == 8.0 and keep["FRAME_TYPE"] == 1.0
+
+
+def test_the_logs_battery_is_flown():
+    """log171's 4S pack (16.5 V at arming, CURR.Volt in cV), its 5200 mAh and its Copter 3.3
+    battery failsafe (FS_BATT_VOLTAGE 14, FS_BATT_ENABLE 2 = RTL) and compensation range
+    (MOT_THST_BAT_MAX/MIN) under their later names."""
+    from tlm_process.fit.fit import log_battery, log_vehicle_params
+    from tlm_process.logread import read_log_tables
+
+    lt = read_log_tables(real_path("log171.bin"))
+    assert log_battery(lt.tables, lt.params) == {"SIM_BATT_VOLTAGE": 16.8, "TLM_MAX_VOLT": 16.8,
+                                                  "SIM_BATT_CAP_AH": 5.2}
+    keep, _ = log_vehicle_params(lt.params)
+    assert keep["BATT_LOW_VOLT"] == 14.0 and keep["BATT_FS_LOW_ACT"] == 2.0
+    assert keep["MOT_BAT_VOLT_MAX"] == pytest.approx(16.8)
+    assert log_battery({}, {}) == {}

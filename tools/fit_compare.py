@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tlm_process.fit.fit import fit_vehicle, fly_hover_stats
+from tlm_process.fit.fit import fit_vehicle, fly_hover_stats, log_battery
 from tlm_process.fit.segment import parse_segment
 from tlm_process.fit.stats import segment_stats
 from tlm_process.logread import read_log_tables
@@ -45,7 +45,8 @@ def main() -> int:
         lt = read_log_tables(args.log)
         first = segment_stats(lt.tables, t0, mid)
         second = segment_stats(lt.tables, mid, t1)
-        fit = fit_vehicle(first, lt.params, args.iterations, seed=1)
+        fit = fit_vehicle(first, lt.params, args.iterations, seed=1,
+                          battery=log_battery(lt.tables, lt.params))
         runs = [fly_hover_stats(fit.params, seed=101 + k) for k in range(args.seeds)]
     tlm = {k: float(np.mean([r[k] for r in runs])) for k in runs[0]}
     spread = {k: float(np.std([r[k] for r in runs])) for k in runs[0]}

@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from tlm_process.fit.fit import fit_vehicle
+    from tlm_process.fit.fit import fit_vehicle, log_battery
     from tlm_process.fit.segment import parse_segment, steady_segments
     from tlm_process.fit.stats import StatsError, segment_stats
     from tlm_process.logread import LogReadError, read_log_tables, warn_damage
@@ -82,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = fit_vehicle(target, lt.params, args.iterations, args.seed,
-                        progress=lambda k: bar.update(2 * k - bar.n))
+                        progress=lambda k: bar.update(2 * k - bar.n),
+                        battery=log_battery(lt.tables, lt.params))
     print(format_table(r.log, r.tlm))
     for name, why in r.dropped.items():
         print(f"note: the log's {name} is not flown: {why}")

@@ -34,11 +34,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from tlm_process.fit.stats import STAT_NAMES, segment_stats
 
 __all__ = ["ACC_AMP", "CMD_REF", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ", "ROTOR_TC",
-           "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_vehicle",
+           "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_vehicle", "log_battery",
            "fly_hover_stats", "hover_mission", "hover_window", "log_vehicle_params"]
 
 #: accelerometer vibration amplitude per motor [m/s^2] the per-axis gains scale (SITL's
@@ -122,14 +123,24 @@ COPTER33_NAMES: dict[str, str] = {
     "RATE_RLL_FILT_HZ": "ATC_RAT_RLL_FLTD", "RATE_PIT_FILT_HZ": "ATC_RAT_PIT_FLTD",
     "RATE_YAW_FILT_HZ": "ATC_RAT_YAW_FLTE",
     **{f"STB_{a}_P": f"ATC_ANG_{a}_P" for a in ("RLL", "PIT", "YAW")},
+    # the motors' battery compensation (MOT_THST_BAT_* became MOT_BAT_VOLT_*) and the battery
+    # failsafe (FS_BATT_*: 0 off, 1 land, 2 RTL, as BATT_FS_LOW_ACT)
+    "MOT_THST_BAT_MAX": "MOT_BAT_VOLT_MAX", "MOT_THST_BAT_MIN": "MOT_BAT_VOLT_MIN",
+    "FS_BATT_VOLTAGE": "BATT_LOW_VOLT", "FS_BATT_MAH": "BATT_LOW_MAH",
+    "FS_BATT_ENABLE": "BATT_FS_LOW_ACT",
 }
+#: a fully charged LiPo cell [V], and the charge a cell is taken to have at arming (the
+#: cell count is the arming voltage over it, rounded)
+CELL_FULL_V = 4.2
+CELL_AT_ARMING_V = 4.1
 #: Copter 3.3's rate-controller output range: IMAX was in it, 3.4+ has 0..1
 COPTER33_OUTPUT = 4500.0
 
 
 def copter33_params(values: Mapping[str, float]) -> dict[str, float]:
-    """``values`` with Copter 3.3's attitude-controller parameters under their 3.4+ names and
-    scales (a log that has the 3.4+ names is returned unchanged). Copter 3.4 moved them
+    """``values`` with Copter 3.3's attitude-controller, motor-battery and battery-failsafe
+    parameters under their later names and scales (a log that has the 3.4+ names is returned
+    unchanged). Copter 3.4 moved them
     "automatically, scales adjusted": the rate P and D (and I, in the same output units) 10 %
     lower on X, V and H quads and 27 % higher on other frames, IMAX from the 4500 output range
     to 0..1 (ArduCopter release notes 3.4.0-rc1, item 5). ``FRAME`` (3.x: 0 +, 1 X, 2 V, 3 H)
@@ -148,6 +159,33 @@ def copter33_params(values: Mapping[str, float]) -> dict[str, float]:
         elif old.endswith("_IMAX"):
             v /= COPTER33_OUTPUT
         out[new] = v
+    return out
+
+
+def log_battery(tables: Mapping[str, Any], log_params: Mapping[str, float]) -> dict[str, float]:
+    """The log's battery for tlm to fly: the cell count from the voltage at arming (BAT.Volt,
+    or Copter 3.x's CURR.Volt in V or cV) as ``SIM_BATT_VOLTAGE`` and the frame's full-pack
+    ``TLM_MAX_VOLT`` (cells x :data:`CELL_FULL_V`, so a full pack gives the same thrust scale),
+    and ``BATT_CAPACITY`` as the simulated pack's ``SIM_BATT_CAP_AH``. Empty when the log has
+    no battery voltage."""
+    volts = None
+    for name in ("BAT", "CURR"):
+        df = tables.get(name)
+        if df is not None and len(df) and "Volt" in df:
+            v = pd.to_numeric(df["Volt"], errors="coerce").dropna()
+            v = v[v > 0]
+            if len(v):
+                volts = float(v.iloc[: max(len(v) // 20, 1)].median())
+                break
+    out: dict[str, float] = {}
+    if volts is not None:
+        if volts > 100.0:  # Copter 3.x CURR.Volt in centivolts
+            volts *= 0.01
+        cells = max(round(volts / CELL_AT_ARMING_V), 1)
+        out["SIM_BATT_VOLTAGE"] = out["TLM_MAX_VOLT"] = round(cells * CELL_FULL_V, 2)
+    cap = float(log_params.get("BATT_CAPACITY", 0.0) or 0.0)
+    if cap > 0:
+        out["SIM_BATT_CAP_AH"] = cap * 1e-3
     return out
 
 
@@ -233,14 +271,17 @@ def _gain(gain: float, target: float, got: float, floor: float) -> float:
 
 def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] | None = None,
                 iterations: int = 10, seed: int = 1,
-                progress: Callable[[int], None] | None = None) -> FitResult:
+                progress: Callable[[int], None] | None = None,
+                battery: Mapping[str, float] | None = None) -> FitResult:
     """Fit tlm's vehicle to ``log_stats`` (:func:`segment_stats` of the log's steady segment),
     starting from the log's parameters; a floor flight (no vibration) then ``iterations``
     fitting flights; the best flight's parameters are returned (the smallest largest relative
-    error over :data:`FIT_STATS`). ``progress`` is called with the number of flights flown."""
+    error over :data:`FIT_STATS`). ``progress`` is called with the number of flights flown;
+    ``battery``: the log's pack (:func:`log_battery`)."""
     from tlm_sim.params import Params
 
     base, dropped = log_vehicle_params(log_params or {})
+    base.update(battery or {})
     base["SIM_VIB_MOT_MAX"] = ROTOR_HZ
     base["TLM_ROTOR_TC"] = ROTOR_TC
     base["TLM_VIB_SPREAD"] = MOT_SPREAD
