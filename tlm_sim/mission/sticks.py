@@ -1,0 +1,263 @@
+"""Stick scripts: what a pilot's transmitter sends over time (issue 42, part 2).
+
+A script is a list of keyframes. Each row is a time ``t`` [s since boot, the log's
+``TimeUS / 1e6``] and any of:
+- ``roll``, ``pitch``, ``yaw`` in -1..1 (right, nose forward, yaw right positive);
+- ``throttle`` in 0..1;
+- ``mode``, a flight-mode name;
+- ``ramp`` [s], the time each stick given on that row takes to move to its new position,
+  linearly (default :data:`DEFAULT_RAMP_S`, the reference pilot flights' 0.5 s; 0 is a step).
+
+A stick keeps its last position until a row moves it. Before the first row they are centred,
+with the throttle at 0.
+
+They become RC channels as a receiver delivers them (:meth:`StickScript.channels`), in PWM
+[us] on the default RCMAP (C1 roll, C2 pitch with forward = low PWM, C3 throttle, C4 yaw; 1000
+to 2000), and the mode switch on ``FLTMODE_CH``. The mode is put at the centre of the
+switch position whose ``FLTMODEn`` holds it; ArduPilot's positions are split at
+1231 / 1361 / 1491 / 1621 / 1750 us.
+
+Files: YAML or JSON ``{"sticks": [{"t": 0, "mode": "LOITER"}, {"t": 60, "pitch": 0.4}, ...]}``,
+or CSV with a header (``t,roll,pitch,throttle,yaw,mode,ramp``; an empty cell leaves that
+stick where it is). Errors are :class:`StickScriptError` (a ``ValueError``) with a one-line
+message naming the row.
+
+This module reads and renders scripts. Flying them (``tlm fly --sticks``, the pilot modes) is
+the next step of issue 42 (docs/pilot.md).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tlm_sim.ardupilot import MODE_NAMES
+from tlm_sim.textfile import TextFileError, read_text
+
+__all__ = ["AXES", "DEFAULT_RAMP_S", "StickScript", "StickScriptError", "mode_pwm"]
+
+#: the stick axes of a row, with their range
+AXES: dict[str, tuple[float, float]] = {"roll": (-1.0, 1.0), "pitch": (-1.0, 1.0),
+                                        "throttle": (0.0, 1.0), "yaw": (-1.0, 1.0)}
+#: the reference pilot flights' ramp per step [s]
+DEFAULT_RAMP_S = 0.5
+#: RC channel (1-based) of each axis, ArduPilot's default RCMAP
+CHANNEL: dict[str, int] = {"roll": 1, "pitch": 2, "throttle": 3, "yaw": 4}
+#: the 6-position mode switch's upper PWM bounds (RC_Channel::read_6pos_switch) and each
+#: position's centre [us]
+SWITCH_BOUNDS: tuple[float, ...] = (1231.0, 1361.0, 1491.0, 1621.0, 1750.0)
+SWITCH_CENTRES: tuple[float, ...] = (1165.0, 1295.0, 1425.0, 1555.0, 1685.0, 1815.0)
+_KEYS = ("t", *AXES, "mode", "ramp")
+_MODES = {name: num for num, name in MODE_NAMES.items()}
+
+
+class StickScriptError(ValueError):
+    """A stick script or its file is invalid; the message names the row (0-based)."""
+
+
+def mode_pwm(mode: str, params: Mapping[str, float]) -> float:
+    """PWM [us] of the switch position whose FLTMODEn is ``mode`` (a name of
+    :data:`tlm_sim.ardupilot.MODE_NAMES`), StickScriptError when no position holds it."""
+    num = _MODES.get(str(mode).strip().upper())
+    if num is None:
+        raise StickScriptError(f"unknown flight mode {mode!r}; known: {', '.join(_MODES)}")
+    for k in range(6):
+        if int(params[f"FLTMODE{k + 1}"]) == num:
+            return SWITCH_CENTRES[k]
+    slots = ", ".join(f"FLTMODE{k + 1} {MODE_NAMES.get(int(params[f'FLTMODE{k + 1}']), '?')}"
+                      for k in range(6))
+    raise StickScriptError(f"no mode switch position is {mode.upper()} ({slots}): set one "
+                           f"FLTMODEn to {num}")
+
+
+@dataclass(frozen=True)
+class StickScript:
+    """Keyframes ``rows`` (time-ordered dicts with ``t`` and the keys they set, each value
+    checked; see the module docstring)."""
+
+    rows: tuple[Mapping[str, Any], ...]
+
+    def __post_init__(self) -> None:
+        if isinstance(self.rows, str | bytes | Mapping) or not isinstance(self.rows, Sequence):
+            raise StickScriptError("a stick script is a list of rows {t: s, roll: .., ...}")
+        if not self.rows:
+            raise StickScriptError("a stick script needs at least one row")
+        clean = []
+        last_t = -math.inf
+        for i, row in enumerate(self.rows):
+            r = _check_row(row, i)
+            if r["t"] < last_t:
+                raise StickScriptError(f"row {i}: t {r['t']:g} s is before the row above "
+                                       f"({last_t:g} s); list rows in time order")
+            last_t = r["t"]
+            clean.append(r)
+        object.__setattr__(self, "rows", tuple(clean))
+
+    # -- files ----------------------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | Sequence[Mapping[str, Any]]) -> StickScript:
+        """From ``{"sticks": [...]}`` or the list itself."""
+        rows = d.get("sticks") if isinstance(d, Mapping) else d
+        if rows is None:
+            raise StickScriptError("expected a mapping with 'sticks': [rows]")
+        return cls(tuple(rows))
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> StickScript:
+        """Read a ``.yaml`` / ``.yml`` / ``.json`` / ``.csv`` stick script."""
+        p = Path(path)
+        try:
+            text = read_text(p)
+        except TextFileError as exc:
+            raise StickScriptError(f"{p}: {exc}") from None
+        suffix = p.suffix.lower()
+        if suffix == ".csv":
+            return cls(tuple(_csv_rows(text, p)))
+        if suffix not in (".yaml", ".yml", ".json"):
+            raise StickScriptError(f"{p}: a stick script is .yaml, .yml, .json or .csv")
+        try:
+            import yaml
+
+            doc = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
+        except (ValueError, yaml.YAMLError) as exc:
+            raise StickScriptError(f"{p}: not valid {suffix[1:].upper()}: "
+                                   f"{str(exc).splitlines()[0]}") from None
+        try:
+            return cls.from_dict(doc)
+        except StickScriptError as exc:
+            raise StickScriptError(f"{p}: {exc}") from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """File form (:meth:`from_dict` reads it back to an equal script)."""
+        return {"sticks": [dict(r) for r in self.rows]}
+
+    # -- rendering ------------------------------------------------------------------------
+    def sticks(self, t_s: float) -> dict[str, float]:
+        """Each axis's position at time ``t_s`` [s]: a row moves a stick linearly from where
+        it is at the row's time (mid-ramp, if an earlier move has not ended) to the new
+        position over the row's ramp."""
+        return {axis: self._axis(axis, t_s) for axis in AXES}
+
+    def _axis(self, axis: str, t_s: float) -> float:
+        move = (0.0, 0.0, 0.0, 0.0)  # (start time, from, to, ramp): centred / throttle 0
+
+        def at(m: tuple[float, float, float, float], x: float) -> float:
+            t0, v0, v1, ramp = m
+            frac = 1.0 if ramp <= 0.0 else min(max((x - t0) / ramp, 0.0), 1.0)
+            return v0 + (v1 - v0) * frac
+
+        for r in self.rows:
+            if r["t"] > t_s:
+                break
+            if axis in r:
+                move = (r["t"], at(move, r["t"]), r[axis], r.get("ramp", DEFAULT_RAMP_S))
+        return at(move, t_s)
+
+    def mode(self, t_s: float) -> str | None:
+        """The flight mode the switch is set to at ``t_s`` [s] (None before any row sets one)."""
+        out = None
+        for r in self.rows:
+            if r["t"] > t_s:
+                break
+            out = r.get("mode", out)
+        return out
+
+    def channels(self, t_s: float, params: Mapping[str, float]) -> np.ndarray:
+        """RC channels 1-8 [us] at ``t_s`` as the receiver delivers them: the sticks on the
+        default RCMAP, the mode switch on ``FLTMODE_CH`` (its position's centre), 1500 on the
+        other channels."""
+        ch = np.full(8, 1500.0)
+        pos = self.sticks(t_s)
+        ch[CHANNEL["roll"] - 1] = 1500.0 + 500.0 * pos["roll"]
+        ch[CHANNEL["pitch"] - 1] = 1500.0 - 500.0 * pos["pitch"]  # forward is low PWM
+        ch[CHANNEL["throttle"] - 1] = 1000.0 + 1000.0 * pos["throttle"]
+        ch[CHANNEL["yaw"] - 1] = 1500.0 + 500.0 * pos["yaw"]
+        mode = self.mode(t_s)
+        sw = int(params["FLTMODE_CH"])
+        if mode is not None and 1 <= sw <= 8:
+            ch[sw - 1] = mode_pwm(mode, params)
+        return np.round(ch)
+
+    def table(self, params: Mapping[str, float], t_end_s: float,
+              rate_hz: float = 50.0) -> np.ndarray:
+        """Rows ``(t_s, C1..C8)`` every ``1 / rate_hz`` s from 0 to ``t_end_s`` (SITL's RC input
+        comes at 50 Hz): what the simulation loop will read."""
+        n = int(math.floor(t_end_s * rate_hz)) + 1
+        out = np.empty((n, 9))
+        for k in range(n):
+            t = k / rate_hz
+            out[k, 0] = t
+            out[k, 1:] = self.channels(t, params)
+        return out
+
+
+def _number(v: Any, what: str, i: int) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
+        raise StickScriptError(f"row {i}: {what} must be a finite number, got {v!r}")
+    return float(v)
+
+
+def _check_row(row: Any, i: int) -> dict[str, Any]:
+    if not isinstance(row, Mapping):
+        raise StickScriptError(f"row {i}: expected a mapping like {{t: 60, pitch: 0.4}}, "
+                               f"got {row!r}")
+    unknown = [k for k in row if k not in _KEYS]
+    if unknown:
+        raise StickScriptError(f"row {i}: unknown key {unknown[0]!r}; keys: {', '.join(_KEYS)}")
+    if "t" not in row:
+        raise StickScriptError(f"row {i}: missing 't' (seconds since boot)")
+    out: dict[str, Any] = {"t": _number(row["t"], "t", i)}
+    if out["t"] < 0:
+        raise StickScriptError(f"row {i}: t must be >= 0 s, got {out['t']:g}")
+    for axis, (lo, hi) in AXES.items():
+        if axis in row:
+            v = _number(row[axis], axis, i)
+            if not lo <= v <= hi:
+                raise StickScriptError(f"row {i}: {axis} {v:g} is outside {lo:g}..{hi:g}")
+            out[axis] = v
+    if "mode" in row:
+        name = str(row["mode"]).strip().upper()
+        if name not in _MODES:
+            raise StickScriptError(f"row {i}: unknown flight mode {row['mode']!r}; known: "
+                                   f"{', '.join(_MODES)}")
+        out["mode"] = name
+    if "ramp" in row:
+        r = _number(row["ramp"], "ramp", i)
+        if r < 0:
+            raise StickScriptError(f"row {i}: ramp must be >= 0 s, got {r:g}")
+        out["ramp"] = r
+    if len(out) == 1 or set(out) == {"t", "ramp"}:
+        raise StickScriptError(f"row {i}: sets nothing (give a stick or a mode)")
+    return out
+
+
+def _csv_rows(text: str, path: Path) -> list[dict[str, Any]]:
+    """Rows of a CSV stick script (header ``t,roll,pitch,throttle,yaw,mode,ramp``, any
+    subset in any order; empty cells are not set)."""
+    reader = csv.DictReader(io.StringIO(text))
+    if not reader.fieldnames or "t" not in reader.fieldnames:
+        raise StickScriptError(f"{path}: the CSV needs a header with a 't' column and the "
+                               f"sticks (t,roll,pitch,throttle,yaw,mode,ramp)")
+    rows = []
+    for i, rec in enumerate(reader):
+        row: dict[str, Any] = {}
+        for k, v in rec.items():
+            if k is None or v is None or not str(v).strip():
+                continue
+            if k == "mode":
+                row[k] = v.strip()
+                continue
+            try:
+                row[k] = float(v)
+            except ValueError:
+                raise StickScriptError(f"{path}: row {i}: {k} {v!r} is not a number") from None
+        rows.append(row)
+    return rows
