@@ -16,8 +16,11 @@ ARMED, DISARMED = 10, 11
 AUTO = 3
 
 
-def time_window(df: pd.DataFrame, t0_us: float, t1_us: float) -> pd.DataFrame:
-    """Rows of df with t0_us <= TimeUS <= t1_us."""
+def time_window(df: pd.DataFrame | None, t0_us: float, t1_us: float) -> pd.DataFrame:
+    """Rows of df with t0_us <= TimeUS <= t1_us (an empty frame for a missing table or one
+    without TimeUS)."""
+    if df is None or "TimeUS" not in df:
+        return pd.DataFrame()
     return df[(df.TimeUS >= t0_us) & (df.TimeUS <= t1_us)]
 
 

@@ -216,9 +216,10 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "SITL's (the accel amplitude the same at any speed)")),
     ("TLM_ROTOR_TC", 0.0, ParamInfo(
         "s", 0.0, 1.0,
-        "time constant of the rotor speed that the vibration follows (motor, ESC and propeller "
-        "lag): the motor vibration's frequency and the imbalance follow each motor's command "
-        "through a first-order lag; 0 = SITL's (the command itself)")),
+        "time constant of the rotors' speed (motor, ESC and propeller lag): each motor's "
+        "command, and so its thrust, follows its output through a first-order lag, and the "
+        "motor vibration's frequency and the imbalance follow the lagged rotor; 0 = SITL's "
+        "(the command at once)")),
     ("TLM_GYR_WALK", 0.0, ParamInfo(
         "deg/s/s^0.5", 0.0, 10.0,
         "gyro bias random walk per axis and IMU (white noise of this density integrated into "

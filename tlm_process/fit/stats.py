@@ -26,6 +26,8 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from tlm_process.reference import time_window
+
 __all__ = ["STAT_NAMES", "StatsError", "rate_unit", "segment_stats"]
 
 #: every statistic :func:`segment_stats` returns, in report order
@@ -43,12 +45,6 @@ CENTI_SLOPE = 10.0
 
 class StatsError(ValueError):
     """The log lacks what a statistic needs in the segment (one line, for the command)."""
-
-
-def _window(df: pd.DataFrame | None, t0: float, t1: float) -> pd.DataFrame:
-    if df is None or "TimeUS" not in df:
-        return pd.DataFrame()
-    return df[(df.TimeUS >= t0) & (df.TimeUS <= t1)]
 
 
 def _imu0(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame | None:
@@ -94,9 +90,9 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
     """Every :data:`STAT_NAMES` statistic over ``[t0_us, t1_us]``; ``unit``: degrees per second
     per RATE unit (default :func:`rate_unit` of the tables). Raises :class:`StatsError` when the
     segment has no IMU, ATT or CTUN rows."""
-    imu = _window(_imu0(tables), t0_us, t1_us)
-    att = _window(tables.get("ATT"), t0_us, t1_us)
-    ctun = _window(tables.get("CTUN"), t0_us, t1_us)
+    imu = time_window(_imu0(tables), t0_us, t1_us)
+    att = time_window(tables.get("ATT"), t0_us, t1_us)
+    ctun = time_window(tables.get("CTUN"), t0_us, t1_us)
     for name, df in (("IMU", imu), ("ATT", att), ("CTUN", ctun)):
         if len(df) < 3:
             raise StatsError(f"no {name} rows between {t0_us * 1e-6:.1f} s and "
@@ -106,12 +102,12 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
     for ax in "xyz":
         out[f"acc_{ax}_std"] = _std(imu[f"Acc{ax.upper()}"])
         out[f"gyr_{ax}_std_dps"] = math.degrees(_std(imu[f"Gyr{ax.upper()}"]))
-    rate = _window(tables.get("RATE"), t0_us, t1_us)
+    rate = time_window(tables.get("RATE"), t0_us, t1_us)
     u = rate_unit(tables) if unit is None else unit
     for name, des, got in (("roll", "RDes", "R"), ("pitch", "PDes", "P")):
         ok = len(rate) > 2 and des in rate and got in rate
         out[f"rate_{name}_err_std_dps"] = _std((rate[got] - rate[des]) * u) if ok else math.nan
-    vibe = _window(tables.get("VIBE"), t0_us, t1_us)
+    vibe = time_window(tables.get("VIBE"), t0_us, t1_us)
     if len(vibe) and "IMU" in vibe:
         vibe = vibe[vibe.IMU == 0]
     for ax in "xyz":

@@ -353,11 +353,8 @@ class ScenarioConfig:
         set_(self, "frames", frames)
         set_(self, "wind", wind)
         vib = _vibration(self.vibration, params, ranges)
-        if vib is not None:
-            _check_params({**params, **{k: lo for k, (lo, _) in vib["ranges"].items()}}, {},
-                          None, frames)
-            _check_params({**params, **{k: hi for k, (_, hi) in vib["ranges"].items()}}, {},
-                          None, frames)
+        if vib is not None:  # both ends of the airframe's draws, on every frame
+            _check_params(params, vib["ranges"], None, frames)
         set_(self, "vibration", vib)
         set_(self, "ranges", ranges)
         set_(self, "params", {k: float(params[k]) for k in sorted(params)})

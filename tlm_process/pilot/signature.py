@@ -34,6 +34,7 @@ import pandas as pd
 
 from tlm_process.fit.stats import throttle_out
 from tlm_process.logread import arming_time_us, disarm_time_us
+from tlm_process.reference import time_window
 
 __all__ = ["METRICS", "StickSegment", "flight_time_s", "pilot_signature", "segment_metrics",
            "segments_from_rcin", "segments_from_sidecar"]
@@ -157,12 +158,6 @@ def segments_from_rcin(tables: Mapping[str, pd.DataFrame],
     return out
 
 
-def _window(df: pd.DataFrame | None, a: int, b: int) -> pd.DataFrame:
-    if df is None or not len(df):
-        return pd.DataFrame()
-    return df[(df["TimeUS"] >= a) & (df["TimeUS"] < b)]
-
-
 def _nan_stat(s: pd.Series | None, how: str) -> float:
     if s is None or not len(s):
         return math.nan
@@ -176,13 +171,13 @@ def segment_metrics(tables: Mapping[str, pd.DataFrame], seg: StickSegment,
     """The :data:`METRICS` of one stick segment (NaN where the log lacks the table);
     ``n_motors``: the frame's motors (RCOU C1..Cn)."""
     a, b = seg.start_us, seg.end_us
-    att = _window(tables.get("ATT"), a, b)
+    att = time_window(tables.get("ATT"), a, b)
     gps = tables.get("GPS")
     if gps is not None and "I" in gps:
         gps = gps[gps["I"] == 0]
-    gps = _window(gps, a, b)
-    ctun = _window(tables.get("CTUN"), a, b)
-    rcou = _window(tables.get("RCOU"), a, b)
+    gps = time_window(gps, a, b)
+    ctun = time_window(tables.get("CTUN"), a, b)
+    rcou = time_window(tables.get("RCOU"), a, b)
     prefix = "C" if "C1" in rcou else "Ch"  # Copter 3.x: Ch1..
     others = [f"{prefix}{k}" for k in range(2, n_motors + 1) if f"{prefix}{k}" in rcou]
     excess = (rcou[f"{prefix}1"] - rcou[others].mean(axis=1)) if len(rcou) and others else None

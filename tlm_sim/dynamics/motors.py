@@ -1,10 +1,9 @@
 """Motor and frame force model of SITL's multicopter (ardupilot-reference.md §1.4-§1.8).
 
 Per motor: PWM -> command with a slew limit (and the rotor lag, TLM_ROTOR_TC), thrust from
-momentum theory with inflow, rotor
-reaction (yaw) torque, per-motor momentum drag and current. Frame sum: total body force
-(thrust, momentum drag, parasitic body drag) and torque. All vectors are body FRD; every
-motor's thrust axis is body -z.
+momentum theory with inflow, rotor reaction (yaw) torque, per-motor momentum drag and
+current. Frame sum: total body force (thrust, momentum drag, parasitic body drag) and torque.
+All vectors are body FRD; every motor's thrust axis is body -z.
 """
 
 from __future__ import annotations
@@ -42,11 +41,15 @@ PAPER_YAW_SCALE: float = math.radians(40.0)
 
 
 @tick_jit
-def slew_command(pwm: float, last: float, pwm_lo: float, per_us: float, step: float) -> float:
+def slew_command(pwm: float, last: float, pwm_lo: float, per_us: float, step: float,
+                 lag: float = 1.0) -> float:
     """Motor command 0..1 for ``pwm`` [us] (SITL ``pwm_to_command``: ``(pwm - pwm_lo) *
-    per_us`` clamped, ``per_us = 1 / (pwm_hi - pwm_lo)``), rate limited to ``step`` from
-    ``last`` (``step = slew_max * dt``; no limit when 0)."""
+    per_us`` clamped, ``per_us = 1 / (pwm_hi - pwm_lo)``), moved from ``last`` by the rotor
+    lag's per-step gain ``lag`` (TLM_ROTOR_TC; 1: no lag, SITL) and rate limited to ``step``
+    (``step = slew_max * dt``; no limit when 0)."""
     a = min(max((pwm - pwm_lo) * per_us, 0.0), 1.0)
+    if lag < 1.0:
+        a = last + (a - last) * lag
     if step > 0.0:
         a = min(max(a, last - step), last + step)
     return a
@@ -93,14 +96,7 @@ def motor_forces(
     step = frame[F_SLEW_MAX] * dt
     lag = frame[F_ROTOR_ALPHA]
     for i in range(int(frame[F_N_MOTORS])):
-        last = x[X.M1 + i]
-        if lag < 1.0:  # TLM_ROTOR_TC: the rotor follows its command through a first-order lag
-            target = min(max((pwm[i] - pwm_lo) * per_us, 0.0), 1.0)
-            a = last + (target - last) * lag
-            if step > 0.0:
-                a = min(max(a, last - step), last + step)
-        else:
-            a = slew_command(pwm[i], last, pwm_lo, per_us, step)
+        a = slew_command(pwm[i], x[X.M1 + i], pwm_lo, per_us, step, lag)
         x[X.M1 + i] = a
         if dead:
             x[X.T1 + i] = 0.0
