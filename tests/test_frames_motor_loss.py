@@ -217,17 +217,17 @@ def test_throttle_mix_slews_and_resets_to_the_mix_in_use():
     c[C.THR_HOVER] = 0.4
     c[C.THR_RPY_MIX] = 0.1
     for _ in range(40):  # 0.1 s
-        throttle_mix_update(c, g, True, 0.2, 0.2)
+        throttle_mix_update(c, g, g[C.G_THR_MIX_MAX], 0.2, 0.2)
     assert c[C.THR_RPY_MIX] == pytest.approx(0.3)
     assert c[C.THR_AVG_MAX] == pytest.approx(0.2 * 0.7 + 0.4 * 0.3)
     for _ in range(400):
-        throttle_mix_update(c, g, True, 0.2, 0.2)
+        throttle_mix_update(c, g, g[C.G_THR_MIX_MAX], 0.2, 0.2)
     assert c[C.THR_RPY_MIX] == pytest.approx(g[C.G_THR_MIX_MAX])
     c[C.MOT_THR_OUT] = 0.3  # the mixer raised the throttle half way to the hover throttle
-    throttle_mix_update(c, g, False, 0.2, 0.2)
+    throttle_mix_update(c, g, g[C.G_THR_MIX_MIN], 0.2, 0.2)
     assert c[C.THR_RPY_MIX] == pytest.approx(0.5 - 0.5 * g[C.G_DT])  # used 0.5: slew only
     c[C.MOT_THR_OUT] = 0.2
-    throttle_mix_update(c, g, False, 0.2, 0.2)
+    throttle_mix_update(c, g, g[C.G_THR_MIX_MIN], 0.2, 0.2)
     assert c[C.THR_RPY_MIX] == pytest.approx(max(g[C.G_THR_MIX_MIN], 0.1))  # used 0: at once
 
 

@@ -460,7 +460,6 @@ def test_crosscheck_scenario_of_a_log_that_starts_at_arming(tmp_path: Path) -> N
 
 
 @pytest.mark.parametrize("name, error", [
-    ("log171.bin", "the log has no mission"),
     ("mechanical_fail.log", "the log has no mission"),
     ("nan.log", "LOG_BITMASK"),
     ("backend_log_80k.bin", "never armed"),

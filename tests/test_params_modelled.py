@@ -34,7 +34,7 @@ from tlm_sim.sensors.config import build_sensor_config
 #: parameters the issue found accepted and ignored: each must now be refused
 ISSUE_IGNORED = ("SIM_BAR3_DISABLE", "SIM_MAG_DELAY", "SIM_BAR3_DRIFT", "SIM_BAR3_FREEZE",
                  "SIM_BARO_DELAY", "SIM_GPS1_POS_X", "SIM_MAG1_DIA_X", "LOG_BITMASK",
-                 "SIM_BAR3_RND", "DISARM_DELAY", "PSC_ACCZ_D")
+                 "SIM_BAR3_RND", "PSC_ACCZ_D")  # (DISARM_DELAY acts since pilot modes)
 
 
 def _inputs(p: Params) -> list[np.ndarray]:

@@ -130,8 +130,7 @@ import json
 from numba import types as nt
 from tlm_sim import precompile as P
 F1, F2, I1 = nt.float64[::1], nt.float64[:, ::1], nt.int64[::1]
-SUBTREE = ("imu_take_deltas", "gps_push_truth", "gps_measure", "baro_read", "mag_sample",
-           "rc_update")
+SUBTREE = ("imu_take_deltas", "gps_push_truth", "gps_measure", "baro_read", "mag_sample")
 P.JOBS = tuple(j for j in P.JOBS if j.target.split(":")[1] in SUBTREE)
 assert len(P.JOBS) == len(SUBTREE)
 P.RUN_FLIGHT = P.Job("tlm_sim.flight:_read_sensors",

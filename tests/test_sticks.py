@@ -39,12 +39,14 @@ def test_channels_as_a_receiver_gives_them():
                      {"t": 1, "roll": 0.4, "pitch": 0.4, "yaw": -0.3, "ramp": 0}))
     ch = s.channels(2.0, P)
     assert list(ch[:5]) == [1700, 1300, 1500, 1350, 1685]  # pitch forward: low PWM
-    assert list(ch[5:]) == [1500, 1500, 1500]
+    assert list(ch[5:]) == [1000, 1000, 1800]  # the other channels: SITL's idle values
     assert mode_pwm("STABILIZE", P) == 1815 and mode_pwm("AUTO", P) == 1555
     with pytest.raises(StickScriptError, match="no mode switch position is POSHOLD"):
         mode_pwm("POSHOLD", P)
     ch6 = s.channels(2.0, {**P, "FLTMODE_CH": 6.0})
-    assert ch6[4] == 1500 and ch6[5] == 1685
+    assert ch6[4] == 1800 and ch6[5] == 1685
+    assert list(StickScript(({"t": 0, "roll": 0.2},)).channels(1.0, P)[4:]) == [
+        1800, 1000, 1000, 1800]  # no mode set: the switch stays where SITL's idle input has it
 
 
 def test_table_at_the_receivers_rate():

@@ -37,7 +37,9 @@ def flight_summary(log: FlightLog) -> dict[str, Any]:
         "disarmed_s": None if meta.get("disarmed_s") is None else round(meta["disarmed_s"], 1),
         "distance_m": round(dist, 1),
         "max_alt_m": round(max_alt, 1),
-        "waypoints_reached": f"{meta.get('waypoints_reached', '?')}/{meta.get('n_waypoints', '?')}",
+        "waypoints_reached": ("none: flown by a pilot's sticks" if meta.get("mission") == "pilot"
+                              else f"{meta.get('waypoints_reached', '?')}/"
+                                   f"{meta.get('n_waypoints', '?')}"),
         "final_mode": f"{AP.MODE_NAMES.get(final_mode, final_mode)} ({final_mode})",
         "landed": meta.get("landed"),
         "end_reason": meta.get("end_reason"),

@@ -37,6 +37,9 @@ M_PER_DEG_LAT: float = 111318.84502145034
 #: (SCHED_LOOP_RATE): the only rates tlm runs (tlm_sim.params pins both parameters to them)
 SIM_RATE_HZ = 1200
 LOOP_RATE_HZ = 400
+#: SITL's RC input when no pilot sends anything: channels 1..8 [us PWM] (roll, pitch centred,
+#: throttle down, yaw centred, the mode switch at position 6, then 1000, 1000, 1800)
+RC_IDLE_PWM = (1500.0, 1500.0, 1000.0, 1500.0, 1800.0, 1000.0, 1000.0, 1800.0)
 #: The periodic tasks of tlm's main loop and their rates [Hz] (ArduCopter's scheduler table
 #: names where it has the task). Each runs every ``LOOP_RATE_HZ / rate`` main-loop ticks:
 #: tlm_sim.flight's ``*_TICKS`` / ``*_PERIOD_US`` constants come from here, and each logged
@@ -113,11 +116,13 @@ MODE_REASONS: dict[int, str] = {
 }
 
 # AP_Arming::Method (ARM.Method)
+ARM_METHOD_RUDDER = 0  # the yaw-stick gesture (pilot-flown flights)
 ARM_METHOD_MAVLINK = 1  # the GCS arms (the reference driver, tlm's TLM_ARM_TIME)
 ARM_METHOD_BATTERYFAILSAFE = 7
 ARM_METHOD_CRASH = 12
 ARM_METHOD_LANDED = 13  # LAND / RTL mode: the land detector
 ARM_METHOD_MISSIONEXIT = 14  # AUTO: landed at the end of the mission (its RTL item)
+ARM_METHOD_DISARMDELAY = 17  # auto-disarm: landed with the throttle low for DISARM_DELAY
 ARM_METHOD_TERMINATE = 20  # FAILSAFE_ACTION_TERMINATE
 
 # Copter::LandDetectorLoggingFlag (LDET.Flags bits)

@@ -53,6 +53,9 @@ class FlightPlan(NamedTuple):
     applied: np.ndarray  #: per change, the time [us] it took effect (-1: never)
     home: np.ndarray  #: home latitude, longitude [deg] and altitude AMSL [m]
     gps_time: np.ndarray  #: GPS week and milliseconds of week at boot
+    #: the pilot's transmitter: rows (time since boot [us], channels 1..8 [us PWM]) in time
+    #: order, each held until the next (tlm_sim.sensors.rc); no rows: SITL's idle receiver
+    rc: np.ndarray
 
 
 class FlightLogs(NamedTuple):

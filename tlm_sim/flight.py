@@ -52,6 +52,7 @@ from tlm_sim.control.log import (
 )
 from tlm_sim.control.mixer import throttle_slew_update
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
+from tlm_sim.control.pilot import arm_pilot, pilot_init, pilot_rc
 from tlm_sim.control.wpnav import (
     P_CMD,
     P_CNUM,
@@ -89,8 +90,10 @@ from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.frames import FRAMES, MAX_MOTORS, frame_for
+from tlm_sim.geo import HOME_CMAC
 from tlm_sim.mission import Mission, builtin_mission
 from tlm_sim.mission.mission import ITEM_FIELDS
+from tlm_sim.mission.sticks import StickScript
 from tlm_sim.params import Params
 from tlm_sim.profiles import profile_params
 from tlm_sim.rng import new_rng, new_streams
@@ -105,7 +108,7 @@ from tlm_sim.sensors.mag import (
     mag_sample,
 )
 from tlm_sim.sensors.power import power_module_read
-from tlm_sim.sensors.rc import rc_init, rc_update
+from tlm_sim.sensors.rc import RC_COLS, rc_init, rc_update
 from tlm_sim.slots import Layout
 
 # the physics tick and the main loop at the rates tlm simulates (SIM_RATE_HZ and
@@ -276,7 +279,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     """
     x, s, ekf, sel, c, dcm, gsf, rng, wind_rng = state
     frame, scfg, ecfg, g = cfg
-    path, seg, sched, applied, home, gps_time = plan
+    path, seg, sched, applied, home, gps_time, rc = plan
     bufs, counts, txt = logs
     dang, dvel, rows, eo = work
     gps, pwm = rows[W_GPS], rows[W_PWM]
@@ -302,6 +305,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         next_loop += LOOP_DT_US
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(state, scfg, work, t_us, ev)
+        rc_update(s, scfg, float(t_us), rc)  # the RC receiver: the pilot's table or SITL's idle
         now = LoopTick(t_us, tick, gps_new, baro_new, mag_new)
         inputs = _ekf_inputs(state, work, now)
         dcm_update(dcm, g, s, inputs, gps, int(eo[EK.O_IMU]), t_us)
@@ -314,10 +318,16 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         battery_monitor(c, g, t_us, s[S.PM_VOLT], s[S.PM_CURR], ev)
         vin = VehicleInputs(pos, vel, q, gyro, acc_ned, eo, s[S.PM_VOLT], s[S.RC_LAST_FRAME_US],
                             s[S.RC_CH + 2])
+        pilot = g[C.G_PILOT] != 0.0
+        if pilot:  # the pilot's radio: sticks, mode switch, rudder gestures
+            pilot_rc(c, g, t_us, s[S.RC_CH:S.RC_CH + 8], vin, (seg, ev))
         vehicle_step(c, g, t_us, vin, path, seg, ev)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), (s, gps), vin, txt, ev):
-            arm_vehicle(c, t_us, q, ev)
+            if pilot:
+                arm_pilot(c, g, t_us, vin, ev)
+            else:
+                arm_vehicle(c, t_us, q, ev)
         throttle_slew_update(c, g, t_us, q)  # the motors' throttle filter (RATE.AOutSlew)
         throttle = _motor_pwm(c, frame, pwm)  # the new commands, until the next main tick
         last_gps_ms = _log_tick(logs, state, cfg, plan, work, now, last_gps_ms)
@@ -342,6 +352,7 @@ def _boot(state, cfg, ev, home_lat):
     mag_init(s)
     ekf_init(state.ekf, state.sel, cfg.ecfg)
     arming_init(state.c, cfg.g)
+    pilot_init(state.c)
     gsf_init(state.gsf, cfg.ecfg)
     dcm_init(state.dcm)
     log_mode(ev, 0, AP.MODE_STABILIZE, AP.RSN_INITIALISED)
@@ -363,8 +374,9 @@ def _read_sensors(state, scfg, work, t_us, ev):
     """The main loop's sensor reads at t_us: IMU deltas into work (its W_IMU_OK row: [i] IMU
     i's accel delivered samples, [N_IMU + i] its gyro did), the GPS epoch into the W_GPS row
     when one is due, baro and compass at 10 Hz (ERR 18 when the primary baro's health changes,
-    ERR 3 when the first compass's does; ev: the event buffers and counts), the RC receiver,
-    the power module. Returns (GPS, primary baro, compass tick) new this tick."""
+    ERR 3 when the first compass's does; ev: the event buffers and counts), the power module
+    (the RC receiver follows: run_flight's rc_update). Returns (GPS, primary baro, compass
+    tick) new this tick."""
     s, x, rng = state.s, state.x, state.rng
     imu_ok, gps = work.rows[W_IMU_OK], work.rows[W_GPS]
     power_module_read(s, x)
@@ -390,7 +402,6 @@ def _read_sensors(state, scfg, work, t_us, ev):
             log_err(ev, t_us, AP.ERR_COMPASS,
                     AP.ERR_CODE_RESOLVED if dh > 0 else AP.ERR_CODE_UNHEALTHY)
         mag_new = True
-    rc_update(s, scfg, float(t_us))
     return gps_new, baro_new, mag_new
 
 
@@ -472,10 +483,12 @@ def new_work() -> LoopWork:
                     np.zeros((N_WORK_ROWS, WORK_COLS)), np.zeros(EK.N_OUT))
 
 
-def _configs(p: Params) -> VehicleConfig:
-    """The configuration arrays (frame, sensors, EKF, autopilot) of a parameter set."""
-    return VehicleConfig(build_frame(p), build_sensor_config(p), build_ekf_config(p),
-                         build_control_config(p))
+def _configs(p: Params, pilot: bool = False) -> VehicleConfig:
+    """The configuration arrays (frame, sensors, EKF, autopilot) of a parameter set; pilot:
+    the flight is flown from RC input (the autopilot's G_PILOT)."""
+    g = build_control_config(p)
+    g[C.G_PILOT] = 1.0 if pilot else 0.0
+    return VehicleConfig(build_frame(p), build_sensor_config(p), build_ekf_config(p), g)
 
 
 def _as_change(ch: Any) -> tuple[int, float, str, float]:
@@ -495,6 +508,7 @@ def build_schedule(
     params: Params,
     changes: Sequence[Any],
     base: VehicleConfig | None = None,
+    pilot: bool = False,
 ) -> np.ndarray:
     """Rows (at, kind, target, index, value, change) realising scheduled parameter changes.
 
@@ -505,7 +519,7 @@ def build_schedule(
     change that alters none gets one TGT_NONE row, so its time is still recorded), so any
     parameter the subsystems read can change in flight, exactly as in SITL. Column ``change``
     is the change's position in ``changes``. ``base``: the configuration arrays of ``params``
-    when the caller already built them.
+    when the caller already built them; ``pilot``: the flight is flown from RC input.
     """
     items = [_as_change(ch) for ch in changes]
     order = list(range(len(items)))
@@ -513,7 +527,7 @@ def build_schedule(
         order.sort(key=lambda i: items[i][1])
     rows: list[tuple[float, int, int, int, float, int]] = []
     current = params
-    before = base if base is not None else _configs(current)
+    before = base if base is not None else _configs(current, pilot)
     for i in order:
         kind, at, name, value = items[i]
         if not math.isfinite(at) or at < 0:
@@ -522,7 +536,7 @@ def build_schedule(
             raise ValueError(f"{name} cannot change in flight: ArduPilot reads it at boot "
                              f"(the frame is built once); set it in the flight's parameters")
         current = current.updated({name: value})
-        after = _configs(current)
+        after = _configs(current, pilot)
         trigger = round(at * 1e6) if kind == TRIG_TIME else at
         n_before = len(rows)
         for tgt, (a, b) in enumerate(zip(before, after, strict=True)):
@@ -634,17 +648,19 @@ def _with_frame(params: Params | Mapping[str, float] | None,
 
 
 def fly(
-    mission: Mission | int,
+    mission: Mission | int | None,
     faults: FaultSchedule | Sequence[Any] | None = None,
     params: Params | Mapping[str, float] | None = None,
     seed: int = 0,
     profile: str = "current",
     frame: str | None = None,
+    sticks: StickScript | np.ndarray | None = None,
 ) -> FlightLog:
-    """Fly one mission and return its FlightLog.
+    """Fly one mission, or a pilot's sticks, and return its FlightLog.
 
     Args:
-        mission: a Mission, or 1-4 for a built-in one.
+        mission: a Mission, or 1-4 for a built-in one. With ``sticks`` it gives only the home
+            (its waypoints are neither flown nor logged); None there: SITL's home.
         faults: a :class:`tlm_sim.faults.FaultSchedule` (recorded as Eq. 4 fault records in
             ``FlightLog.faults``), or raw SITL parameter changes ``(time_s, name, value)``, e.g.
             ``[(120, "SIM_GPS1_ENABLE", 0), (150, "SIM_GPS1_ENABLE", 1)]``; None for none.
@@ -656,23 +672,30 @@ def fly(
         frame: a frame of :data:`tlm_sim.frames.FRAMES` (``"+"``, ``"x"``, ``"hexa"``,
             ``"hexax"``, ``"octa"``): sets FRAME_CLASS / FRAME_TYPE (a ValueError when
             ``params`` sets them to another frame); None: the frame of ``params``.
+        sticks: fly from a pilot's transmitter instead of a mission (docs/pilot.md): a
+            :class:`tlm_sim.mission.sticks.StickScript`, or an RC table, rows of (time since
+            boot [s], channels 1..8 [us]) in time order (a log's RCIN for a replay). The
+            vehicle arms by the rudder gesture and flies the modes of the mode switch
+            (STABILIZE, ALT_HOLD, LOITER, POSHOLD; RTL, LAND); the flight ends 2 s after it
+            disarms, or :data:`PILOT_TAIL_S` after the table's last row.
     """
     params = _with_frame(params, frame)
-    mission = _checked_mission(mission, seed)
+    mission = _flown_mission(mission, seed, sticks is not None)
     from tlm_sim.precompile import ensure_compiled  # not at import: `python -m` runs it
     p, earth = with_home_field(profile_params(profile, params), mission.home, BOOT_UTC)
-    duration = max_duration_s(mission, p)
+    duration, rc_table = _flight_span(mission, p, sticks)
     schedule = faults if isinstance(faults, FaultSchedule) else None
     if schedule is not None:
-        schedule.validate(n_waypoints=mission.n_waypoints, max_time_s=duration)
+        schedule.validate(n_waypoints=0 if sticks is not None else mission.n_waypoints,
+                          max_time_s=duration)
         changes: list[Any] = list(schedule.param_changes(p))
     else:
         changes = list(faults or ())
         _check_changes(p, changes)  # a bad change fails before any compiling
     ensure_compiled()  # a cold numba cache is compiled by several processes at once
-    cfg = _configs(p)
+    cfg = _configs(p, pilot=sticks is not None)
     frame, g = cfg.frame, cfg.g
-    sched = build_schedule(p, changes, cfg)
+    sched = build_schedule(p, changes, cfg, pilot=sticks is not None)
     applied = np.full(len(changes), -1.0)
     home = np.array(mission.home, dtype=np.float64)
     x = np.zeros(X.N_STATE)
@@ -689,7 +712,8 @@ def fly(
     state = VehicleState(x, np.zeros(S.N_SENSOR_STATE), ekf, sel, c, np.zeros(N_DCM),
                          np.zeros((ekf.shape[0], N_GSF)),
                          new_streams(int(seed), S.N_NOISE_STREAMS), new_rng(int(seed), 2))
-    plan = FlightPlan(path, seg, sched, applied, home, np.array([week, ms], dtype=np.float64))
+    plan = FlightPlan(path, seg, sched, applied, home, np.array([week, ms], dtype=np.float64),
+                      rc_table)
     t_final = run_flight(state, cfg, plan,
                          FlightLogs(buf_tuple, counts, txt), new_work(), int(duration * 1e6))
     armed = c[C.ARM_TIME_S] >= 0.0
@@ -697,14 +721,7 @@ def fly(
         "seed": int(seed),
         "profile": profile,
         "duration_s": t_final * 1e-6,
-        "mission": mission.name,
-        "home": list(mission.home),
-        "armed_s": float(c[C.ARM_TIME_S]) if armed else None,
-        "disarmed_s": float(c[C.DISARM_TIME]) if c[C.DISARM_TIME] >= 0 else None,
-        "final_mode": int(c[C.MODE]),
-        "waypoints_reached": int(c[C.WP_REACHED]),
-        "n_waypoints": int(mission.n_waypoints),
-        "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
+        **_flown_meta(c, mission, sticks is not None),
         "end_reason": end_reason(float(c[C.DISARM_TIME]),
                                  bufs["ERR"][:int(counts[L.K_ERR])], armed),
         "boot_phase": bool(p["TLM_BOOT_PHASE"]),
@@ -719,7 +736,7 @@ def fly(
     log = FlightLog.from_buffers(
         {n: bufs[n] for n in L.LOG_ORDER},
         {n: int(counts[i]) for i, n in enumerate(L.LOG_ORDER)},
-        params=p, mission=mission, faults=[], meta=meta,
+        params=p, mission=mission if sticks is None else None, faults=[], meta=meta,
     )
     _jitter_sats(log, int(seed), p["TLM_SAT_JITTER"])
     if schedule is not None:
@@ -728,6 +745,70 @@ def fly(
         log.faults = fault_records(schedule, changes, applied, log.tables, float(home[2]),
                                    t_last)
     return log
+
+
+#: a pilot-flown flight runs at most this long after its RC table's last row [s]
+PILOT_TAIL_S = 30.0
+
+
+def _flown_mission(mission: Mission | int | None, seed: int, pilot: bool) -> Mission:
+    """The Mission to fly (:func:`_checked_mission`); a pilot-flown flight's placeholder at
+    its home (SITL's when ``mission`` is None)."""
+    if pilot:
+        home = HOME_CMAC if mission is None else _checked_mission(mission, seed).home
+        return _checked_mission(pilot_home_mission(home), seed)
+    return _checked_mission(mission, seed)
+
+
+def _flight_span(mission: Mission, p: Params,
+                 sticks: StickScript | np.ndarray | None) -> tuple[float, np.ndarray]:
+    """The longest the flight can last [s] and its RC table (no rows without sticks)."""
+    if sticks is None:
+        return max_duration_s(mission, p), np.zeros((0, RC_COLS))
+    rc = rc_table_us(sticks, p)
+    return float(rc[-1, 0]) * 1e-6 + PILOT_TAIL_S, rc
+
+
+def _flown_meta(c: np.ndarray, mission: Mission, pilot: bool) -> dict[str, Any]:
+    """What the flight did, for FlightLog.meta: the mission (``pilot``: flown from sticks),
+    home, arming and disarming times, final mode, waypoints, whether it landed."""
+    armed = c[C.ARM_TIME_S] >= 0.0
+    return {
+        "mission": "pilot" if pilot else mission.name,
+        "home": list(mission.home),
+        "armed_s": float(c[C.ARM_TIME_S]) if armed else None,
+        "disarmed_s": float(c[C.DISARM_TIME]) if c[C.DISARM_TIME] >= 0 else None,
+        "final_mode": int(c[C.MODE]),
+        "waypoints_reached": int(c[C.WP_REACHED]),
+        "n_waypoints": 0 if pilot else int(mission.n_waypoints),
+        "landed": bool(c[C.SUBMODE] == C.SUB_LANDED),
+    }
+
+
+def pilot_home_mission(home: Sequence[float]) -> Mission:
+    """The placeholder mission of a pilot-flown flight: only its home counts (one waypoint 10 m
+    above it, never flown)."""
+    lat, lon, _ = home
+    return Mission(np.array([[lat, lon, 10.0]]), home=tuple(home), name="pilot")
+
+
+def rc_table_us(sticks: StickScript | np.ndarray, params: Params) -> np.ndarray:
+    """The loop's RC table (FlightPlan.rc: time [us], channels 1..8 [us]) of a stick script
+    (rendered at 50 Hz to its last row's time plus its ramp and 60 s) or of rows (time [s],
+    channels 1..8); ValueError for rows that are not that."""
+    if isinstance(sticks, StickScript):
+        t_end = max(float(r["t"]) + float(r.get("ramp", 0.0)) for r in sticks.rows) + 60.0
+        rows = sticks.table(params, t_end)
+    else:
+        rows = np.asarray(sticks, dtype=np.float64)
+        if rows.ndim != 2 or rows.shape[1] != RC_COLS or rows.shape[0] == 0:
+            raise ValueError(f"an RC table is rows of (t_s, C1..C8), {RC_COLS} columns; got "
+                             f"shape {rows.shape}")
+        if not np.all(np.isfinite(rows)) or np.any(np.diff(rows[:, 0]) < 0.0):
+            raise ValueError("an RC table's values must be finite and its times in order")
+    out = rows.copy()
+    out[:, 0] = np.round(rows[:, 0] * 1e6)
+    return np.ascontiguousarray(out)
 
 
 def _jitter_sats(log: FlightLog, seed: int, mu: float) -> None:

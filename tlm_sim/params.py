@@ -494,8 +494,8 @@ _add(["ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX"], "deg/s", 0, 2000,
      "max angular rate, 0 = no limit (§4.2)", modelled=False)
 _add("ATC_THR_MIX_MIN", "", 0, 1, "throttle vs attitude priority, minimum (landing) (§4.2)")
 _add("ATC_THR_MIX_MAX", "", 0, 5, "throttle vs attitude priority, maximum (active flight) (§4.2)")
-_add("ATC_THR_MIX_MAN", "", 0, 10, "throttle vs attitude priority, manual flight (§4.2)",
-     modelled=False)
+_add("ATC_THR_MIX_MAN", "", 0, 10,
+     "throttle vs attitude priority, manual-throttle flight (STABILIZE, §4.2)")
 for _ax in ("RLL", "PIT", "YAW"):
     _r = f"ATC_RAT_{_ax}_"
     _add(_r + "P", "", 0, 5, f"{_ax} rate PID P gain (§4.3)")
@@ -545,8 +545,10 @@ _add("PSC_ACCZ_PDMX", "", 0, 1000, "vertical acceleration PID P+D limit, 0 = off
      modelled=False)
 _add("PSC_ACCZ_D_FF", "", 0, 1, "vertical acceleration PID derivative feed-forward (§4.5)",
      modelled=False)
-_add(["PSC_JERK_XY", "PSC_JERK_Z"], "m/s/s/s", 0.1, 1000, "position controller jerk (§4.5)",
+_add("PSC_JERK_XY", "m/s/s/s", 0.1, 1000, "horizontal position controller jerk (§4.5)",
      modelled=False)
+_add("PSC_JERK_Z", "m/s/s/s", 0.1, 1000,
+     "vertical jerk of the pilot's climb-rate shaping (ALT_HOLD, LOITER, POSHOLD)")
 _add("WPNAV_SPEED", "cm/s", 10, 2000, "waypoint horizontal speed (§4.6)")
 _add("WPNAV_RADIUS", "cm", 5, 1000, "waypoint reached radius (§4.6)")
 _add("WPNAV_SPEED_UP", "cm/s", 10, 1000, "waypoint climb speed (§4.6)")
@@ -559,11 +561,34 @@ _add("WPNAV_ACCEL_C", "cm/s/s", 0, 500, "waypoint corner acceleration, 0 = 2 x W
 _add("WP_YAW_BEHAVIOR", "", 0, 3,
      "0 never change yaw, 1 face next wp, 2 face next wp except RTL, 3 along course (§3.5)",
      True, modelled=False)
-_add("PILOT_SPEED_UP", "cm/s", 10, 1000, "pilot max climb speed; position controller default",
+_add("PILOT_SPEED_UP", "cm/s", 10, 1000, "pilot max climb speed (tlm_sim.control.pilot)")
+_add("PILOT_SPEED_DN", "cm/s", 0, 500, "pilot max descent speed, 0 = PILOT_SPEED_UP")
+_add("PILOT_ACCEL_Z", "cm/s/s", 50, 500, "pilot vertical acceleration")
+_add("PILOT_Y_RATE", "deg/s", 1, 500, "yaw rate at full yaw stick")
+_add("PILOT_Y_EXPO", "", -0.5, 1, "yaw stick expo")
+_add("PILOT_Y_RATE_TC", "s", 0, 1, "yaw stick time constant, 0 = none")
+_add("PILOT_TKOFF_ALT", "cm", 0, 1000, "pilot takeoff height in the altitude-holding modes")
+_add("PILOT_THR_BHV", "", 0, 7, "throttle stick behaviour bits (tlm: 0 only)", True,
      modelled=False)
-_add("PILOT_SPEED_DN", "cm/s", 0, 500, "pilot max descent speed, 0 = PILOT_SPEED_UP",
+_add("PILOT_THR_FILT", "Hz", 0, 10, "manual throttle filter, 0 = off (tlm: 0 only)",
      modelled=False)
-_add("PILOT_ACCEL_Z", "cm/s/s", 50, 500, "pilot vertical acceleration", modelled=False)
+_add("THR_DZ", "", 0, 300, "throttle dead band around mid-stick (control_in units of 0..1000)",
+     True)
+_add("TKOFF_SLEW_TIME", "s", 0.25, 5, "pilot takeoff: time the throttle takes from 0 to 1")
+_add("TKOFF_THR_MAX", "", 0, 1, "pilot takeoff: throttle at which the copter counts as airborne")
+_add("LOIT_ANG_MAX", "deg", 0, 45, "LOITER's pilot lean angle, 0 = 2/3 of ANGLE_MAX")
+_add("LOIT_SPEED", "cm/s", 20, 3500, "LOITER's top speed")
+_add("LOIT_ACC_MAX", "cm/s/s", 100, 981, "LOITER's position correction acceleration")
+_add("LOIT_BRK_ACCEL", "cm/s/s", 25, 250, "LOITER's braking acceleration")
+_add("LOIT_BRK_JERK", "cm/s/s/s", 500, 5000, "LOITER's braking jerk")
+_add("LOIT_BRK_DELAY", "s", 0, 2, "LOITER: delay before braking after the stick is released")
+_add("PHLD_BRAKE_RATE", "deg/s", 4, 12, "POSHOLD's brake angle rate", True)
+_add("PHLD_BRAKE_ANGLE", "cdeg", 2000, 4500, "POSHOLD's largest brake angle", True)
+_add(["RCMAP_ROLL", "RCMAP_PITCH", "RCMAP_THROTTLE", "RCMAP_YAW"], "", 1, 4,
+     "RC channel of roll / pitch / throttle / yaw (tlm: channels 1-4, in any order)", True)
+_add("ARMING_RUDDER", "", 0, 2, "arm / disarm with the yaw stick: 0 off, 1 arm, 2 arm and disarm",
+     True)
+_add("FLTMODE_CH", "", 0, 8, "the mode switch's RC channel, 0 = none", True)
 
 # ---- RTL, LAND, failsafes, arming (§3.1-3.7) --------------------------------------------------
 _add("RTL_ALT", "cm", 30, 300000, "RTL return altitude above home (§3.5)")
@@ -579,7 +604,8 @@ _add("LAND_SPEED", "cm/s", 30, 200, "final descent speed (§3.5)")
 _add("LAND_SPEED_HIGH", "cm/s", 0, 2500, "descent speed above LAND_ALT_LOW, 0 = WPNAV_SPEED_DN")
 _add("LAND_ALT_LOW", "cm", 100, 10000, "altitude where descent slows to LAND_SPEED (§3.5)")
 _flag("LAND_REPOSITION", "pilot may reposition during landing (§3.5)", modelled=False)
-_add("DISARM_DELAY", "s", 0, 127, "auto-disarm delay after landing (§3.5)", True, modelled=False)
+_add("DISARM_DELAY", "s", 0, 127,
+     "auto-disarm delay after landing with the throttle low, 0 = off (pilot modes)", True)
 _add("FS_THR_ENABLE", "", 0, 7,
      "radio failsafe action: 0 off, 1 RTL, 3 Land, 4/5 SmartRTL, 6 DO_LAND_START, 7 Brake (§3.1)",
      True)
@@ -597,8 +623,8 @@ _add("FS_GCS_ENABLE", "", 0, 7, "GCS failsafe action", True, modelled=False)
 _add("FS_GCS_TIMEOUT", "s", 0, 120, "GCS failsafe timeout", modelled=False)
 _flag("FS_CRASH_CHECK", "crash check disarms (§3.6)")
 _flag("FS_VIBE_ENABLE", "vibration failsafe (§3.6)")
-_add([f"FLTMODE{_i}" for _i in range(1, 7)], "", 0, 28, "flight mode of switch slot (§2.1)", True,
-     modelled=False)
+_add([f"FLTMODE{_i}" for _i in range(1, 7)], "", 0, 28,
+     "flight mode of mode switch position 1..6 (tlm flies 0, 2, 5, 6, 9, 16)", True)
 _add("FRAME_CLASS", "", 1, 3,
      "frame class: 1 quad, 2 hexa, 3 octa (tlm_sim.frames; sitl-faults.md §6.3)", True)
 _add("FRAME_TYPE", "", 0, 1,
@@ -615,9 +641,11 @@ _add("ARMING_CHECK", "", 0, _U32,
 _add("ARMING_ACCTHRESH", "m/s/s", 0.25, 3,
      "accelerometers differing by more than this fail the pre-arm check \"Accels "
      "inconsistent\" (tlm_sim.control.arming)")
-for _i in range(1, 9):
+for _i in range(1, 9):  # the sticks' channels 1-4 (RCMAP_*) act; 5-8 are only carried
     _add([f"RC{_i}_MIN", f"RC{_i}_TRIM", f"RC{_i}_MAX"], "PWM", 800, 2200,
-         f"RC channel {_i} min / trim / max (§2.1)", modelled=False)
+         f"RC channel {_i} min / trim / max (§2.1)", modelled=_i <= 4)
+    _add(f"RC{_i}_DZ", "PWM", 0, 200, f"RC channel {_i} dead zone", True, modelled=_i <= 4)
+    _flag(f"RC{_i}_REVERSED", f"RC channel {_i} reversed", modelled=_i <= 4)
 
 # ---- motors and mixer (AP_Motors*, §4.4) -----------------------------------------------------
 _add("MOT_THST_EXPO", "", -1, 1, "thrust curve expo (§4.4)")

@@ -1,5 +1,7 @@
 """``tlm crosscheck SITL.bin``: fly a SITL log's scenario in tlm and report how far apart they are
-(:mod:`tlm_process.crosscheck`).
+(:mod:`tlm_process.crosscheck`). A pilot-flown log (RCIN, no AUTO; or ``--replay``) is re-flown
+from its RCIN instead (:mod:`tlm_process.pilot.replay`): per stick segment, issue 42's
+measures; exit code 1 when one is outside its tolerance.
 
 Writes ``DIR/report.md`` with overlay plots (trajectory, altitude and speed, IMU spectrum), the
 re-flown flight as ``DIR/tlm_flight.bin`` (ArduPilot DataFlash) and ``R.json``;
@@ -51,6 +53,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "(--param FRAME_TYPE=1), a wind, or SITL's start-up (--param "
                         "TLM_BOOT_PHASE=1: then the pre-arm and EKF start-up texts are compared "
                         "too)")
+    c.add_argument("--replay", action="store_true",
+                   help="re-fly the log from its RCIN (the pilot's sticks) and compare per "
+                        "stick segment; the default for a log with RCIN and no AUTO mode")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
     c.add_argument("--out", type=folder, metavar="DIR",
                    help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "
@@ -78,6 +83,8 @@ def run(args: argparse.Namespace) -> int:
         check_writable_file(args.json, "--json")
     out = prepare_out(args.out, "crosscheck", args.overwrite,
                       inputs=[args.log, args.sidecar]) if args.out else None
+    if args.replay or _pilot_flown(args.log):
+        return _run_replay(args, overrides, out)
     if args.seeds is not None:
         return _run_seeds(args, overrides, out)
     try:
@@ -148,3 +155,59 @@ def _run_seeds(args: argparse.Namespace, overrides: dict[str, float], out: Path 
     if args.json:
         Path(args.json).write_text(json.dumps(to_json(d), indent=1) + "\n")
     return 0
+
+
+def _pilot_flown(path: str) -> bool:
+    """Whether the log was flown by a pilot (:func:`tlm_process.pilot.replay.is_pilot_flown`)."""
+    from tlm_process.logread import LogReadError, read_log_tables
+    from tlm_process.pilot.replay import is_pilot_flown
+
+    try:
+        return is_pilot_flown(read_log_tables(path, ["MODE", "RCIN"]).tables)
+    except LogReadError:
+        return False  # (the mission path reports what is wrong with the file)
+
+
+def _run_replay(args: argparse.Namespace, overrides: dict[str, float], out: Path | None) -> int:
+    """``tlm crosscheck LOG`` for a pilot-flown log: re-fly it from its RCIN."""
+    from tlm_process.pilot.replay import format_report, plot, replay, summary_lines
+
+    if args.seeds is not None:
+        raise UsageError("--seeds compares fault signatures of mission flights; a replay from "
+                         "RCIN judges one flight")
+    try:
+        r = replay(args.log, args.sidecar, args.seed, params=overrides or None)
+    except (ValueError, KeyError) as e:
+        raise UsageError(f"cannot replay {args.log} from RCIN: {e}") from None
+    for line in summary_lines(r):
+        print(line)
+    if out is not None:
+        plot(r, out)
+        (out / "report.md").write_text(format_report(r))
+        r["_log"].write_bin(out / "tlm_flight.bin")
+        print(f"written            {out}/report.md (+ overlay.png, tlm_flight.bin)")
+    if args.json:
+        doc = {"scenario": r["scenario"], "checks": r["checks"],
+               "flight_time_s": r["flight_time_s"],
+               "judged": r["judged"].to_dict("records"),
+               "segments": {k: v.to_dict("records") for k, v in r["segments"].items()}}
+        Path(args.json).write_text(json.dumps(_clean(doc), indent=1) + "\n")
+    c = r["checks"]
+    return 0 if c["segments"]["pass"] and c["flight_time"]["pass"] else 1
+
+
+def _clean(o: object) -> object:
+    """``o`` as strict JSON: numpy scalars as Python numbers, NaN and infinities as null."""
+    import math
+
+    import numpy as np
+
+    if isinstance(o, dict):
+        return {str(k): _clean(v) for k, v in o.items()}
+    if isinstance(o, list | tuple):
+        return [_clean(v) for v in o]
+    if isinstance(o, np.generic):
+        o = o.item()
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    return o

@@ -1,5 +1,6 @@
-"""``tlm fly``: fly one mission (built-in or a QGC WPL file), optionally with a fault schedule,
-and write its log tables, faults.json and summary.json."""
+"""``tlm fly``: fly one mission (built-in or a QGC WPL file), or a pilot's stick script
+(``--sticks``), optionally with a fault schedule, and write its log tables, faults.json and
+summary.json."""
 
 from __future__ import annotations
 
@@ -129,12 +130,13 @@ def _split_specs(items: Sequence[str]) -> list[str]:
     return [s for it in items for s in it.replace(",", " ").split()]
 
 
-def _load_schedule(args: argparse.Namespace, mission: Mission,
-                   params: Params) -> FaultSchedule | None:
+def _load_schedule(args: argparse.Namespace, mission: Mission | None,
+                   params: Params, max_time_s: float | None = None) -> FaultSchedule | None:
     """The flight's FaultSchedule (None when neither --faults nor --fault is given), checked
     against the mission's waypoint count and the longest the flight can last, before flying.
 
-    ``params``: the flight's parameters with the profile applied (they size the flight).
+    ``params``: the flight's parameters with the profile applied (they size the flight);
+    ``mission`` None: a pilot-flown flight of at most ``max_time_s`` (no waypoints).
     """
     from tlm_sim.faults import FaultSchedule, FaultScheduleError
     from tlm_sim.flight import max_duration_s
@@ -152,13 +154,19 @@ def _load_schedule(args: argparse.Namespace, mission: Mission,
                          "schedule or raw parameter changes); put extra parameter values in a "
                          "schedule file's params_start/params_end")
     # whole seconds, rounded down: readable in messages and never past fly()'s own bound
-    bounds = {"n_waypoints": mission.n_waypoints,
-              "max_time_s": float(math.floor(max_duration_s(mission, params)))}
+    if mission is None:
+        bounds = {"n_waypoints": 0, "max_time_s": float(math.floor(max_time_s or 0.0))}
+    else:
+        bounds = {"n_waypoints": mission.n_waypoints,
+                  "max_time_s": float(math.floor(max_duration_s(mission, params)))}
     option = "--fault" if args.fault else "--faults"
     try:
         if args.fault:
             schedule = FaultSchedule.from_shorthand(_split_specs(args.fault), **bounds)
         elif args.faults.strip().lower() == "paper":
+            if mission is None:
+                raise UsageError("--faults paper places its faults on a mission's waypoints; "
+                                 "with --sticks give the faults by time")
             schedule = FaultSchedule.paper(args.seed)
             schedule.validate(**bounds)
         else:
@@ -276,6 +284,34 @@ def _from_manifest(args: argparse.Namespace):
     return scenario_from_manifest(args.from_manifest, args.flight)
 
 
+def _pilot_scenario(args: argparse.Namespace):
+    """(None, the stick script, schedule, params, seed, profile, changes) of ``--sticks FILE``:
+    no mission (a pilot flies), faults and --set changes by time within the script's flight."""
+    from tlm_sim.flight import PILOT_TAIL_S, rc_table_us
+    from tlm_sim.mission.sticks import StickScript, StickScriptError
+    from tlm_sim.profiles import profile_params
+
+    if args.mission is not None or args.mission_file:
+        raise UsageError("--sticks flies a pilot's script instead of a mission: drop "
+                         "--mission / --mission-file")
+    try:
+        script = StickScript.from_file(args.sticks)
+    except StickScriptError as e:
+        raise UsageError(f"--sticks: {e}") from None
+    args.seed = 0 if args.seed is None else args.seed
+    profile = _check_profile("current" if args.profile is None else args.profile)
+    params = _load_params(args)
+    flown = profile_params(profile, params)
+    try:
+        table = rc_table_us(script, flown)
+    except StickScriptError as e:
+        raise UsageError(f"--sticks: {e}") from None
+    longest = float(table[-1, 0]) * 1e-6 + PILOT_TAIL_S
+    changes = _parse_changes(args.set or [], math.floor(longest))
+    schedule = _load_schedule(args, None, flown, longest)
+    return None, script, schedule, params, args.seed, profile, changes
+
+
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``fly`` to ``tlm``'s subcommands; returns its parser."""
     f = sub.add_parser("fly", help="fly one mission and write its log tables",
@@ -290,6 +326,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="QGC WPL 110 mission file instead of a built-in one: waypoints (with "
                         "hold times), LOITER_TIME, DO_CHANGE_SPEED, TAKEOFF, RTL or a final "
                         "LAND; anything else is refused (docs/missions.md)")
+    f.add_argument("--sticks", metavar="FILE",
+                   help="fly a pilot's stick script (.yaml/.json/.csv: time, roll, pitch, "
+                        "throttle, yaw, mode) instead of a mission: STABILIZE, ALT_HOLD, "
+                        "LOITER, POSHOLD from the sticks, arming by the rudder gesture "
+                        "(docs/pilot.md)")
     f.add_argument("--seed", type=int, default=None,
                    help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", type=folder, required=True, help="output folder")
@@ -335,9 +376,14 @@ def run(args: argparse.Namespace) -> int:
     from tlm_sim.profiles import profile_params
 
     fmts = _parse_formats(args.format)
+    sticks = None
     if args.from_manifest is not None:
+        if args.sticks:
+            raise UsageError("--from-manifest flies the data set's own scenario: drop --sticks")
         mission, schedule, params, seed, profile = _from_manifest(args)
         changes = []
+    elif args.sticks:
+        mission, sticks, schedule, params, seed, profile, changes = _pilot_scenario(args)
     else:
         _take_defaults(args)
         params = _load_params(args)
@@ -352,12 +398,13 @@ def run(args: argparse.Namespace) -> int:
                       inputs=[args.mission_file, args.params, args.faults, args.from_manifest])
     t0 = time.perf_counter()
     faults = schedule if schedule is not None else (changes or None)
-    log = fly(mission, faults=faults, params=params, seed=seed, profile=profile)
+    log = fly(mission, faults=faults, params=params, seed=seed, profile=profile, sticks=sticks)
     wall = time.perf_counter() - t0
     log.write(out, formats=fmts)
     write_faults(out, log)
     if not args.no_plot:
-        plot_trajectory(log, out / "trajectory.png", f"{mission.name}, seed {seed}")
+        name = "stick script" if sticks is not None else mission.name
+        plot_trajectory(log, out / "trajectory.png", f"{name}, seed {seed}")
     s = flight_summary(log)
     (out / "summary.json").write_text(json.dumps(s, indent=1))
     print(format_summary(s))

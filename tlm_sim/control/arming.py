@@ -53,7 +53,7 @@ MAG_XYZ_ANGLE = math.radians(90.0)  # AP_COMPASS_MAX_XYZ_ANG_DIFF
 MAG_XY_ANGLE = math.radians(60.0)  # AP_COMPASS_MAX_XY_ANG_DIFF
 MAG_XY_LENGTH = 0.2  # AP_COMPASS_MAX_XY_LENGTH_DIFF (200 mGauss) [gauss]
 
-MODE_NEEDS_GPS = (AP.MODE_AUTO, AP.MODE_GUIDED, AP.MODE_LOITER, AP.MODE_RTL)
+MODE_NEEDS_GPS = (AP.MODE_AUTO, AP.MODE_GUIDED, AP.MODE_LOITER, AP.MODE_RTL, AP.MODE_POSHOLD)
 
 
 @tick_jit
@@ -389,6 +389,11 @@ def arming_step(c, g, t_us, sensors, vin, txt, ev):
         _prearm_update(c, g, t_us, s, gps, eo, txt)
     if c[C.ARMED] != 0.0 or c[C.DISARM_TIME] >= 0.0 or c[C.ARM_GAVE_UP] != 0.0:
         return False
+    if g[C.G_PILOT] != 0.0:  # the pilot arms: an attempt when the rudder gesture asks
+        if c[C.PIL_ARM_REQ] == 0.0:
+            return False
+        c[C.PIL_ARM_REQ] = 0.0
+        return _attempt(c, g, t_us, sensors, vin, txt, ev)
     switched = c[C.MODE] != AP.MODE_GUIDED and t_s >= g[C.G_DRIVER_T]
     if switched:  # the driver's GUIDED (its MODE row is the arming's when that is now)
         c[C.MODE] = AP.MODE_GUIDED

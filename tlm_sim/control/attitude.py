@@ -253,7 +253,11 @@ def _rotate(qw, qx, qy, qz, vx, vy, vz):
 def _shape_yaw(c, g, tc, dt):
     """The heading target moves towards the command with its rate (YAW_RATE_CMD) as
     feed-forward, slew-limited (G_SLEW_YAW) and acceleration-limited; tc: input time constant
-    [s], dt [s]."""
+    [s], dt [s]. With a rate input (ATT_YAW_RATE_IN, the pilot's yaw stick) the heading rate
+    follows YAW_RATE_CMD instead: :func:`_shape_yaw_rate`."""
+    if c[C.ATT_YAW_RATE_IN] != 0.0:
+        _shape_yaw_rate(c, g, dt)
+        return
     yerr = wrap_pi(c[C.ATT_YAW_CMD] - c[C.ATT_YAW_T])
     yrate = c[C.YAW_RATE_CMD] + sqrt_ctrl(yerr, 1.0 / tc, g[C.G_ACCEL_MAX + 2], dt)
     smax = g[C.G_SLEW_YAW]
@@ -264,6 +268,25 @@ def _shape_yaw(c, g, tc, dt):
         yrate = min(max(yrate, yr0 - dv), yr0 + dv)
     c[C.ATT_YAW_RATE_T] = yrate
     c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + yrate * dt)
+
+
+@inline_jit
+def _shape_yaw_rate(c, g, dt):
+    """AC_AttitudeControl's input_shaping_ang_vel for the heading: the heading rate moves
+    towards the commanded rate YAW_RATE_CMD [rad/s] (through a first-order lag of
+    PILOT_Y_RATE_TC when set) at most ATC_ACCEL_Y_MAX per second, no slew limit; the
+    heading command follows the target."""
+    want = c[C.YAW_RATE_CMD]
+    r0 = c[C.ATT_YAW_RATE_T]
+    tc = g[C.G_PILOT_Y_TC]
+    if tc > 0.0:
+        want = r0 + (want - r0) * min(dt / tc, 1.0)
+    dv = g[C.G_ACCEL_MAX + 2] * dt
+    if dv > 0.0:
+        want = min(max(want, r0 - dv), r0 + dv)
+    c[C.ATT_YAW_RATE_T] = want
+    c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + want * dt)
+    c[C.ATT_YAW_CMD] = c[C.ATT_YAW_T]
 
 
 @inline_jit
@@ -337,9 +360,10 @@ THR_MIX_HI = 5.0
 
 
 @tick_jit
-def throttle_mix_update(c, g, attitude_first, thr_in, thr_unboosted):
-    """Slew the throttle vs attitude priority THR_RPY_MIX towards ATC_THR_MIX_MAX
-    (attitude_first: the land detector's "active flight") or ATC_THR_MIX_MIN, up at
+def throttle_mix_update(c, g, want, thr_in, thr_unboosted):
+    """Slew the throttle vs attitude priority THR_RPY_MIX towards want (ATC_THR_MIX_MAX in
+    the land detector's "active flight", else ATC_THR_MIX_MIN; ATC_THR_MIX_MAN in a
+    manual-throttle mode with the stick up: Copter::update_throttle_mix), up at
     THR_MIX_UP and down at THR_MIX_DOWN per second; going down it drops at once to the mix
     the mixer actually used (the throttle it placed, MOT_THR_OUT, against thr_in, the throttle
     demand 0..1, and the hover throttle), as AC_AttitudeControl_Multi does each rate-loop
@@ -347,7 +371,6 @@ def throttle_mix_update(c, g, attitude_first, thr_in, thr_unboosted):
     the higher of thr_in and thr_unboosted (the demand before angle boost), or its blend with
     the hover throttle by the mix if higher (set_throttle_out, get_throttle_avg_max)."""
     dt = g[C.G_DT]
-    want = g[C.G_THR_MIX_MAX] if attitude_first else g[C.G_THR_MIX_MIN]
     m = c[C.THR_RPY_MIX]
     hover = c[C.THR_HOVER]
     if m < want:

@@ -189,6 +189,68 @@ def _dcm(g: np.ndarray, p: Params) -> None:
     g[C.G_GPS_LAG] = gps_delay_s(p)
 
 
+#: AC_Loiter's position correction limits (LOITER_POS_CORRECTION_MAX, LOITER_VEL_CORRECTION_MAX)
+LOITER_POS_CORRECTION_MAX_M = 2.0
+LOITER_VEL_CORRECTION_MAX_MS = 2.0
+_STICKS = ("ROLL", "PITCH", "THROTTLE", "YAW")
+
+
+def _pilot(g: np.ndarray, p: Params) -> None:
+    """The receiver and the pilot's modes (RCn_*, RCMAP_*, FLTMODE*, PILOT_*, THR_DZ, LOIT_*,
+    PHLD_*, ARMING_RUDDER, DISARM_DELAY; tlm_sim.control.pilot). G_PILOT itself is set by
+    :func:`tlm_sim.flight.fly` when the flight has RC input to fly from."""
+    for k, name in enumerate(_STICKS):
+        ch = int(p[f"RCMAP_{name}"])
+        g[C.G_RC_MAP + k] = ch - 1
+        g[C.G_RC_MIN + k] = p[f"RC{ch}_MIN"]
+        g[C.G_RC_MAX + k] = p[f"RC{ch}_MAX"]
+        g[C.G_RC_TRIM + k] = p[f"RC{ch}_TRIM"]
+        g[C.G_RC_DZ + k] = p[f"RC{ch}_DZ"]
+        g[C.G_RC_REV + k] = p[f"RC{ch}_REVERSED"]
+    for k in range(6):
+        g[C.G_FLTMODE + k] = p[f"FLTMODE{k + 1}"]
+    g[C.G_FLTMODE_CH] = p["FLTMODE_CH"] - 1.0
+    up = p["PILOT_SPEED_UP"] / 100.0
+    dn = (p["PILOT_SPEED_DN"] or p["PILOT_SPEED_UP"]) / 100.0
+    accel = p["PILOT_ACCEL_Z"] / 100.0
+    g[C.G_PILOT_SPEED_UP] = up
+    g[C.G_PILOT_SPEED_DN] = dn
+    g[C.G_PILOT_ACCEL_Z] = accel
+    g[C.G_PILOT_JERK_Z] = p["PSC_JERK_Z"]
+    g[C.G_PILOT_POSZ_ERR_UP] = inv_sqrt_ctrl(up, p["PSC_POSZ_P"], accel)
+    g[C.G_PILOT_POSZ_ERR_DN] = inv_sqrt_ctrl(dn, p["PSC_POSZ_P"], accel)
+    g[C.G_PILOT_Y_RATE] = math.radians(p["PILOT_Y_RATE"])
+    g[C.G_PILOT_Y_EXPO] = p["PILOT_Y_EXPO"]
+    g[C.G_PILOT_Y_TC] = p["PILOT_Y_RATE_TC"]
+    g[C.G_THR_DZ] = min(max(p["THR_DZ"], 0.0), 400.0)
+    # RC_Channel::get_control_mid of the throttle (an integer: 484 for 1000-2000, DZ 30)
+    lo = g[C.G_RC_MIN + 2] + g[C.G_RC_DZ + 2]
+    hi = g[C.G_RC_MAX + 2]
+    mid = 0.5 * (g[C.G_RC_MIN + 2] + hi)
+    g[C.G_THR_MID] = float(int(1000.0 * (mid - lo) / (hi - lo))) if hi > lo else 500.0
+    g[C.G_TKOFF_ALT] = p["PILOT_TKOFF_ALT"] / 100.0
+    g[C.G_TKOFF_SLEW] = p["TKOFF_SLEW_TIME"]
+    g[C.G_TKOFF_THR_MAX] = p["TKOFF_THR_MAX"]
+    g[C.G_ARMING_RUDDER] = p["ARMING_RUDDER"]
+    g[C.G_DISARM_DELAY] = p["DISARM_DELAY"]
+    g[C.G_THR_MIX_MAN] = p["ATC_THR_MIX_MAN"]
+    # AC_Loiter::get_angle_max_cd: LOIT_ANG_MAX, or 2/3 of ANGLE_MAX when 0 (tlm's position
+    # controller leans to ANGLE_MAX: PSC_ANGLE_MAX is not modelled)
+    angle_max = p["ANGLE_MAX"] / 100.0
+    loit = p["LOIT_ANG_MAX"]
+    g[C.G_LOIT_ANG_MAX] = math.radians(min(loit, angle_max) if loit > 0.0 else angle_max * 2 / 3)
+    g[C.G_LOIT_SPEED] = max(p["LOIT_SPEED"], 20.0) / 100.0
+    g[C.G_LOIT_ACC_MAX] = min(p["LOIT_ACC_MAX"] / 100.0,
+                              GRAVITY_MSS * math.tan(math.radians(angle_max)))
+    g[C.G_LOIT_BRK_ACCEL] = p["LOIT_BRK_ACCEL"] / 100.0
+    g[C.G_LOIT_BRK_JERK] = p["LOIT_BRK_JERK"] / 100.0
+    g[C.G_LOIT_BRK_DELAY] = p["LOIT_BRK_DELAY"]
+    g[C.G_LOIT_ERR_MAX] = min(LOITER_POS_CORRECTION_MAX_M, inv_sqrt_ctrl(
+        LOITER_VEL_CORRECTION_MAX_MS, p["PSC_POSXY_P"], g[C.G_LOIT_ACC_MAX]))
+    g[C.G_PHLD_BRAKE_RATE] = max(p["PHLD_BRAKE_RATE"], 4.0)
+    g[C.G_PHLD_BRAKE_ANGLE] = p["PHLD_BRAKE_ANGLE"]
+
+
 def build_control_config(p: Params) -> np.ndarray:
     """Controller configuration of a flight from its parameters (ArduCopter names -> SI)."""
     require_params(p, "build_control_config")
@@ -201,6 +263,7 @@ def build_control_config(p: Params) -> np.ndarray:
     _motors(g, p)
     _failsafes(g, p)
     _dcm(g, p)
+    _pilot(g, p)
     g[C.G_YAW_ERR_MAX] = yaw_error_max(g[C.G_RAT_P + 2], g[C.G_ANG_P + 2], g[C.G_ACCEL_MAX + 2])
     g[C.G_POSXY_ERR_MAX] = inv_sqrt_ctrl(g[C.G_WP_SPEED], g[C.G_POSXY_P], g[C.G_WP_ACCEL])
     g[C.G_POSZ_ERR_UP] = inv_sqrt_ctrl(g[C.G_WP_SPEED_UP], g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z])

@@ -117,9 +117,9 @@ def log_vehicle_events(log, t_us, c, pos, origin_ready, home):
 
 @inline_jit
 def _log_arm(log, t_us, c, armed):
-    """ARM: the new state, not forced, by MAVLink (the GCS arms, as the reference driver did)
-    or by the disarm's method; ArmChecks 0 here (on arming: ARMING_CHECK, filled after the
-    flight)."""
+    """ARM: the new state, not forced, by the arming's method (MAVLink: the GCS arms, as the
+    reference driver did; RUDDER: the pilot's gesture) or the disarm's; ArmChecks 0 here (on
+    arming: ARMING_CHECK, filled after the flight)."""
     bufs = log[0]  # the log buffers
     r = L.new_row(log, L.K_ARM, t_us)
     if r >= 0:
@@ -127,7 +127,7 @@ def _log_arm(log, t_us, c, armed):
         b[r, ARM.ArmState] = armed
         b[r, ARM.ArmChecks] = 0.0
         b[r, ARM.Forced] = 0.0
-        b[r, ARM.Method] = AP.ARM_METHOD_MAVLINK if armed != 0.0 else c[C.DISARM_METHOD]
+        b[r, ARM.Method] = c[C.ARM_METHOD] if armed != 0.0 else c[C.DISARM_METHOD]
 
 
 @inline_jit

@@ -40,6 +40,12 @@ from tlm_sim.control.failsafe import (
     vertical_cf_update,
 )
 from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle, voltage_compensation
+from tlm_sim.control.pilot_modes import (
+    ARMING_DELAY_S,
+    log_land_complete,
+    pilot_mix_want,
+    pilot_step,
+)
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
@@ -62,10 +68,9 @@ from tlm_sim.rotation import quat_to_euler
 
 SPOOL_TIME_S = MOT_SPOOL_TIME_S
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
-# ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at MOT_SPIN_ARM and a takeoff
-# waits 2 s after arming; every reference log has EV 57 at 2.00 s, the throttle rising from
-# there (above 0.2 at 2.9-3.0 s) and NOT_LANDED at 3.28 s
-ARMING_DELAY_S = 2.0
+# ArduCopter's arming delay (ARMING_DELAY_SEC, pilot_modes.ARMING_DELAY_S): the motors stay at
+# MOT_SPIN_ARM and a takeoff waits 2 s after arming; every reference log has EV 57 at 2.00 s,
+# the throttle rising from there (above 0.2 at 2.9-3.0 s) and NOT_LANDED at 3.28 s
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 #: AC_PosControl's POSCONTROL_RELAX_TC [s]: the time constant of soften_for_landing's decay
 POSCONTROL_RELAX_TC = 0.16
@@ -91,8 +96,13 @@ LAND_CRITERIA_MASK = LAND_CRITERIA | AP.LDET_LARGE_ANGLE
 
 @tick_jit
 def set_mode(c, mode, rsn, t_us, ev):
-    """Change flight mode and write the MODE row."""
+    """Change flight mode and write the MODE row (the reason kept for the arming's MODE row);
+    a mode that is not flown from the sticks takes the heading as a command again."""
     c[C.MODE] = mode
+    c[C.MODE_RSN] = rsn
+    if not (mode == AP.MODE_STABILIZE or mode == AP.MODE_ALT_HOLD or mode == AP.MODE_LOITER
+            or mode == AP.MODE_POSHOLD):
+        c[C.ATT_YAW_RATE_IN] = 0.0
     E.log_mode(ev, t_us, mode, rsn)
 
 
@@ -154,7 +164,7 @@ def _position_ok(c):
 
 
 @tick_jit
-def _start_land(c, pos, failsafe):
+def start_land(c, pos, failsafe):
     """Enter LAND here: hold the height, without position control when the EKF has no
     position, pausing LAND_WITH_DELAY (4 s) first when a failsafe asked for it."""
     c[C.SUBMODE] = C.SUB_LAND
@@ -195,6 +205,9 @@ def vehicle_step(c, g, t_us, inputs, path, seg, ev):
     if sub == C.SUB_GROUND_IDLE:
         _ground_idle(c, g, t_us, inputs, seg, ev)
         _motors_at_rest(c, g, v_batt)
+        return
+    if sub == C.SUB_PILOT:
+        _pilot_tick(c, g, t_us, inputs, cos_tilt, ev)
         return
     yaw_cmd, yaw_rate_ff, land_vertical = _navigate(c, g, t_us, sub, inputs, (path, seg), ev)
     sub = int(c[C.SUBMODE])
@@ -245,6 +258,7 @@ def arm_vehicle(c, t_us, q, ev):
     set_mode(c, AP.MODE_GUIDED, AP.RSN_GCS, t_us, ev)
     c[C.ARMED] = 1.0
     c[C.ARM_TIME_S] = t_us * 1e-6
+    c[C.ARM_METHOD] = AP.ARM_METHOD_MAVLINK
     c[C.LANDED] = 1.0
     c[C.HOME_YAW] = _yaw(q)
     c[C.SUBMODE] = C.SUB_GROUND_IDLE
@@ -287,7 +301,7 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
         # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != AP.MODE_RTL:
-            return _rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_RADIO_FAILSAFE, ev)
+            return rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_RADIO_FAILSAFE, ev)
     elif not rc_late and thr_ok and c[C.RC_FAILSAFE] != 0.0:
         c[C.RC_FAILSAFE] = 0.0
         E.log_err(ev, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_RESOLVED)
@@ -295,7 +309,7 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
 
 
 @inline_jit
-def _rtl_or_land(c, g, t_us, inputs, seg, rsn, ev):
+def rtl_or_land(c, g, t_us, inputs, seg, rsn, ev):
     """A failsafe's RTL, or LAND after a pause when there is no position; returns the new
     submode."""
     pos, vel = inputs.pos, inputs.vel
@@ -304,7 +318,7 @@ def _rtl_or_land(c, g, t_us, inputs, seg, rsn, ev):
         _start_rtl(c, g, pos, vel, seg)
         return C.SUB_RTL_CLIMB
     set_mode(c, AP.MODE_LAND, rsn, t_us, ev)
-    _start_land(c, pos, True)
+    start_land(c, pos, True)
     return C.SUB_LAND
 
 
@@ -323,20 +337,20 @@ def _battery_failsafe(c, g, t_us, sub, inputs, seg, ev):
     landed = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
     if landed or act == B.ACT_TERMINATE:
         method = AP.ARM_METHOD_BATTERYFAILSAFE if landed else AP.ARM_METHOD_TERMINATE
-        _disarm(c, g, t_us, method, ev)
+        disarm(c, g, t_us, method, ev)
         return C.SUB_LANDED
     if act == B.ACT_LAND or act == B.ACT_SMARTRTL_LAND or act == B.ACT_BRAKE_LAND:
         if c[C.MODE] != AP.MODE_LAND:
             set_mode(c, AP.MODE_LAND, AP.RSN_BATTERY_FAILSAFE, t_us, ev)
-            _start_land(c, pos, True)
+            start_land(c, pos, True)
             return C.SUB_LAND
     elif act != B.ACT_NONE and c[C.MODE] != AP.MODE_RTL and c[C.MODE] != AP.MODE_LAND:
-        return _rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_BATTERY_FAILSAFE, ev)
+        return rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_BATTERY_FAILSAFE, ev)
     return sub
 
 
 @inline_jit
-def _disarm(c, g, t_us, method, ev):
+def disarm(c, g, t_us, method, ev):
     """Disarm now by AP_Arming::Method ``method`` (EV DISARMED, ARM.Method; motors stopped;
     the flight ends 2 s later)."""
     E.log_ev(ev, t_us, AP.EV_DISARMED)
@@ -354,17 +368,18 @@ def _nav_failsafes(c, g, t_us, sub, pos, eo, ev):
     fs = failsafe_checks(c, g, t_us, eo, ev)
     if fs == FS_NONE or sub == C.SUB_GROUND_IDLE or c[C.LANDED] != 0.0:
         return sub
-    needs_position = c[C.MODE] == AP.MODE_AUTO or c[C.MODE] == AP.MODE_GUIDED or (
-        c[C.MODE] == AP.MODE_RTL)
+    mode = c[C.MODE]
+    needs_position = (mode == AP.MODE_AUTO or mode == AP.MODE_GUIDED or mode == AP.MODE_RTL
+                      or mode == AP.MODE_LOITER or mode == AP.MODE_POSHOLD)
     if not (needs_position or g[C.G_FS_EKF_ACTION] == 3.0):
         return sub
     if fs == FS_EKF_ALTHOLD:
         set_mode(c, AP.MODE_ALT_HOLD, AP.RSN_EKF_FAILSAFE, t_us, ev)
-        _start_land(c, pos, True)
+        start_land(c, pos, True)
         c[C.LAND_PAUSE] = 1e9  # AltHold with centred sticks: level, hold the height
     elif c[C.MODE] != AP.MODE_LAND:
         set_mode(c, AP.MODE_LAND, AP.RSN_EKF_FAILSAFE, t_us, ev)
-        _start_land(c, pos, True)
+        start_land(c, pos, True)
     return C.SUB_LAND
 
 
@@ -465,7 +480,7 @@ def _nav_waypoints(c, g, t_us, pos, vel, path, seg):
             elif path[i, P_CMD] == AP.MAV_CMD_NAV_LAND:
                 # ModeAuto::verify_land: at the landing point, descend (and disarm, landed)
                 c[C.MISSION_LAND] = 1.0
-                _start_land(c, pos, False)
+                start_land(c, pos, False)
             else:
                 c[C.NAV_CNUM] = path[i, P_CNUM] + 1.0  # the mission's RETURN_TO_LAUNCH
                 _start_rtl(c, g, pos, vel, seg)
@@ -591,6 +606,17 @@ def _controllers(c, g, sub, inputs, cos_tilt, yaw_cmd, yaw_rate_ff):
     althold_lean_update(c, g, thr)
     thr_b = angle_boost(thr, cos_tilt)
     c[C.THR_OUT_BOOSTED] = thr_b
+    _attitude_rates_mix(c, g, (q, gyro, v_batt), sub, thr, thr_b)
+    return thr
+
+
+@inline_jit
+def _attitude_rates_mix(c, g, meas, sub, thr, thr_b):
+    """The attitude controller (its targets set), the rate PIDs, the throttle mix (of the
+    submode sub: the pilot's modes or the autopilot's) and the mixer with the throttle thr
+    (thr_b boosted). meas: the EKF attitude body->NED, the body rates [rad/s] and the
+    battery voltage [V]."""
+    q, gyro, v_batt = meas
     attitude_update(c, g, q, gyro, c[C.BODY_RATE_T : C.BODY_RATE_T + 3])
     rate_t0 = c[C.BODY_RATE_T]
     rate_t1 = c[C.BODY_RATE_T + 1]
@@ -600,9 +626,34 @@ def _controllers(c, g, sub, inputs, cos_tilt, yaw_cmd, yaw_rate_ff):
     r_out = rate_pid(c, g, 0, rate_t0, gyro[0], lim_rp)
     p_out = rate_pid(c, g, 1, rate_t1, gyro[1], lim_rp)
     y_out = rate_pid(c, g, 2, rate_t2, gyro[2], lim_y)
-    throttle_mix_update(c, g, _attitude_first(c, sub), thr_b, thr)
+    if sub == C.SUB_PILOT:
+        want = pilot_mix_want(c, g)
+    else:
+        want = g[C.G_THR_MIX_MAX] if _attitude_first(c, sub) else g[C.G_THR_MIX_MIN]
+    throttle_mix_update(c, g, want, thr_b, thr)
     mix(c, g, r_out, p_out, y_out, thr_b, v_batt)
-    return thr
+
+
+@inline_jit
+def _pilot_tick(c, g, t_us, inputs, cos_tilt, ev):
+    """The armed vehicle in a pilot mode (tlm_sim.control.pilot_modes): the mode's targets,
+    the controllers and mixer (unless the motors idle), hover learning outside STABILIZE,
+    the land detector (not while a takeoff's throttle rises on the ground; EV
+    LAND_COMPLETE / NOT_LANDED), the crash checks."""
+    was_landed = c[C.LANDED] != 0.0
+    thr, thr_b, run = pilot_step(c, g, t_us, inputs, cos_tilt)
+    if run:
+        meas = (inputs.q, inputs.gyro, inputs.v_batt)
+        _attitude_rates_mix(c, g, meas, C.SUB_PILOT, thr, thr_b)
+    if was_landed and c[C.LANDED] == 0.0:
+        E.log_ev(ev, t_us, AP.EV_NOT_LANDED)
+        was_landed = False
+    if c[C.MODE] != AP.MODE_STABILIZE:
+        _hover_learning(c, g, C.SUB_PILOT, thr, inputs)
+    taking_off = c[C.PIL_TKOFF] == 1.0
+    _land_detector(c, g, t_us, C.SUB_TAKEOFF if taking_off else C.SUB_PILOT, thr, inputs, ev)
+    log_land_complete(c, t_us, was_landed, ev)
+    _crash_checks(c, g, t_us, inputs, cos_tilt, ev)
 
 
 @inline_jit
@@ -707,6 +758,6 @@ def _crash_checks(c, g, t_us, inputs, cos_tilt, ev):
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
             E.log_err(ev, t_us, AP.ERR_CRASH_CHECK, AP.ERR_CODE_FAILSAFE)
-            _disarm(c, g, t_us, AP.ARM_METHOD_CRASH, ev)
+            disarm(c, g, t_us, AP.ARM_METHOD_CRASH, ev)
     else:
         c[C.CRASH_TIMER] = 0.0

@@ -123,9 +123,19 @@ def _limit_accel_xy(c, an, ae, accel_max):
 
 @tick_jit
 def xy_update(c, g, pos, vel, cy, sy):
+    """:func:`xy_control` with the waypoint navigation's position correction (WPNAV_ACCEL,
+    the error that asks for WPNAV_SPEED): AUTO, GUIDED, RTL, LAND."""
+    xy_control(c, g, pos, vel, cy, sy, (g[C.G_WP_ACCEL], g[C.G_POSXY_ERR_MAX]))
+
+
+@tick_jit
+def xy_control(c, g, pos, vel, cy, sy, corr):
     """Run the horizontal controller on the EKF position/velocity (NED); sets ATT_ROLL/PITCH_CMD.
 
-    cy, sy: cosine and sine of the heading the lean angles are about (the attitude target's).
+    cy, sy: cosine and sine of the heading the lean angles are about (the attitude target's);
+    corr: the position correction's acceleration limit [m/s^2] and the largest position error
+    it acts on [m] (waypoints: WPNAV_ACCEL and the error asking for WPNAV_SPEED; LOITER:
+    LOIT_ACC_MAX and 2 m).
     The acceleration is limited to the lean angle min(ANGLE_MAX, max(ALTHOLD_LEAN, 10 deg)),
     keeping the part across the desired velocity first; while limited, the velocity integrator
     does not grow along the limit.
@@ -143,14 +153,14 @@ def xy_update(c, g, pos, vel, cy, sy):
     en = c[C.PXY_POS_T] - pos[0]
     ee = c[C.PXY_POS_T + 1] - pos[1]
     dist = math.sqrt(en * en + ee * ee)
-    emax = g[C.G_POSXY_ERR_MAX]
+    corr_accel, emax = corr
     if dist > emax:
         en *= emax / dist
         ee *= emax / dist
         dist = emax
         c[C.PXY_POS_T] = pos[0] + en
         c[C.PXY_POS_T + 1] = pos[1] + ee
-    vcorr = sqrt_ctrl(dist, g[C.G_POSXY_P], g[C.G_WP_ACCEL], dt)
+    vcorr = sqrt_ctrl(dist, g[C.G_POSXY_P], corr_accel, dt)
     if dist > 1e-9:
         vcn = vcorr * en / dist
         vce = vcorr * ee / dist
@@ -221,8 +231,21 @@ def z_reset(c, g, pd, vd, throttle):
 
 @tick_jit
 def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
+    """:func:`z_control` with the waypoint navigation's limits (WPNAV_SPEED_UP / _DN,
+    WPNAV_ACCEL_Z): AUTO, GUIDED, RTL, LAND."""
+    return z_control(c, g, (pd, vd, acc_up_meas), (limit_lo, limit_hi),
+                     (g[C.G_WP_SPEED_UP], g[C.G_WP_SPEED_DN], g[C.G_WP_ACCEL_Z],
+                      g[C.G_POSZ_ERR_UP], g[C.G_POSZ_ERR_DN]))
+
+
+@tick_jit
+def z_control(c, g, meas, limits, kin):
     """Run the vertical controller; returns the throttle demand 0..1 (before angle boost; the
     unclamped demand, as AC_PosControl passes it on, in c[THR_IN_RAW]).
+
+    meas: (pd, vd, acc_up_meas); limits: (limit_lo, limit_hi); kin: the climb and descent
+    speed limits [m/s], the correction's acceleration [m/s^2] and the largest position
+    errors acted on above and below [m] (waypoints: WPNAV_*; the pilot's modes: PILOT_*).
 
     pd, vd: EKF down position [m] and velocity [m/s]; acc_up_meas: measured up acceleration
     [m/s^2] (earth frame, gravity removed); limit_lo/hi: mixer throttle saturation flags.
@@ -234,21 +257,22 @@ def z_update(c, g, pd, vd, acc_up_meas, limit_lo, limit_hi):
     POSCONTROL_VIBE_COMP gains).
     """
     dt = g[C.G_DT]
-    up_max = g[C.G_WP_SPEED_UP]
-    dn_max = g[C.G_WP_SPEED_DN]
+    pd, vd, acc_up_meas = meas
+    limit_lo, limit_hi = limits
+    up_max, dn_max, accel_z, err_up_max, err_dn_max = kin
     vibe = c[C.VIBE_COMP] != 0.0
     v_up_est = -c[C.VCF_VEL] if vibe else -vd
     err_up = -(c[C.PZ_POS_T] - pd)  # positive when the target is above
     # as AC_P_1D: the target stays within the errors that ask for WPNAV_SPEED_UP / _DN
     # (combined_s21.bin: during the accelerometer fault's climb PSCD's target is dragged up
     # with the vehicle and then follows it down 1.625 m below, the error asking for 1.5 m/s)
-    if err_up > g[C.G_POSZ_ERR_UP]:
-        err_up = g[C.G_POSZ_ERR_UP]
+    if err_up > err_up_max:
+        err_up = err_up_max
         c[C.PZ_POS_T] = pd - err_up
-    elif err_up < -g[C.G_POSZ_ERR_DN]:
-        err_up = -g[C.G_POSZ_ERR_DN]
+    elif err_up < -err_dn_max:
+        err_up = -err_dn_max
         c[C.PZ_POS_T] = pd - err_up
-    v_up = sqrt_ctrl(err_up, g[C.G_POSZ_P], g[C.G_WP_ACCEL_Z], dt) - c[C.PZ_VEL_FF]
+    v_up = sqrt_ctrl(err_up, g[C.G_POSZ_P], accel_z, dt) - c[C.PZ_VEL_FF]
     v_up = min(max(v_up, -dn_max), up_max)
     c[C.PZ_VEL_T] = -v_up
     acc_up = g[C.G_VELZ_P] * (v_up - v_up_est) - c[C.PZ_ACC_FF]

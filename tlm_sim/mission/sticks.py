@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from tlm_sim.ardupilot import MODE_NAMES
+from tlm_sim.ardupilot import MODE_NAMES, RC_IDLE_PWM
 from tlm_sim.textfile import TextFileError, read_text
 
 __all__ = ["AXES", "DEFAULT_RAMP_S", "StickScript", "StickScriptError", "mode_pwm"]
@@ -172,9 +172,10 @@ class StickScript:
 
     def channels(self, t_s: float, params: Mapping[str, float]) -> np.ndarray:
         """RC channels 1-8 [us] at ``t_s`` as the receiver delivers them: the sticks on the
-        default RCMAP, the mode switch on ``FLTMODE_CH`` (its position's centre), 1500 on the
-        other channels."""
-        ch = np.full(8, 1500.0)
+        default RCMAP, the mode switch on ``FLTMODE_CH`` (its position's centre) once a row
+        sets a mode, SITL's idle values on the other channels (5: 1800, 6: 1000, 7: 1000, 8:
+        1800)."""
+        ch = np.array(RC_IDLE_PWM)
         pos = self.sticks(t_s)
         ch[CHANNEL["roll"] - 1] = 1500.0 + 500.0 * pos["roll"]
         ch[CHANNEL["pitch"] - 1] = 1500.0 - 500.0 * pos["pitch"]  # forward is low PWM

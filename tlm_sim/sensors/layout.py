@@ -132,6 +132,7 @@ MAG_BASE = _s.block("MAG", MAG, N_MAG)
 RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
 RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
 RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
+RC_ROW = _s.add("RC_ROW", 1, "", "next row of the flight's RC table (a pilot-flown flight)")
 BARO_BASE = _s.block("BARO", BARO, N_BARO)
 B_GND_TEMP = _s.add("B_GND_TEMP", 1, "degC",
                     "AP_Baro's ground temperature: the primary's at calibration (BARO.GndTemp)")

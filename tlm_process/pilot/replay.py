@@ -1,0 +1,409 @@
+"""Re-fly a pilot-flown log from its own RCIN (issue 42, part 3; ``tlm crosscheck`` on a log
+without an AUTO mission).
+
+A pilot-flown log carries what the pilot's transmitter sent: RCIN, channels 1..8 at the log's
+rate (10 Hz in SITL's and most real logs). tlm flies it as it was sent (:func:`rc_table`: each
+row held until the next, as tlm's 50 Hz receiver delivers it), from the log's parameters
+(:func:`log_params`: a SITL log's PARM as it starts; a real vehicle's modelled parameters,
+Copter 3.3 names translated, and its battery), with the sidecar's faults or the SIM_* changes
+in PARM, on the log's own time line: the vehicle arms by the rudder gesture where the log's
+pilot made it. A log armed another way (a ground station, an arming switch) gets the gesture
+inserted before its arming time (:func:`with_arm_gesture`), the stick positions it replaces
+are noted.
+
+The two flights are then measured per stick segment (:mod:`tlm_process.pilot.signature`: the
+sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segment, mean and
+peak pitch and roll and the top speed within 15 % of the log's (or within a noise floor of
+0.5 deg and 0.3 m/s, whichever is larger), the height held within 0.5 m (range of CTUN.Alt)
+in the modes that hold it, motor 1's excess over the others within 15 % (floor 5 us); the
+flight time within 5 %.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tlm_process.pilot.signature import (
+    StickSegment,
+    flight_time_s,
+    pilot_signature,
+    segments_from_rcin,
+    segments_from_sidecar,
+)
+
+__all__ = ["PilotScenario", "REL_TOL", "judge", "log_params", "reconstruct_pilot", "replay",
+           "rc_table", "with_arm_gesture", "is_pilot_flown", "format_report", "plot"]
+
+#: issue 42's tolerances: relative, per measure, and the noise floors below which a difference
+#: is not judged relative (hover attitude ~0.1 deg, speed ~0.05 m/s, motor 1 +-1 us)
+REL_TOL = 0.15
+FLOORS: dict[str, float] = {"pitch_mean_deg": 0.5, "pitch_peak_deg": 0.5, "roll_mean_deg": 0.5,
+                            "roll_peak_deg": 0.5, "speed_max_ms": 0.3, "motor1_excess_us": 5.0}
+HEIGHT_HELD_M = 0.5
+FLIGHT_TIME_REL_TOL = 0.05
+#: the modes that hold height (their segments' CTUN.Alt range is judged)
+HEIGHT_MODES = (2, 5, 16)  # ALT_HOLD, LOITER, POSHOLD
+#: the rudder gesture tlm inserts: this long before the log's arming time [s] (the gesture
+#: arms after 3 s, at the next tick)
+GESTURE_S = 3.02
+CHANNELS = tuple(f"C{k}" for k in range(1, 9))
+
+
+def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
+    """A log flown by a pilot: RCIN with stick input and no AUTO in MODE."""
+    mode = tables.get("MODE")
+    rcin = tables.get("RCIN")
+    if rcin is None or not len(rcin) or not {"C1", "C2", "C3", "C4"} <= set(rcin.columns):
+        return False
+    if mode is not None and len(mode):
+        col = "ModeNum" if "ModeNum" in mode else "Mode"
+        if (pd.to_numeric(mode[col], errors="coerce") == 3).any():
+            return False
+    return bool((rcin[["C1", "C2", "C3", "C4"]].to_numpy(float) > 0).any())
+
+
+def rc_table(tables: Mapping[str, pd.DataFrame]) -> np.ndarray:
+    """The log's RCIN as tlm's RC table: rows (time since boot [s], channels 1..8 [us]) where
+    the receiver delivered the sticks (rows with roll, pitch, throttle and yaw all 0, no
+    radio, are dropped; a channel the log lacks or logs as 0 takes SITL's idle value)."""
+    from tlm_sim.ardupilot import RC_IDLE_PWM
+
+    rcin = tables["RCIN"]
+    sticks = rcin[["C1", "C2", "C3", "C4"]].to_numpy(float)
+    keep = (sticks > 0).any(axis=1)
+    r = rcin[keep]
+    out = np.empty((len(r), 9))
+    out[:, 0] = r["TimeUS"].to_numpy(float) * 1e-6
+    for k, ch in enumerate(CHANNELS):
+        v = r[ch].to_numpy(float) if ch in r else np.zeros(len(r))
+        out[:, k + 1] = np.where(v > 0, v, RC_IDLE_PWM[k])
+    return out
+
+
+def _gesture_in_log(table: np.ndarray, arm_s: float, params: Mapping[str, float]) -> bool:
+    """Whether the table shows the rudder arming gesture before ``arm_s``: yaw beyond 89 % of
+    its travel with the throttle at its bottom through the 2.8 s before it (each row held until
+    the next, sampled at 50 Hz; RCIN logged at 10 Hz may show the 3 s gesture 0.1 s late)."""
+    yaw_ch = int(params.get("RCMAP_YAW", 4))
+    thr_ch = int(params.get("RCMAP_THROTTLE", 3))
+    times = np.arange(arm_s - 2.8, arm_s - 0.05, 0.02)  # (RCIN at 10 Hz lags the frames)
+    idx = np.searchsorted(table[:, 0], times, side="right") - 1
+    if len(times) == 0 or idx.min() < 0:
+        return False
+    held = table[idx]
+    trim = params.get(f"RC{yaw_ch}_TRIM", 1500.0)
+    hi = params.get(f"RC{yaw_ch}_MAX", 2000.0)
+    lo_thr = params.get(f"RC{thr_ch}_MIN", 1000.0) + params.get(f"RC{thr_ch}_DZ", 30.0)
+    yaw_right = held[:, yaw_ch] > trim + 0.89 * (hi - trim)
+    thr_low = held[:, thr_ch] <= lo_thr
+    return bool(np.all(yaw_right & thr_low))
+
+
+def with_arm_gesture(table: np.ndarray, arm_s: float,
+                     params: Mapping[str, float]) -> tuple[np.ndarray, str | None]:
+    """The table with the rudder arming gesture (yaw full right, throttle at its bottom) in the
+    :data:`GESTURE_S` before the log's arming time ``arm_s`` [s], unless the log shows one;
+    returns (table, a note on what was inserted, or None)."""
+    if _gesture_in_log(table, arm_s, params):
+        return table, None
+    yaw_ch = int(params.get("RCMAP_YAW", 4))
+    thr_ch = int(params.get("RCMAP_THROTTLE", 3))
+    t0 = arm_s - GESTURE_S
+    before = table[table[:, 0] < t0]
+    after = table[table[:, 0] > arm_s]
+    last = table[table[:, 0] <= arm_s]
+    base = last[-1].copy() if len(last) else table[0].copy()
+    g = base.copy()
+    g[0] = t0
+    g[yaw_ch] = params.get(f"RC{yaw_ch}_MAX", 2000.0)
+    g[thr_ch] = params.get(f"RC{thr_ch}_MIN", 1000.0)
+    back = base.copy()
+    back[0] = arm_s + 0.05
+    rows = [before, g[None, :], back[None, :], after[after[:, 0] > arm_s + 0.05]]
+    note = (f"the log arms at {arm_s:.1f} s without the rudder gesture: tlm's pilot makes it "
+            f"from {t0:.1f} s (yaw full right, throttle down)")
+    return np.concatenate(rows), note
+
+
+def log_params(tables: Mapping[str, pd.DataFrame],
+               log_values: Mapping[str, float]) -> tuple[dict[str, float], list[str]]:
+    """The parameters to fly a log with, and notes: a SITL log's PARM at its start (the
+    SIM_* too); a real vehicle's modelled parameters (Copter 3.3 names translated,
+    out-of-range values dropped) and its battery (:mod:`tlm_process.fit.fit`)."""
+    notes: list[str] = []
+    if any(str(k).startswith("SIM_") for k in log_values):
+        from tlm_process.crosscheck.scenario import _initial_params
+
+        return _initial_params(tables["PARM"]), notes
+    from tlm_process.fit.fit import log_battery, log_vehicle_params
+
+    keep, dropped = log_vehicle_params(log_values)
+    for name, why in dropped.items():
+        notes.append(f"parameter {name} not flown: {why}")
+    keep.update(log_battery(tables, log_values))
+    return keep, notes
+
+
+@dataclass
+class PilotScenario:
+    """What tlm needs to re-fly a pilot-flown log, and the log."""
+
+    name: str
+    tables: dict[str, pd.DataFrame]
+    log_values: dict[str, float]
+    params: dict[str, float]
+    rc: np.ndarray
+    changes: list[tuple[float, str, float]]
+    segments: list[StickSegment]
+    seed: int
+    arm_s: float
+    notes: list[str] = field(default_factory=list)
+
+
+def _sidecar(path: Path, sidecar: str | Path | None) -> dict[str, Any] | None:
+    p = Path(sidecar) if sidecar is not None else path.with_suffix(".json")
+    if not p.is_file():
+        if sidecar is not None:
+            raise FileNotFoundError(2, "no such sidecar", str(p))
+        return None
+    doc = json.loads(p.read_text())
+    return doc if isinstance(doc, dict) else None
+
+
+def _changes(doc: Mapping[str, Any] | None,
+             tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, str, float]]:
+    """The faults as parameter changes on the log's time line: the sidecar's records, else
+    the SIM_* changes of PARM after its start."""
+    out: list[tuple[float, str, float]] = []
+    faults = (doc or {}).get("faults") or []
+    if faults:
+        for f in faults:
+            for key, t_key in (("params_start", "start_time_us"), ("params_end", "end_time_us")):
+                t = f.get(t_key)
+                if t is None:
+                    continue
+                out += [(float(t) * 1e-6, str(n), float(v)) for n, v in (f.get(key) or {}).items()]
+        return out
+    parm = tables.get("PARM")
+    if parm is None or not len(parm):
+        return out
+    from tlm_sim.flightlog.binreader import param_changes_from_parm
+
+    for row in param_changes_from_parm(parm, exclude=()).itertuples():
+        if str(row.Name).startswith("SIM_"):
+            out.append((float(row.TimeUS) * 1e-6, str(row.Name), float(row.Value)))
+    return out
+
+
+def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
+                      seed: int | None = None) -> PilotScenario:
+    """Read a pilot-flown log (and its sidecar) into a :class:`PilotScenario`."""
+    from tlm_process.logread import arming_time_us, read_log_tables
+
+    path = Path(bin_path)
+    lt = read_log_tables(path)
+    tables = dict(lt.tables)
+    values = dict(lt.params)
+    doc = _sidecar(path, sidecar)
+    params, notes = log_params(tables, values)
+    table = rc_table(tables)
+    if not len(table):
+        raise ValueError(f"{path}: RCIN has no stick input to replay")
+    arm_us, _ = arming_time_us(tables, values)
+    if arm_us is None:
+        raise ValueError(f"{path.name}: the log never armed: there is no flight to replay")
+    arm_s = arm_us * 1e-6
+    table, note = with_arm_gesture(table, arm_s, {**_rc_defaults(), **values})
+    if note:
+        notes.append(note)
+    segments = segments_from_sidecar(doc) if doc and doc.get("stick_script") else (
+        segments_from_rcin(tables, values))
+    mode = tables.get("MODE")
+    if mode is not None and len(mode):
+        col = "ModeNum" if "ModeNum" in mode else "Mode"
+        unflown = sorted({int(m) for m in pd.to_numeric(mode[col], errors="coerce").dropna()}
+                         - {0, 2, 5, 6, 9, 16})
+        if unflown:
+            from tlm_sim.ardupilot import MODE_NAMES
+
+            notes.append("modes tlm does not fly from the sticks (it stays in the mode before): "
+                         + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
+    s = int(seed if seed is not None else (doc or {}).get("seed", 0) or 0)
+    return PilotScenario(path.stem, tables, values, params, table, _changes(doc, tables),
+                         segments, s, arm_s, notes)
+
+
+def _rc_defaults() -> dict[str, float]:
+    from tlm_sim.params import Params
+
+    d = Params.defaults()
+    return {k: float(v) for k, v in d.items() if k.startswith(("RC", "RCMAP_"))}
+
+
+def _mode_at(tables: Mapping[str, pd.DataFrame], t_us: float) -> int | None:
+    mode = tables.get("MODE")
+    if mode is None or not len(mode):
+        return None
+    col = "ModeNum" if "ModeNum" in mode else "Mode"
+    before = mode[mode["TimeUS"] <= t_us]
+    return int(before[col].iloc[-1]) if len(before) else None
+
+
+def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.DataFrame],
+          rel_tol: float = REL_TOL) -> pd.DataFrame:
+    """Per segment and measure: the log's value, tlm's, the tolerance and whether tlm is
+    within it (see the module docstring)."""
+    rows = []
+    for (_, a), (_, b) in zip(ref.iterrows(), ours.iterrows(), strict=True):
+        mode = _mode_at(ref_tables, a["start_s"] * 1e6)
+        for m, floor in FLOORS.items():
+            x, y = float(a[m]), float(b[m])
+            if not (math.isfinite(x) and math.isfinite(y)):
+                continue
+            tol = max(rel_tol * abs(x), floor)
+            rows.append({"segment": a["segment"], "measure": m, "log": x, "tlm": y,
+                         "tol": tol, "pass": abs(y - x) <= tol})
+        if mode in HEIGHT_MODES and math.isfinite(float(b["alt_range_m"])):
+            y = float(b["alt_range_m"])
+            rows.append({"segment": a["segment"], "measure": "alt_range_m",
+                         "log": float(a["alt_range_m"]), "tlm": y, "tol": HEIGHT_HELD_M,
+                         "pass": y <= HEIGHT_HELD_M})
+    return pd.DataFrame(rows, columns=["segment", "measure", "log", "tlm", "tol", "pass"])
+
+
+def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | None = None,
+           params: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """Re-fly a pilot-flown log from its RCIN and compare: returns ``scenario`` (what was
+    flown), ``segments`` (the log's and tlm's signature tables), ``judged``
+    (:func:`judge`), ``flight_time_s`` (log, tlm), ``checks`` and the flown ``_log``."""
+    from tlm_sim import fly
+    from tlm_sim.params import Params
+
+    sc = reconstruct_pilot(bin_path, sidecar, seed)
+    flown = {**sc.params, **dict(params or {})}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        log = fly(None, sc.changes or None, params=Params(flown), seed=sc.seed, sticks=sc.rc)
+    ours = {n: log.tables[n] for n in log.tables}
+    ref_sig = pilot_signature(sc.tables, sc.segments, sc.log_values)
+    tlm_sig = pilot_signature(ours, sc.segments, dict(log.params))
+    judged = judge(ref_sig, tlm_sig, sc.tables)
+    ft_log = flight_time_s(sc.tables, sc.log_values)
+    ft_tlm = flight_time_s(ours, dict(log.params))
+    ft_ok = (math.isfinite(ft_log) and math.isfinite(ft_tlm)
+             and abs(ft_tlm - ft_log) <= FLIGHT_TIME_REL_TOL * ft_log)
+    n_pass = int(judged["pass"].sum()) if len(judged) else 0
+    return {
+        "scenario": {"log": str(bin_path), "name": sc.name, "seed": sc.seed,
+                     "arm_s": sc.arm_s, "rc_rows": int(len(sc.rc)),
+                     "faults": [list(c) for c in sc.changes], "notes": list(sc.notes),
+                     "params_from_log": dict(sc.params),
+                     "overrides": {k: float(v) for k, v in (params or {}).items()},
+                     "end_reason": log.meta.get("end_reason")},
+        "segments": {"log": ref_sig, "tlm": tlm_sig},
+        "judged": judged,
+        "flight_time_s": {"log": ft_log, "tlm": ft_tlm},
+        "checks": {"segments": {"passed": n_pass, "judged": int(len(judged)),
+                                "pass": n_pass == len(judged)},
+                   "flight_time": {"pass": bool(ft_ok), "rel_tol": FLIGHT_TIME_REL_TOL}},
+        "_log": log, "_tables": sc.tables,
+    }
+
+
+def _fmt(v: float) -> str:
+    return "—" if not math.isfinite(v) else f"{v:.2f}"
+
+
+def format_report(r: Mapping[str, Any]) -> str:
+    """Markdown report of :func:`replay`: the scenario, the checks, the judged measures per
+    segment and the overlay pictures (:func:`plot`)."""
+    sc = r["scenario"]
+    c = r["checks"]
+    ft = r["flight_time_s"]
+    lines = [f"# tlm crosscheck (replay from RCIN): {sc['name']}", "",
+             f"Re-flown from the log's RCIN ({sc['rc_rows']} rows), seed {sc['seed']}, "
+             f"arming at {_fmt(sc['arm_s'] or math.nan)} s; tlm's flight ended: "
+             f"{sc['end_reason']}.", ""]
+    for note in sc["notes"]:
+        lines.append(f"- note: {note}")
+    lines += ["", f"**Flight time**: log {_fmt(ft['log'])} s, tlm {_fmt(ft['tlm'])} s "
+              f"({'pass' if c['flight_time']['pass'] else 'FAIL'}, within "
+              f"{FLIGHT_TIME_REL_TOL:.0%}).", "",
+              f"**Stick segments**: {c['segments']['passed']}/{c['segments']['judged']} "
+              f"measures within tolerance ({REL_TOL:.0%} or the noise floor; height held "
+              f"within {HEIGHT_HELD_M} m).", "",
+              "| segment | measure | log | tlm | tolerance | |", "|---|---|---|---|---|---|"]
+    for row in r["judged"].to_dict("records"):
+        lines.append(f"| {row['segment']} | {row['measure']} | {_fmt(row['log'])} | "
+                     f"{_fmt(row['tlm'])} | {_fmt(row['tol'])} | "
+                     f"{'pass' if row['pass'] else 'FAIL'} |")
+    lines += ["", "![overlay](overlay.png)", ""]
+    return "\n".join(lines)
+
+
+def plot(r: Mapping[str, Any], out: Path) -> Path:
+    """``overlay.png``: the log's and tlm's pitch, roll, ground speed and altitude over time,
+    with the sticks below and the stick segments shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ref = r["_tables"]
+    ours = {n: r["_log"].tables[n] for n in r["_log"].tables}
+    fig, axes = plt.subplots(5, 1, figsize=(11, 11), sharex=True)
+    panels = (("ATT", "Pitch", "pitch [deg]"), ("ATT", "Roll", "roll [deg]"),
+              ("GPS", "Spd", "ground speed [m/s]"), ("CTUN", "Alt", "altitude [m]"))
+    for ax, (msg, col, label) in zip(axes, panels, strict=False):
+        for tables, name, style in ((ref, "log", "-"), (ours, "tlm", "--")):
+            df = tables.get(msg)
+            if df is None or col not in df:
+                continue
+            if msg == "GPS" and "I" in df:
+                df = df[df["I"] == 0]
+            ax.plot(df["TimeUS"] * 1e-6, df[col], style, lw=1, label=name)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper right")
+    rc = ref.get("RCIN")
+    if rc is not None:
+        for ch, name in (("C1", "roll"), ("C2", "pitch"), ("C3", "throttle"), ("C4", "yaw")):
+            if ch in rc:
+                axes[4].plot(rc["TimeUS"] * 1e-6, rc[ch], lw=1, label=f"{ch} {name}")
+        axes[4].set_ylabel("RCIN [us]")
+        axes[4].legend(loc="upper right", ncol=4, fontsize=8)
+    for k, seg in enumerate(r["segments"]["log"].itertuples()):
+        for ax in axes:
+            ax.axvspan(seg.start_s, seg.end_s, color="0.86" if k % 2 else "0.94", zorder=0)
+    axes[-1].set_xlabel("time since boot [s]")
+    fig.suptitle(f"{r['scenario']['name']}: log (solid) and tlm re-flown from RCIN (dashed)")
+    fig.tight_layout()
+    path = out / "overlay.png"
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def summary_lines(r: Mapping[str, Any]) -> Sequence[str]:
+    """The console lines of a replay."""
+    c, ft = r["checks"], r["flight_time_s"]
+    out = [f"replayed from RCIN: {r['scenario']['name']} (seed {r['scenario']['seed']})"]
+    out += [f"note: {n}" for n in r["scenario"]["notes"]]
+    out.append(f"flight time: tlm {_fmt(ft['tlm'])} s, log {_fmt(ft['log'])} s "
+               f"({'pass' if c['flight_time']['pass'] else 'FAIL'})")
+    out.append(f"stick segments: {c['segments']['passed']}/{c['segments']['judged']} measures "
+               "within tolerance")
+    for row in r["judged"].to_dict("records"):
+        if not row["pass"]:
+            out.append(f"  outside: {row['segment']} {row['measure']}: log {_fmt(row['log'])}, "
+                       f"tlm {_fmt(row['tlm'])} (tolerance {_fmt(row['tol'])})")
+    return out
