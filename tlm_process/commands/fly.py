@@ -155,7 +155,7 @@ def _load_schedule(args: argparse.Namespace, mission: Mission | None,
                          "schedule file's params_start/params_end")
     # whole seconds, rounded down: readable in messages and never past fly()'s own bound
     if mission is None:
-        bounds = {"n_waypoints": 0, "max_time_s": float(math.floor(max_time_s or 0.0))}
+        bounds = {"n_waypoints": 1, "max_time_s": float(math.floor(max_time_s or 0.0))}
     else:
         bounds = {"n_waypoints": mission.n_waypoints,
                   "max_time_s": float(math.floor(max_duration_s(mission, params)))}
@@ -266,7 +266,8 @@ def _take_defaults(args: argparse.Namespace) -> None:
 
 
 def _from_manifest(args: argparse.Namespace):
-    """(mission, schedule, params, seed, profile) of ``--from-manifest DS --flight N``."""
+    """(mission, schedule, params, seed, profile, sticks) of ``--from-manifest DS --flight
+    N``."""
     from tlm_process.generate.manifest import scenario_from_manifest
 
     if args.flight is None:
@@ -380,7 +381,7 @@ def run(args: argparse.Namespace) -> int:
     if args.from_manifest is not None:
         if args.sticks:
             raise UsageError("--from-manifest flies the data set's own scenario: drop --sticks")
-        mission, schedule, params, seed, profile = _from_manifest(args)
+        mission, schedule, params, seed, profile, sticks = _from_manifest(args)
         changes = []
     elif args.sticks:
         mission, sticks, schedule, params, seed, profile, changes = _pilot_scenario(args)

@@ -245,6 +245,12 @@ def build_config(args: argparse.Namespace) -> Any:
         ranges.pop(name, None)
     d["wind"] = _wind_setting(args, d, ranges, flag_ranges)
     d["vibration"] = _vibration_setting(args, d)
+    share = getattr(args, "pilot_share", None)
+    if share is not None:
+        if d.get("pilot", {}) is None:
+            raise UsageError(f"{args.config} (pilot: null) draws no pilot-flown flights: drop "
+                             "--pilot-share")
+        d["pilot"] = {**dict(d.get("pilot") or {}), "share": share}
     d["ranges"], d["params"] = ranges, params
     return ScenarioConfig.from_dict(d)
 
@@ -325,6 +331,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                          "(default 0:360)")
     sc.add_argument("--wind-turb", metavar="LOW:HIGH",
                     help="SIM_WIND_TURB of the windy flights, m/s (default 0:2)")
+    sc.add_argument("--pilot-share", type=float, metavar="F",
+                    help="share of pilot-flown flights (ALT_HOLD, LOITER, POSHOLD from a drawn "
+                         "stick script: hover, lines, boxes, yaw turns; default 0), the rest "
+                         "fly missions; faults are drawn as for missions (docs/generate.md)")
     sc.add_argument("--real-share", type=float, metavar="F",
                     help="share of flights with a real copter's vibration and noise, the rest "
                          "SITL-quiet (default 0.5; 0 when --params gives the vehicle its own; "

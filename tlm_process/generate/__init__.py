@@ -9,8 +9,8 @@ Typical use::
     report = generate(GenerateOptions(out=Path("ds"), flights=1000, seed=1))
     print("\\n".join(report.lines()))
     gps = read_dataset_table("ds", "GPS")         # every flight, column 'flight'
-    mission, schedule, params, seed, profile = scenario_from_manifest("ds", 123)
-    tlm_sim.fly(mission, schedule, params, seed, profile)   # flight 123 again, same tables
+    spec = scenario_from_manifest("ds", 123)
+    tlm_sim.fly(*spec[:5], sticks=spec.sticks)   # flight 123 again, same tables
 
 Names are imported lazily (``tlm_process._lazy``) so that ``tlm --help`` stays fast.
 """

@@ -71,6 +71,11 @@ def generate_card(header: Mapping[str, Any], manifest: pd.DataFrame,
         f"* missions: {_counts(str(m).split('-')[0] for m in ok.get('mission', []))}",
         f"* frames: {_counts(ok.get('frame', []))}",
     ]
+    pilot = [str(m) for m in ok.get("mission", []) if str(m).startswith("pilot-")]
+    if pilot:
+        lines.append(f"* pilot-flown (stick scripts, docs/pilot.md): modes "
+                     f"{_counts(m.split('-')[1] for m in pilot)}; patterns "
+                     f"{_counts('-'.join(m.split('-')[2:]) for m in pilot)}")
     if "vibration" in ok:
         vib = ok["vibration"].fillna("-")
         lines.append(f"* vibration: {int((vib == 'real').sum())} with a real copter's vibration "

@@ -226,8 +226,7 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
         e = entries[flight]
         sc, sm, tm = (_obj(e.get(k)) for k in ("scenario", "summary", "timing"))
         m = _obj(sc.get("mission"))
-        mission = (f"builtin-{m.get('id')}" if m.get("source") == "builtin"
-                   else f"random-{m.get('seed')}" if m else None)
+        mission = _mission_name(m)
         cond = (flight_conditions(_obj(sc.get("params"))) if sc
                 else dict.fromkeys(CONDITION_COLUMNS))
         rows.append({
@@ -269,6 +268,19 @@ def manifest_frame(entries: Mapping[int, Mapping[str, Any]]) -> pd.DataFrame:
     return df
 
 
+def _mission_name(m: Mapping[str, Any]) -> str | None:
+    """The manifest's ``mission`` of a recipe: ``builtin-K``, ``random-SEED`` or, for a
+    pilot-flown flight, ``pilot-MODE-PATTERN``."""
+    if not m:
+        return None
+    if m.get("source") == "builtin":
+        return f"builtin-{m.get('id')}"
+    if m.get("source") == "pilot":
+        p = _obj(m.get("pilot"))
+        return f"pilot-{p.get('mode')}-{p.get('pattern')}"
+    return f"random-{m.get('seed')}"
+
+
 def _obj(v: Any) -> dict[str, Any]:
     """``v`` when it is a JSON object, else an empty one (a hand-edited journal value)."""
     return v if isinstance(v, dict) else {}
@@ -280,8 +292,9 @@ def _list(v: Any) -> list[Any]:
 
 def scenario_from_manifest(ds: str | os.PathLike, flight: int, *,
                            strict: bool = True) -> FlightSpec:
-    """``(mission, schedule, params, seed, profile)`` of flight ``flight`` of data set ``ds``,
-    to fly it again alone (``tlm_sim.fly(*spec)`` gives the tables the data set holds).
+    """``(mission, schedule, params, seed, profile, sticks)`` of flight ``flight`` of data set
+    ``ds``, to fly it again alone (``tlm_sim.fly(*spec[:5], sticks=spec.sticks)`` gives the
+    tables the data set holds).
 
     Raises GenerateError: not a data set, no such flight, or (``strict``) a data set made by
     another simulator source, whose flights would not come out the same."""

@@ -59,7 +59,13 @@ any fault time. Streams:
    moves no real flight's values). A real-level flight flies the drawn airframe (they replace
    the environment's SIM_GYRn_RND draws); a quiet one none of them (docs/noise.md).
 
-Streams 6 to 8 came last, so every draw of streams 0-5 of a flight is what it was before
+9. **pilot**: a pilot-flown flight instead of a mission by :attr:`ScenarioConfig.pilot`'s
+   ``share`` (one uniform draw; none by default), then its mode, pattern, height and stick
+   segments (:mod:`tlm_process.generate.pilot_flights`). Its faults count from the start of
+   its pattern instead of ``auto_start_s`` and must end before its descent; its mission
+   stream is not drawn (the recipe is the script's draw).
+
+Streams 6 to 9 came last, so every draw of streams 0-5 of a flight is what it was before
 (``tests/test_generate_frames.py`` pins it against digests of the earlier sampler).
 
 :func:`fault_preset` names the usual choices of fault types (``--faults`` of ``tlm
@@ -86,8 +92,14 @@ import numpy as np
 
 from tlm_process.fault_types import Knob, fault_type_record, fault_type_records
 from tlm_process.generate.errors import GenerateError
+from tlm_process.generate.pilot_flights import (
+    draw_pilot,
+    pilot_params,
+    pilot_script,
+    validate_pilot,
+)
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
-from tlm_sim.flight import max_duration_s
+from tlm_sim.flight import max_duration_s, pilot_home_mission
 from tlm_sim.frames import FRAMES, FrameError, frame_name
 from tlm_sim.geo import HOME_CMAC
 from tlm_sim.mission import (
@@ -133,7 +145,7 @@ MISSION_SOURCES: tuple[str, ...] = ("builtin", "random")
 PAPER_FIRST: tuple[str, ...] = ("gps", "accel", "engine")
 
 (_S_KIND, _S_MISSION, _S_FAULTS, _S_ENV, _S_SEED, _S_MAGNITUDE, _S_FRAME, _S_WIND,
- _S_VIBRATION) = range(9)
+ _S_VIBRATION, _S_PILOT) = range(10)
 
 #: The paper's four fault types (labels 1-4).
 PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
@@ -277,6 +289,10 @@ class ScenarioConfig:
             vehicle) and no share is given, no flight draws them (the vehicle has its own);
             a share > 0 with such ``params`` is refused. ``None``: no draw (every flight
             SITL-quiet, or what ``params`` give).
+        pilot: ``share`` of pilot-flown flights (0..1, default 0), their ``modes`` and
+            ``patterns`` shares and the ranges ``stick``, ``alt``, ``duration``, ``leg_s``,
+            ``release_s`` (:data:`~tlm_process.generate.pilot_flights.DEFAULT_PILOT`);
+            ``None``: none.
     """
 
     kinds: Mapping[str, float] = field(
@@ -305,6 +321,7 @@ class ScenarioConfig:
         default_factory=lambda: dict(DEFAULT_FRAMES))
     wind: Mapping[str, Any] | None = field(default_factory=dict)
     vibration: Mapping[str, Any] | None = field(default_factory=dict)
+    pilot: Mapping[str, Any] | None = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -367,6 +384,11 @@ class ScenarioConfig:
                                 f"{len(self.sequence_types)} types")
         set_(self, "sequence_len", (int(lo), int(hi)))
         set_(self, "magnitudes", _magnitudes(self.magnitudes))
+        pilot = validate_pilot(self.pilot)
+        if pilot is not None and pilot["share"] > 0 and "FLTMODE1" in self.params:
+            raise GenerateError("FLTMODE1 is fixed (params) but pilot-flown flights put their "
+                                "mode on switch position 1: leave it out of params")
+        set_(self, "pilot", pilot)
         _check_modelled(self.drawn_types())
 
     def drawn_types(self) -> set[str]:
@@ -728,13 +750,15 @@ def _draw_magnitudes(rng: np.random.Generator, ftype: str, cfg: ScenarioConfig
 
 
 class FlightSpec(NamedTuple):
-    """The arguments of :func:`tlm_sim.fly` for one flight."""
+    """The arguments of :func:`tlm_sim.fly` for one flight (``sticks``: the stick script of a
+    pilot-flown flight, whose mission gives only the home)."""
 
     mission: Mission
     schedule: FaultSchedule
     params: Params
     seed: int
     profile: str
+    sticks: Any = None
 
 
 @dataclass(frozen=True)
@@ -812,7 +836,12 @@ class Scenario:
             params = Params(self.params)
         except (FaultScheduleError, ParamError) as exc:
             raise GenerateError(f"flight {self.flight}: {exc}") from None
-        return FlightSpec(mission, schedule, params, int(self.seed), self.profile)
+        sticks = None
+        if self.mission.get("source") == "pilot":
+            from tlm_sim.mission.sticks import StickScript
+
+            sticks = StickScript(tuple(pilot_script(self.mission["pilot"])[0]))
+        return FlightSpec(mission, schedule, params, int(self.seed), self.profile, sticks)
 
 
 def mission_hash(mission: Mission) -> str:
@@ -830,8 +859,12 @@ def mission_from_recipe(recipe: Mapping[str, Any]) -> Mission:
     ``default_rng(s)``, Savitzky-Golay 21/3). ``{"source": "random", "seed": s, "home": [...],
     "n_waypoints": n, "alt_range": [lo, hi]}``: ``random_loop(home, default_rng(s))`` and
     ``make_mission`` drawing the altitudes from the same generator (as the reference driver).
+    ``{"source": "pilot", "home": [...], "pilot": draw}``: a pilot-flown flight's placeholder
+    at its home (its sticks: :meth:`Scenario.realise`).
     """
     try:
+        if recipe.get("source") == "pilot":
+            return pilot_home_mission(tuple(float(v) for v in recipe["home"]))
         return _mission_cached(_freeze(recipe))
     except (MissionError, KeyError, TypeError, ValueError) as exc:
         raise GenerateError(f"bad mission recipe {dict(recipe)!r}: {exc}") from None
@@ -876,13 +909,13 @@ def _pick(rng: np.random.Generator, shares: Mapping[str, float]) -> str:
     return names[min(i, len(names) - 1)]
 
 
-def _draw_faults(rng: np.random.Generator, kind: str, cfg: ScenarioConfig) -> list[tuple[str,
-                                                                                         float,
-                                                                                         float]]:
-    """(type, start s, end s) per fault, holds scaled by λ, rounded to 0.1 s."""
+def _draw_faults(rng: np.random.Generator, kind: str, cfg: ScenarioConfig,
+                 origin: float | None = None) -> list[tuple[str, float, float]]:
+    """(type, start s, end s) per fault, holds scaled by λ, rounded to 0.1 s; times count from
+    ``origin`` [s] (None: ``auto_start_s``)."""
     if kind == "none":
         return []
-    t = cfg.auto_start_s
+    t = cfg.auto_start_s if origin is None else origin
     if kind == "single":
         ftype = _pick(rng, cfg.fault_weights)
         start = round(t + float(rng.uniform(*cfg.single_start_s)), 1)
@@ -938,9 +971,17 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
             raise GenerateError(f"{what} must be a whole number >= 0, got {v!r}")
     run_seed, flight = int(run_seed), int(flight)
     kind = _pick(_stream(run_seed, flight, _S_KIND), cfg.kinds)
-    recipe = _draw_mission(_stream(run_seed, flight, _S_MISSION), cfg)
+    pilot = None
+    if cfg.pilot is not None and cfg.pilot["share"] > 0:
+        pilot = draw_pilot(_stream(run_seed, flight, _S_PILOT), cfg.pilot)
+    origin = descent = None
+    if pilot is None:
+        recipe = _draw_mission(_stream(run_seed, flight, _S_MISSION), cfg)
+    else:
+        recipe = {"source": "pilot", "home": list(cfg.home), "pilot": pilot}
+        _, origin, descent = pilot_script(pilot)
     mission = mission_from_recipe(recipe)
-    drawn = _draw_faults(_stream(run_seed, flight, _S_FAULTS), kind, cfg)
+    drawn = _draw_faults(_stream(run_seed, flight, _S_FAULTS), kind, cfg, origin)
     env = _stream(run_seed, flight, _S_ENV)
     params = dict(cfg.params)
     for name, (lo, hi) in cfg.ranges.items():
@@ -951,11 +992,14 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
         params.update(_draw_wind(_stream(run_seed, flight, _S_WIND), cfg.wind))
     if cfg.vibration is not None:
         params.update(_draw_vibration(_stream(run_seed, flight, _S_VIBRATION), cfg.vibration))
+    if pilot is not None:
+        params.update(pilot_params(pilot))
     params = dict(sorted(params.items()))
     seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
     seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
     # drop faults that could not happen: past the longest the flight can last (whole seconds)
-    limit = math.floor(max_duration_s(mission, profile_params(cfg.profile, params)))
+    limit = (math.floor(descent) if descent is not None else
+             math.floor(max_duration_s(mission, profile_params(cfg.profile, params))))
     kept = drawn[:next((k for k, d in enumerate(drawn) if d[2] > limit), len(drawn))]
     mag = _stream(run_seed, flight, _S_MAGNITUDE)
     faults = []

@@ -103,7 +103,7 @@ def fly_job(job: Mapping[str, Any]) -> dict[str, Any]:
         t1 = time.perf_counter()
         timing["sample_s"] = t1 - t0
         log = fly(spec.mission, faults=spec.schedule, params=spec.params, seed=spec.seed,
-                  profile=spec.profile)
+                  profile=spec.profile, sticks=spec.sticks)
         t2 = time.perf_counter()
         timing["fly_s"] = t2 - t1
         gps_t = log.columns("GPS")["TimeUS"] if log.n_rows("GPS") else np.zeros(0)

@@ -1,0 +1,198 @@
+"""Pilot-flown flights of a generated data set (issue 42): a stick script drawn per flight.
+
+A pilot-flown flight arms by the rudder gesture in its mode (ALT_HOLD, LOITER or POSHOLD, by
+their shares), climbs to a drawn height, flies a drawn **pattern** of stick segments for a drawn
+time, descends, lands and disarms by the rudder gesture. The patterns:
+
+* ``hover``: sticks centred throughout (the pilot holds position; the mode does the rest);
+* ``lines``: pitch forward, release, pitch back, release, ... (out-and-back lines);
+* ``box``: pitch forward, roll right, pitch back, roll left, each followed by a release;
+* ``yaw_turns``: yaw right / left turns of a drawn rate and length between hovers.
+
+Each segment's stick deflection is uniform in ``stick`` (fraction of full stick), its length in
+``leg_s`` [s], the release after it in ``release_s`` [s]. The mode sits on switch position 1
+(``FLTMODE1`` is set to it in the flight's parameters). STABILIZE is not drawn: a script has no
+pilot to hold the height with the throttle.
+
+The script's **origin** (the start of the pattern, after the climb) is where the fault draws
+start counting, as AUTO's start does for missions; faults that would end after the descent
+starts are dropped.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from tlm_process.generate.errors import GenerateError
+
+__all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_params",
+           "pilot_script", "validate_pilot"]
+
+#: the modes a drawn script flies (they hold the height themselves)
+PILOT_MODES: tuple[str, ...] = ("ALT_HOLD", "LOITER", "POSHOLD")
+PATTERNS: tuple[str, ...] = ("hover", "lines", "box", "yaw_turns")
+#: Default: no pilot-flown flights (``--pilot-share``); when there are, every mode and pattern
+#: alike, sticks 20-60 %, heights 5-20 m, 150-400 s of pattern, legs 4-10 s, releases 5-10 s.
+DEFAULT_PILOT: dict[str, Any] = {
+    "share": 0.0, "modes": dict.fromkeys(PILOT_MODES, 1.0),
+    "patterns": dict.fromkeys(PATTERNS, 1.0), "stick": (0.2, 0.6), "alt": (5.0, 20.0),
+    "duration": (150.0, 400.0), "leg_s": (4.0, 10.0), "release_s": (5.0, 10.0)}
+#: the script's timeline [s since boot]: the rudder gesture, the throttle up
+ARM_GESTURE_S = 15.0
+GESTURE_HOLD_S = 3.5
+CLIMB_STICK = 0.8  # 1.26 m/s with the default PILOT_SPEED_UP and THR_DZ
+CLIMB_MS = 1.26
+DESCENT_STICK = 0.15  # -1.69 m/s
+DESCENT_MS = 1.69
+#: the arming delay, spool-up and takeoff before the climb rate holds [s]
+TAKEOFF_LAG_S = 4.0
+SETTLE_S = 5.0  # hover after the climb before the pattern
+#: the mode switch position the drawn mode is put on (FLTMODE1)
+SWITCH_SLOT = 1
+
+
+def _pair(v: Any, what: str, lo_min: float) -> tuple[float, float]:
+    try:
+        lo, hi = (float(x) for x in v)
+    except (TypeError, ValueError):
+        raise GenerateError(f"pilot {what} must be a pair (low, high), got {v!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < lo_min or hi < lo:
+        raise GenerateError(f"pilot {what} must be finite with {lo_min:g} <= low <= high, got "
+                            f"({lo:g}, {hi:g})")
+    return lo, hi
+
+
+def _weights(d: Any, known: tuple[str, ...], what: str) -> dict[str, float]:
+    if not isinstance(d, Mapping):
+        raise GenerateError(f"pilot {what} must be a mapping name -> share")
+    norm = {str(k).strip().upper() if what == "modes" else str(k).strip().lower(): v
+            for k, v in d.items()}
+    bad = [k for k in norm if k not in known]
+    if bad:
+        extra = " (STABILIZE needs a pilot holding the height)" if bad[0] == "STABILIZE" else ""
+        raise GenerateError(f"pilot {what}: unknown {bad[0]!r}{extra}; choose from "
+                            f"{', '.join(known)}")
+    out = {}
+    for k in known:
+        v = norm.get(k, 0.0)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0:
+            raise GenerateError(f"pilot {what}: share of {k!r} must be a number >= 0")
+        out[k] = float(v)
+    if sum(out.values()) <= 0:
+        raise GenerateError(f"pilot {what}: at least one share must be > 0")
+    return out
+
+
+def validate_pilot(v: Any) -> dict[str, Any] | None:
+    """The validated ``pilot`` setting of a scenario configuration (missing keys take
+    :data:`DEFAULT_PILOT`'s); None: no pilot-flown flights drawn."""
+    if v is None:
+        return None
+    if not isinstance(v, Mapping):
+        raise GenerateError(f"pilot must be a mapping (share, modes, patterns, ...) or null, "
+                            f"got {v!r}")
+    unknown = [k for k in v if k not in DEFAULT_PILOT]
+    if unknown:
+        raise GenerateError(f"pilot: unknown setting {unknown[0]!r}; known: "
+                            f"{', '.join(DEFAULT_PILOT)}")
+    share = v.get("share", DEFAULT_PILOT["share"])
+    if isinstance(share, bool) or not isinstance(share, int | float) or not 0 <= share <= 1:
+        raise GenerateError(f"pilot share (--pilot-share) must be a number in [0, 1], got "
+                            f"{share!r}")
+    out: dict[str, Any] = {"share": float(share),
+                           "modes": _weights(v.get("modes", DEFAULT_PILOT["modes"]),
+                                             PILOT_MODES, "modes"),
+                           "patterns": _weights(v.get("patterns", DEFAULT_PILOT["patterns"]),
+                                                PATTERNS, "patterns")}
+    for key, lo_min in (("stick", 0.0), ("alt", 2.0), ("duration", 10.0), ("leg_s", 0.5),
+                        ("release_s", 0.5)):
+        out[key] = _pair(v.get(key, DEFAULT_PILOT[key]), key, lo_min)
+    if out["stick"][1] > 1.0:
+        raise GenerateError("pilot stick is a fraction of full stick: at most 1")
+    if out["alt"][1] > 100.0:
+        raise GenerateError("pilot alt: at most 100 m")
+    return out
+
+
+def _pick(rng: np.random.Generator, shares: Mapping[str, float]) -> str:
+    names = list(shares)
+    w = np.array([shares[n] for n in names], dtype=np.float64)
+    i = int(np.searchsorted(np.cumsum(w) / w.sum(), rng.random(), side="right"))
+    return names[min(i, len(names) - 1)]
+
+
+def draw_pilot(rng: np.random.Generator, cfg: Mapping[str, Any]) -> dict[str, Any] | None:
+    """One flight's draw (the scenario's pilot stream): None for a mission flight (by the
+    share; one uniform draw), else the mode, pattern, height, pattern length and the
+    segments ``[[roll, pitch, yaw, length s, release s], ...]`` (rounded to 0.01 / 0.1 s)."""
+    if float(rng.random()) >= cfg["share"]:
+        return None
+    mode = _pick(rng, cfg["modes"])
+    pattern = _pick(rng, cfg["patterns"])
+    alt = round(float(rng.uniform(*cfg["alt"])), 1)
+    duration = round(float(rng.uniform(*cfg["duration"])), 1)
+    segs: list[list[float]] = []
+    t = 0.0
+    k = 0
+    while t < duration:
+        s = round(float(rng.uniform(*cfg["stick"])), 2)
+        leg = round(float(rng.uniform(*cfg["leg_s"])), 1)
+        rel = round(float(rng.uniform(*cfg["release_s"])), 1)
+        roll, pitch, yaw = _stick(pattern, k, s, float(rng.random()))
+        segs.append([roll, pitch, yaw, leg, rel])
+        t += leg + rel
+        k += 1
+    return {"mode": mode, "pattern": pattern, "alt": alt, "duration": duration,
+            "segments": segs}
+
+
+def _stick(pattern: str, k: int, s: float, u: float) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) of segment k of a pattern, deflection s; u: a uniform draw (the
+    yaw turn's direction)."""
+    if pattern == "hover":
+        return 0.0, 0.0, 0.0
+    if pattern == "lines":
+        return 0.0, s if k % 2 == 0 else -s, 0.0
+    if pattern == "box":
+        return ((0.0, s, 0.0), (s, 0.0, 0.0), (0.0, -s, 0.0), (-s, 0.0, 0.0))[k % 4]
+    return 0.0, 0.0, s if u < 0.5 else -s
+
+
+def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, float]:
+    """The stick script rows of a draw (:func:`draw_pilot`), the pattern's start (the fault
+    draws' origin) and the descent's start [s since boot]."""
+    rows: list[dict[str, Any]] = [
+        {"t": 0.0, "mode": draw["mode"]},
+        {"t": ARM_GESTURE_S, "yaw": 1.0, "ramp": 0.0},
+        {"t": ARM_GESTURE_S + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0},
+    ]
+    t_up = ARM_GESTURE_S + GESTURE_HOLD_S + 0.5
+    rows.append({"t": t_up, "throttle": CLIMB_STICK, "ramp": 0.0})
+    t_hold = round(t_up + TAKEOFF_LAG_S + float(draw["alt"]) / CLIMB_MS, 1)
+    rows.append({"t": t_hold, "throttle": 0.5})
+    t = round(t_hold + SETTLE_S, 1)
+    origin = t
+    for roll, pitch, yaw, leg, rel in draw["segments"]:
+        if roll or pitch or yaw:
+            rows.append({"t": t, "roll": roll, "pitch": pitch, "yaw": yaw})
+            rows.append({"t": round(t + leg, 1), "roll": 0.0, "pitch": 0.0, "yaw": 0.0})
+        t = round(t + leg + rel, 1)
+    descent = t
+    rows.append({"t": descent, "throttle": DESCENT_STICK})
+    t_down = round(descent + (float(draw["alt"]) + 2.0) / DESCENT_MS + 4.0, 1)
+    rows.append({"t": t_down, "throttle": 0.0, "ramp": 0.0})
+    rows.append({"t": t_down + 1.0, "yaw": -1.0, "ramp": 0.0})
+    rows.append({"t": t_down + 1.0 + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0})
+    return rows, origin, descent
+
+
+def pilot_params(draw: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters a drawn script needs: its mode on switch position 1 (FLTMODE1)."""
+    from tlm_sim.ardupilot import MODE_NAMES
+
+    number = {v: k for k, v in MODE_NAMES.items()}[draw["mode"]]
+    return {f"FLTMODE{SWITCH_SLOT}": float(number)}
