@@ -107,17 +107,25 @@ def test_fit_recovers_known_parameters_from_a_tlm_flight():
 @pytest.mark.slow
 def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
     """``tlm fit log171.bin``: its steady LOITER hover, fitted statistics within 15 % of the
-    log's, a .parm file tlm loads (the log's gains and frame, the fitted knobs) and a plot."""
+    log's, a .parm file tlm loads (the log's gains and frame, the fitted knobs) and a plot;
+    with ``--replay`` the log re-flown from its RCIN with the fitted vehicle: the segment's
+    hover throttle and gyro noise in the replay within 25 % of the log's."""
     from tlm_process.cli import main
     from tlm_process.fit.fit import FIT_STATS
     from tlm_sim.params import Params
 
     out = tmp_path / "v.parm"
-    assert main(["fit", str(real_path("log171.bin")), "--out", str(out)]) == 0
-    text = capsys.readouterr().out
+    assert main(["fit", str(real_path("log171.bin")), "--out", str(out), "--replay",
+                 str(tmp_path / "replay")]) == 0
+    text, replayed = capsys.readouterr().out.split("the segment 197.5-216.5 s in the replay:")
     assert "segment            197.5-216.5 s" in text
     rows = {ln.split()[0]: ln.split() for ln in text.splitlines()
             if ln.split() and ln.split()[0] in FIT_STATS}
+    again = {ln.split()[0]: ln.split() for ln in replayed.splitlines()
+             if ln.split() and ln.split()[0] in FIT_STATS}
+    for name in ("hover_thr", "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps"):
+        assert float(again[name][2]) == pytest.approx(float(again[name][1]), rel=0.25), name
+    assert (tmp_path / "replay" / "report.md").is_file()
     for name in FIT_STATS:
         log, tlm = float(rows[name][1]), float(rows[name][2])
         assert tlm == pytest.approx(log, rel=0.15), name

@@ -6,6 +6,10 @@ Finds the log's steady segment (or takes ``--segment START:END``), measures it
 vibration per axis of the accelerometers and gyros. Prints each statistic, log against the
 fitted tlm flight; writes the parameter file and a comparison plot. ``tlm fly --params
 vehicle.parm`` and ``tlm generate --params vehicle.parm`` then fly that vehicle.
+
+``--replay DIR`` then re-flies a pilot-flown log from its RCIN with the fitted vehicle
+(:mod:`tlm_process.pilot.replay`) and compares it with the log: the fitted statistics over the
+same segment of the replay, and the per-stick-segment report and overlay in DIR.
 """
 
 from __future__ import annotations
@@ -38,6 +42,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=1, help="first seed of tlm's hovers (default 1)")
     p.add_argument("--plot", metavar="PNG",
                    help="comparison plot (default: beside --out, with .png)")
+    p.add_argument("--replay", metavar="DIR",
+                   help="then re-fly the log from its RCIN (the pilot's sticks) with the "
+                        "fitted vehicle and compare: the segment's statistics in the replay, "
+                        "DIR/report.md and DIR/overlay.png per stick segment")
     p.set_defaults(func=run)
     return p
 
@@ -95,7 +103,40 @@ def run(args: argparse.Namespace) -> int:
     Path(args.out).write_text(p.to_parm_text(only_changed=True, header=header))
     plot_fit(r.log, r.tlm, plot, f"{Path(args.log).name} {t0 * 1e-6:.0f}-{t1 * 1e-6:.0f} s")
     print(f"written            {args.out} (+ {plot})")
+    if args.replay:
+        _replay(args, r.params, target, (t0, t1))
     return 0
+
+
+def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str, float],
+            segment: tuple[float, float]) -> None:
+    """``--replay DIR``: the log re-flown from its RCIN with the fitted vehicle; the segment's
+    statistics in it against the log's, and the replay's report in DIR."""
+    import warnings
+
+    from tlm_process.fit.stats import StatsError, segment_stats
+    from tlm_process.pilot.replay import format_report, plot, replay, summary_lines
+
+    out = Path(args.replay)
+    out.mkdir(parents=True, exist_ok=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            rr = replay(args.log, params=fitted)
+        except (ValueError, KeyError) as exc:
+            raise UsageError(f"--replay: cannot re-fly {args.log} from its RCIN: {exc}") from None
+    for line in summary_lines(rr):
+        print(line)
+    tables = {n: rr["_log"].tables[n] for n in rr["_log"].tables}
+    try:
+        stats = segment_stats(tables, *segment)
+        print(f"the segment {segment[0] * 1e-6:.1f}-{segment[1] * 1e-6:.1f} s in the replay:")
+        print(format_table(target, stats))
+    except StatsError as exc:
+        print(f"note: the replay has no statistics over the segment ({exc})")
+    plot(rr, out)
+    (out / "report.md").write_text(format_report(rr))
+    print(f"written            {out}/report.md (+ overlay.png)")
 
 
 def format_table(log: dict[str, float], tlm: dict[str, float]) -> str:
@@ -104,7 +145,7 @@ def format_table(log: dict[str, float], tlm: dict[str, float]) -> str:
 
     lines = [f"{'statistic':<24} {'log':>9} {'tlm':>9} {'diff':>7}  fitted"]
     for k, v in log.items():
-        t = tlm[k]
+        t = tlm.get(k, math.nan)
         d = f"{t / v - 1:+.0%}" if math.isfinite(v) and v and math.isfinite(t) else "-"
         lines.append(f"{k:<24} {_n(v):>9} {_n(t):>9} {d:>7}  {'yes' if k in FIT_STATS else ''}")
     return "\n".join(lines)
