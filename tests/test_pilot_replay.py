@@ -94,6 +94,22 @@ def test_rc_table_drops_rows_without_radio_and_fills_channels():
     assert t[0, 8] == 1800.0  # channel 8 missing: idle
 
 
+def test_gcs_mode_changes_of_a_log_are_asked_for_again():
+    import pandas as pd
+
+    from tlm_process.pilot.replay import gcs_requests
+
+    mode = pd.DataFrame({"TimeUS": [1e6, 5e6, 9e6], "Mode": [0, 5, 2], "ModeNum": [0, 5, 2],
+                         "Rsn": [26, 2, 1]})
+    assert gcs_requests({"MODE": mode}) == [(5.0, 5)]
+    assert gcs_requests({"MODE": mode.drop(columns="Rsn")}) == []  # Copter 3.x: no reasons
+    with pytest.raises(ValueError, match="give sticks"):
+        fly(1, gcs_modes=[(10.0, "LOITER")])
+    with pytest.raises(ValueError, match="unknown flight mode"):
+        fly(None, sticks=np.column_stack([[0.0], np.full((1, 8), 1500.0)]),
+            gcs_modes=[(10.0, "HOVER")])
+
+
 def test_judge_tolerances():
     import pandas as pd
 
@@ -152,11 +168,18 @@ def test_stabilize_and_mode_switch_to_alt_hold():
     script = {"sticks": [{"t": 0, "mode": "STABILIZE"}, {"t": 20, "yaw": 1, "ramp": 0},
                          {"t": 23.5, "yaw": 0, "ramp": 0}, {"t": 24, "throttle": 0.6},
                          {"t": 30, "mode": "ALT_HOLD", "throttle": 0.5},
-                         {"t": 50, "roll": 0.4}, {"t": 55, "roll": 0.0}]}
+                         {"t": 50, "roll": 0.4}, {"t": 55, "roll": 0.0},
+                         {"t": 62, "gcs_mode": "LOITER"}, {"t": 66, "gcs_mode": "AUTO"}]}
     log = _flight(script, params)
     modes = log.tables["MODE"]
-    assert list(modes["ModeNum"])[-1] == AP.MODE_ALT_HOLD
-    assert modes["TimeUS"].iloc[-1] * 1e-6 == pytest.approx(30.2, abs=0.05)  # 200 ms debounce
+    alt_hold = modes[modes["ModeNum"] == AP.MODE_ALT_HOLD]
+    assert alt_hold["TimeUS"].iloc[0] * 1e-6 == pytest.approx(30.2, abs=0.05)  # 200 ms debounce
+    assert list(alt_hold["Rsn"]) == [AP.RSN_RC_COMMAND]
+    # the ground station: LOITER over MAVLink at 62 s (the switch stays on ALT_HOLD), AUTO
+    # refused (tlm flies no mission from a pilot's flight)
+    last = modes.iloc[-1]
+    assert (last["ModeNum"], last["Rsn"]) == (AP.MODE_LOITER, AP.RSN_GCS)
+    assert last["TimeUS"] * 1e-6 == pytest.approx(62.0, abs=0.01)
     att = log.tables["ATT"]
     lean = att[(att.TimeUS > 52e6) & (att.TimeUS < 55e6)]["Roll"].mean()
     assert lean == pytest.approx(0.4 * 30.0 * 480 / 480, rel=0.1)

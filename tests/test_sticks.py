@@ -49,6 +49,15 @@ def test_channels_as_a_receiver_gives_them():
         1800, 1000, 1000, 1800]  # no mode set: the switch stays where SITL's idle input has it
 
 
+def test_ground_station_mode_rows():
+    s = StickScript(({"t": 0, "mode": "LOITER"}, {"t": 30, "gcs_mode": "rtl"},
+                     {"t": 40.5, "gcs_mode": "LAND", "roll": 0.1}))
+    assert s.gcs_modes().tolist() == [[30.0, 6.0], [40.5, 9.0]]
+    assert s.mode(35.0) == "LOITER"  # the switch stays where it is
+    with pytest.raises(StickScriptError, match="unknown flight mode"):
+        StickScript(({"t": 0, "gcs_mode": "HOVER"},))
+
+
 def test_table_at_the_receivers_rate():
     s = StickScript(({"t": 1, "yaw": 1.0, "ramp": 0},))
     tab = s.table(P, 2.0)

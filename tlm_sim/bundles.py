@@ -56,6 +56,9 @@ class FlightPlan(NamedTuple):
     #: the pilot's transmitter: rows (time since boot [us], channels 1..8 [us PWM]) in time
     #: order, each held until the next (tlm_sim.sensors.rc); no rows: SITL's idle receiver
     rc: np.ndarray
+    #: the ground station's mode requests of a pilot-flown flight: rows (time since boot [us],
+    #: mode number) in time order (tlm_sim.control.pilot); no rows: none
+    gcs: np.ndarray
 
 
 class FlightLogs(NamedTuple):

@@ -52,7 +52,7 @@ from tlm_sim.control.log import (
 )
 from tlm_sim.control.mixer import throttle_slew_update
 from tlm_sim.control.modes import arm_vehicle, vehicle_step
-from tlm_sim.control.pilot import arm_pilot, pilot_init, pilot_rc
+from tlm_sim.control.pilot import arm_pilot, pilot_gcs, pilot_init, pilot_rc
 from tlm_sim.control.wpnav import (
     P_CMD,
     P_CNUM,
@@ -279,7 +279,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
     """
     x, s, ekf, sel, c, dcm, gsf, rng, wind_rng = state
     frame, scfg, ecfg, g = cfg
-    path, seg, sched, applied, home, gps_time, rc = plan
+    path, seg, sched, applied, home, gps_time, rc, gcs = plan
     bufs, counts, txt = logs
     dang, dvel, rows, eo = work
     gps, pwm = rows[W_GPS], rows[W_PWM]
@@ -321,6 +321,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         pilot = g[C.G_PILOT] != 0.0
         if pilot:  # the pilot's radio: sticks, mode switch, rudder gestures
             pilot_rc(c, g, t_us, s[S.RC_CH:S.RC_CH + 8], vin, (seg, ev))
+            pilot_gcs(c, g, t_us, gcs, vin, (seg, ev))
         vehicle_step(c, g, t_us, vin, path, seg, ev)
         if (c[C.ARMED] == 0.0 or t_us >= c[C.PREARM_NEXT_T] * 1e6) and arming_step(
                 c, g, float(t_us), (s, gps), vin, txt, ev):
@@ -655,6 +656,7 @@ def fly(
     profile: str = "current",
     frame: str | None = None,
     sticks: StickScript | np.ndarray | None = None,
+    gcs_modes: Sequence[tuple[float, str | int]] | None = None,
 ) -> FlightLog:
     """Fly one mission, or a pilot's sticks, and return its FlightLog.
 
@@ -672,12 +674,12 @@ def fly(
         frame: a frame of :data:`tlm_sim.frames.FRAMES` (``"+"``, ``"x"``, ``"hexa"``,
             ``"hexax"``, ``"octa"``): sets FRAME_CLASS / FRAME_TYPE (a ValueError when
             ``params`` sets them to another frame); None: the frame of ``params``.
-        sticks: fly from a pilot's transmitter instead of a mission (docs/pilot.md): a
-            :class:`tlm_sim.mission.sticks.StickScript`, or an RC table, rows of (time since
-            boot [s], channels 1..8 [us]) in time order (a log's RCIN for a replay). The
-            vehicle arms by the rudder gesture and flies the modes of the mode switch
-            (STABILIZE, ALT_HOLD, LOITER, POSHOLD; RTL, LAND); the flight ends 2 s after it
-            disarms, or :data:`PILOT_TAIL_S` after the table's last row.
+        sticks: fly a pilot's transmitter instead (docs/pilot.md): a
+            :class:`tlm_sim.mission.sticks.StickScript` or rows (time since boot [s],
+            channels 1..8 [us]), e.g. a log's RCIN. It ends 2 s after the disarm, or
+            :data:`PILOT_TAIL_S` after the last row.
+        gcs_modes: with ``sticks``, the ground station's mode changes (MAVLink): ``(time
+            since boot [s], mode name or number)``, besides a script's ``gcs_mode`` rows.
     """
     params = _with_frame(params, frame)
     mission = _flown_mission(mission, seed, sticks is not None)
@@ -712,7 +714,7 @@ def fly(
                          np.zeros((ekf.shape[0], N_GSF)),
                          new_streams(int(seed), S.N_NOISE_STREAMS), new_rng(int(seed), 2))
     plan = FlightPlan(path, seg, sched, applied, home, np.array([week, ms], dtype=np.float64),
-                      rc_table)
+                      rc_table, gcs_table(sticks, gcs_modes))
     t_final = run_flight(state, cfg, plan,
                          FlightLogs(buf_tuple, counts, txt), new_work(), int(duration * 1e6))
     armed = c[C.ARM_TIME_S] >= 0.0
@@ -818,6 +820,30 @@ def rc_table_us(sticks: StickScript | np.ndarray, params: Params) -> np.ndarray:
             raise ValueError("an RC table's values must be finite and its times in order")
     out = rows.copy()
     out[:, 0] = np.round(rows[:, 0] * 1e6)
+    return np.ascontiguousarray(out)
+
+
+def gcs_table(sticks: StickScript | np.ndarray | None,
+              gcs_modes: Sequence[tuple[float, str | int]] | None) -> np.ndarray:
+    """The loop's table of ground-station mode requests (FlightPlan.gcs: time [us], mode
+    number, in time order): a script's ``gcs_mode`` rows and ``gcs_modes``; ValueError for a
+    request without sticks, an unknown mode or a bad time."""
+    rows: list[tuple[float, float]] = []
+    if isinstance(sticks, StickScript):
+        rows += [(float(t), float(m)) for t, m in sticks.gcs_modes()]
+    if gcs_modes:
+        if sticks is None:
+            raise ValueError("gcs_modes are mode changes of a pilot-flown flight: give sticks")
+        names = {v: k for k, v in AP.MODE_NAMES.items()}
+        for t, m in gcs_modes:
+            num = names.get(str(m).strip().upper()) if isinstance(m, str) else int(m)
+            if num is None or num not in AP.MODE_NAMES:
+                raise ValueError(f"gcs_modes: unknown flight mode {m!r}")
+            if not (math.isfinite(float(t)) and float(t) >= 0.0):
+                raise ValueError(f"gcs_modes: time must be >= 0 s, got {t!r}")
+            rows.append((float(t), float(num)))
+    out = np.array(sorted(rows, key=lambda r: r[0]), dtype=np.float64).reshape(-1, 2)
+    out[:, 0] = np.round(out[:, 0] * 1e6)
     return np.ascontiguousarray(out)
 
 

@@ -77,7 +77,7 @@ _VIN = nt.NamedTuple((_F1,) * 6 + (_f8,) * 3, B.VehicleInputs)
 _TICK = nt.NamedTuple((_i8, _i8, _b1, _b1, _b1), B.LoopTick)
 _EKF_INPUTS = nt.NamedTuple((_F2, _F2, _F1, _b1, _F1, _F1, _b1, _b1, _f8, _b1, _F1, _b1),
                             B.EkfInputs)
-_PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1, _F2), B.FlightPlan)
+_PLAN = nt.NamedTuple((_F2, _F2, _F2, _F1, _F1, _F1, _F2, _F2), B.FlightPlan)
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,8 @@ Copter 3.3 names translated, and its battery), with the sidecar's faults or the 
 in PARM, on the log's own time line: the vehicle arms by the rudder gesture where the log's
 pilot made it. A log armed another way (a ground station, an arming switch) gets the gesture
 inserted before its arming time (:func:`with_arm_gesture`), the stick positions it replaces
-are noted.
+are noted. The mode switch is in RCIN; the mode changes a ground station made (MODE rows with
+reason GCS) are asked for again at their times (:func:`gcs_requests`).
 
 The two flights are then measured per stick segment (:mod:`tlm_process.pilot.signature`: the
 sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segment, mean and
@@ -164,6 +165,7 @@ class PilotScenario:
     rc: np.ndarray
     changes: list[tuple[float, str, float]]
     segments: list[StickSegment]
+    gcs: list[tuple[float, int]]
     seed: int
     arm_s: float
     notes: list[str] = field(default_factory=list)
@@ -239,7 +241,20 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
                          + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
     s = int(seed if seed is not None else (doc or {}).get("seed", 0) or 0)
     return PilotScenario(path.stem, tables, values, params, table, _changes(doc, tables),
-                         segments, s, arm_s, notes)
+                         segments, gcs_requests(tables), s, arm_s, notes)
+
+
+def gcs_requests(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, int]]:
+    """The mode changes a ground station made: (time [s], mode number) of the MODE rows with
+    reason GCS (ModeReason 2; a log without reasons, Copter 3.x, has none)."""
+    from tlm_sim.ardupilot import RSN_GCS
+
+    mode = tables.get("MODE")
+    if mode is None or not len(mode) or "Rsn" not in mode:
+        return []
+    col = "ModeNum" if "ModeNum" in mode else "Mode"
+    gcs = mode[pd.to_numeric(mode["Rsn"], errors="coerce") == RSN_GCS]
+    return [(float(t) * 1e-6, int(m)) for t, m in zip(gcs["TimeUS"], gcs[col], strict=True)]
 
 
 def _rc_defaults() -> dict[str, float]:
@@ -292,7 +307,8 @@ def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | 
     flown = {**sc.params, **dict(params or {})}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        log = fly(None, sc.changes or None, params=Params(flown), seed=sc.seed, sticks=sc.rc)
+        log = fly(None, sc.changes or None, params=Params(flown), seed=sc.seed, sticks=sc.rc,
+                  gcs_modes=sc.gcs)
     ours = {n: log.tables[n] for n in log.tables}
     ref_sig = pilot_signature(sc.tables, sc.segments, sc.log_values)
     tlm_sig = pilot_signature(ours, sc.segments, dict(log.params))
@@ -306,6 +322,7 @@ def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | 
         "scenario": {"log": str(bin_path), "name": sc.name, "seed": sc.seed,
                      "arm_s": sc.arm_s, "rc_rows": int(len(sc.rc)),
                      "faults": [list(c) for c in sc.changes], "notes": list(sc.notes),
+                     "gcs_modes": [list(g) for g in sc.gcs],
                      "params_from_log": dict(sc.params),
                      "overrides": {k: float(v) for k, v in (params or {}).items()},
                      "end_reason": log.meta.get("end_reason")},

@@ -245,6 +245,7 @@ PIL_SW_T = _c.add("PIL_SW_T", 1, "s", "when that position was first read")
 PIL_RUDDER_T = _c.add("PIL_RUDDER_T", 1, "s", "start of the rudder arm gesture (-1: none)")
 PIL_RUDDER_DIS_T = _c.add("PIL_RUDDER_DIS_T", 1, "s",
                           "start of the rudder disarm gesture (-1: none)")
+PIL_GCS_ROW = _c.add("PIL_GCS_ROW", 1, "", "next row of the ground station's mode requests")
 PIL_ARM_REQ = _c.add("PIL_ARM_REQ", 1, "", "1: the rudder gesture asks for an arm attempt")
 PIL_AUTO_ARMED = _c.add("PIL_AUTO_ARMED", 1, "", "auto_armed: armed and the throttle raised once")
 PIL_DISARM_T = _c.add("PIL_DISARM_T", 1, "s", "auto-disarm: landed with the throttle low since")

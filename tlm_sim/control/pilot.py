@@ -16,6 +16,8 @@ Each main-loop tick, before the vehicle's step (ArduCopter's rc_loop), :func:`pi
   read the same for 200 ms; then the mode FLTMODEn: STABILIZE, ALT_HOLD, LOITER, POSHOLD
   (:mod:`tlm_sim.control.pilot_modes`), RTL or LAND; LOITER and POSHOLD are refused while
   armed without a position; other modes are refused (tlm flies no mission from a switch);
+- the ground station's mode requests (MAVLink SET_MODE, ``FlightPlan.gcs``): each tried once
+  at its time, reason GCS, under the same rules as the switch's;
 - the rudder gestures (ARMING_RUDDER): yaw stick beyond 4000 of 4500 with the throttle at 0
   for 3 s asks for an arm attempt (the pre-arm and arm checks,
   :func:`tlm_sim.control.arming.arming_step`); with ARMING_RUDDER 2, yaw beyond -4000 with
@@ -102,6 +104,7 @@ def pilot_init(c):
     c[C.PIL_THR_ZERO_T] = 0.0
     c[C.PIL_DISARM_T] = -1.0
     c[C.MODE_RSN] = AP.RSN_INITIALISED
+    c[C.PIL_GCS_ROW] = 0.0
 
 
 @tick_jit
@@ -165,17 +168,30 @@ def _mode_switch(c, g, t_us, pos, inputs, out):
         return
     c[C.PIL_SW_POS] = pos
     c[C.PIL_SW_NEW] = -1.0
-    change_mode(c, g, t_us, int(g[C.G_FLTMODE + pos]), inputs, out)
+    change_mode(c, g, t_us, (int(g[C.G_FLTMODE + pos]), AP.RSN_RC_COMMAND), inputs, out)
 
 
 @tick_jit
-def change_mode(c, g, t_us, mode, inputs, out):
-    """Copter::set_mode for a pilot's request (reason RC_COMMAND); returns whether the mode is
-    now ``mode``. Refused: an unflown mode; LOITER or POSHOLD while armed without a
-    position. out: (the RTL / LAND segment scratch, the event buffers)."""
+def pilot_gcs(c, g, t_us, gcs, inputs, out):
+    """The ground station's mode requests due at t_us (gcs: rows (time [us], mode number)),
+    each tried once, reason GCS (out: (the RTL / LAND segment scratch, the event buffers))."""
+    row = int(c[C.PIL_GCS_ROW])
+    while row < gcs.shape[0] and gcs[row, 0] <= t_us:
+        change_mode(c, g, t_us, (int(gcs[row, 1]), AP.RSN_GCS), inputs, out)
+        row += 1
+    c[C.PIL_GCS_ROW] = row
+
+
+@tick_jit
+def change_mode(c, g, t_us, request, inputs, out):
+    """Copter::set_mode for a request (mode number, reason: RC_COMMAND from the switch, GCS
+    over MAVLink); returns whether the mode is now the one asked for. Refused: an unflown
+    mode; LOITER or POSHOLD while armed without a position. out: (the RTL / LAND segment
+    scratch, the event buffers)."""
+    mode, rsn = request
     seg, ev = out
     if mode == c[C.MODE]:
-        c[C.MODE_RSN] = AP.RSN_RC_COMMAND
+        c[C.MODE_RSN] = rsn
         return True
     armed = c[C.ARMED] != 0.0
     airborne = armed and c[C.LANDED] == 0.0
@@ -185,7 +201,7 @@ def change_mode(c, g, t_us, mode, inputs, out):
                                              and c[C.EKF_FAILSAFE] == 0.0):
             return False
         from_manual = c[C.MODE] == AP.MODE_STABILIZE
-        set_mode(c, mode, AP.RSN_RC_COMMAND, t_us, ev)
+        set_mode(c, mode, rsn, t_us, ev)
         if armed:
             if c[C.SUBMODE] != C.SUB_PILOT:
                 c[C.SUB_TIMER] = max(c[C.SUB_TIMER], SPOOLED_UP_S) if airborne else 0.0
@@ -194,12 +210,12 @@ def change_mode(c, g, t_us, mode, inputs, out):
         return True
     if mode == AP.MODE_RTL:
         if airborne:
-            rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_RC_COMMAND, ev)
+            rtl_or_land(c, g, t_us, inputs, seg, rsn, ev)
         else:
-            set_mode(c, mode, AP.RSN_RC_COMMAND, t_us, ev)
+            set_mode(c, mode, rsn, t_us, ev)
         return True
     if mode == AP.MODE_LAND:
-        set_mode(c, mode, AP.RSN_RC_COMMAND, t_us, ev)
+        set_mode(c, mode, rsn, t_us, ev)
         if airborne:
             start_land(c, inputs.pos, False)
         return True

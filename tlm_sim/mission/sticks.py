@@ -4,7 +4,9 @@ A script is a list of keyframes. Each row is a time ``t`` [s since boot, the log
 ``TimeUS / 1e6``] and any of:
 - ``roll``, ``pitch``, ``yaw`` in -1..1 (right, nose forward, yaw right positive);
 - ``throttle`` in 0..1;
-- ``mode``, a flight-mode name;
+- ``mode``, a flight-mode name, set on the mode switch;
+- ``gcs_mode``, a flight-mode name the ground station asks for over MAVLink at ``t`` (the
+  switch stays where it is);
 - ``ramp`` [s], the time each stick given on that row takes to move to its new position,
   linearly (default :data:`DEFAULT_RAMP_S`, the reference pilot flights' 0.5 s; 0 is a step).
 
@@ -55,7 +57,7 @@ CHANNEL: dict[str, int] = {"roll": 1, "pitch": 2, "throttle": 3, "yaw": 4}
 #: position's centre [us]
 SWITCH_BOUNDS: tuple[float, ...] = (1231.0, 1361.0, 1491.0, 1621.0, 1750.0)
 SWITCH_CENTRES: tuple[float, ...] = (1165.0, 1295.0, 1425.0, 1555.0, 1685.0, 1815.0)
-_KEYS = ("t", *AXES, "mode", "ramp")
+_KEYS = ("t", *AXES, "mode", "gcs_mode", "ramp")
 _MODES = {name: num for num, name in MODE_NAMES.items()}
 
 
@@ -187,6 +189,11 @@ class StickScript:
             ch[sw - 1] = mode_pwm(mode, params)
         return np.round(ch)
 
+    def gcs_modes(self) -> np.ndarray:
+        """The ground station's mode requests: rows (t [s since boot], mode number)."""
+        rows = [(r["t"], float(_MODES[r["gcs_mode"]])) for r in self.rows if "gcs_mode" in r]
+        return np.array(rows, dtype=np.float64).reshape(-1, 2)
+
     def table(self, params: Mapping[str, float], t_end_s: float,
               rate_hz: float = 50.0) -> np.ndarray:
         """Rows ``(t_s, C1..C8)`` every ``1 / rate_hz`` s from 0 to ``t_end_s`` (SITL's RC input
@@ -224,12 +231,13 @@ def _check_row(row: Any, i: int) -> dict[str, Any]:
             if not lo <= v <= hi:
                 raise StickScriptError(f"row {i}: {axis} {v:g} is outside {lo:g}..{hi:g}")
             out[axis] = v
-    if "mode" in row:
-        name = str(row["mode"]).strip().upper()
-        if name not in _MODES:
-            raise StickScriptError(f"row {i}: unknown flight mode {row['mode']!r}; known: "
-                                   f"{', '.join(_MODES)}")
-        out["mode"] = name
+    for key in ("mode", "gcs_mode"):
+        if key in row:
+            name = str(row[key]).strip().upper()
+            if name not in _MODES:
+                raise StickScriptError(f"row {i}: unknown flight mode {row[key]!r}; known: "
+                                       f"{', '.join(_MODES)}")
+            out[key] = name
     if "ramp" in row:
         r = _number(row["ramp"], "ramp", i)
         if r < 0:
@@ -253,7 +261,7 @@ def _csv_rows(text: str, path: Path) -> list[dict[str, Any]]:
         for k, v in rec.items():
             if k is None or v is None or not str(v).strip():
                 continue
-            if k == "mode":
+            if k in ("mode", "gcs_mode"):
                 row[k] = v.strip()
                 continue
             try:
