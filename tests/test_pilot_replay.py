@@ -220,3 +220,44 @@ def test_crosscheck_replays_a_pilot_flown_log(tmp_path):
     code = main(["crosscheck", str(reference_path("../real/log171.bin")), "--out",
                  str(tmp_path / "real")])
     assert code == 1 and (tmp_path / "real" / "overlay.png").is_file()
+
+
+def test_pilot_takeoff_to_pilot_tkoff_alt():
+    """PILOT_TKOFF_ALT 5 m: a short push above the dead band (2 s at 60 % throttle, ~0.26
+    m/s) takes the copter on to 5 m before it holds."""
+    script = {"sticks": [{"t": 0, "mode": "LOITER"}, {"t": 20, "yaw": 1, "ramp": 0},
+                         {"t": 23.5, "yaw": 0, "ramp": 0}, {"t": 26.5, "throttle": 0.6},
+                         {"t": 28.5, "throttle": 0.5}]}
+    log = _flight(script, {"PILOT_TKOFF_ALT": 500})
+    ctun = log.tables["CTUN"]
+    held = ctun[(ctun.TimeUS > 45e6) & (ctun.TimeUS < 55e6)]["Alt"]
+    assert held.mean() == pytest.approx(5.0, abs=0.3) and held.max() - held.min() < 0.2
+
+
+def test_radio_failsafe_in_a_pilot_mode_flies_home():
+    """SIM_RC_FAIL 1 while the pilot flies LOITER: ERR radio, RTL (reason radio failsafe),
+    landed and disarmed at home."""
+    script = StickScript.from_file(SCRIPT)
+    log = fly(None, [(90.0, "SIM_RC_FAIL", 1.0)], sticks=script)
+    modes = log.tables["MODE"]
+    assert (modes["ModeNum"].iloc[-1], modes["Rsn"].iloc[-1]) == (AP.MODE_RTL,
+                                                                    AP.RSN_RADIO_FAILSAFE)
+    assert log.meta["end_reason"] == "landed"
+    assert log.tables["ARM"]["Method"].iloc[-1] == AP.ARM_METHOD_LANDED
+
+
+def test_tlm_fly_sticks_command(tmp_path, capsys):
+    from tlm_process.cli import main
+
+    out = tmp_path / "f"
+    assert main(["fly", "--sticks", str(SCRIPT), "--out", str(out), "--format", "csv",
+                 "--no-plot", "--fault", "gps_glitch:90-110"]) == 0
+    text = capsys.readouterr().out
+    assert "none: flown by a pilot's sticks" in text and "gps_glitch" in text
+    assert (out / "RCIN.csv").is_file()
+    assert main(["fly", "--sticks", str(SCRIPT), "--out", str(tmp_path / "g"),
+                 "--fault", "gps:wp3-wp5"]) == 2
+    assert "no waypoints" in capsys.readouterr().err
+    assert main(["fly", "--sticks", str(SCRIPT), "--mission", "2", "--out",
+                 str(tmp_path / "h")]) == 2
+    assert "drop --mission" in capsys.readouterr().err

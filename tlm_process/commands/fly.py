@@ -155,7 +155,8 @@ def _load_schedule(args: argparse.Namespace, mission: Mission | None,
                          "schedule file's params_start/params_end")
     # whole seconds, rounded down: readable in messages and never past fly()'s own bound
     if mission is None:
-        bounds = {"n_waypoints": 1, "max_time_s": float(math.floor(max_time_s or 0.0))}
+        # (no waypoints: any waypoint trigger is refused below, with that reason)
+        bounds = {"n_waypoints": 10**6, "max_time_s": float(math.floor(max_time_s or 0.0))}
     else:
         bounds = {"n_waypoints": mission.n_waypoints,
                   "max_time_s": float(math.floor(max_duration_s(mission, params)))}
@@ -173,6 +174,10 @@ def _load_schedule(args: argparse.Namespace, mission: Mission | None,
             schedule = FaultSchedule.from_file(args.faults, **bounds)
     except FaultScheduleError as e:
         raise UsageError(f"{option}: {e}") from None
+    if mission is None and any(t is not None and t.kind == "wp" for f in schedule
+                               for t in (f.start, f.end)):
+        raise UsageError(f"{option}: a pilot-flown flight (--sticks) has no waypoints: give the "
+                         "faults' start and end in seconds")
     if lam is None:
         return schedule
     try:
