@@ -232,8 +232,9 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
     mode = tables.get("MODE")
     if mode is not None and len(mode):
         col = "ModeNum" if "ModeNum" in mode else "Mode"
-        unflown = sorted({int(m) for m in pd.to_numeric(mode[col], errors="coerce").dropna()}
-                         - {0, 2, 5, 6, 9, 16})
+        after = mode[mode["TimeUS"] >= arm_us - 1e6] if arm_us is not None else mode
+        flown = pd.to_numeric(after[col], errors="coerce").dropna()
+        unflown = sorted({int(m) for m in flown} - {0, 2, 5, 6, 9, 16})
         if unflown:
             from tlm_sim.ardupilot import MODE_NAMES
 
