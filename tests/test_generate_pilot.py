@@ -43,11 +43,13 @@ def test_pilot_share_draws_scripts_and_times_faults_within_them():
         seen_modes.add(draw["mode"])
         seen_patterns.add(draw["pattern"])
         rows, origin, descent = pilot_script(draw)
-        assert sc.params["FLTMODE1"] == {v: k for k, v in AP.MODE_NAMES.items()}[draw["mode"]]
+        assert rows[0] == {"t": 1.0, "gcs_mode": draw["mode"]}  # the ground station's mode
         for f in sc.faults["faults"]:
             assert origin <= f["start"] and f["end"] <= descent
         spec = sc.realise()
-        assert isinstance(spec.sticks, StickScript) and spec.sticks.rows[0]["mode"] == draw["mode"]
+        assert isinstance(spec.sticks, StickScript)
+        assert spec.sticks.gcs_modes()[0, 1] == {v: k for k, v in AP.MODE_NAMES.items()}[
+            draw["mode"]]
     assert seen_modes == set(PILOT_MODES) and seen_patterns == set(PATTERNS)
 
 

@@ -10,9 +10,10 @@ time, descends, lands and disarms by the rudder gesture. The patterns:
 * ``yaw_turns``: yaw right / left turns of a drawn rate and length between hovers.
 
 Each segment's stick deflection is uniform in ``stick`` (fraction of full stick), its length in
-``leg_s`` [s], the release after it in ``release_s`` [s]. The mode sits on switch position 1
-(``FLTMODE1`` is set to it in the flight's parameters). STABILIZE is not drawn: a script has no
-pilot to hold the height with the throttle.
+``leg_s`` [s], the release after it in ``release_s`` [s]. The ground station selects the mode
+1 s after boot (MAVLink; the mode switch stays where SITL's idle receiver has it), so a
+vehicle's own ``FLTMODEn`` (``--params``) need not hold it. STABILIZE is not drawn: a script
+has no pilot to hold the height with the throttle.
 
 The script's **origin** (the start of the pattern, after the climb) is where the fault draws
 start counting, as AUTO's start does for missions; faults that would end after the descent
@@ -29,8 +30,8 @@ import numpy as np
 
 from tlm_process.generate.errors import GenerateError
 
-__all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_params",
-           "pilot_script", "validate_pilot"]
+__all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_script",
+           "validate_pilot"]
 
 #: the modes a drawn script flies (they hold the height themselves)
 PILOT_MODES: tuple[str, ...] = ("ALT_HOLD", "LOITER", "POSHOLD")
@@ -51,8 +52,7 @@ DESCENT_MS = 1.69
 #: the arming delay, spool-up and takeoff before the climb rate holds [s]
 TAKEOFF_LAG_S = 4.0
 SETTLE_S = 5.0  # hover after the climb before the pattern
-#: the mode switch position the drawn mode is put on (FLTMODE1)
-SWITCH_SLOT = 1
+GCS_MODE_S = 1.0  # the ground station selects the mode
 
 
 def _pair(v: Any, what: str, lo_min: float) -> tuple[float, float]:
@@ -166,7 +166,7 @@ def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, 
     """The stick script rows of a draw (:func:`draw_pilot`), the pattern's start (the fault
     draws' origin) and the descent's start [s since boot]."""
     rows: list[dict[str, Any]] = [
-        {"t": 0.0, "mode": draw["mode"]},
+        {"t": GCS_MODE_S, "gcs_mode": draw["mode"]},
         {"t": ARM_GESTURE_S, "yaw": 1.0, "ramp": 0.0},
         {"t": ARM_GESTURE_S + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0},
     ]
@@ -189,10 +189,3 @@ def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, 
     rows.append({"t": t_down + 1.0 + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0})
     return rows, origin, descent
 
-
-def pilot_params(draw: Mapping[str, Any]) -> dict[str, float]:
-    """The parameters a drawn script needs: its mode on switch position 1 (FLTMODE1)."""
-    from tlm_sim.ardupilot import MODE_NAMES
-
-    number = {v: k for k, v in MODE_NAMES.items()}[draw["mode"]]
-    return {f"FLTMODE{SWITCH_SLOT}": float(number)}

@@ -92,12 +92,7 @@ import numpy as np
 
 from tlm_process.fault_types import Knob, fault_type_record, fault_type_records
 from tlm_process.generate.errors import GenerateError
-from tlm_process.generate.pilot_flights import (
-    draw_pilot,
-    pilot_params,
-    pilot_script,
-    validate_pilot,
-)
+from tlm_process.generate.pilot_flights import draw_pilot, pilot_script, validate_pilot
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
 from tlm_sim.flight import max_duration_s, pilot_home_mission
 from tlm_sim.frames import FRAMES, FrameError, frame_name
@@ -384,11 +379,7 @@ class ScenarioConfig:
                                 f"{len(self.sequence_types)} types")
         set_(self, "sequence_len", (int(lo), int(hi)))
         set_(self, "magnitudes", _magnitudes(self.magnitudes))
-        pilot = validate_pilot(self.pilot)
-        if pilot is not None and pilot["share"] > 0 and "FLTMODE1" in self.params:
-            raise GenerateError("FLTMODE1 is fixed (params) but pilot-flown flights put their "
-                                "mode on switch position 1: leave it out of params")
-        set_(self, "pilot", pilot)
+        set_(self, "pilot", validate_pilot(self.pilot))
         _check_modelled(self.drawn_types())
 
     def drawn_types(self) -> set[str]:
@@ -992,8 +983,6 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
         params.update(_draw_wind(_stream(run_seed, flight, _S_WIND), cfg.wind))
     if cfg.vibration is not None:
         params.update(_draw_vibration(_stream(run_seed, flight, _S_VIBRATION), cfg.vibration))
-    if pilot is not None:
-        params.update(pilot_params(pilot))
     params = dict(sorted(params.items()))
     seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
     seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
