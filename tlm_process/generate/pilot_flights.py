@@ -2,7 +2,9 @@
 
 A pilot-flown flight arms by the rudder gesture in its mode (ALT_HOLD, LOITER or POSHOLD, by
 their shares), climbs to a drawn height, flies a drawn **pattern** of stick segments for a drawn
-time, descends, lands and disarms by the rudder gesture. The patterns:
+time, descends, lands and disarms by the rudder gesture (still armed 20 s after the throttle
+went down, a fault having taken it higher or the wind keeping the land detector from
+completing, the ground station selects LAND, which lands and disarms it). The patterns:
 
 * ``hover``: sticks centred throughout (the pilot holds position; the mode does the rest);
 * ``lines``: pitch forward, release, pitch back, release, ... (out-and-back lines);
@@ -53,6 +55,8 @@ DESCENT_MS = 1.69
 TAKEOFF_LAG_S = 4.0
 SETTLE_S = 5.0  # hover after the climb before the pattern
 GCS_MODE_S = 1.0  # the ground station selects the mode
+#: still armed this long after the throttle went down: the ground station selects LAND [s]
+LAND_FALLBACK_S = 20.0
 
 
 def _pair(v: Any, what: str, lo_min: float) -> tuple[float, float]:
@@ -187,5 +191,8 @@ def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, 
     rows.append({"t": t_down, "throttle": 0.0, "ramp": 0.0})
     rows.append({"t": t_down + 1.0, "yaw": -1.0, "ramp": 0.0})
     rows.append({"t": t_down + 1.0 + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0})
+    # a pilot whose copter is still flying (a fault took it higher, the wind held it off the
+    # ground) hands over to LAND, which lands and disarms it
+    rows.append({"t": t_down + LAND_FALLBACK_S, "gcs_mode": "LAND"})
     return rows, origin, descent
 
