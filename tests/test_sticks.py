@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -80,6 +81,9 @@ def test_any_script_round_trips_and_stays_in_range(rows, t):
     assert StickScript.from_dict(json.loads(json.dumps(s.to_dict()))) == s
     ch = s.channels(t, P)
     assert ((ch >= 1000) & (ch <= 2000)).all()
+    # the 50 Hz table (all rows at once) is channels() row by row, exactly
+    tab = s.table(P, min(t, 60.0))
+    assert np.array_equal(tab[:, 1:], np.array([s.channels(x, P) for x in tab[:, 0]]))
 
 
 def test_files(tmp_path):

@@ -197,13 +197,49 @@ class StickScript:
     def table(self, params: Mapping[str, float], t_end_s: float,
               rate_hz: float = 50.0) -> np.ndarray:
         """Rows ``(t_s, C1..C8)`` every ``1 / rate_hz`` s from 0 to ``t_end_s`` (SITL's RC input
-        comes at 50 Hz): what the simulation loop will read."""
+        comes at 50 Hz): what the simulation loop will read; each row what :meth:`channels`
+        gives at its time (computed for all rows at once)."""
         n = int(math.floor(t_end_s * rate_hz)) + 1
+        t = np.arange(n) / rate_hz
         out = np.empty((n, 9))
-        for k in range(n):
-            t = k / rate_hz
-            out[k, 0] = t
-            out[k, 1:] = self.channels(t, params)
+        out[:, 0] = t
+        out[:, 1:] = np.array(RC_IDLE_PWM)
+        pos = {axis: self._axis_at(axis, t) for axis in AXES}
+        out[:, CHANNEL["roll"]] = 1500.0 + 500.0 * pos["roll"]
+        out[:, CHANNEL["pitch"]] = 1500.0 - 500.0 * pos["pitch"]
+        out[:, CHANNEL["throttle"]] = 1000.0 + 1000.0 * pos["throttle"]
+        out[:, CHANNEL["yaw"]] = 1500.0 + 500.0 * pos["yaw"]
+        sw = int(params["FLTMODE_CH"])
+        mode_rows = [r for r in self.rows if "mode" in r]
+        if mode_rows and 1 <= sw <= 8:
+            starts = np.array([r["t"] for r in mode_rows])
+            pwm = np.array([mode_pwm(r["mode"], params) for r in mode_rows])
+            k = np.searchsorted(starts, t, side="right") - 1
+            out[:, sw] = np.where(k >= 0, pwm[np.maximum(k, 0)], out[:, sw])
+        out[:, 1:] = np.round(out[:, 1:])
+        return out
+
+    def _axis_at(self, axis: str, t: np.ndarray) -> np.ndarray:
+        """:meth:`_axis` at every time of ``t`` (sorted) at once: the moves' starts and ends
+        worked out row by row, then each time's move evaluated by the same formula."""
+        moves = []  # (start, from, to, ramp), as _axis builds them
+        move = (0.0, 0.0, 0.0, 0.0)
+        for r in self.rows:
+            if axis in r:
+                t0, v0, v1, ramp = move
+                frac = 1.0 if ramp <= 0.0 else min(max((r["t"] - t0) / ramp, 0.0), 1.0)
+                move = (r["t"], v0 + (v1 - v0) * frac, r[axis], r.get("ramp", DEFAULT_RAMP_S))
+                moves.append(move)
+        out = np.zeros(len(t))
+        if not moves:
+            return out
+        m = np.array(moves)
+        k = np.searchsorted(m[:, 0], t, side="right") - 1
+        ok = k >= 0
+        t0, v0, v1, ramp = (m[k[ok], j] for j in range(4))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            frac = np.where(ramp <= 0.0, 1.0, np.clip((t[ok] - t0) / ramp, 0.0, 1.0))
+        out[ok] = v0 + (v1 - v0) * frac
         return out
 
 
