@@ -51,6 +51,8 @@ AXES: dict[str, tuple[float, float]] = {"roll": (-1.0, 1.0), "pitch": (-1.0, 1.0
                                         "throttle": (0.0, 1.0), "yaw": (-1.0, 1.0)}
 #: the reference pilot flights' ramp per step [s]
 DEFAULT_RAMP_S = 0.5
+#: a ramp this short or shorter is a step [s]
+MIN_RAMP_S = 1e-9
 #: RC channel (1-based) of each axis, ArduPilot's default RCMAP
 CHANNEL: dict[str, int] = {"roll": 1, "pitch": 2, "throttle": 3, "yaw": 4}
 #: the 6-position mode switch's upper PWM bounds (RC_Channel::read_6pos_switch) and each
@@ -153,7 +155,7 @@ class StickScript:
 
         def at(m: tuple[float, float, float, float], x: float) -> float:
             t0, v0, v1, ramp = m
-            frac = 1.0 if ramp <= 0.0 else min(max((x - t0) / ramp, 0.0), 1.0)
+            frac = 1.0 if ramp <= MIN_RAMP_S else min(max((x - t0) / ramp, 0.0), 1.0)
             return v0 + (v1 - v0) * frac
 
         for r in self.rows:
@@ -227,7 +229,8 @@ class StickScript:
         for r in self.rows:
             if axis in r:
                 t0, v0, v1, ramp = move
-                frac = 1.0 if ramp <= 0.0 else min(max((r["t"] - t0) / ramp, 0.0), 1.0)
+                frac = 1.0 if ramp <= MIN_RAMP_S else min(max((r["t"] - t0) / ramp, 0.0),
+                                                          1.0)
                 move = (r["t"], v0 + (v1 - v0) * frac, r[axis], r.get("ramp", DEFAULT_RAMP_S))
                 moves.append(move)
         out = np.zeros(len(t))
@@ -237,8 +240,8 @@ class StickScript:
         k = np.searchsorted(m[:, 0], t, side="right") - 1
         ok = k >= 0
         t0, v0, v1, ramp = (m[k[ok], j] for j in range(4))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            frac = np.where(ramp <= 0.0, 1.0, np.clip((t[ok] - t0) / ramp, 0.0, 1.0))
+        step = ramp <= MIN_RAMP_S
+        frac = np.where(step, 1.0, np.clip((t[ok] - t0) / np.where(step, 1.0, ramp), 0.0, 1.0))
         out[ok] = v0 + (v1 - v0) * frac
         return out
 
