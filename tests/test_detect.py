@@ -90,6 +90,20 @@ def test_missing_tables_and_columns_are_named():
     assert np.isnan(t["IMU1.GyrX"]).all()
 
 
+def test_columns_of_dropped_channels_do_not_count_as_lacking():
+    """A Copter 3.3 IMU has no GH / AH: a model without IMU.GH / IMU.AH (--drop-features)
+    reads the log's gyros, and the log lacks nothing it needs."""
+    imu = pd.DataFrame({"TimeUS": [0, 100_000], "I": [0, 0], "GyrX": [0.1, 0.2],
+                        "GyrY": [0.0, 0.0], "GyrZ": [0.0, 0.0], "AccX": [0.0, 0.0],
+                        "AccY": [0.0, 0.0], "AccZ": [-9.8, -9.8]})
+    kept, _ = drop_channels(["IMU.GH", "IMU.AH"])
+    want = [k for k in kept if k.startswith("IMU0.")]
+    assert "IMU0.GyrX" in want and "IMU0.GH" not in want
+    t, lacking = channel_table({"IMU": imu}, {}, want, _grid_s(0, 0.1))
+    assert lacking == []
+    assert t["IMU0.GyrX"].tolist() == [0.1, 0.2]
+
+
 def test_drop_features_by_column_group_table_and_channel():
     kept, unknown = drop_channels(["RATE.AOutSlew"])
     assert "RATE.AOutSlew" not in kept and "RATE.AOut" in kept and not unknown

@@ -373,10 +373,11 @@ def needed_columns(channels: Sequence[str]) -> dict[str, list[str]]:
     return out
 
 
-def _lacking(src: _Source, df: pd.DataFrame | None) -> list[str]:
-    """The columns of ``src``'s channels that ``df`` lacks (all, without the table or its
-    instance)."""
-    need = dict.fromkeys(n for c in src.channels for n in c.needs)
+def _lacking(src: _Source, df: pd.DataFrame | None, wanted: set[str]) -> list[str]:
+    """The columns of ``src``'s ``wanted`` channels that ``df`` lacks (all, without the table
+    or its instance); the columns of channels not wanted (dropped from the model) do not
+    count."""
+    need = dict.fromkeys(n for c in src.channels if c.name in wanted for n in c.needs)
     if src.event:
         return []
     if df is None or not len(df):
@@ -423,7 +424,7 @@ def channel_table(tables: Mapping[str, pd.DataFrame], params: Mapping[str, float
         if not names:
             continue
         df = tables.get(src.table)
-        miss = _lacking(src, df)
+        miss = _lacking(src, df, want)
         if miss:
             lacking += [m for m in miss if m not in lacking]
             for n in names:
@@ -435,6 +436,10 @@ def channel_table(tables: Mapping[str, pd.DataFrame], params: Mapping[str, float
             cols.update({n: vals[n] for n in names})
             continue
         rows = rows.sort_values("TimeUS", kind="stable")
+        absent = {n.partition(".")[2] for c in src.channels for n in c.needs} - set(
+            rows.columns) - {""}
+        if absent:  # columns only dropped channels read: NaN, the source computes them all
+            rows = rows.assign(**dict.fromkeys(sorted(absent), np.nan))
         computed = src.compute(rows.reset_index(drop=True), params)
         frame = pd.DataFrame({f"{src.group}.{q}": v for q, v in computed.items()})
         frame.insert(0, "TimeUS", rows["TimeUS"].to_numpy(np.int64))
