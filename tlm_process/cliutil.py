@@ -17,7 +17,7 @@ from pathlib import Path
 __all__ = ["OUT_MARK", "UsageError", "WRITE_PROBE", "add_overwrite", "check_writable_file",
            "clear_folder", "foreign_entries",
            "fraction", "int_at_least", "is_one_of", "number", "positive_number", "prepare_out",
-           "show_param_warnings", "whole_number"]
+           "show_param_warnings", "strict_json", "whole_number"]
 
 #: the empty file written and removed to check that an output folder can be written
 WRITE_PROBE = ".tlm-write-test"
@@ -242,3 +242,21 @@ def parse_param_args(items: Sequence[str]) -> dict[str, float]:
         except ValueError:
             raise UsageError(f"--param expects NAME=VALUE with a number, got {it!r}") from None
     return out
+
+
+def strict_json(x: object) -> object:
+    """``x`` as strict JSON (``json.dumps`` without NaN): dicts (keys as strings), lists and
+    tuples recursively, numpy scalars as Python numbers, NaN and infinities as null."""
+    import math
+
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): strict_json(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [strict_json(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x

@@ -22,6 +22,7 @@ from tlm_process.cliutil import (
     folder,
     parse_param_args,
     prepare_out,
+    strict_json,
 )
 from tlm_process.crosscheck.compare import (
     DEFAULT_MAX_FLIGHT_TIME_DIFF,
@@ -191,23 +192,7 @@ def _run_replay(args: argparse.Namespace, overrides: dict[str, float], out: Path
                "flight_time_s": r["flight_time_s"],
                "judged": r["judged"].to_dict("records"),
                "segments": {k: v.to_dict("records") for k, v in r["segments"].items()}}
-        Path(args.json).write_text(json.dumps(_clean(doc), indent=1) + "\n")
+        Path(args.json).write_text(json.dumps(strict_json(doc), indent=1) + "\n")
     c = r["checks"]
     return 0 if c["segments"]["pass"] and c["flight_time"]["pass"] else 1
 
-
-def _clean(o: object) -> object:
-    """``o`` as strict JSON: numpy scalars as Python numbers, NaN and infinities as null."""
-    import math
-
-    import numpy as np
-
-    if isinstance(o, dict):
-        return {str(k): _clean(v) for k, v in o.items()}
-    if isinstance(o, list | tuple):
-        return [_clean(v) for v in o]
-    if isinstance(o, np.generic):
-        o = o.item()
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    return o

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import fnmatch
 import hashlib
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -24,6 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_process.cliutil import strict_json
 from tlm_process.detect.channels import CHANNELS, GRID_HZ, drop_channels, needed_columns
 from tlm_process.detect.data import DetectError, read_training, window_labels
 from tlm_process.detect.features import WINDOW_S, feature_names
@@ -217,20 +217,8 @@ def _score(det: Detector, blocks: Sequence[tuple[str, np.ndarray, np.ndarray, np
             strict=True)},
         "labels": present,
     }
-    out["events"] = _jsonable(detection_summary(f, t, yt, yp))
+    out["events"] = strict_json(detection_summary(f, t, yt, yp))
     return out
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 def _source_card(path: str) -> dict[str, Any]:

@@ -24,12 +24,12 @@ starts are dropped.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from tlm_process.generate.checks import fraction, known_keys, shares, value_range
 from tlm_process.generate.errors import GenerateError
 
 __all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_script",
@@ -59,36 +59,16 @@ GCS_MODE_S = 1.0  # the ground station selects the mode
 LAND_FALLBACK_S = 20.0
 
 
-def _pair(v: Any, what: str, lo_min: float) -> tuple[float, float]:
-    try:
-        lo, hi = (float(x) for x in v)
-    except (TypeError, ValueError):
-        raise GenerateError(f"pilot {what} must be a pair (low, high), got {v!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < lo_min or hi < lo:
-        raise GenerateError(f"pilot {what} must be finite with {lo_min:g} <= low <= high, got "
-                            f"({lo:g}, {hi:g})")
-    return lo, hi
-
-
 def _weights(d: Any, known: tuple[str, ...], what: str) -> dict[str, float]:
-    if not isinstance(d, Mapping):
-        raise GenerateError(f"pilot {what} must be a mapping name -> share")
-    norm = {str(k).strip().upper() if what == "modes" else str(k).strip().lower(): v
-            for k, v in d.items()}
-    bad = [k for k in norm if k not in known]
-    if bad:
-        extra = " (STABILIZE needs a pilot holding the height)" if bad[0] == "STABILIZE" else ""
-        raise GenerateError(f"pilot {what}: unknown {bad[0]!r}{extra}; choose from "
-                            f"{', '.join(known)}")
-    out = {}
-    for k in known:
-        v = norm.get(k, 0.0)
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0:
-            raise GenerateError(f"pilot {what}: share of {k!r} must be a number >= 0")
-        out[k] = float(v)
-    if sum(out.values()) <= 0:
-        raise GenerateError(f"pilot {what}: at least one share must be > 0")
-    return out
+    """Validated shares (:func:`~tlm_process.generate.checks.shares`); mode names in any
+    case, STABILIZE refused with why."""
+    if isinstance(d, Mapping):
+        d = {str(k).strip().upper() if what == "modes" else str(k).strip().lower(): v
+             for k, v in d.items()}
+        if "STABILIZE" in d:
+            raise GenerateError("pilot modes: STABILIZE needs a pilot holding the height with "
+                                f"the throttle; choose from {', '.join(known)}")
+    return shares(d, known, f"pilot {what}")
 
 
 def validate_pilot(v: Any) -> dict[str, Any] | None:
@@ -99,22 +79,16 @@ def validate_pilot(v: Any) -> dict[str, Any] | None:
     if not isinstance(v, Mapping):
         raise GenerateError(f"pilot must be a mapping (share, modes, patterns, ...) or null, "
                             f"got {v!r}")
-    unknown = [k for k in v if k not in DEFAULT_PILOT]
-    if unknown:
-        raise GenerateError(f"pilot: unknown setting {unknown[0]!r}; known: "
-                            f"{', '.join(DEFAULT_PILOT)}")
-    share = v.get("share", DEFAULT_PILOT["share"])
-    if isinstance(share, bool) or not isinstance(share, int | float) or not 0 <= share <= 1:
-        raise GenerateError(f"pilot share (--pilot-share) must be a number in [0, 1], got "
-                            f"{share!r}")
-    out: dict[str, Any] = {"share": float(share),
+    known_keys(v, tuple(DEFAULT_PILOT), "pilot")
+    share = fraction(v.get("share", DEFAULT_PILOT["share"]), "pilot share (--pilot-share)")
+    out: dict[str, Any] = {"share": share,
                            "modes": _weights(v.get("modes", DEFAULT_PILOT["modes"]),
                                              PILOT_MODES, "modes"),
                            "patterns": _weights(v.get("patterns", DEFAULT_PILOT["patterns"]),
                                                 PATTERNS, "patterns")}
     for key, lo_min in (("stick", 0.0), ("alt", 2.0), ("duration", 10.0), ("leg_s", 0.5),
                         ("release_s", 0.5)):
-        out[key] = _pair(v.get(key, DEFAULT_PILOT[key]), key, lo_min)
+        out[key] = value_range(v.get(key, DEFAULT_PILOT[key]), f"pilot {key}", lo_min)
     if out["stick"][1] > 1.0:
         raise GenerateError("pilot stick is a fraction of full stick: at most 1")
     if out["alt"][1] > 100.0:

@@ -91,6 +91,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tlm_process.fault_types import Knob, fault_type_record, fault_type_records
+from tlm_process.generate.checks import fraction, known_keys
+from tlm_process.generate.checks import shares as _shares
+from tlm_process.generate.checks import value_range as _range
 from tlm_process.generate.errors import GenerateError
 from tlm_process.generate.pilot_flights import draw_pilot, pilot_script, validate_pilot
 from tlm_sim.faults import FAULT_TYPES, Fault, FaultSchedule, FaultScheduleError, Trigger
@@ -209,35 +212,6 @@ REAL_VIBRATION: dict[str, tuple[float, float]] = {
 #: Default vibration setting: half the flights with a real copter's vibration, half
 #: SITL-quiet.
 DEFAULT_VIBRATION: dict[str, Any] = {"real": 0.5, "ranges": REAL_VIBRATION}
-
-
-def _shares(d: Mapping[str, Any], known: tuple[str, ...], what: str) -> dict[str, float]:
-    """Validated shares in ``known`` order (missing names get 0); at least one > 0."""
-    if not isinstance(d, Mapping):
-        raise GenerateError(f"{what} must be a mapping name -> share, got {type(d).__name__}")
-    unknown = [k for k in d if k not in known]
-    if unknown:
-        raise GenerateError(f"{what}: unknown {unknown[0]!r}; choose from {', '.join(known)}")
-    out = {}
-    for k in known:
-        v = d.get(k, 0.0)
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0:
-            raise GenerateError(f"{what}: share of {k!r} must be a number >= 0, got {v!r}")
-        out[k] = float(v)
-    if sum(out.values()) <= 0:
-        raise GenerateError(f"{what}: at least one share must be > 0")
-    return out
-
-
-def _range(v: Any, what: str, lo_min: float = 0.0) -> tuple[float, float]:
-    try:
-        lo, hi = (float(x) for x in v)
-    except (TypeError, ValueError):
-        raise GenerateError(f"{what} must be a pair (low, high), got {v!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < lo_min or hi < lo:
-        raise GenerateError(f"{what} must be finite with {lo_min:g} <= low <= high, got "
-                            f"({lo:g}, {hi:g})")
-    return lo, hi
 
 
 @dataclass(frozen=True)
@@ -476,15 +450,10 @@ def _wind(w: Any, ranges: dict[str, tuple[float, float]]) -> dict[str, Any] | No
     if not isinstance(w, Mapping):
         raise GenerateError(f"wind must be a mapping (calm, speed, direction, turbulence) or "
                             f"null for no wind draw, got {w!r}")
-    unknown = [k for k in w if k not in ("calm", *WIND_PARAMS)]
-    if unknown:
-        raise GenerateError(f"wind: unknown setting {unknown[0]!r}; known: calm, "
-                            f"{', '.join(WIND_PARAMS)}")
-    calm = w.get("calm", DEFAULT_WIND["calm"])
-    if isinstance(calm, bool) or not isinstance(calm, int | float) or not 0 <= calm <= 1:
-        raise GenerateError(f"wind: calm (the share of calm flights, --calm-share) must be a "
-                            f"number in [0, 1], got {calm!r}")
-    out: dict[str, Any] = {"calm": float(calm)}
+    known_keys(w, ("calm", *WIND_PARAMS), "wind")
+    calm = fraction(w.get("calm", DEFAULT_WIND["calm"]),
+                    "wind: calm (the share of calm flights, --calm-share)")
+    out: dict[str, Any] = {"calm": calm}
     for key, name in WIND_PARAMS.items():
         if name in ranges:
             if key in w:
@@ -507,9 +476,7 @@ def _vibration(v: Any, params: Mapping[str, Any],
     if not isinstance(v, Mapping):
         raise GenerateError(f"vibration must be a mapping (real, ranges) or null for no draw, "
                             f"got {v!r}")
-    unknown = [k for k in v if k not in ("real", "ranges")]
-    if unknown:
-        raise GenerateError(f"vibration: unknown setting {unknown[0]!r}; known: real, ranges")
+    known_keys(v, ("real", "ranges"), "vibration")
     raw = v.get("ranges", DEFAULT_VIBRATION["ranges"])
     if not isinstance(raw, Mapping):
         raise GenerateError(f"vibration: ranges must be a mapping NAME -> [low, high], got "
@@ -523,10 +490,8 @@ def _vibration(v: Any, params: Mapping[str, Any],
     fixed = sorted(n for n in out_ranges if n in params)
     if "real" not in v and fixed:
         return {"real": 0.0, "ranges": out_ranges}  # the vehicle has its own vibration
-    real = v.get("real", DEFAULT_VIBRATION["real"])
-    if isinstance(real, bool) or not isinstance(real, int | float) or not 0 <= real <= 1:
-        raise GenerateError(f"vibration: real (the share of real-level flights, --real-share) "
-                            f"must be a number in [0, 1], got {real!r}")
+    real = fraction(v.get("real", DEFAULT_VIBRATION["real"]),
+                    "vibration: real (the share of real-level flights, --real-share)")
     if real > 0 and fixed:
         raise GenerateError(f"{fixed[0]} is both drawn (real-level vibration, --real-share) "
                             "and fixed (params): give --real-share 0 to fly the vehicle's own "

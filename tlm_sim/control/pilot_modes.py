@@ -235,16 +235,22 @@ def pilot_step(c, g, t_us, inputs, cos_tilt):
     elif mode == AP.MODE_POSHOLD:
         _poshold_xy(c, g, t_us, inputs)
     else:
-        roll, pitch = lean_angles(c[C.PIL_ROLL], c[C.PIL_PITCH], g[C.G_ANGLE_MAX],
-                                  c[C.ALTHOLD_LEAN])
-        c[C.ATT_ROLL_CMD] = roll
-        c[C.ATT_PITCH_CMD] = pitch
+        _stick_lean(c, g, c[C.ALTHOLD_LEAN])
     thr = z_control(c, g, (inputs.pos[2], inputs.vel[2], -inputs.acc_ned[2]),
                     (c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0),
                     (g[C.G_PILOT_SPEED_UP], g[C.G_PILOT_SPEED_DN], g[C.G_PILOT_ACCEL_Z],
                      g[C.G_PILOT_POSZ_ERR_UP], g[C.G_PILOT_POSZ_ERR_DN]))
     thr, thr_b = _throttle_out(c, g, thr, cos_tilt)
     return thr, thr_b, True
+
+
+@inline_jit
+def _stick_lean(c, g, limit):
+    """Roll and pitch commands [rad] from the sticks: each axis to ANGLE_MAX, their tilt
+    within ``limit`` (A4.1)."""
+    roll, pitch = lean_angles(c[C.PIL_ROLL], c[C.PIL_PITCH], g[C.G_ANGLE_MAX], limit)
+    c[C.ATT_ROLL_CMD] = roll
+    c[C.ATT_PITCH_CMD] = pitch
 
 
 @inline_jit
@@ -310,10 +316,7 @@ def _stabilize(c, g, inputs, cos_tilt):
     if c[C.PIL_THR_ZERO] != 0.0 or c[C.SUB_TIMER] < ARMING_DELAY_S:
         _idle(c, g, inputs)
         return 0.0, 0.0, False
-    roll, pitch = lean_angles(c[C.PIL_ROLL], c[C.PIL_PITCH], g[C.G_ANGLE_MAX],
-                              g[C.G_ANGLE_MAX])
-    c[C.ATT_ROLL_CMD] = roll
-    c[C.ATT_PITCH_CMD] = pitch
+    _stick_lean(c, g, g[C.G_ANGLE_MAX])
     thr = manual_throttle(g, c[C.PIL_THR], c[C.THR_HOVER])
     c[C.THR_IN_RAW] = thr
     if c[C.LANDED] != 0.0 and c[C.LIM_THR_LO] == 0.0:  # the motors left their lower limit
@@ -351,10 +354,7 @@ def _takeoff_ground(c, g, t_us, inputs, cos_tilt, climb):
         c[C.PH_STATE + 1] = PH_PILOT_OVERRIDE
         _poshold_xy(c, g, t_us, inputs)
     else:
-        roll, pitch = lean_angles(c[C.PIL_ROLL], c[C.PIL_PITCH], g[C.G_ANGLE_MAX],
-                                  c[C.ALTHOLD_LEAN])
-        c[C.ATT_ROLL_CMD] = roll
-        c[C.ATT_PITCH_CMD] = pitch
+        _stick_lean(c, g, c[C.ALTHOLD_LEAN])
     if lifted:
         c[C.LANDED] = 0.0
         c[C.MAYBE_LANDED] = 0.0
