@@ -129,10 +129,16 @@ def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
     for name in FIT_STATS:
         log, tlm = float(rows[name][1]), float(rows[name][2])
         assert tlm == pytest.approx(log, rel=0.15), name
+    # the airframe's balance: log171's rear motors run ~22 us above its front ones
+    asym = {ln.split()[0]: ln.split() for ln in text.splitlines()
+            if ln.split() and ln.split()[0].startswith("mot_")}
+    for name in ("mot_roll_us", "mot_pitch_us"):
+        assert float(asym[name][2]) == pytest.approx(float(asym[name][1]), abs=3.0), name
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         p = Params.from_parm(out)
     assert p["FRAME_TYPE"] == 1 and p["ANGLE_MAX"] == 3500 and p["TLM_VIB_ACC_X"] > 1.0
+    assert -0.015 < p["TLM_CG_X"] < -0.004  # centre of gravity behind the motors' centre
     assert (tmp_path / "v.png").is_file()
 
 

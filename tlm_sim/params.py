@@ -187,6 +187,11 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         "", 0.0, 20.0,
         f"gain of the gyros' vibration (SIM_VIB_MOT_*, SIM_VIB_FREQ_*) on body axis {a}; 1 = "
         "SITL's equal axes")) for a in "XYZ"),
+    *((f"TLM_CG_{a}", 0.0, ParamInfo(
+        "m", -0.1, 0.1,
+        f"centre of gravity {a} (body {'forward' if a == 'X' else 'right'}) from the motors' "
+        "centre: the thrust's moment about it, which the motors balance unequally as a real "
+        "airframe's do (tlm fit fits it to a log's motor outputs)")) for a in "XY"),
     ("TLM_VIB_IMB_MOT", 0.0, ParamInfo(
         "", 0.0, 8.0,
         "motor (output 1..8) whose propeller is out of balance, 0 = none; its rotor runs at "

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tlm_process.fit.fit import fit_vehicle, log_battery
     from tlm_process.fit.segment import parse_segment, steady_segments
-    from tlm_process.fit.stats import StatsError, segment_stats
+    from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
     from tlm_process.logread import LogReadError, read_log_tables, warn_damage
 
     if not Path(args.log).is_file():
@@ -82,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
                 raise StatsError("the log has no steady segment (airborne, upright, one mode, "
                                  "steady attitude and altitude for 6 s); give --segment")
             t0, t1 = segs[0]
-        target = segment_stats(lt.tables, t0, t1)
+        target = {**segment_stats(lt.tables, t0, t1),
+                  **motor_asymmetry(lt.tables, t0, t1, lt.params)}
     except StatsError as exc:
         raise UsageError(str(exc)) from None
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
@@ -114,7 +115,7 @@ def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str
     statistics in it against the log's, and the replay's report in DIR."""
     import warnings
 
-    from tlm_process.fit.stats import StatsError, segment_stats
+    from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
     from tlm_process.pilot.replay import format_report, plot, replay, summary_lines
 
     out = Path(args.replay)
@@ -129,7 +130,8 @@ def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str
         print(line)
     tables = {n: rr["_log"].tables[n] for n in rr["_log"].tables}
     try:
-        stats = segment_stats(tables, *segment)
+        stats = {**segment_stats(tables, *segment),
+                 **motor_asymmetry(tables, *segment, rr["_log"].params)}
         print(f"the segment {segment[0] * 1e-6:.1f}-{segment[1] * 1e-6:.1f} s in the replay:")
         print(format_table(target, stats))
     except StatsError as exc:
@@ -142,12 +144,14 @@ def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str
 def format_table(log: dict[str, float], tlm: dict[str, float]) -> str:
     """statistic | log | tlm | tlm / log - 1, one line each."""
     from tlm_process.fit.fit import FIT_STATS
+    from tlm_process.fit.stats import ASYM_NAMES
 
+    fitted = (*FIT_STATS, *ASYM_NAMES)
     lines = [f"{'statistic':<24} {'log':>9} {'tlm':>9} {'diff':>7}  fitted"]
     for k, v in log.items():
         t = tlm.get(k, math.nan)
         d = f"{t / v - 1:+.0%}" if math.isfinite(v) and v and math.isfinite(t) else "-"
-        lines.append(f"{k:<24} {_n(v):>9} {_n(t):>9} {d:>7}  {'yes' if k in FIT_STATS else ''}")
+        lines.append(f"{k:<24} {_n(v):>9} {_n(t):>9} {d:>7}  {'yes' if k in fitted else ''}")
     return "\n".join(lines)
 
 

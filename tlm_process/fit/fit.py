@@ -12,7 +12,11 @@ adjusts, a few flights in turn:
 * the gyros' per axis (``TLM_VIB_GYR_X/Y/Z`` on ``SIM_GYRn_RND`` :data:`GYR_AMP`) to the gyro
   standard deviation per axis;
 * the gusts (``SIM_WIND_TURB``, correlated over ``TLM_TURB_TC`` :data:`TURB_TC`) to the mean
-  of the ATT roll and pitch standard deviations (:func:`attitude_std`).
+  of the ATT roll and pitch standard deviations (:func:`attitude_std`);
+* the centre of gravity (``TLM_CG_X`` / ``_Y``) to how unequally the log's motors run: its
+  mean motor outputs projected on the frame's pitch and roll factors
+  (:func:`tlm_process.fit.stats.motor_asymmetry`; a real airframe is never balanced, and a
+  detector trained on a balanced one calls the log's unequal motors a fault).
 
 A statistic is the flight's own motion and the sensor's noise together; the motion (the
 statistic of a first flight without vibration or gusts, the *floor*) is taken out in
@@ -36,7 +40,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tlm_process.fit.stats import STAT_NAMES, segment_stats
+from tlm_process.fit.stats import ASYM_NAMES, STAT_NAMES, motor_asymmetry, segment_stats
 
 __all__ = ["ACC_AMP", "CMD_REF", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ", "ROTOR_TC",
            "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_vehicle", "log_battery",
@@ -82,6 +86,13 @@ DAMPING = 0.8
 #: statistics the fit drives to the log's (the others are compared, not fitted)
 FIT_STATS = ("hover_thr", "acc_x_std", "acc_y_std", "acc_z_std",
              "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps")
+#: the centre-of-gravity knobs, the motor asymmetry each is fitted to and the slope the fit
+#: starts from [us per m]: a 1 cm offset makes ~20-25 us of pitch or roll output on the
+#: default quad (roll's sign is opposite: ArduPilot's roll factor is negative on the right)
+CG_KNOBS: dict[str, tuple[str, float]] = {"TLM_CG_X": ("mot_pitch_us", 2000.0),
+                                          "TLM_CG_Y": ("mot_roll_us", -2000.0)}
+#: the largest centre-of-gravity offset the fit gives [m]
+CG_MAX_M = 0.05
 #: hover flown per fit flight [s], and what of it is measured (after settling)
 HOVER_S = 60
 SETTLE_S = 8.0
@@ -230,7 +241,9 @@ def fly_hover_stats(params: Mapping[str, float], seed: int = 1,
         log = fly(hover_mission(hold_s=hold_s), params=Params(dict(params)), seed=seed)
     t0, t1 = hover_window(log.tables)
     t1 = min(t1, t0 + hold_s * 1e6) - END_S * 1e6  # the hold ends hold_s after arriving
-    return segment_stats(log.tables, t0 + SETTLE_S * 1e6, t1, unit=1.0)
+    t0 += SETTLE_S * 1e6
+    return {**segment_stats(log.tables, t0, t1, unit=1.0),
+            **motor_asymmetry(log.tables, t0, t1, log.params)}
 
 
 def hover_window(tables: Mapping[str, Any], alt_m: float = 10.0) -> tuple[float, float]:
@@ -293,6 +306,9 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
              **{f"TLM_VIB_ACC_{a}": 1.0 for a in "XYZ"},
              **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"},
              "SIM_WIND_TURB": TURB_START if math.isfinite(attitude_std(log_stats)) else 0.0}
+    cg = [k for k, (stat, _) in CG_KNOBS.items() if math.isfinite(log_stats.get(stat, math.nan))]
+    knobs.update(dict.fromkeys(cg, 0.0))
+    last: dict[str, tuple[float, float]] = {}
     fixed = {"SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
              "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_TURB_TC": TURB_TC}
     history, best, best_err = [], None, math.inf
@@ -302,7 +318,8 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
         if progress is not None:
             progress(k + 2)
         err = _max_rel_err(got, log_stats)
-        history.append({**{s: got[s] for s in STAT_NAMES}, **knobs, "max_rel_err": err})
+        history.append({**{s: got[s] for s in (*STAT_NAMES, *ASYM_NAMES) if s in got},
+                        **knobs, "max_rel_err": err})
         if err < best_err:
             best, best_err = (dict(params), got), err
         thr = knobs["TLM_HOVER_THR"] * log_stats["hover_thr"] / max(got["hover_thr"], 1e-3)
@@ -314,10 +331,30 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
         if knobs["SIM_WIND_TURB"] > 0.0:
             knobs["SIM_WIND_TURB"] = _gain(knobs["SIM_WIND_TURB"], attitude_std(log_stats),
                                            attitude_std(got), attitude_std(floor))
+        for name in cg:
+            knobs[name] = _cg_step(name, knobs[name], log_stats, got, floor, last)
     assert best is not None
     params, got = best
     return FitResult(params=params, log=dict(log_stats), tlm=got, history=history,
                      dropped=dropped)
+
+
+def _cg_step(name: str, value: float, target: Mapping[str, float], got: Mapping[str, float],
+             floor: Mapping[str, float], last: dict[str, tuple[float, float]]) -> float:
+    """The centre-of-gravity knob ``name`` moved so that its motor asymmetry meets the log's:
+    the asymmetry is linear in the offset, its slope measured from the last two flights (or
+    from the floor flight's asymmetry at offset 0), :data:`CG_KNOBS`' until one moved it."""
+    stat, slope = CG_KNOBS[name]
+    g = got.get(stat, math.nan)
+    if not (math.isfinite(g) and math.isfinite(target[stat])):
+        return value
+    v0, g0 = last.get(name, (0.0, floor.get(stat, 0.0)))
+    if abs(value - v0) > 1e-4 and math.isfinite(g0):
+        measured = (g - g0) / (value - v0)
+        if measured * slope > 0.0 and 0.2 < measured / slope < 5.0:
+            slope = measured
+    last[name] = (value, g)
+    return float(min(max(value + (target[stat] - g) / slope, -CG_MAX_M), CG_MAX_M))
 
 
 def _mean_stats(runs: list[dict[str, float]]) -> dict[str, float]:

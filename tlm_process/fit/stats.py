@@ -28,7 +28,8 @@ import pandas as pd
 
 from tlm_process.reference import time_window
 
-__all__ = ["STAT_NAMES", "StatsError", "rate_unit", "segment_stats"]
+__all__ = ["ASYM_NAMES", "STAT_NAMES", "StatsError", "motor_asymmetry", "rate_unit",
+           "segment_stats"]
 
 #: every statistic :func:`segment_stats` returns, in report order
 STAT_NAMES = ("hover_thr", "roll_std_deg", "pitch_std_deg",
@@ -36,6 +37,10 @@ STAT_NAMES = ("hover_thr", "roll_std_deg", "pitch_std_deg",
               "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps",
               "rate_roll_err_std_dps", "rate_pitch_err_std_dps",
               "vibe_x", "vibe_y", "vibe_z")
+
+
+#: the motor outputs' static asymmetry (:func:`motor_asymmetry`) [us]
+ASYM_NAMES = ("mot_roll_us", "mot_pitch_us")
 
 
 #: RATE-per-gyro regression slope above which RATE is in centidegrees per second (between the
@@ -114,3 +119,31 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
         col = f"Vibe{ax.upper()}"
         out[f"vibe_{ax}"] = float(vibe[col].mean()) if len(vibe) and col in vibe else math.nan
     return {k: out[k] for k in STAT_NAMES}
+
+
+def motor_asymmetry(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float,
+                    params: Mapping[str, float]) -> dict[str, float]:
+    """How unequally the motors run over ``[t0_us, t1_us]``: each motor's mean RCOU output
+    less their mean, projected on the frame's roll and pitch mixer factors [us]
+    (``mot_roll_us``, ``mot_pitch_us``: the steady roll and pitch output that balances the
+    airframe; front motors working harder give a positive pitch, right ones a negative roll,
+    ArduPilot's factors). The frame from ``params`` (FRAME_CLASS / FRAME_TYPE, or Copter
+    3.x's FRAME); NaN without RCOU rows."""
+    from tlm_sim.frames import FrameError, frame_for
+
+    nan = dict.fromkeys(ASYM_NAMES, math.nan)
+    try:
+        frame_type = params.get("FRAME_TYPE", params.get("FRAME", 1.0))
+        layout = frame_for(params.get("FRAME_CLASS", 1.0), frame_type)
+    except FrameError:
+        return nan
+    rcou = time_window(tables.get("RCOU"), t0_us, t1_us)
+    prefix = "C" if "C1" in rcou else "Ch"
+    cols = [f"{prefix}{k + 1}" for k in range(layout.n_motors)]
+    if len(rcou) < 3 or not all(c in rcou for c in cols):
+        return nan
+    mean = rcou[cols].apply(pd.to_numeric, errors="coerce").mean().to_numpy(float)
+    dev = mean - mean.mean()
+    roll, pitch, _ = (np.asarray(f, dtype=float) for f in layout.mixer_factors())
+    return {"mot_roll_us": float(dev @ roll / (roll @ roll)),
+            "mot_pitch_us": float(dev @ pitch / (pitch @ pitch))}

@@ -82,6 +82,8 @@ F_POWER_FACTOR = _f.add("F_POWER_FACTOR", 1, "W/N", "power per newton of thrust 
 F_IXX, F_IYY, F_IZZ = _f.vector(("F_IXX", "F_IYY", "F_IZZ"), "kg m^2",
                                 "principal moments of inertia")
 F_ROT_DAMP = _f.add("F_ROT_DAMP", 1, "1/s", "rotational air damping rate c_w")
+F_CG = _f.add("F_CG", 2, "m", "TLM_CG_X / _Y: centre of gravity from the motors' centre, body "
+              "FRD (the thrust's moment arm about it)")
 F_PWM_LO, F_PWM_HI = _f.vector(("F_PWM_LO", "F_PWM_HI"), "us",
                                "PWM of command 0 and command 1")
 F_HOVER_CMD = _f.add("F_HOVER_CMD", 1, "", "motor command a_h that gives hover thrust at "
@@ -212,6 +214,8 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_IXX] = get("TLM_IXX") or ring_xy
     f[F_IYY] = get("TLM_IYY") or ring_xy
     f[F_IZZ] = get("TLM_IZZ") or ring_z
+    f[F_CG] = get("TLM_CG_X")
+    f[F_CG + 1] = get("TLM_CG_Y")
     rot_rate = get("TLM_REF_ROT_RATE")
     f[F_ROT_DAMP] = math.radians(400.0) / rot_rate if rot_rate > 0.0 else 0.0
 
