@@ -50,6 +50,20 @@ def test_channels_as_a_receiver_gives_them():
         1800, 1000, 1000, 1800]  # no mode set: the switch stays where SITL's idle input has it
 
 
+def test_sticks_follow_each_channels_range():
+    """A vehicle whose throttle channel spans 1000-1900 and whose roll trim is 1520: mid
+    throttle is 1450 (its mid-stick), a centred roll its trim, full roll its RC1_MAX."""
+    from tlm_sim.mission.sticks import stick_pwm
+
+    params = {**P, "RC3_MAX": 1900.0, "RC1_TRIM": 1520.0, "RC1_MAX": 1940.0}
+    assert stick_pwm("throttle", 0.5, params) == 1450.0
+    assert stick_pwm("roll", 0.0, params) == 1520.0 and stick_pwm("roll", 1.0, params) == 1940
+    assert stick_pwm("roll", -1.0, params) == 1000.0
+    assert stick_pwm("pitch", 1.0, params) == 1000.0  # forward is low PWM
+    s = StickScript(({"t": 0, "throttle": 0.5, "roll": 0.0, "ramp": 0},))
+    assert list(s.table(params, 0.1)[0, 1:4]) == [1520.0, 1500.0, 1450.0]
+
+
 def test_ground_station_mode_rows():
     s = StickScript(({"t": 0, "mode": "LOITER"}, {"t": 30, "gcs_mode": "rtl"},
                      {"t": 40.5, "gcs_mode": "LAND", "roll": 0.1}))

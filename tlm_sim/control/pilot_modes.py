@@ -236,6 +236,7 @@ def pilot_step(c, g, t_us, inputs, cos_tilt):
         _poshold_xy(c, g, t_us, inputs)
     else:
         _stick_lean(c, g, c[C.ALTHOLD_LEAN])
+        _xy_idle(c, inputs.pos)
     thr = z_control(c, g, (inputs.pos[2], inputs.vel[2], -inputs.acc_ned[2]),
                     (c[C.LIM_THR_LO] != 0.0, c[C.LIM_THR_HI] != 0.0),
                     (g[C.G_PILOT_SPEED_UP], g[C.G_PILOT_SPEED_DN], g[C.G_PILOT_ACCEL_Z],
@@ -251,6 +252,14 @@ def _stick_lean(c, g, limit):
     roll, pitch = lean_angles(c[C.PIL_ROLL], c[C.PIL_PITCH], g[C.G_ANGLE_MAX], limit)
     c[C.ATT_ROLL_CMD] = roll
     c[C.ATT_PITCH_CMD] = pitch
+
+
+@inline_jit
+def _xy_idle(c, pos):
+    """The horizontal position controller at rest where the copter is (ALT_HOLD and
+    STABILIZE do not run it): a mode that takes it up (LAND from the switch or a failsafe)
+    starts from here, as ArduCopter initialises an inactive controller."""
+    xy_reset(c, pos[0], pos[1], 0.0, 0.0)
 
 
 @inline_jit
@@ -317,6 +326,7 @@ def _stabilize(c, g, inputs, cos_tilt):
         _idle(c, g, inputs)
         return 0.0, 0.0, False
     _stick_lean(c, g, g[C.G_ANGLE_MAX])
+    _xy_idle(c, inputs.pos)
     thr = manual_throttle(g, c[C.PIL_THR], c[C.THR_HOVER])
     c[C.THR_IN_RAW] = thr
     if c[C.LANDED] != 0.0 and c[C.LIM_THR_LO] == 0.0:  # the motors left their lower limit

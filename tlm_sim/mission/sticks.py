@@ -176,15 +176,14 @@ class StickScript:
 
     def channels(self, t_s: float, params: Mapping[str, float]) -> np.ndarray:
         """RC channels 1-8 [us] at ``t_s`` as the receiver delivers them: the sticks on the
-        default RCMAP, the mode switch on ``FLTMODE_CH`` (its position's centre) once a row
-        sets a mode, SITL's idle values on the other channels (5: 1800, 6: 1000, 7: 1000, 8:
-        1800)."""
+        default RCMAP, over each channel's own range (``RCn_MIN`` / ``_TRIM`` / ``_MAX``: a
+        centred stick at the trim, full stick at the end, throttle 0..1 over MIN..MAX), the
+        mode switch on ``FLTMODE_CH`` (its position's centre) once a row sets a mode, SITL's
+        idle values on the other channels (5: 1800, 6: 1000, 7: 1000, 8: 1800)."""
         ch = np.array(RC_IDLE_PWM)
         pos = self.sticks(t_s)
-        ch[CHANNEL["roll"] - 1] = 1500.0 + 500.0 * pos["roll"]
-        ch[CHANNEL["pitch"] - 1] = 1500.0 - 500.0 * pos["pitch"]  # forward is low PWM
-        ch[CHANNEL["throttle"] - 1] = 1000.0 + 1000.0 * pos["throttle"]
-        ch[CHANNEL["yaw"] - 1] = 1500.0 + 500.0 * pos["yaw"]
+        for axis in AXES:
+            ch[CHANNEL[axis] - 1] = stick_pwm(axis, pos[axis], params)
         mode = self.mode(t_s)
         sw = int(params["FLTMODE_CH"])
         if mode is not None and 1 <= sw <= 8:
@@ -206,11 +205,8 @@ class StickScript:
         out = np.empty((n, 9))
         out[:, 0] = t
         out[:, 1:] = np.array(RC_IDLE_PWM)
-        pos = {axis: self._axis_at(axis, t) for axis in AXES}
-        out[:, CHANNEL["roll"]] = 1500.0 + 500.0 * pos["roll"]
-        out[:, CHANNEL["pitch"]] = 1500.0 - 500.0 * pos["pitch"]
-        out[:, CHANNEL["throttle"]] = 1000.0 + 1000.0 * pos["throttle"]
-        out[:, CHANNEL["yaw"]] = 1500.0 + 500.0 * pos["yaw"]
+        for axis in AXES:
+            out[:, CHANNEL[axis]] = stick_pwm(axis, self._axis_at(axis, t), params)
         sw = int(params["FLTMODE_CH"])
         mode_rows = [r for r in self.rows if "mode" in r]
         if mode_rows and 1 <= sw <= 8:
@@ -244,6 +240,21 @@ class StickScript:
         frac = np.where(step, 1.0, np.clip((t[ok] - t0) / np.where(step, 1.0, ramp), 0.0, 1.0))
         out[ok] = v0 + (v1 - v0) * frac
         return out
+
+
+def stick_pwm(axis: str, pos: Any, params: Mapping[str, float]) -> Any:
+    """PWM [us] of stick ``axis`` at ``pos`` (a number or an array) on its channel's range:
+    roll and yaw from ``RCn_TRIM`` towards ``RCn_MAX`` (right) or ``RCn_MIN``, pitch the other
+    way (forward is low PWM), the throttle from ``RCn_MIN`` (0) to ``RCn_MAX`` (1); SITL's
+    1000 / 1500 / 2000 where ``params`` lacks them."""
+    ch = CHANNEL[axis]
+    lo = params.get(f"RC{ch}_MIN", 1000.0)
+    hi = params.get(f"RC{ch}_MAX", 2000.0)
+    if axis == "throttle":
+        return lo + (hi - lo) * pos
+    trim = params.get(f"RC{ch}_TRIM", 1500.0)
+    p = -pos if axis == "pitch" else pos
+    return np.where(p >= 0.0, trim + p * (hi - trim), trim + p * (trim - lo))
 
 
 def _number(v: Any, what: str, i: int) -> float:
