@@ -31,7 +31,6 @@ from tlm_sim.dynamics import layout as X
 from tlm_sim.dynamics.atmosphere import GRAVITY_MSS, air_density, air_density_gradient
 from tlm_sim.dynamics.battery import init_battery, update_battery
 from tlm_sim.dynamics.frame import (
-    F_CG,
     F_FRAME_HEIGHT,
     F_GYRO,
     F_HOME_ALT,
@@ -237,12 +236,6 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     # --- forces and torques --------------------------------------------------------------
     fx, fy, fz, tx, ty, tz, current = motor_forces(x, pwm, frame, dt)
-    cgx, cgy = frame[F_CG], frame[F_CG + 1]
-    if cgx != 0.0 or cgy != 0.0:
-        # the thrust acts at the motors, the body turns about its centre of gravity c:
-        # torque (r - c) x F = r x F - c x F, c in the x-y plane, F mostly along z
-        tx -= cgy * fz
-        ty += cgx * fz
     ixx, iyy, izz = frame[F_IXX], frame[F_IYY], frame[F_IZZ]
     rxx, ryy, rzz = 1.0 / ixx, 1.0 / iyy, 1.0 / izz  # three divisions instead of six
     damp = frame[F_ROT_DAMP]

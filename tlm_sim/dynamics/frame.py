@@ -82,8 +82,6 @@ F_POWER_FACTOR = _f.add("F_POWER_FACTOR", 1, "W/N", "power per newton of thrust 
 F_IXX, F_IYY, F_IZZ = _f.vector(("F_IXX", "F_IYY", "F_IZZ"), "kg m^2",
                                 "principal moments of inertia")
 F_ROT_DAMP = _f.add("F_ROT_DAMP", 1, "1/s", "rotational air damping rate c_w")
-F_CG = _f.add("F_CG", 2, "m", "TLM_CG_X / _Y: centre of gravity from the motors' centre, body "
-              "FRD (the thrust's moment arm about it)")
 F_PWM_LO, F_PWM_HI = _f.vector(("F_PWM_LO", "F_PWM_HI"), "us",
                                "PWM of command 0 and command 1")
 F_HOVER_CMD = _f.add("F_HOVER_CMD", 1, "", "motor command a_h that gives hover thrust at "
@@ -122,8 +120,11 @@ F_ENGINE_MASK = _f.add("F_ENGINE_MASK", 1, "",
                        "SIM_ENGINE_FAIL as a bit mask of outputs (bit 0 = SERVO1 = motor 1)")
 # ---- motor table (tlm_sim.frames; positions in metres, body FRD) --------------------------
 F_N_MOTORS = _f.add("F_N_MOTORS", 1, "", "number of motors n (FRAME_CLASS / FRAME_TYPE)")
-F_MOT_X = _f.add("F_MOT_X", MAX_MOTORS, "m", "per output: arm x (0 beyond n)")
-F_MOT_Y = _f.add("F_MOT_Y", MAX_MOTORS, "m", "per output: arm y (0 beyond n)")
+F_MOT_X = _f.add("F_MOT_X", MAX_MOTORS, "m",
+                 "per output: motor x from the centre of gravity (the arm less TLM_CG_X; 0 "
+                 "beyond n)")
+F_MOT_Y = _f.add("F_MOT_Y", MAX_MOTORS, "m",
+                 "per output: motor y from the centre of gravity (the arm less TLM_CG_Y)")
 F_MOT_YAW = _f.add("F_MOT_YAW", MAX_MOTORS, "", "per output: yaw factor (+1 CCW, -1 CW)")
 
 N_FRAME = FRAME.close()
@@ -214,8 +215,6 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_IXX] = get("TLM_IXX") or ring_xy
     f[F_IYY] = get("TLM_IYY") or ring_xy
     f[F_IZZ] = get("TLM_IZZ") or ring_z
-    f[F_CG] = get("TLM_CG_X")
-    f[F_CG + 1] = get("TLM_CG_Y")
     rot_rate = get("TLM_REF_ROT_RATE")
     f[F_ROT_DAMP] = math.radians(400.0) / rot_rate if rot_rate > 0.0 else 0.0
 
@@ -224,7 +223,7 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_PWM_HI] = f[F_PWM_MIN] + f[F_SPIN_MAX] * span
     f[F_HOVER_CMD] = _hover_command(hover_thr, expo)
 
-    _motor_table(f, layout, diag)
+    _motor_table(f, layout, diag, (get("TLM_CG_X"), get("TLM_CG_Y")))
     _environment(f, p)
     _engine_fault(f, p)
     return f
@@ -241,12 +240,15 @@ def _engine_fault(f: np.ndarray, p: Params) -> None:
     f[F_ENGINE_MASK] = fail
 
 
-def _motor_table(f: np.ndarray, layout: FrameLayout, diag: float) -> None:
-    """The motor slots of frame array ``f``: count, arm positions [m, body FRD], yaw factors."""
+def _motor_table(f: np.ndarray, layout: FrameLayout, diag: float,
+                 cg: tuple[float, float] = (0.0, 0.0)) -> None:
+    """The motor slots of frame array ``f``: count, positions [m, body FRD] from the centre of
+    gravity ``cg`` (TLM_CG_X / _Y from the motors' centre: the thrust, the air at the rotors
+    and the momentum drag act about it), yaw factors."""
     f[F_N_MOTORS] = layout.n_motors
     for i, ((ux, uy), m) in enumerate(zip(layout.arm_unit(), layout.motors, strict=True)):
-        f[F_MOT_X + i] = diag * ux
-        f[F_MOT_Y + i] = diag * uy
+        f[F_MOT_X + i] = diag * ux - cg[0]
+        f[F_MOT_Y + i] = diag * uy - cg[1]
         f[F_MOT_YAW + i] = m.yaw_factor
 
 
