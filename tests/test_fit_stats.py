@@ -24,8 +24,12 @@ def _real171():
 
 
 def test_rate_unit_is_read_from_the_log():
-    """Copter 3.3 logs RATE in centidegrees per second, 4.x (and tlm) in degrees per second."""
-    assert rate_unit(_real171()) == 0.01
+    """Copter 3.3 logs RATE in centidegrees per second, 4.x (and tlm) in degrees per second;
+    the reader gives both in degrees per second (tlm_process.logread), and rate_unit still
+    tells a table in centidegrees."""
+    t = _real171()
+    assert rate_unit(t) == 1.0
+    assert rate_unit({**t, "RATE": t["RATE"].assign(R=t["RATE"].R * 100)}) == 0.01
     assert rate_unit(flown(1).tables) == 1.0
 
 

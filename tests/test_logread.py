@@ -471,3 +471,22 @@ def test_crosscheck_refuses_real_logs_in_one_line(name: str, error: str, tmp_pat
     assert rc == 2
     last = err.strip().splitlines()[-1]
     assert last.startswith("tlm: error:") and error in last
+
+
+def test_copter3_rate_and_ctun_come_in_4x_units():
+    """log171 (Copter 3.3) logs RATE's outputs in +-4500 and its throttle in 0..1000, its rates
+    in centidegrees per second, CTUN's throttle as ThrOut 0..1000: the reader gives them as a
+    4.x log does (the whole-log detector read a 3.3 hover's yaw output 4500 times too large),
+    and says so in its notes."""
+    lt = read_log_tables(real_path("log171.bin"))
+    rate = lt.tables["RATE"]
+    assert rate["AOut"].max() <= 1.0 and rate[["ROut", "POut", "YOut"]].abs().max().max() <= 1.2
+    hover = rate[(rate.TimeUS > 197.5e6) & (rate.TimeUS < 216.5e6)]
+    assert 0.3 < hover["AOut"].mean() < 0.5
+    imu = lt.tables["IMU"].query("I == 0")
+    gyro = np.degrees(np.interp(rate.TimeUS, imu.TimeUS, imu.GyrX))
+    assert np.polyfit(gyro, rate["R"], 1)[0] == pytest.approx(1.0, abs=0.3)  # deg/s
+    assert lt.tables["CTUN"]["ThO"].max() <= 1.0
+    assert any("Copter 3.x output units" in n for n in lt.notes)
+    sitl = read_log_tables(reference_path("normal_s11.bin"), ["RATE", "CTUN", "IMU"])
+    assert not any("Copter 3.x" in n for n in sitl.notes)  # a 4.x log is left alone

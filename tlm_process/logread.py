@@ -297,7 +297,61 @@ def _normalise(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
         if len(t) > 1 and (np.diff(t) < 0).any():
             df = df.iloc[np.argsort(t, kind="stable")]
         out[name] = df.reset_index(drop=True)
+    _units(out, notes)
     return out
+
+
+#: Copter 3.x's rate-controller output range (RATE ROut/POut/YOut; 4.x logs them in +-1) and
+#: throttle range (RATE AOut, CTUN ThrOut; 4.x: 0..1)
+COPTER3_OUTPUT = 4500.0
+COPTER3_THROTTLE = 1000.0
+#: RATE-per-gyro regression slope above which RATE's rates are in centidegrees per second
+CENTI_SLOPE = 10.0
+
+
+def _units(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
+    """Copter 3.x's RATE and CTUN in 4.x units: rate outputs from +-4500 to +-1 and the
+    throttle from 0..1000 to 0..1 (an AOut above 1.5 tells), the rates from centidegrees to
+    degrees per second (RATE's roll rate 100 times IMU 0's gyro), CTUN's ThrOut as ThO."""
+    rate = tables.get("RATE")
+    if rate is not None and "AOut" in rate and np.nanmax(
+            pd.to_numeric(rate["AOut"], errors="coerce").to_numpy(float), initial=0.0) > 1.5:
+        rate = rate.copy()
+        for col in ("ROut", "POut", "YOut"):
+            if col in rate:
+                rate[col] = pd.to_numeric(rate[col], errors="coerce") / COPTER3_OUTPUT
+        rate["AOut"] = pd.to_numeric(rate["AOut"], errors="coerce") / COPTER3_THROTTLE
+        tables["RATE"] = rate
+        notes.append("RATE ROut/POut/YOut / 4500 and AOut / 1000 (Copter 3.x output units)")
+    if rate is not None and _centidegrees(rate, tables.get("IMU")):
+        rate = tables["RATE"].copy()
+        cols = [c for c in ("RDes", "R", "PDes", "P", "YDes", "Y") if c in rate]
+        for col in cols:
+            rate[col] = pd.to_numeric(rate[col], errors="coerce") * 0.01
+        tables["RATE"] = rate
+        notes.append(f"RATE {'/'.join(cols)} x 0.01 (Copter 3.x: centidegrees per second)")
+    ctun = tables.get("CTUN")
+    if ctun is not None and "ThrOut" in ctun and "ThO" not in ctun:
+        ctun = ctun.copy()
+        ctun["ThO"] = pd.to_numeric(ctun["ThrOut"], errors="coerce") / COPTER3_THROTTLE
+        tables["CTUN"] = ctun
+        notes.append("CTUN ThO = ThrOut / 1000 (Copter 3.x)")
+
+
+def _centidegrees(rate: pd.DataFrame, imu: pd.DataFrame | None) -> bool:
+    """Whether RATE's rates are in centidegrees per second: its roll rate R against IMU 0's
+    roll gyro (a regression over the whole log; False when either is missing)."""
+    if imu is None or len(rate) < 10 or len(imu) < 10 or "R" not in rate or "GyrX" not in imu:
+        return False
+    if "I" in imu:
+        imu = imu[imu["I"] == 0]
+    g = np.degrees(np.interp(rate.TimeUS.to_numpy(float), imu.TimeUS.to_numpy(float),
+                             pd.to_numeric(imu.GyrX, errors="coerce").to_numpy(float)))
+    r = pd.to_numeric(rate.R, errors="coerce").to_numpy(float)
+    ok = np.isfinite(g) & np.isfinite(r)
+    if ok.sum() < 10 or not np.any(g[ok]):
+        return False
+    return abs(float(np.dot(r[ok], g[ok]) / max(np.dot(g[ok], g[ok]), 1e-12))) > CENTI_SLOPE
 
 
 def _as_time(t: np.ndarray) -> np.ndarray:
