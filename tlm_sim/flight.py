@@ -86,7 +86,7 @@ from tlm_sim.ekf.log import (
     log_gsf,
     log_lane_switch,
 )
-from tlm_sim.faults import FaultSchedule, FaultScheduleError, jitter_nsats
+from tlm_sim.faults import FaultSchedule, jitter_nsats
 from tlm_sim.faults.records import fault_records
 from tlm_sim.flightlog import LOGGED_MESSAGES, FlightLog, allocate_buffers
 from tlm_sim.frames import FRAMES, MAX_MOTORS, frame_for
@@ -688,7 +688,9 @@ def fly(
     duration, rc_table = _flight_span(mission, p, sticks)
     schedule = faults if isinstance(faults, FaultSchedule) else None
     if schedule is not None:
-        _validate_schedule(schedule, mission, duration, sticks is not None)
+        schedule.validate(n_waypoints=mission.n_waypoints, max_time_s=duration)
+        if sticks is not None:
+            schedule.require_times()
         changes: list[Any] = list(schedule.param_changes(p))
     else:
         changes = list(faults or ())
@@ -750,17 +752,6 @@ def fly(
 
 #: a pilot-flown flight runs at most this long after its RC table's last row [s]
 PILOT_TAIL_S = 30.0
-
-
-def _validate_schedule(schedule: FaultSchedule, mission: Mission, duration: float,
-                       pilot: bool) -> None:
-    """FaultScheduleError unless the schedule fits the flight: its waypoints and the longest
-    it can last; a pilot-flown flight has no waypoints, so times only."""
-    schedule.validate(n_waypoints=mission.n_waypoints, max_time_s=duration)
-    if pilot and any(t is not None and t.kind == "wp" for f in schedule
-                     for t in (f.start, f.end)):
-        raise FaultScheduleError("a pilot-flown flight has no waypoints: give the faults' "
-                                 "start and end as times")
 
 
 def _flown_mission(mission: Mission | int | None, seed: int, pilot: bool) -> Mission:

@@ -28,6 +28,24 @@ def quat_to_euler(qw, qx, qy, qz):
     return roll, pitch, yaw
 
 
+@tick_jit
+def heading_vector(q):
+    """Body x axis of a body->NED quaternion array q projected on the horizontal plane (hx,
+    hy), and its length."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    hx = 1.0 - 2.0 * (y * y + z * z)
+    hy = 2.0 * (w * z + x * y)
+    return hx, hy, math.sqrt(hx * hx + hy * hy)
+
+
+@tick_jit
+def heading(q):
+    """Heading [rad] of a body->NED quaternion array q (0 when the body x axis points straight
+    down or up); only where needed: an atan2 every tick cost about 1.5 % of the loop."""
+    hx, hy, norm = heading_vector(q)
+    return 0.0 if norm < 1e-9 else math.atan2(hy, hx)
+
+
 _R6, _R12, _R20, _R30, _R42, _R56 = (1.0 / n for n in (6.0, 12.0, 20.0, 30.0, 42.0, 56.0))
 
 

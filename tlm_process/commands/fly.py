@@ -154,9 +154,8 @@ def _load_schedule(args: argparse.Namespace, mission: Mission | None,
                          "schedule or raw parameter changes); put extra parameter values in a "
                          "schedule file's params_start/params_end")
     # whole seconds, rounded down: readable in messages and never past fly()'s own bound
-    if mission is None:
-        # (no waypoints: any waypoint trigger is refused below, with that reason)
-        bounds = {"n_waypoints": 10**6, "max_time_s": float(math.floor(max_time_s or 0.0))}
+    if mission is None:  # flown from sticks: no waypoints (require_times below)
+        bounds = {"n_waypoints": None, "max_time_s": float(math.floor(max_time_s or 0.0))}
     else:
         bounds = {"n_waypoints": mission.n_waypoints,
                   "max_time_s": float(math.floor(max_duration_s(mission, params)))}
@@ -172,12 +171,10 @@ def _load_schedule(args: argparse.Namespace, mission: Mission | None,
             schedule.validate(**bounds)
         else:
             schedule = FaultSchedule.from_file(args.faults, **bounds)
+        if mission is None:
+            schedule.require_times()
     except FaultScheduleError as e:
         raise UsageError(f"{option}: {e}") from None
-    if mission is None and any(t is not None and t.kind == "wp" for f in schedule
-                               for t in (f.start, f.end)):
-        raise UsageError(f"{option}: a pilot-flown flight (--sticks) has no waypoints: give the "
-                         "faults' start and end in seconds")
     if lam is None:
         return schedule
     try:

@@ -47,7 +47,7 @@ def wrap_pi(a):
 
 
 @tick_jit
-def _shape_axis(c, slots, cmd, shaping, wrap):
+def shape_angle(c, slots, cmd, shaping, wrap):
     """Move a target angle (slots: its and its rate's slots of c) towards cmd with a
     square-root rate demand and an accel limit (shaping: time constant, accel limit, dt)."""
     angle_i, rate_i = slots
@@ -103,9 +103,9 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     dt = g[C.G_DT]
     tc = g[C.G_INPUT_TC]
     amax = g[C.G_ACCEL_MAX]
-    _shape_axis(c, (C.ATT_ROLL_T, C.ATT_ROLL_RATE_T), c[C.ATT_ROLL_CMD], (tc, amax, dt), False)
+    shape_angle(c, (C.ATT_ROLL_T, C.ATT_ROLL_RATE_T), c[C.ATT_ROLL_CMD], (tc, amax, dt), False)
     amax = g[C.G_ACCEL_MAX + 1]
-    _shape_axis(c, (C.ATT_PITCH_T, C.ATT_PITCH_RATE_T), c[C.ATT_PITCH_CMD], (tc, amax, dt), False)
+    shape_angle(c, (C.ATT_PITCH_T, C.ATT_PITCH_RATE_T), c[C.ATT_PITCH_CMD], (tc, amax, dt), False)
     _shape_yaw(c, g, tc, dt)
 
     # target quaternion from euler (ZYX)

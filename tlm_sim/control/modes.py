@@ -42,6 +42,7 @@ from tlm_sim.control.failsafe import (
 from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle, voltage_compensation
 from tlm_sim.control.pilot_modes import (
     ARMING_DELAY_S,
+    is_pilot_mode,
     log_land_complete,
     pilot_mix_want,
     pilot_step,
@@ -49,6 +50,7 @@ from tlm_sim.control.pilot_modes import (
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
+    relax_xy_target,
     xy_init_stopping_point,
     xy_reset,
     xy_update,
@@ -64,7 +66,7 @@ from tlm_sim.control.wpnav import (
     path_update,
     prepare_path,
 )
-from tlm_sim.rotation import quat_to_euler
+from tlm_sim.rotation import heading, quat_to_euler
 
 SPOOL_TIME_S = MOT_SPOOL_TIME_S
 AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs: 0.8-1.0 s)
@@ -72,8 +74,6 @@ AUTO_ARMED_S = SPOOL_TIME_S + 0.3  # EV AUTO_ARMED after arming (reference logs:
 # MOT_SPIN_ARM and a takeoff waits 2 s after arming; every reference log has EV 57 at 2.00 s,
 # the throttle rising from there (above 0.2 at 2.9-3.0 s) and NOT_LANDED at 3.28 s
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
-#: AC_PosControl's POSCONTROL_RELAX_TC [s]: the time constant of soften_for_landing's decay
-POSCONTROL_RELAX_TC = 0.16
 LAND_MAYBE_S = 0.2
 LAND_WITH_DELAY_S = 4.0  # failsafe LAND pauses this long before descending
 # AUTO after the GUIDED takeoff: the reference driver switches at ~91.5 % of the takeoff
@@ -100,28 +100,9 @@ def set_mode(c, mode, rsn, t_us, ev):
     a mode that is not flown from the sticks takes the heading as a command again."""
     c[C.MODE] = mode
     c[C.MODE_RSN] = rsn
-    if not (mode == AP.MODE_STABILIZE or mode == AP.MODE_ALT_HOLD or mode == AP.MODE_LOITER
-            or mode == AP.MODE_POSHOLD):
+    if not is_pilot_mode(mode):
         c[C.ATT_YAW_RATE_IN] = 0.0
     E.log_mode(ev, t_us, mode, rsn)
-
-
-@tick_jit
-def _heading_vector(q):
-    """Body x axis of a body->NED quaternion projected on the horizontal plane (hx, hy), and
-    its length."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    hx = 1.0 - 2.0 * (y * y + z * z)
-    hy = 2.0 * (w * z + x * y)
-    return hx, hy, math.sqrt(hx * hx + hy * hy)
-
-
-@tick_jit
-def _yaw(q):
-    """Heading [rad] of a body->NED quaternion (0 when the body x axis points straight down or
-    up); only where needed: an atan2 every tick cost about 1.5 % of the loop."""
-    hx, hy, norm = _heading_vector(q)
-    return 0.0 if norm < 1e-9 else math.atan2(hy, hx)
 
 
 @tick_jit
@@ -260,7 +241,7 @@ def arm_vehicle(c, t_us, q, ev):
     c[C.ARM_TIME_S] = t_us * 1e-6
     c[C.ARM_METHOD] = AP.ARM_METHOD_MAVLINK
     c[C.LANDED] = 1.0
-    c[C.HOME_YAW] = _yaw(q)
+    c[C.HOME_YAW] = heading(q)
     c[C.SUBMODE] = C.SUB_GROUND_IDLE
     c[C.SUB_TIMER] = 0.0
     c[C.SPOOL] = 1.0
@@ -390,7 +371,7 @@ def _ground_idle(c, g, t_us, inputs, seg, ev):
     dt = g[C.G_DT]
     pos, vel, q = inputs.pos, inputs.vel, inputs.q
     output_idle(c, g, g[C.G_MOT_SPIN_ARM])
-    attitude_reset(c, 0.0, 0.0, _yaw(q))
+    attitude_reset(c, 0.0, 0.0, heading(q))
     if c[C.SUB_TIMER] >= AUTO_ARMED_S and c[C.SUB_TIMER] - dt < AUTO_ARMED_S:
         E.log_ev(ev, t_us, AP.EV_AUTO_ARMED)
     if c[C.SUB_TIMER] >= ARMING_DELAY_S:
@@ -546,9 +527,8 @@ def _land_descent(c, g, t_us, pos, land_vertical, ev):
         # POSCONTROL_RELAX_TC and the velocity integrator may not grow along the acceleration
         # target (set_externally_limited_NE), so a copter on the ground in wind does not wind
         # its lean target up before the detector completes
-        k = dt / (dt + POSCONTROL_RELAX_TC)
+        relax_xy_target(c, pos, dt)
         for j in range(2):
-            c[C.PXY_POS_T + j] += (pos[j] - c[C.PXY_POS_T + j]) * k
             c[C.PXY_LIMIT + j] = c[C.PXY_ACC_T + j]
     if land_vertical:
         # ArduCopter's land descent rate: the square-root controller (PSC_POSZ_P,

@@ -26,14 +26,14 @@ Each main-loop tick, before the vehicle's step (ArduCopter's rc_loop), :func:`pi
   (ARM.Method DISARMDELAY).
 """
 
-import math
 
 from tlm_sim import ardupilot as AP
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.modes import disarm, rtl_or_land, set_mode, start_land
-from tlm_sim.control.pilot_modes import SPOOLED_UP_S, pilot_mode_enter
+from tlm_sim.control.pilot_modes import SPOOLED_UP_S, is_pilot_mode, pilot_mode_enter
+from tlm_sim.rotation import heading
 
 THROTTLE_ZERO_S = 0.4  # set_throttle_zero_flag: the stick at 0 this long
 SWITCH_DEBOUNCE_S = 0.2  # RC_Channel's mode switch debounce
@@ -43,14 +43,6 @@ SWITCH_PWM_MIN, SWITCH_PWM_MAX = 800.0, 2200.0
 RUDDER_CD = 4000.0  # yaw stick beyond this of +-4500 for the gestures
 RUDDER_HOLD_S = 3.0  # ARM_DELAY_MS of the rudder gesture
 ANGLE_RANGE_CD = 4500.0
-
-
-@tick_jit
-def is_pilot_mode(mode):
-    """Whether the mode is one tlm flies from the sticks (STABILIZE, ALT_HOLD, LOITER,
-    POSHOLD)."""
-    return (mode == AP.MODE_STABILIZE or mode == AP.MODE_ALT_HOLD or mode == AP.MODE_LOITER
-            or mode == AP.MODE_POSHOLD)
 
 
 @tick_jit
@@ -290,8 +282,5 @@ def arm_pilot(c, g, t_us, inputs, ev):
     c[C.PIL_TKOFF] = 0.0
     E.log_ev(ev, t_us, AP.EV_ARMED)
     pilot_mode_enter(c, g, t_us * 1e-6, inputs, False)
-    q = inputs.q
-    hx = 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3])
-    hy = 2.0 * (q[0] * q[3] + q[1] * q[2])
-    c[C.HOME_YAW] = math.atan2(hy, hx)
+    c[C.HOME_YAW] = heading(inputs.q)
     return True

@@ -34,17 +34,25 @@ from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.ardupilot import GRAVITY_MSS
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
-from tlm_sim.control.attitude import attitude_reset, rate_reset, sqrt_ctrl, throttle_mix_update
+from tlm_sim.control.attitude import (
+    attitude_reset,
+    rate_reset,
+    shape_angle,
+    sqrt_ctrl,
+    throttle_mix_update,
+)
 from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, output_idle, voltage_compensation
 from tlm_sim.control.position import (
     LEAN_LIMIT_MIN,
     althold_lean_update,
     angle_boost,
+    relax_xy_target,
     xy_control,
     xy_reset,
     z_control,
     z_reset,
 )
+from tlm_sim.rotation import heading_vector
 
 #: ArduCopter's arming delay (ARMING_DELAY_SEC): the motors stay at ground idle this long
 ARMING_DELAY_S = 2.0
@@ -54,8 +62,6 @@ LEAN_CAP = math.radians(85.0)  # rc_input_to_roll_pitch's largest angle
 EXPO_MAX = 0.95  # input_expo: no expo at or beyond this
 #: the vertical shaping's acceleration ceiling when braking a descent (AC_PosControl)
 ACCEL_Z_DOWN_CAP = 7.5
-#: AC_PosControl's POSCONTROL_RELAX_TC [s] (soften_for_landing)
-POSCONTROL_RELAX_TC = 0.16
 #: FLT_EPSILON in cm/s as m/s: below it ArduPilot's desired climb counts as zero
 FLT_EPSILON_CM = 1.1920929e-9
 # POSHOLD (mode_poshold.cpp), angles in centidegrees, times in milliseconds
@@ -150,12 +156,18 @@ def lean_to_accel(roll, pitch, cy, sy):
     return k * (-cy * sp - sy * sr), k * (-sy * sp + cy * sr)
 
 
+@tick_jit
+def is_pilot_mode(mode):
+    """Whether the mode is one tlm flies from the sticks (STABILIZE, ALT_HOLD, LOITER,
+    POSHOLD)."""
+    return (mode == AP.MODE_STABILIZE or mode == AP.MODE_ALT_HOLD or mode == AP.MODE_LOITER
+            or mode == AP.MODE_POSHOLD)
+
+
 @inline_jit
 def _heading(q):
     """(cos, sin) of the heading of the body->NED quaternion q (1, 0 when vertical)."""
-    hx = 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3])
-    hy = 2.0 * (q[0] * q[3] + q[1] * q[2])
-    n = math.sqrt(hx * hx + hy * hy)
+    hx, hy, n = heading_vector(q)
     if n < 1e-9:
         return 1.0, 0.0
     return hx / n, hy / n
@@ -421,17 +433,9 @@ def _climb_shaping(c, g, climb, dt):
 def _predict_angle(c, g, k, cmd, dt):
     """AC_AttitudeControl's input-shaping predictor for roll (k 0) or pitch (k 1): the
     predicted angle moves towards cmd as the attitude target would (1/ATC_INPUT_TC, the
-    axis' ATC_ACCEL_*_MAX)."""
-    tc = g[C.G_INPUT_TC]
-    amax = g[C.G_ACCEL_MAX + k]
-    err = cmd - c[C.LOIT_PRED + k]
-    want = sqrt_ctrl(err, 1.0 / tc, amax, dt)
-    r = c[C.LOIT_PRED_RATE + k]
-    dv = amax * dt
-    if dv > 0.0:
-        want = min(max(want, r - dv), r + dv)
-    c[C.LOIT_PRED_RATE + k] = want
-    c[C.LOIT_PRED + k] += want * dt
+    axis' ATC_ACCEL_*_MAX; :func:`tlm_sim.control.attitude.shape_angle`)."""
+    shape_angle(c, (C.LOIT_PRED + k, C.LOIT_PRED_RATE + k), cmd,
+                (g[C.G_INPUT_TC], g[C.G_ACCEL_MAX + k], dt), False)
 
 
 @inline_jit
@@ -482,9 +486,7 @@ def _loiter_xy(c, g, t_s, inputs, stick_in):
     c[C.PXY_POS_T] += vn * dt
     c[C.PXY_POS_T + 1] += ve * dt
     if c[C.MAYBE_LANDED] != 0.0:
-        k = dt / (dt + POSCONTROL_RELAX_TC)
-        for j in range(2):
-            c[C.PXY_POS_T + j] += (pos[j] - c[C.PXY_POS_T + j]) * k
+        relax_xy_target(c, pos, dt)
     c[C.PXY_VEL_FF] = vn
     c[C.PXY_VEL_FF + 1] = ve
     c[C.PXY_ACC_FF] = an

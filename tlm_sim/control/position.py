@@ -22,6 +22,8 @@ LEAN_LIMIT_MIN = math.radians(10.0)
 #: throttle fraction (of the maximum thrust) above which the lean is limited
 #: (AC_ATTITUDE_CONTROL_ANGLE_LIMIT_THROTTLE_MAX)
 LEAN_LIMIT_THROTTLE = 0.8
+#: AC_PosControl's POSCONTROL_RELAX_TC [s]: the time constant of soften_for_landing's decay
+POSCONTROL_RELAX_TC = 0.16
 VIBE_COMP_P_GAIN = 0.25  # throttle per (hover throttle per cm/s^2) of acceleration target
 VIBE_COMP_I_GAIN = 0.125  # integrator gain on the velocity error, x PSC_VELZ_P
 
@@ -76,6 +78,15 @@ def xy_init_stopping_point(c, g, pos, vel):
     c[C.PXY_POS_T] = sn
     c[C.PXY_POS_T + 1] = se
     return sn, se
+
+
+@tick_jit
+def relax_xy_target(c, pos, dt):
+    """AC_PosControl::soften_for_landing_NE's position part: the horizontal position target
+    decays to the estimate pos (NED) [m] with POSCONTROL_RELAX_TC, dt [s]."""
+    k = dt / (dt + POSCONTROL_RELAX_TC)
+    for j in range(2):
+        c[C.PXY_POS_T + j] += (pos[j] - c[C.PXY_POS_T + j]) * k
 
 
 @tick_jit

@@ -180,6 +180,16 @@ class FaultSchedule:
                     index=i, fault_type=f.type)
         self._check_order()
 
+    def require_times(self) -> None:
+        """Raise :class:`FaultScheduleError` naming the first waypoint trigger: a flight
+        without waypoints (flown from sticks) takes its faults by time only."""
+        for i, f in enumerate(self.faults):
+            for edge, trig in (("start", f.start), ("end", f.end)):
+                if trig is not None and trig.kind == "wp":
+                    raise FaultScheduleError(
+                        f"{edge} {trig}: a pilot-flown flight has no waypoints; give the "
+                        "fault's start and end as times", index=i, fault_type=f.type)
+
     def _boundaries(self) -> list[_Boundary]:
         out = []
         for i, f in enumerate(self.faults):

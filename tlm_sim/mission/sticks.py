@@ -148,22 +148,8 @@ class StickScript:
         """Each axis's position at time ``t_s`` [s]: a row moves a stick linearly from where
         it is at the row's time (mid-ramp, if an earlier move has not ended) to the new
         position over the row's ramp."""
-        return {axis: self._axis(axis, t_s) for axis in AXES}
-
-    def _axis(self, axis: str, t_s: float) -> float:
-        move = (0.0, 0.0, 0.0, 0.0)  # (start time, from, to, ramp): centred / throttle 0
-
-        def at(m: tuple[float, float, float, float], x: float) -> float:
-            t0, v0, v1, ramp = m
-            frac = 1.0 if ramp <= MIN_RAMP_S else min(max((x - t0) / ramp, 0.0), 1.0)
-            return v0 + (v1 - v0) * frac
-
-        for r in self.rows:
-            if r["t"] > t_s:
-                break
-            if axis in r:
-                move = (r["t"], at(move, r["t"]), r[axis], r.get("ramp", DEFAULT_RAMP_S))
-        return at(move, t_s)
+        t = np.array([float(t_s)])
+        return {axis: float(self._axis_at(axis, t)[0]) for axis in AXES}
 
     def mode(self, t_s: float) -> str | None:
         """The flight mode the switch is set to at ``t_s`` [s] (None before any row sets one)."""
@@ -218,9 +204,10 @@ class StickScript:
         return out
 
     def _axis_at(self, axis: str, t: np.ndarray) -> np.ndarray:
-        """:meth:`_axis` at every time of ``t`` (sorted) at once: the moves' starts and ends
-        worked out row by row, then each time's move evaluated by the same formula."""
-        moves = []  # (start, from, to, ramp), as _axis builds them
+        """Stick ``axis`` at every time of ``t`` (sorted) [s] (see :meth:`sticks`): the moves
+        (start, from, to, ramp) worked out row by row, each from where the stick is at its
+        start, then each time's latest move evaluated."""
+        moves = []
         move = (0.0, 0.0, 0.0, 0.0)
         for r in self.rows:
             if axis in r:
