@@ -55,6 +55,7 @@ __all__ = [
     "motor_columns",
     "motor_idle_pwm",
     "pwm_range",
+    "rates_in_centidegrees",
     "ARMING_DELAY_US",
     "read_log_tables",
     "warn_damage",
@@ -297,7 +298,7 @@ def _normalise(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
         if len(t) > 1 and (np.diff(t) < 0).any():
             df = df.iloc[np.argsort(t, kind="stable")]
         out[name] = df.reset_index(drop=True)
-    _units(out, notes)
+    _as_4x(out, notes)
     return out
 
 
@@ -306,13 +307,19 @@ def _normalise(raw: dict[str, pd.DataFrame], order: dict[str, np.ndarray],
 COPTER3_OUTPUT = 4500.0
 COPTER3_THROTTLE = 1000.0
 #: RATE-per-gyro regression slope above which RATE's rates are in centidegrees per second
+#: (between the slopes of 1 and 100 the two units give, on a log scale)
 CENTI_SLOPE = 10.0
 
 
-def _units(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
-    """Copter 3.x's RATE and CTUN in 4.x units: rate outputs from +-4500 to +-1 and the
-    throttle from 0..1000 to 0..1 (an AOut above 1.5 tells), the rates from centidegrees to
-    degrees per second (RATE's roll rate 100 times IMU 0's gyro), CTUN's ThrOut as ThO."""
+def _as_4x(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
+    """Copter 3.x's RATE, CTUN and MODE as 4.x logs them: rate outputs from +-4500 to +-1 and
+    the throttle from 0..1000 to 0..1 (an AOut above 1.5 tells), the rates from centidegrees
+    to degrees per second (RATE's roll rate 100 times IMU 0's gyro), CTUN's ThrOut as ThO,
+    MODE's mode number as ModeNum where only Mode has it."""
+    mode = tables.get("MODE")
+    if mode is not None and "ModeNum" not in mode and "Mode" in mode:
+        tables["MODE"] = mode.assign(ModeNum=pd.to_numeric(mode["Mode"], errors="coerce"))
+        notes.append("MODE ModeNum = Mode (an old firmware's mode number)")
     rate = tables.get("RATE")
     if rate is not None and "AOut" in rate and np.nanmax(
             pd.to_numeric(rate["AOut"], errors="coerce").to_numpy(float), initial=0.0) > 1.5:
@@ -323,7 +330,7 @@ def _units(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
         rate["AOut"] = pd.to_numeric(rate["AOut"], errors="coerce") / COPTER3_THROTTLE
         tables["RATE"] = rate
         notes.append("RATE ROut/POut/YOut / 4500 and AOut / 1000 (Copter 3.x output units)")
-    if rate is not None and _centidegrees(rate, tables.get("IMU")):
+    if rate is not None and rates_in_centidegrees(rate, tables.get("IMU")):
         rate = tables["RATE"].copy()
         cols = [c for c in ("RDes", "R", "PDes", "P", "YDes", "Y") if c in rate]
         for col in cols:
@@ -338,9 +345,10 @@ def _units(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
         notes.append("CTUN ThO = ThrOut / 1000 (Copter 3.x)")
 
 
-def _centidegrees(rate: pd.DataFrame, imu: pd.DataFrame | None) -> bool:
-    """Whether RATE's rates are in centidegrees per second: its roll rate R against IMU 0's
-    roll gyro (a regression over the whole log; False when either is missing)."""
+def rates_in_centidegrees(rate: pd.DataFrame, imu: pd.DataFrame | None) -> bool:
+    """Whether RATE's rates are in centidegrees per second (Copter 3.x): its roll rate R
+    against IMU 0's roll gyro, a regression over the whole log, steeper than
+    :data:`CENTI_SLOPE`; False when either is missing."""
     if imu is None or len(rate) < 10 or len(imu) < 10 or "R" not in rate or "GyrX" not in imu:
         return False
     if "I" in imu:

@@ -26,6 +26,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from tlm_process.logread import motor_columns, rates_in_centidegrees
 from tlm_process.reference import time_window
 
 __all__ = ["ASYM_NAMES", "STAT_NAMES", "StatsError", "motor_asymmetry", "rate_unit",
@@ -41,11 +42,6 @@ STAT_NAMES = ("hover_thr", "roll_std_deg", "pitch_std_deg",
 
 #: the motor outputs' static asymmetry (:func:`motor_asymmetry`) [us]
 ASYM_NAMES = ("mot_roll_us", "mot_pitch_us")
-
-
-#: RATE-per-gyro regression slope above which RATE is in centidegrees per second (between the
-#: slopes of 1 and 100 the two units give, on a log scale)
-CENTI_SLOPE = 10.0
 
 
 class StatsError(ValueError):
@@ -67,18 +63,11 @@ def _std(s: pd.Series) -> float:
 def rate_unit(tables: Mapping[str, pd.DataFrame]) -> float:
     """Degrees per second per unit of the log's RATE ``R``/``P`` columns: 1 (Copter 4.x, deg/s)
     or 0.01 (Copter 3.x, centidegrees/s), whichever makes RATE's roll rate agree in size with
-    IMU 0's gyro (a regression over the whole log); 1 when either is missing."""
-    rate, imu = tables.get("RATE"), _imu0(tables)
-    if rate is None or imu is None or len(rate) < 10 or len(imu) < 10 or "R" not in rate:
-        return 1.0
-    g = np.degrees(np.interp(rate.TimeUS.to_numpy(float), imu.TimeUS.to_numpy(float),
-                             imu.GyrX.to_numpy(float)))
-    r = rate.R.to_numpy(float)
-    ok = np.isfinite(g) & np.isfinite(r)
-    if ok.sum() < 10 or not np.any(g[ok]):
-        return 1.0
-    slope = float(np.dot(r[ok], g[ok]) / max(np.dot(g[ok], g[ok]), 1e-12))
-    return 0.01 if abs(slope) > CENTI_SLOPE else 1.0
+    IMU 0's gyro (:func:`tlm_process.logread.rates_in_centidegrees`; tables read by
+    :func:`~tlm_process.logread.read_log_tables` are in degrees per second already); 1 when
+    either is missing."""
+    rate = tables.get("RATE")
+    return 0.01 if rate is not None and rates_in_centidegrees(rate, tables.get("IMU")) else 1.0
 
 
 def throttle_out(ctun: pd.DataFrame) -> pd.Series:
@@ -138,9 +127,8 @@ def motor_asymmetry(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: flo
     except FrameError:
         return nan
     rcou = time_window(tables.get("RCOU"), t0_us, t1_us)
-    prefix = "C" if "C1" in rcou else "Ch"
-    cols = [f"{prefix}{k + 1}" for k in range(layout.n_motors)]
-    if len(rcou) < 3 or not all(c in rcou for c in cols):
+    cols = motor_columns(rcou, dict(params)) if len(rcou) >= 3 else []
+    if len(cols) != layout.n_motors:
         return nan
     mean = rcou[cols].apply(pd.to_numeric, errors="coerce").mean().to_numpy(float)
     dev = mean - mean.mean()

@@ -22,7 +22,6 @@ the others within 15 % (floor 5 us); the flight time within 5 %.
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from collections.abc import Mapping, Sequence
@@ -66,8 +65,9 @@ def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
     if rcin is None or not len(rcin) or not {"C1", "C2", "C3", "C4"} <= set(rcin.columns):
         return False
     if mode is not None and len(mode):
-        col = "ModeNum" if "ModeNum" in mode else "Mode"
-        if (pd.to_numeric(mode[col], errors="coerce") == 3).any():
+        from tlm_sim.ardupilot import MODE_AUTO
+
+        if (pd.to_numeric(mode["ModeNum"], errors="coerce") == MODE_AUTO).any():
             return False
     return bool((rcin[["C1", "C2", "C3", "C4"]].to_numpy(float) > 0).any())
 
@@ -177,7 +177,9 @@ def _sidecar(path: Path, sidecar: str | Path | None) -> dict[str, Any] | None:
         if sidecar is not None:
             raise FileNotFoundError(2, "no such sidecar", str(p))
         return None
-    doc = json.loads(p.read_text())
+    from tlm_sim.flightlog.sidecar import load_sidecar_json
+
+    doc = load_sidecar_json(p)
     return doc if isinstance(doc, dict) else None
 
 
@@ -231,9 +233,8 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
         segments_from_rcin(tables, values))
     mode = tables.get("MODE")
     if mode is not None and len(mode):
-        col = "ModeNum" if "ModeNum" in mode else "Mode"
-        after = mode[mode["TimeUS"] >= arm_us - 1e6] if arm_us is not None else mode
-        flown = pd.to_numeric(after[col], errors="coerce").dropna()
+        after = mode[mode["TimeUS"] >= arm_us - 1e6]
+        flown = pd.to_numeric(after["ModeNum"], errors="coerce").dropna()
         unflown = sorted({int(m) for m in flown} - {0, 2, 5, 6, 9, 16})
         if unflown:
             from tlm_sim.ardupilot import MODE_NAMES
@@ -253,9 +254,9 @@ def gcs_requests(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, int]]:
     mode = tables.get("MODE")
     if mode is None or not len(mode) or "Rsn" not in mode:
         return []
-    col = "ModeNum" if "ModeNum" in mode else "Mode"
     gcs = mode[pd.to_numeric(mode["Rsn"], errors="coerce") == RSN_GCS]
-    return [(float(t) * 1e-6, int(m)) for t, m in zip(gcs["TimeUS"], gcs[col], strict=True)]
+    return [(float(t) * 1e-6, int(m)) for t, m in zip(gcs["TimeUS"], gcs["ModeNum"],
+                                                       strict=True)]
 
 
 def _rc_defaults() -> dict[str, float]:
@@ -269,9 +270,8 @@ def _mode_at(tables: Mapping[str, pd.DataFrame], t_us: float) -> int | None:
     mode = tables.get("MODE")
     if mode is None or not len(mode):
         return None
-    col = "ModeNum" if "ModeNum" in mode else "Mode"
     before = mode[mode["TimeUS"] <= t_us]
-    return int(before[col].iloc[-1]) if len(before) else None
+    return int(before["ModeNum"].iloc[-1]) if len(before) else None
 
 
 def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.DataFrame],
