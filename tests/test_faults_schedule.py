@@ -69,8 +69,8 @@ def one_line_error(fn, *args, match: str | None = None, **kw) -> FaultScheduleEr
 def test_fault_types_and_their_stable_labels():
     assert list(FAULT_TYPES) == ["gps", "accel", "engine", "rc", "gyro", "baro", "compass",
                                  "gps_glitch", "motor_partial", "vibration", "battery",
-                                 "gps_jam", "accel_samples"]
-    assert [t.label for t in FAULT_TYPES.values()] == list(range(1, 14))
+                                 "gps_jam", "accel_samples", "prop_damage"]
+    assert [t.label for t in FAULT_TYPES.values()] == list(range(1, 15))
     assert dict(FAULT_TYPES["gps"].params_start) == {"SIM_GPS1_ENABLE": 0}
     assert dict(FAULT_TYPES["gps"].params_end) == {"SIM_GPS1_ENABLE": 1}
     assert dict(FAULT_TYPES["accel"].params_start) == {"SIM_ACCEL1_FAIL": 1, "SIM_ACCEL2_FAIL": 1}
@@ -180,7 +180,7 @@ def test_fault_defaults_and_coercion():
     assert f == same and hash(f) == hash(same)
     assert len({f, same}) == 1
     assert Fault("rc", "wp5").end is None
-    assert [Fault(n, 1, 2).label for n in FAULT_TYPES] == list(range(1, 14))
+    assert [Fault(n, 1, 2).label for n in FAULT_TYPES] == list(range(1, 15))
     with pytest.raises(TypeError):
         f.params_start["SIM_GPS1_ENABLE"] = 1  # type: ignore[index]
     with pytest.raises(AttributeError):

@@ -529,14 +529,17 @@ def build_schedule(
     rows: list[tuple[float, int, int, int, float, int]] = []
     current = params
     before = base if base is not None else _configs(current, pilot)
-    for i in order:
+    for pos, i in enumerate(order):
         kind, at, name, value = items[i]
         if not math.isfinite(at) or at < 0:
             raise ValueError(f"parameter change time must be a finite time >= 0 s, got {at}")
         if name in BOOT_ONLY_PARAMS and value != current[name]:
             raise ValueError(f"{name} cannot change in flight: ArduPilot reads it at boot "
                              f"(the frame is built once); set it in the flight's parameters")
-        current = current.updated({name: value})
+        # changes at one trigger are one step: the set must agree with itself after the last
+        in_step = pos + 1 < len(order) and items[order[pos + 1]][:2] == (kind, at)
+        current = (current.updated_in_step({name: value}) if in_step
+                   else current.updated({name: value}))
         after = _configs(current, pilot)
         trigger = round(at * 1e6) if kind == TRIG_TIME else at
         n_before = len(rows)

@@ -192,6 +192,23 @@ _TLM_TABLE: tuple[tuple[str, float, ParamInfo], ...] = (
         f"centre of gravity {a} (body {'forward' if a == 'X' else 'right'}) from the motors' "
         "centre: the thrust's moment about it, which the motors balance unequally as a real "
         "airframe's do (tlm fit fits it to a log's motor outputs)")) for a in "XY"),
+    ("TLM_YAW_ASYM", 0.0, ParamInfo(
+        "", -0.5, 0.5,
+        "the rotors' unequal reaction torque: counter-clockwise rotors' yaw torque 1 + this, "
+        "clockwise ones' 1 - this (motors or propellers not quite alike, a motor leaning on a "
+        "twisted arm); the yaw controller trims it, as a real airframe's steady yaw output in "
+        "hover shows (tlm fit fits it to a log's motor outputs)")),
+    ("TLM_ROTOR_RND", 0.0, ParamInfo(
+        "", 0.0, 0.5,
+        "each rotor's thrust fluctuates by this fraction (standard deviation; a first-order "
+        "Gauss-Markov process per rotor of correlation time TLM_ROTOR_RND_TC): a real rotor "
+        "turns in disturbed air (its own recirculating wake, its neighbours', eddies smaller "
+        "than the airframe), so the rotors' thrusts are never equal and the attitude "
+        "controller always lags a slowly wandering torque; 0 = SITL's steady rotors")),
+    ("TLM_ROTOR_RND_TC", 1.0, ParamInfo(
+        "s", 0.001, 10.0,
+        "correlation time of TLM_ROTOR_RND's fluctuation (log171's hover: 85-94 % of its "
+        "attitude and rate tracking errors' variance below 1 Hz)")),
     ("TLM_VIB_IMB_MOT", 0.0, ParamInfo(
         "", 0.0, 8.0,
         "motor (output 1..8) whose propeller is out of balance, 0 = none; its rotor runs at "
@@ -1024,8 +1041,9 @@ class Params(Mapping[str, float]):
         self._init(_defaults(), overrides, explicit=True)
 
     def _init(self, base: Mapping[str, float], overrides: Mapping[str, Any] | None,
-              explicit: bool) -> None:
-        """Set the values: ``base`` with ``overrides`` validated and applied."""
+              explicit: bool, consistent: bool = True) -> None:
+        """Set the values: ``base`` with ``overrides`` validated and applied (``consistent``:
+        the parameters' agreement with each other checked too)."""
         defaults = _defaults()
         if isinstance(overrides, Params):  # already validated: a copy of it
             values: Mapping[str, float] = overrides._values
@@ -1039,16 +1057,17 @@ class Params(Mapping[str, float]):
             for name, value in overrides.items():
                 key, x = _check(name, value, defaults, explicit)
                 merged[key] = x
-            _check_consistency(merged)
+            if consistent:
+                _check_consistency(merged)
             values = MappingProxyType(merged)
         object.__setattr__(self, "_values", values)
         object.__setattr__(self, "_hash", None)
 
     @classmethod
     def _derived(cls, base: Mapping[str, float], overrides: Mapping[str, Any] | None,
-                 explicit: bool) -> Params:
+                 explicit: bool, consistent: bool = True) -> Params:
         new = cls.__new__(cls)
-        new._init(base, overrides, explicit)
+        new._init(base, overrides, explicit, consistent)
         return new
 
     # -- immutability ---------------------------------------------------------------------
@@ -1104,6 +1123,14 @@ class Params(Mapping[str, float]):
             raise ParamError(
                 f"overrides must be a mapping name -> value, got {type(overrides).__name__}")
         return Params._derived(self._values, {**(overrides or {}), **kw}, explicit=True)
+
+    def updated_in_step(self, overrides: Mapping[str, Any]) -> Params:
+        """:meth:`updated` for one change of several made together (a fault's parameters at
+        its start): each value is checked, their agreement with the others is not, since
+        the set may pass through a state that the next change of the step completes (an
+        imbalance set before its motor). The step's last change is made with
+        :meth:`updated`, which checks the whole set."""
+        return Params._derived(self._values, overrides, explicit=True, consistent=False)
 
     def changed(self) -> dict[str, float]:
         """``{name: value}`` of the values that differ from the defaults (sorted by name)."""

@@ -40,6 +40,8 @@ from tlm_sim.dynamics.frame import (
     F_MASS,
     F_N_MOTORS,
     F_ROT_DAMP,
+    F_ROTOR_RND_A,
+    F_ROTOR_RND_B,
     F_SHOVE,
     F_SHOVE_TIME,
     F_TWIST,
@@ -49,6 +51,7 @@ from tlm_sim.dynamics.kinematics import step_translation
 from tlm_sim.dynamics.motors import motor_forces
 from tlm_sim.dynamics.smoothing import smooth_sensors, smoothing_reset
 from tlm_sim.dynamics.wind import init_wind, update_wind
+from tlm_sim.rng import normal_pair
 from tlm_sim.rotation import quat_mul_normalised, quat_to_dcm, rotation_half_angle
 
 #: body-rate limit per axis [rad/s] (2000 deg/s)
@@ -183,6 +186,22 @@ def _disturbances(x: np.ndarray, frame: np.ndarray, dt: float
 
 
 @inline_jit
+def _rotor_noise(x: np.ndarray, frame: np.ndarray, rng: np.ndarray) -> None:
+    """One physics step of the rotors' thrust fluctuation (TLM_ROTOR_RND > 0): per rotor a
+    first-order Gauss-Markov fraction n <- a n + b N(0, 1) (a = exp(-dt / TLM_ROTOR_RND_TC),
+    b = sqrt(1 - a^2) TLM_ROTOR_RND), so each rotor's thrust is (1 + n) times its steady one
+    (motors.motor_forces). Drawn from the airframe's generator (the wind's)."""
+    a = frame[F_ROTOR_RND_A]
+    b = frame[F_ROTOR_RND_B]
+    n = int(frame[F_N_MOTORS])
+    for i in range(0, n, 2):
+        n0, n1 = normal_pair(rng)
+        x[X.ROTOR_RND + i] = a * x[X.ROTOR_RND + i] + b * n0
+        if i + 1 < n:
+            x[X.ROTOR_RND + i + 1] = a * x[X.ROTOR_RND + i + 1] + b * n1
+
+
+@inline_jit
 def _ground_contact(x: np.ndarray, fh: float, was_on_ground: bool, vd: float,
                     t_s: float) -> None:
     """Ground contact (SITL's NO_MOVEMENT behaviour) after a step: on the ground (frame height
@@ -215,8 +234,8 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
 
     ``pwm[0..3]``: motor 1..4 PWM [us] as the motors see it (after any SIM_ENGINE_* fault
     transform). ``t_s``: simulated time since boot at the start of the tick [s] (wind start
-    delay and slew-filter cadence, ground impact hold-off). ``rng``: the wind turbulence's
-    generator state (:mod:`tlm_sim.rng`).
+    delay and slew-filter cadence, ground impact hold-off). ``rng``: the airframe's
+    generator state (:mod:`tlm_sim.rng`): the wind's turbulence and the rotors' fluctuation.
     Allocation-free.
     """
     g = GRAVITY_MSS
@@ -235,6 +254,8 @@ def physics_step(x: np.ndarray, pwm: np.ndarray, frame: np.ndarray, dt: float, t
     x[X.VAIR_Z] = r02 * an + r12 * ae + r22 * ad
 
     # --- forces and torques --------------------------------------------------------------
+    if frame[F_ROTOR_RND_B] > 0.0:
+        _rotor_noise(x, frame, rng)
     fx, fy, fz, tx, ty, tz, current = motor_forces(x, pwm, frame, dt)
     ixx, iyy, izz = frame[F_IXX], frame[F_IYY], frame[F_IZZ]
     rxx, ryy, rzz = 1.0 / ixx, 1.0 / iyy, 1.0 / izz  # three divisions instead of six

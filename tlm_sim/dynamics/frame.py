@@ -100,6 +100,11 @@ F_WIND_TC = _f.add("F_WIND_TC", 1, "s", "SIM_WIND_TC (live)")
 F_GUST_A = _f.add("F_GUST_A", 1, "",
                   "per-physics-step decay exp(-dt / TLM_TURB_TC) of the correlated gusts, 0 = "
                   "SITL's gusts (live)")
+F_ROTOR_RND_A = _f.add("F_ROTOR_RND_A", 1, "",
+                       "per-physics-step decay exp(-dt / TLM_ROTOR_RND_TC) of the rotors' thrust "
+                       "fluctuation (live)")
+F_ROTOR_RND_B = _f.add("F_ROTOR_RND_B", 1, "",
+                       "its innovation sqrt(1 - a^2) TLM_ROTOR_RND, 0 = steady rotors (live)")
 F_WIND_DIR_Z = _f.add("F_WIND_DIR_Z", 1, "deg",
                       "SIM_WIND_DIR_Z, vertical wind angle, 90 = updraft (live)")
 F_WIND_T = _f.add("F_WIND_T", 1, "", "SIM_WIND_T: 0 square-root law, 1 none, 2 linear (live)")
@@ -125,7 +130,8 @@ F_MOT_X = _f.add("F_MOT_X", MAX_MOTORS, "m",
                  "beyond n)")
 F_MOT_Y = _f.add("F_MOT_Y", MAX_MOTORS, "m",
                  "per output: motor y from the centre of gravity (the arm less TLM_CG_Y)")
-F_MOT_YAW = _f.add("F_MOT_YAW", MAX_MOTORS, "", "per output: yaw factor (+1 CCW, -1 CW)")
+F_MOT_YAW = _f.add("F_MOT_YAW", MAX_MOTORS, "",
+                   "per output: reaction-torque factor (+1 CCW, -1 CW; plus TLM_YAW_ASYM)")
 
 N_FRAME = FRAME.close()
 
@@ -223,7 +229,7 @@ def build_frame(p: Params) -> np.ndarray:
     f[F_PWM_HI] = f[F_PWM_MIN] + f[F_SPIN_MAX] * span
     f[F_HOVER_CMD] = _hover_command(hover_thr, expo)
 
-    _motor_table(f, layout, diag, (get("TLM_CG_X"), get("TLM_CG_Y")))
+    _motor_table(f, layout, diag, (get("TLM_CG_X"), get("TLM_CG_Y")), get("TLM_YAW_ASYM"))
     _environment(f, p)
     _engine_fault(f, p)
     return f
@@ -241,15 +247,17 @@ def _engine_fault(f: np.ndarray, p: Params) -> None:
 
 
 def _motor_table(f: np.ndarray, layout: FrameLayout, diag: float,
-                 cg: tuple[float, float] = (0.0, 0.0)) -> None:
+                 cg: tuple[float, float] = (0.0, 0.0), yaw_asym: float = 0.0) -> None:
     """The motor slots of frame array ``f``: count, positions [m, body FRD] from the centre of
     gravity ``cg`` (TLM_CG_X / _Y from the motors' centre: the thrust, the air at the rotors
-    and the momentum drag act about it), yaw factors."""
+    and the momentum drag act about it), reaction-torque factors: the yaw factor (+1
+    counter-clockwise, -1 clockwise) plus ``yaw_asym`` (TLM_YAW_ASYM: counter-clockwise
+    rotors' torque 1 + it, clockwise ones' 1 - it)."""
     f[F_N_MOTORS] = layout.n_motors
     for i, ((ux, uy), m) in enumerate(zip(layout.arm_unit(), layout.motors, strict=True)):
         f[F_MOT_X + i] = diag * ux - cg[0]
         f[F_MOT_Y + i] = diag * uy - cg[1]
-        f[F_MOT_YAW + i] = m.yaw_factor
+        f[F_MOT_YAW + i] = m.yaw_factor + yaw_asym
 
 
 def _environment(f: np.ndarray, p: Params) -> None:
@@ -267,6 +275,10 @@ def _environment(f: np.ndarray, p: Params) -> None:
         f[slot] = float(p[name])
     tc = float(p["TLM_TURB_TC"])
     f[F_GUST_A] = math.exp(-PHYSICS_DT_S / tc) if tc > 0.0 else 0.0
+    rnd, rnd_tc = float(p["TLM_ROTOR_RND"]), float(p["TLM_ROTOR_RND_TC"])
+    a = math.exp(-PHYSICS_DT_S / rnd_tc)
+    f[F_ROTOR_RND_A] = a
+    f[F_ROTOR_RND_B] = math.sqrt(1.0 - a * a) * rnd
     for k, axis in enumerate("XYZ"):
         f[F_SHOVE + k] = float(p[f"SIM_SHOVE_{axis}"])
         f[F_TWIST + k] = float(p[f"SIM_TWIST_{axis}"])

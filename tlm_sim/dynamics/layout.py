@@ -95,6 +95,8 @@ WIND_STILL_KEY = _x.add("WIND_STILL_KEY", 7, "",
 GUST_E = _x.add("GUST_E", 1, "m/s",
                 "wind model: east gust speed of the correlated gusts (TLM_TURB_TC > 0; GUST_H "
                 "is then the north one)")
+ROTOR_RND = _x.add("ROTOR_RND", MAX_MOTORS, "",
+                   "each rotor's thrust fluctuation, a fraction of its thrust (TLM_ROTOR_RND > 0)")
 
 N_STATE = STATE.close()
 

@@ -32,6 +32,7 @@ from tlm_sim.dynamics.frame import (
     F_PWM_HI,
     F_PWM_LO,
     F_ROTOR_ALPHA,
+    F_ROTOR_RND_B,
     F_SLEW_MAX,
     F_VEL_MAX,
 )
@@ -95,6 +96,7 @@ def motor_forces(
     per_us = 1.0 / (frame[F_PWM_HI] - pwm_lo)
     step = frame[F_SLEW_MAX] * dt
     lag = frame[F_ROTOR_ALPHA]
+    unsteady = frame[F_ROTOR_RND_B] > 0.0
     for i in range(int(frame[F_N_MOTORS])):
         a = slew_command(pwm[i], x[X.M1 + i], pwm_lo, per_us, step, lag)
         x[X.M1 + i] = a
@@ -109,6 +111,8 @@ def motor_forces(
         vmz = vaz + wx * ry - wy * rx
         v_in = -vmz if vmz < 0.0 else 0.0
         thrust = k_thr * (vout2_full * ((1.0 - expo) * a + expo * a * a) - v_in * v_in)
+        if unsteady:
+            thrust *= 1.0 + x[X.ROTOR_RND + i]  # TLM_ROTOR_RND: the rotor in disturbed air
         x[X.T1 + i] = thrust
         thrust_sum += thrust
         # r x (0, 0, -T) = (-r_y T, r_x T, 0)

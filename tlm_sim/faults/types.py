@@ -13,7 +13,9 @@ Labels 1-4 are the TLM paper's Table 6 class labels (0 is normal flight); labels
 rest of SITL's fault catalogue under the type names of the second reference set (``gyro`` 5,
 ``baro`` 6, ``compass`` 7, ``gps_glitch`` 8, ``motor_partial`` 9, ``vibration`` 10,
 ``battery`` 11, ``gps_jam`` 12); 13 is the accelerometer-sample loss (``SIM_ACC_FAIL_MSK``,
-"5b" of issue 19: its own label so that detectors can tell it from the gyro loss). Labels are
+"5b" of issue 19: its own label so that detectors can tell it from the gyro loss); 14 is a
+damaged propeller (``prop_damage``, issue 40), tlm's own: SITL has no such fault, so it is made
+of tlm's imbalance parameters (``TLM_VIB_IMB``) and SITL's motor multiplier. Labels are
 stable: a new type gets the next free number.
 
 The parameter values are exactly those the reference SITL flights set
@@ -255,8 +257,18 @@ _BUILTIN = (
     FaultType("accel_samples", 13, {"SIM_ACC_FAIL_MSK": 1.0}, {"SIM_ACC_FAIL_MSK": 0.0},
               "IMU 1's accelerometer stops producing samples (IMU.AH 0, its logged accel "
               "frozen)", "Accelerometer samples", "teal"),
+    FaultType("prop_damage", 14,
+              {"SIM_VIB_MOT_MAX": 150.0, "TLM_VIB_IMB_MOT": 1.0, "TLM_VIB_IMB": 20.0,
+               "SIM_ENGINE_MUL": 0.9},
+              {"TLM_VIB_IMB": 0.0, "TLM_VIB_IMB_MOT": 0.0, "SIM_VIB_MOT_MAX": 0.0,
+               "SIM_ENGINE_MUL": 1.0},
+              "motor 1's propeller damaged (tlm's, SITL has none): its rotor out of balance, a "
+              "force turning once per revolution (20 m/s/s at full command, with rpm squared), "
+              "and 10 % of its PWM above 1000 us lost", "Damaged propeller", "crimson",
+              relative={"TLM_VIB_IMB": "add", "TLM_VIB_IMB_MOT": "own",
+                        "SIM_VIB_MOT_MAX": "own"}),
 )
-#: Names of the built-in catalogue (labels 1-13), which cannot be replaced or removed.
+#: Names of the built-in catalogue (labels 1-14), which cannot be replaced or removed.
 BUILTIN_TYPES: tuple[str, ...] = tuple(t.name for t in _BUILTIN)
 for _t in _BUILTIN:
     register_fault_type(_t)
