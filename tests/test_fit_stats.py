@@ -78,14 +78,14 @@ def test_stats_need_rows_and_segment_text_is_checked():
 # ---------------------------------------------------------------------------- the fit itself
 KNOWN = {"TLM_HOVER_THR": 0.45, "TLM_VIB_ACC_X": 1.2, "TLM_VIB_ACC_Y": 0.6,
          "TLM_VIB_ACC_Z": 0.8, "TLM_VIB_GYR_X": 3.0, "TLM_VIB_GYR_Y": 1.5, "TLM_VIB_GYR_Z": 1.0,
-         "SIM_WIND_TURB": 0.4}
+         "SIM_WIND_TURB": 0.4, "TLM_CG_X": -0.01, "TLM_YAW_ASYM": -0.12, "TLM_ROTOR_RND": 0.012}
 
 
 @pytest.mark.slow
 def test_fit_recovers_known_parameters_from_a_tlm_flight():
-    """Issue 40: a tlm flight of a vehicle with known hover thrust, per-axis vibration and gusts
-    (one 4-minute hover, another seed than the fit's), fitted: every parameter back within
-    10 %."""
+    """Issue 40: a tlm flight of a vehicle with known hover thrust, per-axis vibration, gusts
+    and balance (centre of gravity, rotor torque; one 4-minute hover, another seed than the
+    fit's), fitted: every parameter back within 10 %."""
     from tlm_process.fit.fit import (
         ACC_AMP,
         CMD_REF,
@@ -123,6 +123,7 @@ def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
                  str(tmp_path / "replay")]) == 0
     text, replayed = capsys.readouterr().out.split("the segment 197.5-216.5 s in the replay:")
     assert "segment            197.5-216.5 s" in text
+    assert "spectrum of IMU 0's rows (log at 50 Hz, tlm at 25 Hz)" in text
     rows = {ln.split()[0]: ln.split() for ln in text.splitlines()
             if ln.split() and ln.split()[0] in FIT_STATS}
     again = {ln.split()[0]: ln.split() for ln in replayed.splitlines()
@@ -136,7 +137,7 @@ def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
     # the airframe's balance: log171's rear motors run ~22 us above its front ones
     asym = {ln.split()[0]: ln.split() for ln in text.splitlines()
             if ln.split() and ln.split()[0].startswith("mot_")}
-    for name in ("mot_roll_us", "mot_pitch_us"):
+    for name in ("mot_roll_us", "mot_pitch_us", "mot_yaw_us"):
         assert float(asym[name][2]) == pytest.approx(float(asym[name][1]), abs=3.0), name
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -193,3 +194,30 @@ def test_the_logs_battery_is_flown():
     assert keep["BATT_LOW_VOLT"] == 14.0 and keep["BATT_FS_LOW_ACT"] == 2.0
     assert keep["MOT_BAT_VOLT_MAX"] == pytest.approx(16.8)
     assert log_battery({}, {}) == {}
+
+
+# ------------------------------------------------------------------------------ the spectrum
+def test_spectrum_of_imu_rows_finds_bands_and_peak():
+    """``tlm fit``'s spectrum: a 50 Hz IMU table whose roll gyro is a slow 0.3 Hz swing and a
+    7 Hz tone (variance 4 : 1): ~80 % below 1 Hz, ~20 % in 3-8 Hz, the peak at 7 Hz; IMU 1's
+    rows and rows outside the segment are not read; too few rows give nothing."""
+    import numpy as np
+    import pandas as pd
+
+    from tlm_process.fit.spectrum import band_shares, format_spectra, imu_spectra
+
+    t = np.arange(0.0, 120.0, 0.02)
+    gx = np.radians(2.0 * np.sin(2 * np.pi * 0.3 * t) + 1.0 * np.sin(2 * np.pi * 7.0 * t))
+    rows = pd.DataFrame({"TimeUS": t * 1e6, "I": 0, "GyrX": gx, "GyrY": 0.0 * t,
+                         "AccX": np.sin(2 * np.pi * 11.0 * t)})
+    other = rows.assign(I=1, GyrX=np.radians(50.0 * np.sin(2 * np.pi * 2.0 * t)))
+    tables = {"IMU": pd.concat([rows, other], ignore_index=True)}
+    spec = imu_spectra(tables, 10e6, 110e6)
+    assert set(spec) == {"gyr_x", "gyr_y", "acc_x"} and spec["gyr_x"].rate_hz == pytest.approx(50)
+    shares, peak = band_shares(spec["gyr_x"])
+    assert shares[0] == pytest.approx(0.8, abs=0.05) and shares[2] == pytest.approx(0.2, abs=0.05)
+    assert peak == pytest.approx(7.0, abs=0.3)
+    assert band_shares(spec["acc_x"])[1] == pytest.approx(11.0, abs=0.3)
+    assert imu_spectra(tables, 10e6, 10.1e6) == {}
+    text = format_spectra(spec, spec)
+    assert "log at 50 Hz" in text and "gyr_x" in text and "peak  7.0 Hz" in text

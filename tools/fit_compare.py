@@ -2,6 +2,7 @@
 segment, then tlm flying the fitted vehicle (new seeds) against the segment's second half.
 
     python tools/fit_compare.py LOG --segment START:END [--seeds 4] [--iterations 10]
+        [--fit-seed 1]
 
 Prints a markdown table (statistic, log first half, log second half, tlm, tlm vs second half,
 within 30 %) and writes the fitted parameters beside it with ``--out``. The steering's blind
@@ -36,6 +37,8 @@ def main() -> int:
     ap.add_argument("--segment", required=True, metavar="START:END")
     ap.add_argument("--seeds", type=int, default=4, help="tlm flights compared (default 4)")
     ap.add_argument("--iterations", type=int, default=10)
+    ap.add_argument("--fit-seed", type=int, default=1, help="first seed of the fit's hovers "
+                    "(default 1; the fit's flights scatter, so its result does too)")
     ap.add_argument("--out", metavar="vehicle.parm", help="write the fitted parameters")
     args = ap.parse_args()
     t0, t1 = parse_segment(args.segment)
@@ -45,7 +48,7 @@ def main() -> int:
         lt = read_log_tables(args.log)
         first = segment_stats(lt.tables, t0, mid)
         second = segment_stats(lt.tables, mid, t1)
-        fit = fit_vehicle(first, lt.params, args.iterations, seed=1,
+        fit = fit_vehicle(first, lt.params, args.iterations, seed=args.fit_seed,
                           battery=log_battery(lt.tables, lt.params))
         runs = [fly_hover_stats(fit.params, seed=101 + k) for k in range(args.seeds)]
     tlm = {k: float(np.mean([r[k] for r in runs])) for k in runs[0]}

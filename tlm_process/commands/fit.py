@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
 from tlm_process.cliutil import UsageError, check_writable_file
 
@@ -30,7 +31,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Measure a steady segment of an ArduCopter log (hover throttle, attitude "
                     "noise, IMU accel and gyro noise per axis, rate-tracking error) and fit "
                     "tlm's vehicle to it by flying hovers: the log's parameters tlm models, "
-                    "the hover thrust, and the vibration per axis. Writes a .parm file that "
+                    "the hover thrust, the vibration per axis, the gusts, the rotors' thrust "
+                    "fluctuation and the airframe's balance. Writes a .parm file that "
                     "tlm fly / tlm generate take with --params.")
     p.add_argument("log", help="the ArduCopter log (.bin or text .log; Copter 3.x to 4.x)")
     p.add_argument("--out", required=True, metavar="vehicle.parm", help="the fitted parameters")
@@ -56,8 +58,9 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from tlm_process.fit.fit import fit_vehicle, log_battery
+    from tlm_process.fit.fit import FIT_SEEDS, fit_steps, fit_vehicle, log_battery
     from tlm_process.fit.segment import parse_segment, steady_segments
+    from tlm_process.fit.spectrum import format_spectra
     from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
     from tlm_process.logread import LogReadError, read_log_tables, warn_damage
 
@@ -87,26 +90,41 @@ def run(args: argparse.Namespace) -> int:
     except StatsError as exc:
         raise UsageError(str(exc)) from None
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
-    with tqdm(total=2 * (args.iterations + 1), desc="fit", unit="hover") as bar, \
+    with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = fit_vehicle(target, lt.params, args.iterations, args.seed,
-                        progress=lambda k: bar.update(2 * k - bar.n),
+                        progress=lambda k: bar.update(FIT_SEEDS * k - bar.n),
                         battery=log_battery(lt.tables, lt.params))
     print(format_table(r.log, r.tlm))
+    spectra = _spectra(lt.tables, (t0, t1), r.params, args.seed)
+    print(format_spectra(*spectra))
     for name, why in r.dropped.items():
         print(f"note: the log's {name} is not flown: {why}")
     from tlm_sim.params import Params
 
     p = Params(r.params)
     header = (f"tlm fit {Path(args.log).name} segment {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s: "
-              "the log's parameters tlm models, the hover thrust and the vibration per axis")
+              "the log's parameters tlm models, the hover thrust, the vibration per axis, the "
+              "gusts, the rotors' fluctuation and the airframe's balance")
     Path(args.out).write_text(p.to_parm_text(only_changed=True, header=header))
-    plot_fit(r.log, r.tlm, plot, f"{Path(args.log).name} {t0 * 1e-6:.0f}-{t1 * 1e-6:.0f} s")
+    plot_fit(r.log, r.tlm, plot, f"{Path(args.log).name} {t0 * 1e-6:.0f}-{t1 * 1e-6:.0f} s",
+             spectra)
     print(f"written            {args.out} (+ {plot})")
     if args.replay:
         _replay(args, r.params, target, (t0, t1))
     return 0
+
+
+def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int
+             ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The spectra of the log's IMU rows over the segment and of a hover of the fitted
+    vehicle (one more flight, seed ``seed`` + 100)."""
+    from tlm_process.fit.fit import fly_hover
+    from tlm_process.fit.spectrum import imu_spectra
+
+    log, h0, h1 = fly_hover(fitted, seed + 100)
+    return imu_spectra(tables, *segment), imu_spectra(log.tables, h0, h1)
 
 
 def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str, float],
@@ -159,8 +177,11 @@ def _n(v: float) -> str:
     return "-" if not math.isfinite(v) else f"{v:.3g}"
 
 
-def plot_fit(log: dict[str, float], tlm: dict[str, float], path: Path, title: str) -> None:
-    """Bars per statistic: the log's and the fitted tlm flight's."""
+def plot_fit(log: dict[str, float], tlm: dict[str, float], path: Path, title: str,
+             spectra: tuple[dict[str, Any], dict[str, Any]] | None = None) -> None:
+    """Bars per statistic (magnitudes): the log's and the fitted tlm flight's; with
+    ``spectra`` (the log's and tlm's :func:`~tlm_process.fit.spectrum.imu_spectra`) below them
+    the gyro spectra."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -169,9 +190,28 @@ def plot_fit(log: dict[str, float], tlm: dict[str, float], path: Path, title: st
 
     keys = [k for k in log if math.isfinite(log[k]) or math.isfinite(tlm[k])]
     x = np.arange(len(keys))
-    fig, ax = plt.subplots(figsize=(10, 4))
-    ax.bar(x - 0.2, [log[k] for k in keys], 0.4, label="log")
-    ax.bar(x + 0.2, [tlm[k] for k in keys], 0.4, label="tlm, fitted")
+    gyros = [n for n in ("gyr_x", "gyr_y", "gyr_z") if spectra and n in spectra[0]]
+    if gyros:
+        fig = plt.figure(figsize=(10, 7))
+        ax = fig.add_subplot(2, 1, 1)
+        for i, n in enumerate(gyros):
+            sx = fig.add_subplot(2, len(gyros), len(gyros) + 1 + i)
+            for which, style in ((0, "-"), (1, "--")):
+                s = spectra[which].get(n)
+                if s is not None:
+                    sx.semilogy(s.freq_hz[1:], s.psd[1:], style,
+                                label=("log" if which == 0 else "tlm, fitted"))
+            sx.set_title(f"{n} spectrum", fontsize=9)
+            sx.set_xlabel("Hz (the rows' own rate)", fontsize=8)
+            if i == 0:
+                sx.set_ylabel("(deg/s)^2 / Hz", fontsize=8)
+                sx.legend(fontsize=7)
+    else:
+        fig, ax = plt.subplots(figsize=(10, 4))
+    # magnitudes on the log scale (the motor asymmetries may be negative)
+    ax.bar(x - 0.2, [abs(log[k]) for k in keys], 0.4, label="log")
+    ax.bar(x + 0.2, [abs(tlm[k]) for k in keys], 0.4, label="tlm, fitted")
+    ax.set_ylabel("|value|", fontsize=8)
     ax.set_xticks(x, keys, rotation=40, ha="right", fontsize=8)
     ax.set_yscale("log")
     ax.set_title(f"tlm fit: {title}")

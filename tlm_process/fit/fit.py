@@ -13,10 +13,11 @@ adjusts, a few flights in turn:
   standard deviation per axis;
 * the gusts (``SIM_WIND_TURB``, correlated over ``TLM_TURB_TC`` :data:`TURB_TC`) to the mean
   of the ATT roll and pitch standard deviations (:func:`attitude_std`);
-* the centre of gravity (``TLM_CG_X`` / ``_Y``) to how unequally the log's motors run: its
-  mean motor outputs projected on the frame's pitch and roll factors
-  (:func:`tlm_process.fit.stats.motor_asymmetry`; a real airframe is never balanced, and a
-  detector trained on a balanced one calls the log's unequal motors a fault).
+* the centre of gravity (``TLM_CG_X`` / ``_Y``) and the rotors' unequal reaction torque
+  (``TLM_YAW_ASYM``) to how unequally the log's motors run: its mean motor outputs projected
+  on the frame's pitch, roll and yaw factors (:func:`tlm_process.fit.stats.motor_asymmetry`;
+  a real airframe is never balanced, and a detector trained on a balanced one calls the log's
+  unequal motors a fault).
 
 A statistic is the flight's own motion and the sensor's noise together; the motion (the
 statistic of a first flight without vibration or gusts, the *floor*) is taken out in
@@ -42,9 +43,10 @@ import pandas as pd
 
 from tlm_process.fit.stats import ASYM_NAMES, STAT_NAMES, motor_asymmetry, segment_stats
 
-__all__ = ["ACC_AMP", "CMD_REF", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ", "ROTOR_TC",
-           "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_vehicle", "log_battery",
-           "fly_hover_stats", "hover_mission", "hover_window", "log_vehicle_params"]
+__all__ = ["ACC_AMP", "CMD_REF", "FIT_SEEDS", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ",
+           "ROTOR_TC", "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_steps",
+           "fit_vehicle", "fly_hover", "fly_hover_stats", "hover_mission", "hover_window",
+           "log_battery", "log_vehicle_params", "tracking_error_std"]
 
 #: accelerometer vibration amplitude per motor [m/s^2] the per-axis gains scale (SITL's
 #: autotest quad's SIM_ACCn_RND)
@@ -79,20 +81,37 @@ CMD_REF = 0.55
 TURB_TC = 1.0
 #: the gusts' standard deviation the fit starts from [m/s] (``SIM_WIND_TURB``)
 TURB_START = 0.5
+#: the rotors' thrust fluctuation of the fit's calibration flights (``TLM_ROTOR_RND``, a
+#: fraction of each rotor's thrust; correlation time TLM_ROTOR_RND_TC's default 1 s)
+ROTOR_RND_CAL = 0.02
+#: the roll / pitch statistics the gyro gains and the rotors' fluctuation share: (gyro std,
+#: rate tracking error std) per axis, with the gyro gain of that axis
+SHARED_STATS = (("TLM_VIB_GYR_X", "gyr_x_std_dps", "rate_roll_err_std_dps"),
+                ("TLM_VIB_GYR_Y", "gyr_y_std_dps", "rate_pitch_err_std_dps"))
+#: the attitude statistic of each axis (the gusts are fitted to their mean)
+AXIS_ATTITUDE = {"TLM_VIB_GYR_X": "roll_std_deg", "TLM_VIB_GYR_Y": "pitch_std_deg"}
 #: flights (seeds) each fitting step averages
 FIT_SEEDS = 2
+#: steps before the fitting ones (the floor and the two calibrations), counted for ``progress``
+#: whether or not the calibrations are flown
+SETUP_STEPS = 3
+#: fitting steps averaged for the result (the second half of them) when there are at least
+#: this many; fewer: the step with the smallest largest error
+TAIL_MIN = 3
 #: exponent of the excess ratio a gain follows per fitting flight (< 1: damped)
 DAMPING = 0.8
 #: statistics the fit drives to the log's (the others are compared, not fitted)
 FIT_STATS = ("hover_thr", "acc_x_std", "acc_y_std", "acc_z_std",
              "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps")
-#: the centre-of-gravity knobs, the motor asymmetry each is fitted to and the slope the fit
-#: starts from [us per m]: a 1 cm offset makes ~20-25 us of pitch or roll output on the
-#: default quad (roll's sign is opposite: ArduPilot's roll factor is negative on the right)
-CG_KNOBS: dict[str, tuple[str, float]] = {"TLM_CG_X": ("mot_pitch_us", 2000.0),
-                                          "TLM_CG_Y": ("mot_roll_us", -2000.0)}
-#: the largest centre-of-gravity offset the fit gives [m]
-CG_MAX_M = 0.05
+#: the balance knobs: the motor asymmetry each is fitted to, the slope the fit starts from
+#: [us per unit] and the largest value it gives. A 1 cm centre-of-gravity offset makes
+#: ~20-25 us of pitch or roll output on the default quad (roll's sign is opposite:
+#: ArduPilot's roll factor is negative on the right); TLM_YAW_ASYM 0.1 makes -35 us of yaw
+#: output (the clockwise rotors work harder)
+ASYM_KNOBS: dict[str, tuple[str, float, float]] = {
+    "TLM_CG_X": ("mot_pitch_us", 2000.0, 0.05),
+    "TLM_CG_Y": ("mot_roll_us", -2000.0, 0.05),
+    "TLM_YAW_ASYM": ("mot_yaw_us", -350.0, 0.5)}
 #: hover flown per fit flight [s], and what of it is measured (after settling)
 HOVER_S = 60
 SETTLE_S = 8.0
@@ -228,11 +247,11 @@ def log_vehicle_params(log_params: Mapping[str, float]) -> tuple[dict[str, float
     return keep, dropped
 
 
-def fly_hover_stats(params: Mapping[str, float], seed: int = 1,
-                    hold_s: int = HOVER_S) -> dict[str, float]:
-    """tlm's :data:`STAT_NAMES` over a hover flown with ``params`` (from :data:`SETTLE_S` after
-    it reaches the hold point to :data:`END_S` before the hold of ``hold_s`` ends;
-    :func:`hover_window`)."""
+def fly_hover(params: Mapping[str, float], seed: int = 1, hold_s: int = HOVER_S
+              ) -> tuple[Any, float, float]:
+    """A hover flown with ``params``: (the flight log, t0_us, t1_us), the window from
+    :data:`SETTLE_S` after it reaches the hold point to :data:`END_S` before the hold of
+    ``hold_s`` ends (:func:`hover_window`)."""
     from tlm_sim import fly
     from tlm_sim.params import Params
 
@@ -241,7 +260,14 @@ def fly_hover_stats(params: Mapping[str, float], seed: int = 1,
         log = fly(hover_mission(hold_s=hold_s), params=Params(dict(params)), seed=seed)
     t0, t1 = hover_window(log.tables)
     t1 = min(t1, t0 + hold_s * 1e6) - END_S * 1e6  # the hold ends hold_s after arriving
-    t0 += SETTLE_S * 1e6
+    return log, t0 + SETTLE_S * 1e6, t1
+
+
+def fly_hover_stats(params: Mapping[str, float], seed: int = 1,
+                    hold_s: int = HOVER_S) -> dict[str, float]:
+    """tlm's :data:`STAT_NAMES` and motor asymmetry over a hover flown with ``params``
+    (:func:`fly_hover`)."""
+    log, t0, t1 = fly_hover(params, seed, hold_s)
     return {**segment_stats(log.tables, t0, t1, unit=1.0),
             **motor_asymmetry(log.tables, t0, t1, log.params)}
 
@@ -287,10 +313,13 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
                 progress: Callable[[int], None] | None = None,
                 battery: Mapping[str, float] | None = None) -> FitResult:
     """Fit tlm's vehicle to ``log_stats`` (:func:`segment_stats` of the log's steady segment),
-    starting from the log's parameters; a floor flight (no vibration) then ``iterations``
-    fitting flights; the best flight's parameters are returned (the smallest largest relative
-    error over :data:`FIT_STATS`). ``progress`` is called with the number of flights flown;
-    ``battery``: the log's pack (:func:`log_battery`)."""
+    starting from the log's parameters; a floor flight (no vibration), two calibration
+    flights (gyro vibration alone, the rotors' fluctuation alone: :func:`_shared_start`), then
+    ``iterations`` fitting flights; the knobs averaged over the second half of them are
+    returned with a flight of them (fewer than :data:`TAIL_MIN` in that half: the flight with
+    the smallest largest relative error over :data:`FIT_STATS`). ``progress`` is called with
+    the number of fitting steps flown (:func:`fit_steps` in all); ``battery``: the log's pack
+    (:func:`log_battery`)."""
     from tlm_sim.params import Params
 
     base, dropped = log_vehicle_params(log_params or {})
@@ -299,24 +328,40 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     base["TLM_ROTOR_TC"] = ROTOR_TC
     base["TLM_VIB_SPREAD"] = MOT_SPREAD
     base["TLM_VIB_CMD_REF"] = CMD_REF
-    floor = _mean_stats([fly_hover_stats(base, seed + j) for j in range(FIT_SEEDS)])
+    fixed = {"SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
+             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_TURB_TC": TURB_TC}
+
+    def fly(params: Mapping[str, float]) -> dict[str, float]:
+        return _mean_stats([fly_hover_stats(params, seed + j) for j in range(FIT_SEEDS)])
+
+    floor = fly(base)
     if progress is not None:
         progress(1)
     knobs = {"TLM_HOVER_THR": Params(base)["TLM_HOVER_THR"],
              **{f"TLM_VIB_ACC_{a}": 1.0 for a in "XYZ"},
              **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"},
-             "SIM_WIND_TURB": TURB_START if math.isfinite(attitude_std(log_stats)) else 0.0}
-    cg = [k for k, (stat, _) in CG_KNOBS.items() if math.isfinite(log_stats.get(stat, math.nan))]
-    knobs.update(dict.fromkeys(cg, 0.0))
+             "SIM_WIND_TURB": TURB_START if math.isfinite(attitude_std(log_stats)) else 0.0,
+             "TLM_ROTOR_RND": 0.0}
+    shares: dict[str, dict[str, float]] = {}
+    if math.isfinite(tracking_error_std(log_stats)):
+        # calibration: the gyro vibration alone, then the rotors' fluctuation alone
+        gyros = {name: 0.0 for name, _, _ in SHARED_STATS}
+        vib = fly({**base, **fixed, **dict.fromkeys(gyros, 1.0)})
+        rot = fly({**base, **fixed, **gyros, "TLM_ROTOR_RND": ROTOR_RND_CAL})
+        shares = _shares(floor, vib, rot)
+        knobs.update(_shared_start(log_stats, floor, shares))
+    if progress is not None:
+        progress(SETUP_STEPS)
+    balance = [k for k, (stat, _, _) in ASYM_KNOBS.items()
+               if math.isfinite(log_stats.get(stat, math.nan))]
+    knobs.update(dict.fromkeys(balance, 0.0))
     last: dict[str, tuple[float, float]] = {}
-    fixed = {"SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
-             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_TURB_TC": TURB_TC}
     history, best, best_err = [], None, math.inf
     for k in range(iterations):
         params = {**base, **fixed, **knobs}
-        got = _mean_stats([fly_hover_stats(params, seed + j) for j in range(FIT_SEEDS)])
+        got = fly(params)
         if progress is not None:
-            progress(k + 2)
+            progress(SETUP_STEPS + k + 1)
         err = _max_rel_err(got, log_stats)
         history.append({**{s: got[s] for s in (*STAT_NAMES, *ASYM_NAMES) if s in got},
                         **knobs, "max_rel_err": err})
@@ -327,24 +372,109 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
         for a in "xyz":
             for kind, stat in (("ACC", f"acc_{a}_std"), ("GYR", f"gyr_{a}_std_dps")):
                 name = f"TLM_VIB_{kind}_{a.upper()}"
-                knobs[name] = _gain(knobs[name], log_stats[stat], got[stat], floor[stat])
+                # what the statistic would be without this gain: the floor and, for the
+                # roll and pitch gyros, the rotors' fluctuation's share
+                without = _without(floor, shares, stat, knobs, "TLM_ROTOR_RND")
+                knobs[name] = _gain(knobs[name], log_stats[stat], got[stat], without)
         if knobs["SIM_WIND_TURB"] > 0.0:
+            without = 0.5 * sum(_without(floor, shares, s, knobs, "TLM_ROTOR_RND", gain)
+                                for gain, s in AXIS_ATTITUDE.items())
             knobs["SIM_WIND_TURB"] = _gain(knobs["SIM_WIND_TURB"], attitude_std(log_stats),
-                                           attitude_std(got), attitude_std(floor))
-        for name in cg:
-            knobs[name] = _cg_step(name, knobs[name], log_stats, got, floor, last)
+                                           attitude_std(got), without)
+        if knobs["TLM_ROTOR_RND"] > 0.0:
+            without = 0.5 * sum(_without(floor, shares, err, knobs, gain)
+                                for gain, _, err in SHARED_STATS)
+            knobs["TLM_ROTOR_RND"] = min(_gain(knobs["TLM_ROTOR_RND"],
+                                               tracking_error_std(log_stats),
+                                               tracking_error_std(got), without), 0.5)
+        for name in balance:
+            knobs[name] = _balance_step(name, knobs[name], log_stats, got, floor, last)
     assert best is not None
     params, got = best
+    tail = history[iterations // 2:]
+    if len(tail) >= TAIL_MIN:
+        # each knob averaged over the second half of the fitting flights (one flight's
+        # statistics scatter by several per cent, and so would its knobs), flown once more
+        mean = {k: float(np.mean([h[k] for h in tail])) for k in knobs}
+        params = {**base, **fixed, **mean}
+        got = fly(params)
+    if progress is not None:
+        progress(fit_steps(iterations))
     return FitResult(params=params, log=dict(log_stats), tlm=got, history=history,
                      dropped=dropped)
 
 
-def _cg_step(name: str, value: float, target: Mapping[str, float], got: Mapping[str, float],
-             floor: Mapping[str, float], last: dict[str, tuple[float, float]]) -> float:
-    """The centre-of-gravity knob ``name`` moved so that its motor asymmetry meets the log's:
-    the asymmetry is linear in the offset, its slope measured from the last two flights (or
-    from the floor flight's asymmetry at offset 0), :data:`CG_KNOBS`' until one moved it."""
-    stat, slope = CG_KNOBS[name]
+def fit_steps(iterations: int) -> int:
+    """Flights (each :data:`FIT_SEEDS` hovers) :func:`fit_vehicle` reports through
+    ``progress``: the floor, two calibrations, the iterations and the averaged knobs'."""
+    return SETUP_STEPS + iterations + 1
+
+
+def _shares(floor: Mapping[str, float], vib: Mapping[str, float], rot: Mapping[str, float]
+            ) -> dict[str, dict[str, float]]:
+    """What the roll / pitch gyro vibration and the rotors' fluctuation each add to the
+    :data:`SHARED_STATS` statistics and to the attitude's (which the gusts are fitted to),
+    in quadrature over the floor: per knob, statistic -> added variance per unit knob squared
+    (the gyro gains at 1, the fluctuation at :data:`ROTOR_RND_CAL`)."""
+    out: dict[str, dict[str, float]] = {"TLM_ROTOR_RND": {}}
+    for gain, gyr, err in SHARED_STATS:
+        out[gain] = {s: max(vib[s] ** 2 - floor[s] ** 2, 0.0)
+                     for s in (gyr, err, AXIS_ATTITUDE[gain])}
+    for s in (*(s for _, gyr, err in SHARED_STATS for s in (gyr, err)),
+              "roll_std_deg", "pitch_std_deg"):
+        out["TLM_ROTOR_RND"][s] = max(rot[s] ** 2 - floor[s] ** 2, 0.0) / ROTOR_RND_CAL**2
+    return out
+
+
+def _shared_start(target: Mapping[str, float], floor: Mapping[str, float],
+                  shares: Mapping[str, Mapping[str, float]]) -> dict[str, float]:
+    """The roll and pitch gyro gains and the rotors' fluctuation to start from: the
+    non-negative least-squares solution, in relative terms, of each :data:`SHARED_STATS`
+    statistic's excess over the floor as the sum of the knobs' shares (the vibration raises a
+    gyro's noise and its axis's tracking error about alike, the fluctuation the tracking error
+    about twice as much, so the four statistics tell the three knobs apart)."""
+    from scipy.optimize import nnls
+
+    knobs = [gain for gain, _, _ in SHARED_STATS] + ["TLM_ROTOR_RND"]
+    rows, rhs = [], []
+    for gain, gyr, err in SHARED_STATS:
+        for s in (gyr, err):
+            t = target[s]
+            if not (math.isfinite(t) and t > 0):
+                continue
+            rows.append([shares[k].get(s, 0.0) / t**2 if k in (gain, "TLM_ROTOR_RND") else 0.0
+                         for k in knobs])
+            rhs.append((t**2 - floor[s] ** 2) / t**2)
+    if len(rows) < len(knobs):
+        return {}
+    sq, _ = nnls(np.asarray(rows), np.asarray(rhs))
+    start = {k: float(math.sqrt(v)) for k, v in zip(knobs, sq, strict=True)}
+    start["TLM_ROTOR_RND"] = min(start["TLM_ROTOR_RND"], 0.5)
+    for gain, _, _ in SHARED_STATS:
+        start[gain] = min(start[gain], 20.0)
+    return start
+
+
+def _without(floor: Mapping[str, float], shares: Mapping[str, Mapping[str, float]], stat: str,
+             knobs: Mapping[str, float], *others: str) -> float:
+    """``stat`` without the knob being fitted: the floor and the shares of the knobs
+    ``others`` (the rotors' fluctuation for a gyro gain, the axis's gyro gain for the
+    fluctuation, both for the gusts) at their present values, in quadrature; the floor alone
+    where no share is known."""
+    var = floor[stat] ** 2
+    for other in others:
+        var += shares.get(other, {}).get(stat, 0.0) * knobs.get(other, 0.0) ** 2
+    return math.sqrt(var)
+
+
+def _balance_step(name: str, value: float, target: Mapping[str, float],
+                  got: Mapping[str, float], floor: Mapping[str, float],
+                  last: dict[str, tuple[float, float]]) -> float:
+    """The balance knob ``name`` (:data:`ASYM_KNOBS`) moved so that its motor asymmetry meets
+    the log's: the asymmetry is linear in the knob, its slope measured from the last two
+    flights (or from the floor flight's asymmetry at 0), :data:`ASYM_KNOBS`' until one moved
+    it."""
+    stat, slope, top = ASYM_KNOBS[name]
     g = got.get(stat, math.nan)
     if not (math.isfinite(g) and math.isfinite(target[stat])):
         return value
@@ -354,7 +484,7 @@ def _cg_step(name: str, value: float, target: Mapping[str, float], got: Mapping[
         if measured * slope > 0.0 and 0.2 < measured / slope < 5.0:
             slope = measured
     last[name] = (value, g)
-    return float(min(max(value + (target[stat] - g) / slope, -CG_MAX_M), CG_MAX_M))
+    return float(min(max(value + (target[stat] - g) / slope, -top), top))
 
 
 def _mean_stats(runs: list[dict[str, float]]) -> dict[str, float]:
@@ -369,10 +499,21 @@ def attitude_std(stats: Mapping[str, float]) -> float:
     return 0.5 * (stats["roll_std_deg"] + stats["pitch_std_deg"])
 
 
+def tracking_error_std(stats: Mapping[str, float]) -> float:
+    """The mean of the RATE roll and pitch tracking errors' standard deviations [deg/s]: what
+    the rotors' fluctuation is fitted to. The fluctuation moves both axes alike and raises
+    their tracking error about twice as much as their gyro noise (it is slow: the attitude
+    lags it), while the gyro vibration raises both about equally, so with the gyro noise the
+    errors tell the two apart (log171: pitch gyro 2.3 deg/s with a 4.0 deg/s rate error, roll
+    5.0 with 6.7; :func:`_shared_start`)."""
+    return 0.5 * (stats["rate_roll_err_std_dps"] + stats["rate_pitch_err_std_dps"])
+
+
 def _max_rel_err(got: Mapping[str, float], want: Mapping[str, float]) -> float:
-    """Largest |got / want - 1| over the :data:`FIT_STATS` the log has and the attitude
-    (:func:`attitude_std`)."""
+    """Largest |got / want - 1| over the :data:`FIT_STATS` the log has, the attitude
+    (:func:`attitude_std`) and its tracking (:func:`tracking_error_std`)."""
     pairs = [(got[s], want[s]) for s in FIT_STATS]
     pairs.append((attitude_std(got), attitude_std(want)))
+    pairs.append((tracking_error_std(got), tracking_error_std(want)))
     errs = [abs(g / w - 1.0) for g, w in pairs if math.isfinite(w) and w > 0]
     return max(errs) if errs else 0.0

@@ -29,7 +29,7 @@ import pandas as pd
 from tlm_process.logread import motor_columns, rates_in_centidegrees
 from tlm_process.reference import time_window
 
-__all__ = ["ASYM_NAMES", "STAT_NAMES", "StatsError", "motor_asymmetry", "rate_unit",
+__all__ = ["ASYM_NAMES", "STAT_NAMES", "StatsError", "imu0_rows", "motor_asymmetry", "rate_unit",
            "segment_stats"]
 
 #: every statistic :func:`segment_stats` returns, in report order
@@ -37,18 +37,21 @@ STAT_NAMES = ("hover_thr", "roll_std_deg", "pitch_std_deg",
               "acc_x_std", "acc_y_std", "acc_z_std",
               "gyr_x_std_dps", "gyr_y_std_dps", "gyr_z_std_dps",
               "rate_roll_err_std_dps", "rate_pitch_err_std_dps",
+              "att_roll_err_std_deg", "att_pitch_err_std_deg",
               "vibe_x", "vibe_y", "vibe_z")
 
 
 #: the motor outputs' static asymmetry (:func:`motor_asymmetry`) [us]
-ASYM_NAMES = ("mot_roll_us", "mot_pitch_us")
+ASYM_NAMES = ("mot_roll_us", "mot_pitch_us", "mot_yaw_us")
 
 
 class StatsError(ValueError):
     """The log lacks what a statistic needs in the segment (one line, for the command)."""
 
 
-def _imu0(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame | None:
+def imu0_rows(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame | None:
+    """IMU 0's rows of the IMU table (the whole table when it has no instance column ``I``;
+    None without IMU)."""
     imu = tables.get("IMU")
     if imu is None:
         return None
@@ -84,7 +87,7 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
     """Every :data:`STAT_NAMES` statistic over ``[t0_us, t1_us]``; ``unit``: degrees per second
     per RATE unit (default :func:`rate_unit` of the tables). Raises :class:`StatsError` when the
     segment has no IMU, ATT or CTUN rows."""
-    imu = time_window(_imu0(tables), t0_us, t1_us)
+    imu = time_window(imu0_rows(tables), t0_us, t1_us)
     att = time_window(tables.get("ATT"), t0_us, t1_us)
     ctun = time_window(tables.get("CTUN"), t0_us, t1_us)
     for name, df in (("IMU", imu), ("ATT", att), ("CTUN", ctun)):
@@ -101,6 +104,9 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
     for name, des, got in (("roll", "RDes", "R"), ("pitch", "PDes", "P")):
         ok = len(rate) > 2 and des in rate and got in rate
         out[f"rate_{name}_err_std_dps"] = _std((rate[got] - rate[des]) * u) if ok else math.nan
+    for name, des, got in (("roll", "DesRoll", "Roll"), ("pitch", "DesPitch", "Pitch")):
+        ok = des in att and got in att
+        out[f"att_{name}_err_std_deg"] = _std(att[got] - att[des]) if ok else math.nan
     vibe = time_window(tables.get("VIBE"), t0_us, t1_us)
     if len(vibe) and "IMU" in vibe:
         vibe = vibe[vibe.IMU == 0]
@@ -113,11 +119,11 @@ def segment_stats(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
 def motor_asymmetry(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float,
                     params: Mapping[str, float]) -> dict[str, float]:
     """How unequally the motors run over ``[t0_us, t1_us]``: each motor's mean RCOU output
-    less their mean, projected on the frame's roll and pitch mixer factors [us]
-    (``mot_roll_us``, ``mot_pitch_us``: the steady roll and pitch output that balances the
+    less their mean, projected on the frame's roll, pitch and yaw mixer factors [us]
+    (``mot_roll_us``, ``mot_pitch_us``, ``mot_yaw_us``: the steady output that balances the
     airframe; front motors working harder give a positive pitch, right ones a negative roll,
-    ArduPilot's factors). The frame from ``params`` (FRAME_CLASS / FRAME_TYPE, or Copter
-    3.x's FRAME); NaN without RCOU rows."""
+    counter-clockwise ones a positive yaw, ArduPilot's factors). The frame from ``params``
+    (FRAME_CLASS / FRAME_TYPE, or Copter 3.x's FRAME); NaN without RCOU rows."""
     from tlm_sim.frames import FrameError, frame_for
 
     nan = dict.fromkeys(ASYM_NAMES, math.nan)
@@ -132,6 +138,7 @@ def motor_asymmetry(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: flo
         return nan
     mean = rcou[cols].apply(pd.to_numeric, errors="coerce").mean().to_numpy(float)
     dev = mean - mean.mean()
-    roll, pitch, _ = (np.asarray(f, dtype=float) for f in layout.mixer_factors())
+    roll, pitch, yaw = (np.asarray(f, dtype=float) for f in layout.mixer_factors())
     return {"mot_roll_us": float(dev @ roll / (roll @ roll)),
-            "mot_pitch_us": float(dev @ pitch / (pitch @ pitch))}
+            "mot_pitch_us": float(dev @ pitch / (pitch @ pitch)),
+            "mot_yaw_us": float(dev @ yaw / (yaw @ yaw))}
