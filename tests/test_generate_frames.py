@@ -35,6 +35,7 @@ from tlm_process.generate.scenario import (
     sample_scenario,
 )
 from tlm_process.generate.task import _config, make_job
+from tlm_sim.faults import FAULT_TYPES
 from tlm_sim.frames import FRAMES
 
 #: fast scenarios: built-in missions keep their altitude profile (cached missions)
@@ -63,8 +64,12 @@ BEFORE = {7: ["600243abfdfb", "d69342543ef8", "c9066e9388b8", "fc81292c511b", "d
 
 def test_the_new_streams_leave_every_earlier_draw_unchanged():
     # the vibration stream (8) replaces the SIM_GYRn_RND draws of its real-level flights
-    # (tests/test_generate_vibration.py); without it every earlier draw is as before
-    cfg = ScenarioConfig(vibration=None)
+    # (tests/test_generate_vibration.py); without it every earlier draw is as before. A new
+    # fault type (prop_damage, label 14) is a new choice: the types of labels 1-13 draw as
+    # before
+    first = [t for t in FAULT_TYPES if FAULT_TYPES[t].label <= 13]
+    cfg = ScenarioConfig(vibration=None, fault_weights=dict.fromkeys(first, 1.0),
+                         sequence_types=tuple(t for t in first if FAULT_TYPES[t].label > 4))
     for seed, digests in BEFORE.items():
         assert [_digest(sample_scenario(seed, i, cfg)) for i in range(6)] == digests
     assert [sample_scenario(7, i, cfg).seed for i in range(3)] == [1171815639, 1025053882,

@@ -41,7 +41,7 @@ def test_records_of_tlm_and_sidecar_shapes():
 @pytest.mark.parametrize("rec,msg", [
     ({"type": "wind", "start_time_us": 1}, "unknown fault type 'wind'"),
     ({"type": "gps", "label": 2, "start_time_us": 1}, "label 2 does not match"),
-    ({"label": 14, "start_time_us": 1}, "not a fault label"),
+    ({"label": 15, "start_time_us": 1}, "not a fault label"),
     ({"start_time_us": 1}, "needs 'type'"),
     ({"type": "gps"}, "no start"),
     ({"type": "gps", "start_time_us": 5, "end_time_us": 5}, "not after start_time_us"),

@@ -3,7 +3,7 @@
 :func:`tlm_process.fault_signatures.fault_signature` measures one fault window with the
 metric function of the fault's type (the ``signature`` of its record,
 :mod:`tlm_process.fault_types`); the built-in types' functions are here (``gps_metrics`` ...
-``accel_samples_metrics``), with :class:`Flight`, the log's shared time lines a new type's
+``prop_damage_metrics``), with :class:`Flight`, the log's shared time lines a new type's
 metrics build on. All take ``(flight, start_time_us, end_time_us, fault, route)``.
 
 They measure the same way in a tlm ``FlightLog.tables`` and
@@ -98,6 +98,11 @@ Metrics by fault type
   route lines, to ``JAM_AFTER_S`` after the end), ``fix_frac_in`` / ``fix_frac_out`` (GPS
   rows with Status >= 3; out: armed, before the start or 10 s after the end),
   ``nsats_min_in``, ``nsats_max_in``, ``hdop_max_in``, ``ekf_err_max_m``, ``auto_kept``.
+* prop_damage (tlm's own type): ``rcou_excess_before_us`` / ``rcou_excess_in_us`` (the
+  imbalanced motor's RCOU less the motors' mean, 20 s before / from 3 s in),
+  ``accxy_std_before`` / ``accxy_std_in`` (IMU 0 AccX, AccY, the larger),
+  ``vibexy_before`` / ``vibexy_in`` (VIBE X and Y of IMU 0), ``thr_mean_in``, ``armed_kept``,
+  ``auto_kept``.
   Jamming is random: its metrics are judged over seeds (``tlm crosscheck --seeds``).
 
 Settling
@@ -741,6 +746,45 @@ def vibration_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, Any],
         "thr_mean_in": _mean(time_window(ctun, t0, t1).ThO),
         "err29_vibe_fs": f.err_count(AP.ERR_FAILSAFE_VIBE, t0, t1),
         "ekf_err_max_m": _ekf_max(f, t0, t1),
+        "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
+    })
+    return out
+
+
+def prop_damage_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, Any],
+                        route: np.ndarray | None) -> dict[str, float]:
+    """A damaged propeller (``prop_damage``): the imbalanced motor's excess output over the
+    frame's mean [us] before and in the fault (its thrust loss), the in-plane accel and VIBE
+    before and in it (the imbalance turns in the body x-y plane), and whether the mission
+    went on."""
+    motor = int((fault.get("params_start") or {}).get("TLM_VIB_IMB_MOT", 1))
+    rcou = f.t["RCOU"]
+    cols = [c for c in (f"C{k}" for k in range(1, 9)) if c in rcou and rcou[c].max() > 0]
+
+    def excess(w: pd.DataFrame) -> float:
+        if not len(w) or f"C{motor}" not in cols:
+            return float("nan")
+        out = w[cols].to_numpy(float)
+        return float((out[:, cols.index(f"C{motor}")] - out.mean(axis=1)).mean())
+
+    before = (t0 - BEFORE_S * 1e6, t0)
+    inside = (t0 + EARLY_S * 1e6, t1)
+    imu0 = f.t["IMU"][f.t["IMU"].I == 0]
+    vibe = f.t["VIBE"]
+    vibe0 = vibe[vibe.IMU == 0] if "IMU" in vibe else vibe
+    out = {
+        "rcou_excess_before_us": excess(time_window(rcou, *before)),
+        "rcou_excess_in_us": excess(time_window(rcou, *inside)),
+        "accxy_std_before": _std3(time_window(imu0, *before), ("AccX", "AccY")),
+        "accxy_std_in": _std3(time_window(imu0, *inside), ("AccX", "AccY")),
+    }
+    for when, (a, b) in (("before", before), ("in", inside)):
+        w = time_window(vibe0, a, b)
+        out[f"vibexy_{when}"] = float(w[["VibeX", "VibeY"]].to_numpy(float).mean()) if len(w) \
+            else float("nan")
+    out.update({
+        "thr_mean_in": _mean(time_window(f.t["CTUN"], *inside).ThO),
+        "armed_kept": 1.0 - f.disarmed_in(t0, t1),
         "auto_kept": f.mode_kept(AP.MODE_AUTO, t0, t1),
     })
     return out

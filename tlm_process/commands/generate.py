@@ -44,7 +44,7 @@ writes:
   DS/GPS.parquet/flights-00000000-00000099.parquet   with --compact: 100 flights per file
 
 defaults: --faults all (kinds none=0.2,single=0.4,paper=0.2,sequence=0.2: single faults
-of every type 1-13, the paper sequence, sequences of the new types); missions
+of every type 1-14, the paper sequence, sequences of the new types); missions
 builtin=0.5,random=0.5; frames +=0.5,x=0.5 (FRAME_CLASS 1, FRAME_TYPE 0 or 1); wind:
 30 % calm (SIM_WIND_SPD 0, SIM_WIND_TURB 0), the others SIM_WIND_SPD 0-8 m/s, SIM_WIND_DIR
 0-360 deg, SIM_WIND_TURB 0-2 m/s; noise SIM_GYR1/2_RND 0-0.5 deg/s, SIM_BARO/BAR2_RND
@@ -306,8 +306,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                           "a share G of the rows is in fault windows")
     sc.add_argument("--faults", metavar="paper|all|new|single|TYPE,TYPE,...",
                     help="which fault types are drawn: all (the default: every type, "
-                         "labels 1-13: single faults, the paper sequence and sequences of new "
-                         "faults), paper (the paper's four, labels 1-4), new (labels 5-13), "
+                         "labels 1-14: single faults, the paper sequence and sequences of new "
+                         "faults), paper (the paper's four, labels 1-4), new (labels 5-14), "
                          "single (single faults of every type), or a list of types (single "
                          "faults and sequences of them); --kinds overrides the mix it sets")
     sc.add_argument("--kinds", metavar="none=A,single=B,paper=C,sequence=D",

@@ -5,7 +5,7 @@ Import from here (``from tlm_process.fault_types import register_fault_type``): 
 package registers the built-in types, so every lookup sees them.
 """
 
-from tlm_process.fault_types import catalogue as _catalogue  # noqa: F401  (registers labels 1-13)
+from tlm_process.fault_types import catalogue as _catalogue  # noqa: F401  (registers labels 1-14)
 from tlm_process.fault_types.registry import (
     FaultTypeRecord,
     Knob,

@@ -1,4 +1,4 @@
-"""The built-in fault types' records: labels 1-13, one :func:`register_fault_type` call each.
+"""The built-in fault types' records: labels 1-14, one :func:`register_fault_type` call each.
 
 The simulator's part of each record (name, label, SITL parameters, description, display name,
 colour) is declared in :mod:`tlm_sim.faults.types` (``tlm_sim`` flies without
@@ -10,8 +10,8 @@ draws nothing for them.
 
 Knob units: ``offset_m`` metres (horizontal, the bearing drawn uniformly), ``mul`` the
 ``SIM_ENGINE_MUL`` multiplier, ``volt`` volts, ``amplitude`` m/s/s (``SIM_ACCn_RND``),
-``instance`` the 1-based sensor number (``"both"`` for both baros / IMUs), ``mode``
-``SIM_MAGn_FAIL`` (1 no data, 2 frozen).
+``imbalance`` m/s/s (``TLM_VIB_IMB``, at full command), ``instance`` the 1-based sensor
+number (``"both"`` for both baros / IMUs), ``mode`` ``SIM_MAGn_FAIL`` (1 no data, 2 frozen).
 """
 
 from __future__ import annotations
@@ -64,6 +64,14 @@ def _vibration(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
             "SIM_VIB_MOT_MAX": 350.0}
 
 
+def _prop_damage(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
+    """The type's own parameters (motor 1, its rotor frequency on an airframe without one of
+    its own) with the imbalance ``imbalance`` m/s/s at full command and the PWM above 1000 us
+    times ``mul``."""
+    return {**FAULT_TYPES["prop_damage"].params_start,
+            "TLM_VIB_IMB": knobs["imbalance"], "SIM_ENGINE_MUL": knobs["mul"]}
+
+
 def _battery(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
     return {"SIM_BATT_VOLTAGE": knobs["volt"]}
 
@@ -103,6 +111,10 @@ def _register() -> None:
     register_fault_type(T["accel_samples"], signature=M.accel_samples_metrics,
                         knobs={"instance": Knob("choice", (1, 2, "both"), [1])},
                         params=_mask("SIM_ACC_FAIL_MSK"))
+    register_fault_type(T["prop_damage"], signature=M.prop_damage_metrics,
+                        knobs={"imbalance": Knob("range", (0.0, 500.0), (15.0, 45.0)),
+                               "mul": Knob("range", (0.0, 1.0), (0.8, 0.95))},
+                        params=_prop_damage)
 
 
 _register()

@@ -150,7 +150,7 @@ PAPER_TYPES: tuple[str, ...] = ("gps", "accel", "engine", "rc")
 
 
 def new_types() -> tuple[str, ...]:
-    """Every registered fault type but the paper's four (labels 5-13 and any registered
+    """Every registered fault type but the paper's four (labels 5-14 and any registered
     since), in label order."""
     return tuple(t for t in FAULT_TYPES if t not in PAPER_TYPES)
 
@@ -199,7 +199,11 @@ DEFAULT_WIND: dict[str, Any] = {"calm": 0.3, "speed": (0.0, 8.0), "direction": (
 #: deg/s, the range of real quads (issue 40's table; log171 fitted: accel gains 1.4 / 0.4 /
 #: 0.6, gyro 6.5 / 1.0 / 1.4) at hover (command ~0.55), each rotor's going with its speed
 #: squared; rotors at 120-250 Hz full command, lagging 30-80 ms, a few per cent apart; the
-#: drawn turbulence's gusts correlated over 0.3-1 s.
+#: drawn turbulence's gusts correlated over 0.3-1 s. A real airframe is never balanced: its
+#: centre of gravity up to 15 mm off the motors' centre and its rotors' reaction torques up to
+#: 15 % apart (log171 fitted: 13 mm behind, 4 mm right, -0.13), so the motors run up to
+#: ~35 us (pitch, roll) and ~50 us (yaw) apart in a hover. Its rotors' thrust fluctuates by up to
+#: 4 % (log171 fitted: 3.2 %), so its attitude tracking error is a real hover's.
 REAL_VIBRATION: dict[str, tuple[float, float]] = {
     "SIM_ACC1_RND": (5.0, 5.0), "SIM_ACC2_RND": (5.0, 5.0),
     "SIM_GYR1_RND": (20.0, 20.0), "SIM_GYR2_RND": (20.0, 20.0),
@@ -208,6 +212,8 @@ REAL_VIBRATION: dict[str, tuple[float, float]] = {
     "TLM_VIB_CMD_REF": (0.55, 0.55),
     "TLM_VIB_ACC_X": (0.3, 3.0), "TLM_VIB_ACC_Y": (0.3, 3.0), "TLM_VIB_ACC_Z": (0.3, 3.0),
     "TLM_VIB_GYR_X": (0.5, 8.0), "TLM_VIB_GYR_Y": (0.5, 8.0), "TLM_VIB_GYR_Z": (0.3, 3.0),
+    "TLM_CG_X": (-0.015, 0.015), "TLM_CG_Y": (-0.015, 0.015), "TLM_YAW_ASYM": (-0.15, 0.15),
+    "TLM_ROTOR_RND": (0.0, 0.04),
 }
 #: Default vibration setting: half the flights with a real copter's vibration, half
 #: SITL-quiet.
@@ -235,7 +241,7 @@ class ScenarioConfig:
         ranges: parameter name -> (low, high), drawn uniformly per flight.
         params: parameter overrides for every flight (ArduPilot names).
         profile: ``current`` or ``paper`` (see :mod:`tlm_sim.profiles`).
-        sequence_types: fault types of ``sequence`` flights (default: labels 5-13).
+        sequence_types: fault types of ``sequence`` flights (default: labels 5-14).
         sequence_len: (low, high) number of faults of a ``sequence`` flight.
         magnitudes: fault type -> knob -> range or list of choices (see
             :func:`magnitude_knobs`; missing knobs keep their defaults).
@@ -597,9 +603,9 @@ def fault_preset(name: Any) -> dict[str, Any]:
 
     * ``paper``: the paper's four types in single-fault and paper-style flights (20 % none,
       40 % single, 40 % paper);
-    * ``all``: single faults of every type (labels 1-13), the paper sequence and sequences
+    * ``all``: single faults of every type (labels 1-14), the paper sequence and sequences
       of the new types (20 % none, 40 % single, 20 % paper, 20 % sequence): the defaults;
-    * ``new``: the new types only (labels 5-13): 20 % none, 40 % single, 40 % sequence;
+    * ``new``: the new types only (labels 5-14): 20 % none, 40 % single, 40 % sequence;
     * ``single``: single faults of every type (20 % none, 80 % single);
     * a list of types (``"gps_glitch,battery"`` or a list): single faults and sequences of
       those types (20 % none, 40 % single, 40 % sequence; sequences need two or more).

@@ -23,7 +23,7 @@ Kinds of input (:func:`detect_kind` decides from the path):
   datasets) is expanded one level.
 
 A fault record (:class:`FaultRecord`) needs ``type`` (``gps``/``accel``/``engine``/``rc`` or
-any other ``tlm_sim.faults.FAULT_TYPES`` name) or its ``label`` (1-13, or a registered
+any other ``tlm_sim.faults.FAULT_TYPES`` name) or its ``label`` (1-14, or a registered
 type's), and a start and an end given as log times (``start_time_us`` / ``end_time_us``,
 microseconds since boot, as tlm and the SITL sidecars write) and/or as positions
 (``start_lat``, ``start_lon``, ``start_alt`` ... with the altitude in metres above home, as the

@@ -82,7 +82,7 @@ def class_counts(tables: Mapping[str, pd.DataFrame], label: str = "label") -> pd
             raise PipelineError(f"{name} has no {label!r} column: label the rows first")
         arrays[name] = df[label].to_numpy(np.int64)
         if len(arrays[name]) and arrays[name].min() < 0:
-            raise PipelineError(f"{name}: negative labels (0 is normal, faults 1-13)")
+            raise PipelineError(f"{name}: negative labels (0 is normal, faults 1-14)")
     labels = class_labels(*arrays.values())
     rows = {}
     for name, y in arrays.items():
