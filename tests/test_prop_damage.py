@@ -83,12 +83,38 @@ def test_flown_on_an_unbalanced_vibrating_airframe():
 
 
 def test_generate_draw_gives_whole_parameter_sets():
-    start, end = fault_params("prop_damage", {"imbalance": 27.5, "mul": 0.85}, 35.0)
-    assert start == {"SIM_VIB_MOT_MAX": 150.0, "TLM_VIB_IMB_MOT": 1.0, "TLM_VIB_IMB": 27.5,
-                     "SIM_ENGINE_MUL": 0.85}
+    start, end = fault_params("prop_damage", {"imbalance": 27.5, "mul": 0.85, "motor": 3},
+                              35.0)
+    assert start == {"SIM_VIB_MOT_MAX": 150.0, "TLM_VIB_IMB_MOT": 3.0, "TLM_VIB_IMB": 27.5,
+                     "SIM_ENGINE_FAIL": 4.0, "SIM_ENGINE_MUL": 0.85}
     assert end == {"SIM_VIB_MOT_MAX": 0.0, "TLM_VIB_IMB_MOT": 0.0, "TLM_VIB_IMB": 0.0,
-                   "SIM_ENGINE_MUL": 1.0}
+                   "SIM_ENGINE_FAIL": 1.0, "SIM_ENGINE_MUL": 1.0}
     Fault("prop_damage", 10, 20, params_start=start, params_end=end)  # a valid fault
+
+
+def test_generate_draws_every_motor_of_a_quad():
+    from tlm_process.generate.scenario import magnitude_knobs
+
+    knob = magnitude_knobs()["prop_damage"]["motor"]
+    assert knob.how == "choice" and list(knob.default) == [1, 2, 3, 4]
+    assert set(knob.limits) == set(range(1, 9))
+
+
+def test_damage_on_another_motor():
+    """The draw's motor 3: its output works harder (its thrust is down), the others do not,
+    and the fault's signature reads that motor's excess."""
+    start, end = fault_params("prop_damage", {"imbalance": 30.0, "mul": 0.85, "motor": 3},
+                              35.0)
+    log = fly(1, faults=FaultSchedule([Fault("prop_damage", T0, T1, params_start=start,
+                                             params_end=end)]), seed=3)
+    rcou = log.tables["RCOU"]
+    w = rcou[(rcou.TimeUS > (T0 + 5) * 1e6) & (rcou.TimeUS < T1 * 1e6)]
+    out = w[["C1", "C2", "C3", "C4"]].to_numpy(float)
+    excess = (out - out.mean(axis=1, keepdims=True)).mean(axis=0)
+    assert excess[2] > 40.0 and excess[2] == excess.max()
+    sig = fault_signature(log.tables, log.faults[0])
+    assert sig["rcou_excess_in_us"] == pytest.approx(excess[2], abs=5.0)
+    assert sig["vibexy_in"] > 2.0
 
 
 def test_changes_at_one_instant_are_one_step():

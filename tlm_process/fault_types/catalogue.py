@@ -65,10 +65,12 @@ def _vibration(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
 
 
 def _prop_damage(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
-    """The type's own parameters (motor 1, its rotor frequency on an airframe without one of
-    its own) with the imbalance ``imbalance`` m/s/s at full command and the PWM above 1000 us
-    times ``mul``."""
+    """The type's own parameters (its rotor frequency on an airframe without one of its own)
+    on motor ``motor`` (its imbalance and its SIM_ENGINE_FAIL bit), with the imbalance
+    ``imbalance`` m/s/s at full command and the PWM above 1000 us times ``mul``."""
+    motor = int(knobs["motor"])
     return {**FAULT_TYPES["prop_damage"].params_start,
+            "TLM_VIB_IMB_MOT": float(motor), "SIM_ENGINE_FAIL": float(1 << (motor - 1)),
             "TLM_VIB_IMB": knobs["imbalance"], "SIM_ENGINE_MUL": knobs["mul"]}
 
 
@@ -113,7 +115,10 @@ def _register() -> None:
                         params=_mask("SIM_ACC_FAIL_MSK"))
     register_fault_type(T["prop_damage"], signature=M.prop_damage_metrics,
                         knobs={"imbalance": Knob("range", (0.0, 500.0), (15.0, 45.0)),
-                               "mul": Knob("range", (0.0, 1.0), (0.8, 0.95))},
+                               "mul": Knob("range", (0.0, 1.0), (0.8, 0.95)),
+                               # any motor of a quad (and of the larger frames' first four):
+                               # a detector meets a damaged propeller on any arm
+                               "motor": Knob("choice", tuple(range(1, 9)), [1, 2, 3, 4])},
                         params=_prop_damage)
 
 

@@ -262,9 +262,11 @@ _BUILTIN = (
                "SIM_ENGINE_MUL": 0.9},
               {"TLM_VIB_IMB": 0.0, "TLM_VIB_IMB_MOT": 0.0, "SIM_VIB_MOT_MAX": 0.0,
                "SIM_ENGINE_MUL": 1.0},
-              "motor 1's propeller damaged (tlm's, SITL has none): its rotor out of balance, a "
-              "force turning once per revolution (20 m/s/s at full command, with rpm squared), "
-              "and 10 % of its PWM above 1000 us lost", "Damaged propeller", "crimson",
+              "a propeller damaged (tlm's, SITL has none; motor 1, SIM_ENGINE_FAIL's default; "
+              "another with its TLM_VIB_IMB_MOT and SIM_ENGINE_FAIL bit): its rotor out of "
+              "balance, a force turning once per revolution (20 m/s/s at full command, with "
+              "rpm squared), and 10 % of its PWM above 1000 us lost", "Damaged propeller",
+              "crimson",
               relative={"TLM_VIB_IMB": "add", "TLM_VIB_IMB_MOT": "own",
                         "SIM_VIB_MOT_MAX": "own"}),
 )
