@@ -122,6 +122,7 @@ ARM_METHOD_BATTERYFAILSAFE = 7
 ARM_METHOD_CRASH = 12
 ARM_METHOD_LANDED = 13  # LAND / RTL mode: the land detector
 ARM_METHOD_MISSIONEXIT = 14  # AUTO: landed at the end of the mission (its RTL item)
+ARM_METHOD_RADIOFAILSAFE = 16  # the radio failsafe on the ground (should_disarm_on_failsafe)
 ARM_METHOD_DISARMDELAY = 17  # auto-disarm: landed with the throttle low for DISARM_DELAY
 ARM_METHOD_TERMINATE = 20  # FAILSAFE_ACTION_TERMINATE
 

@@ -266,11 +266,26 @@ def _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle):
 
 
 @inline_jit
+def _should_disarm_on_failsafe(c, sub):
+    """Copter's should_disarm_on_failsafe, for the radio failsafe: on the ground (landed, or
+    the arming delay's ground idle) disarm instead of flying the action; in STABILIZE also with
+    the throttle stick at zero (throttle_zero). AUTO disarms only if landed before auto_armed,
+    which tlm's missions never are (they arm with the throttle up): never here."""
+    mode = c[C.MODE]
+    if mode == AP.MODE_AUTO:
+        return False
+    on_ground = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
+    if mode == AP.MODE_STABILIZE and c[C.PIL_THR_ZERO] != 0.0:
+        return True
+    return on_ground
+
+
+@inline_jit
 def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
     """The radio failsafe: no RC frame for RC_FS_TIMEOUT (ERR 2/2 and 5/1) or three frames with
-    throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> RTL (LAND without a
-    position); frames again with a good throttle -> ERR 5/0. Returns the submode to continue
-    with."""
+    throttle below FS_THR_VALUE (SIM_RC_FAIL 2: ERR 5/1 only) -> disarm on the ground
+    (:func:`_should_disarm_on_failsafe`, ARM.Method 16), else RTL (LAND without a position);
+    frames again with a good throttle -> ERR 5/0. Returns the submode to continue with."""
     rc_last_frame_us, rc_throttle = inputs.rc_last_frame_us, inputs.rc_throttle
     rc_late = (t_us - rc_last_frame_us) * 1e-6 > g[C.G_RC_FS_TIMEOUT]
     thr_low, thr_ok = _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle)
@@ -279,7 +294,9 @@ def _radio_failsafe(c, g, t_us, sub, inputs, seg, ev):
         if rc_late:
             E.log_err(ev, t_us, AP.ERR_RADIO, AP.ERR_CODE_LATE_FRAME)
         E.log_err(ev, t_us, AP.ERR_FAILSAFE_RADIO, AP.ERR_CODE_FAILSAFE)
-        # (ArduCopter disarms instead when already landed; fault issue 3 covers that case)
+        if _should_disarm_on_failsafe(c, sub):
+            disarm(c, g, t_us, AP.ARM_METHOD_RADIOFAILSAFE, ev)
+            return C.SUB_LANDED
         landed = c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF
         if not landed and sub != C.SUB_LAND and c[C.MODE] != AP.MODE_RTL:
             return rtl_or_land(c, g, t_us, inputs, seg, AP.RSN_RADIO_FAILSAFE, ev)
