@@ -326,3 +326,16 @@ def test_shove_and_twist_act_for_exactly_their_time(kind, unit):
     assert frame[F_SHOVE_TIME if kind == "SHOVE" else F_TWIST_TIME] == 0.0
     assert x[X.SHOVE_MS if kind == "SHOVE" else X.TWIST_MS] == 0.0
     assert 0.9 * gained <= x[slot] - base[slot] <= 1.001 * gained
+
+
+def test_generate_draws_the_weakened_motor():
+    """motor_partial's ``motor`` knob: motor 1 (the default, SITL's) flies the type's own
+    parameters; another sets its SIM_ENGINE_FAIL bit, cleared to SITL's default motor 1."""
+    from tlm_process.generate.scenario import fault_params, magnitude_knobs
+
+    assert list(magnitude_knobs()["motor_partial"]["motor"].default) == [1]
+    assert fault_params("motor_partial", {"mul": 0.6, "motor": 1}, 35.0) == (
+        {"SIM_ENGINE_MUL": 0.6}, {"SIM_ENGINE_MUL": 1.0})
+    assert fault_params("motor_partial", {"mul": 0.6, "motor": 3}, 35.0) == (
+        {"SIM_ENGINE_FAIL": 4.0, "SIM_ENGINE_MUL": 0.6},
+        {"SIM_ENGINE_FAIL": 1.0, "SIM_ENGINE_MUL": 1.0})

@@ -704,7 +704,7 @@ def motor_partial_metrics(f: Flight, t0: float, t1: float, fault: Mapping[str, A
     gps = time_window(f.t["GPS"], t0, fall_end)
     mask = int((fault.get("params_start") or {}).get("SIM_ENGINE_FAIL", 1))
     rcou = time_window(f.t["RCOU"], t0, t1)
-    motors = [f"C{k + 1}" for k in range(4) if mask >> k & 1] or ["C1"]
+    motors = [f"C{k + 1}" for k in range(8) if mask >> k & 1 and f"C{k + 1}" in rcou] or ["C1"]
     up1 = f.first_time(f.h > 1.0, t1)
     up10 = f.first_time(f.h > 10.0, t1)
     sel = f.sel(t0, ground if np.isfinite(ground) else t1)

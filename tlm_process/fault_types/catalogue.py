@@ -56,7 +56,13 @@ def _gps_glitch(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
 
 
 def _motor_partial(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
-    return {"SIM_ENGINE_MUL": knobs["mul"]}
+    """``SIM_ENGINE_MUL`` ``mul`` on motor ``motor``: its SIM_ENGINE_FAIL bit (motor 1, SITL's
+    default and the reference flight's, gives the type's own parameters; a draw made before the
+    knob existed has none: motor 1)."""
+    motor = int(knobs.get("motor", 1))
+    if motor == 1:
+        return {"SIM_ENGINE_MUL": knobs["mul"]}
+    return {"SIM_ENGINE_FAIL": float(1 << (motor - 1)), "SIM_ENGINE_MUL": knobs["mul"]}
 
 
 def _vibration(knobs: Mapping[str, Any], lat_deg: float) -> dict[str, float]:
@@ -101,7 +107,8 @@ def _register() -> None:
                                                    decimals=1, configurable=False)},
                         params=_gps_glitch)
     register_fault_type(T["motor_partial"], signature=M.motor_partial_metrics,
-                        knobs={"mul": Knob("range", (0.0, 1.0), (0.4, 0.8))},
+                        knobs={"mul": Knob("range", (0.0, 1.0), (0.4, 0.8)),
+                               "motor": Knob("choice", tuple(range(1, 9)), [1])},
                         params=_motor_partial)
     register_fault_type(T["vibration"], signature=M.vibration_metrics,
                         knobs={"amplitude": Knob("range", (0.0, 50.0), (2.0, 6.0))},
