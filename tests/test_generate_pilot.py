@@ -62,6 +62,16 @@ def test_patterns_move_the_sticks_they_name():
     assert all(0.2 <= max(abs(v) for v in m) <= 0.6 for m in moves)
 
 
+def test_freestyle_moves_every_stick_at_once():
+    cfg = validate_pilot({"share": 1.0, "patterns": {"freestyle": 1}})
+    moves = np.array([s[:3] for k in range(20)
+                      for s in draw_pilot(np.random.default_rng(k), cfg)["segments"]])
+    assert np.all(np.abs(moves) <= 0.6)
+    assert np.mean(np.all(moves != 0.0, axis=1)) > 0.95  # three sticks at once
+    for axis in range(3):  # both ways on each
+        assert moves[:, axis].min() < -0.3 and moves[:, axis].max() > 0.3
+
+
 @pytest.mark.parametrize("bad, msg", [
     ({"share": 1.5}, "share"), ({"modes": {"STABILIZE": 1}}, "STABILIZE needs a pilot"),
     ({"patterns": {"circle": 1}}, "unknown 'circle'"), ({"stick": [0.2, 1.5]}, "at most 1"),

@@ -9,7 +9,9 @@ completing, the ground station selects LAND, which lands and disarms it). The pa
 * ``hover``: sticks centred throughout (the pilot holds position; the mode does the rest);
 * ``lines``: pitch forward, release, pitch back, release, ... (out-and-back lines);
 * ``box``: pitch forward, roll right, pitch back, roll left, each followed by a release;
-* ``yaw_turns``: yaw right / left turns of a drawn rate and length between hovers.
+* ``yaw_turns``: yaw right / left turns of a drawn rate and length between hovers;
+* ``freestyle``: roll, pitch and yaw at once, each uniform in +-the drawn deflection (a pilot
+  repositioning, as log171's pilot flew LOITER: roll, pitch and yaw 50-70 % together).
 
 Each segment's stick deflection is uniform in ``stick`` (fraction of full stick), its length in
 ``leg_s`` [s], the release after it in ``release_s`` [s]. The ground station selects the mode
@@ -37,7 +39,7 @@ __all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_scri
 
 #: the modes a drawn script flies (they hold the height themselves)
 PILOT_MODES: tuple[str, ...] = ("ALT_HOLD", "LOITER", "POSHOLD")
-PATTERNS: tuple[str, ...] = ("hover", "lines", "box", "yaw_turns")
+PATTERNS: tuple[str, ...] = ("hover", "lines", "box", "yaw_turns", "freestyle")
 #: Default: no pilot-flown flights (``--pilot-share``); when there are, every mode and pattern
 #: alike, sticks 20-60 %, heights 5-20 m, 150-400 s of pattern, legs 4-10 s, releases 5-10 s.
 DEFAULT_PILOT: dict[str, Any] = {
@@ -120,7 +122,9 @@ def draw_pilot(rng: np.random.Generator, cfg: Mapping[str, Any]) -> dict[str, An
         s = round(float(rng.uniform(*cfg["stick"])), 2)
         leg = round(float(rng.uniform(*cfg["leg_s"])), 1)
         rel = round(float(rng.uniform(*cfg["release_s"])), 1)
-        roll, pitch, yaw = _stick(pattern, k, s, float(rng.random()))
+        u = float(rng.random())
+        axes = tuple(float(x) for x in rng.random(2)) if pattern == "freestyle" else (0.5, 0.5)
+        roll, pitch, yaw = _stick(pattern, k, s, u, axes)
         segs.append([roll, pitch, yaw, leg, rel])
         t += leg + rel
         k += 1
@@ -128,11 +132,14 @@ def draw_pilot(rng: np.random.Generator, cfg: Mapping[str, Any]) -> dict[str, An
             "segments": segs}
 
 
-def _stick(pattern: str, k: int, s: float, u: float) -> tuple[float, float, float]:
+def _stick(pattern: str, k: int, s: float, u: float, axes: tuple[float, float] = (0.5, 0.5)
+           ) -> tuple[float, float, float]:
     """(roll, pitch, yaw) of segment k of a pattern, deflection s; u: a uniform draw (the
-    yaw turn's direction)."""
+    yaw turn's direction, freestyle's yaw), ``axes``: two more (freestyle's roll and pitch)."""
     if pattern == "hover":
         return 0.0, 0.0, 0.0
+    if pattern == "freestyle":
+        return tuple(round(s * (2.0 * v - 1.0), 2) for v in (*axes, u))  # type: ignore[return-value]
     if pattern == "lines":
         return 0.0, s if k % 2 == 0 else -s, 0.0
     if pattern == "box":
