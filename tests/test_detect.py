@@ -26,7 +26,7 @@ from tlm_process.detect.channels import (
 from tlm_process.detect.data import DetectError, LogData
 from tlm_process.detect.features import feature_matrix, feature_names
 from tlm_process.detect.model import WEIGHTS_FILE, Detector, load_detector
-from tlm_process.detect.predict import find_faults
+from tlm_process.detect.predict import fault_rows, find_faults
 
 
 def _grid_s(t0: float, t1: float) -> np.ndarray:
@@ -213,6 +213,11 @@ def test_find_faults_keeps_sustained_runs_and_merges_close_ones():
     assert [(f.name, f.start_s, f.end_s, f.also) for f in found] == [
         ("Engine", 10.0, pytest.approx(16.0), ()), ("Acc", 30.0, pytest.approx(33.0), ())]
     assert found[0].peak == pytest.approx(0.9)
+    fault = fault_rows(_pred(lab)["TimeUS"].to_numpy(), found)
+    want = np.zeros(500, dtype=int)
+    want[100:160] = 3  # the gap inside the merged fault is the fault's
+    want[300:330] = 2  # the flicker at 5 s is no fault
+    assert np.array_equal(fault, want)
 
 
 def test_runs_of_two_classes_that_touch_are_one_fault_named_by_the_main_class():
@@ -349,7 +354,15 @@ def test_detect_writes_summary_predictions_and_timeline(small_model, tmp_path, c
     assert len(gps) and abs(gps["start_s"].iloc[0] - 71.7) < 3.0  # sidecar: 71.7 s
     assert (summary[summary["log"].str.endswith("normal_s11.bin")]["class"] == "none").all()
     pred = pd.read_parquet(out / "combined_s21" / "predictions.parquet")
-    assert {"TimeUS", "p_Normal", "p_GPS", "p_RC", "label", "true_label"} <= set(pred.columns)
+    assert {"TimeUS", "p_Normal", "p_GPS", "p_RC", "label", "fault",
+            "true_label"} <= set(pred.columns)
+    t = pred["TimeUS"] * 1e-6
+    for _, f in comb.iterrows():  # the decision per row is the summary's faults
+        inside = (t >= f["start_s"] - 0.01) & (t < f["end_s"] - 0.01)
+        assert (pred["fault"][inside] == f["label"]).all()
+    assert (pred["fault"] != 0).sum() == sum(
+        ((t >= f["start_s"] - 0.01) & (t < f["end_s"] - 0.01)).sum()
+        for _, f in comb.iterrows())
     assert np.allclose(pred[["p_Normal", "p_GPS", "p_RC"]].sum(axis=1), 1.0, atol=1e-4)
     assert (out / "combined_s21" / "timeline.png").stat().st_size > 10_000
     assert "sidecar: GPS at 71.7 s found" in capsys.readouterr().out

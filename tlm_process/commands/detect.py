@@ -31,8 +31,9 @@ outputs:
                                (log time, s since boot), peak_p, also (other classes
                                predicted briefly within it); class 'none' for a log where
                                nothing was found
-  DIR/<log>/predictions.parquet  TimeUS, p_<class> per class, label (the most probable);
-                               true_label when the log has a sidecar
+  DIR/<log>/predictions.parquet  TimeUS, p_<class> per class, label (the most probable),
+                               fault (the class of the fault reported over the row, 0
+                               outside them); true_label when the log has a sidecar
   DIR/<log>/timeline.png       class probabilities over time, the faults reported, the log's
                                MODE/ERR/EV marks, and the true fault windows when known
 

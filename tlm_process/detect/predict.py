@@ -7,7 +7,8 @@ the predicted label on every row. :func:`find_faults`: the faults a log holds by
 predictions: runs of one fault class that last at least :data:`MIN_FAULT_S` (a persistence
 filter, as :data:`tlm_process.evaluate.events.PERSISTENCE_S`), merged across gaps shorter than
 :data:`MERGE_GAP_S`, and runs of several classes that touch taken as one fault named by its
-main class.
+main class. :func:`fault_rows`: the detector's decision per row, the class of the fault found
+over it (0 outside every fault found).
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ from tlm_process.detect.model import Detector
 from tlm_process.evaluate.events import PERSISTENCE_S
 from tlm_process.labels import class_name
 
-__all__ = ["MERGE_GAP_S", "MIN_FAULT_S", "Finding", "find_faults", "log_features",
-           "predict_rows"]
+__all__ = ["MERGE_GAP_S", "MIN_FAULT_S", "Finding", "fault_rows", "find_faults",
+           "log_features", "predict_rows"]
 
 #: A fault class must be predicted on consecutive rows covering this long to be reported [s].
 MIN_FAULT_S: float = PERSISTENCE_S
@@ -142,4 +143,16 @@ def find_faults(pred: pd.DataFrame, classes: Sequence[int],
         peak = max(float(prob[main][idx].max()) for c, idx in ev if c == main)
         out.append(Finding(main, float(t[first]), float(t[last] + dt), peak,
                            tuple(sorted(c for c in rows if c != main))))
+    return out
+
+
+def fault_rows(time_us: np.ndarray, findings: Sequence[Finding]) -> np.ndarray:
+    """The detector's decision on rows at ``time_us`` [µs]: the label of the finding whose
+    span (``start_s`` <= t < ``end_s``) holds the row, 0 (normal) for rows outside every
+    finding. Unlike the per-row most probable class, a flicker shorter than
+    :data:`MIN_FAULT_S` is not a fault, and the short gaps inside a fault are."""
+    t = np.asarray(time_us, dtype=np.float64) * 1e-6
+    out = np.zeros(len(t), dtype=np.int16)
+    for f in findings:
+        out[(t >= f.start_s - 1e-9) & (t < f.end_s - 1e-9)] = f.label
     return out

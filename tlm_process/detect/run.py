@@ -1,7 +1,8 @@
 """``tlm detect``'s work: a saved detector over many logs, written as the user reads it.
 
 For each log: ``DIR/<log>/predictions.parquet`` (``TimeUS``, ``p_<class>`` per class,
-``label``, and ``true_label`` when the log has a sidecar), ``DIR/<log>/timeline.png``
+``label`` the most probable class, ``fault`` the class of the fault found over the row, 0
+outside the faults found, and ``true_label`` when the log has a sidecar), ``DIR/<log>/timeline.png``
 (:mod:`.plots`); one row per fault found in ``DIR/summary.csv`` (``log``, ``class``,
 ``label``, ``start_s``, ``end_s``, ``peak_p``, ``also``: other classes predicted briefly
 within the same fault; a row with class ``none`` for a log where nothing was found) and, for
@@ -23,7 +24,7 @@ import pandas as pd
 from tlm_process.detect.channels import needed_columns
 from tlm_process.detect.data import DetectError, LogData, read_log
 from tlm_process.detect.model import Detector
-from tlm_process.detect.predict import Finding, find_faults, log_features, predict_rows
+from tlm_process.detect.predict import Finding, fault_rows, find_faults, log_features, predict_rows
 from tlm_process.labels import class_name
 from tlm_process.pipeline.errors import PipelineError
 
@@ -99,6 +100,8 @@ def detect_log(det: Detector, path: str | Path, *, allow_missing: bool = False) 
             refuse_missing(det, log, missing)
     pred = predict_rows(det, time_us, X, log.windows)
     findings = find_faults(pred, det.classes)
+    pred.insert(pred.columns.get_loc("label") + 1, "fault",
+                fault_rows(pred["TimeUS"].to_numpy(), findings))
     res = LogResult(log, findings, pred, missing)
     if log.windows is not None:
         res.scores = score_log(pred, findings, log)
