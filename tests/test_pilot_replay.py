@@ -94,6 +94,30 @@ def test_rc_table_drops_rows_without_radio_and_fills_channels():
     assert t[0, 8] == 1800.0  # channel 8 missing: idle
 
 
+def test_rc_table_interpolates_the_sticks_onto_the_receiver_frames():
+    """RCIN at 10 Hz: the sticks (RCMAP's channels) are linear between rows at 50 Hz, the mode
+    switch is held row to row, and rows 0.5 s apart (the radio lost) are not filled."""
+    import pandas as pd
+
+    from tlm_process.pilot.replay import RC_FRAME_HZ
+    from tlm_sim.sensors.rc import RC_FRAME_US
+
+    assert RC_FRAME_HZ == 1e6 / RC_FRAME_US
+    rcin = pd.DataFrame({"TimeUS": [1.0e6, 1.1e6, 1.6e6], "C1": [1500, 1600, 1600],
+                         "C2": [1500, 1400, 1400], "C3": [1100, 1200, 1200],
+                         "C4": [1500, 1500, 1700], "C5": [1165, 1685, 1685],
+                         "C6": [1000, 2000, 2000]})
+    t = rc_table({"RCIN": rcin})
+    assert np.allclose(t[:, 0], [1.0, 1.02, 1.04, 1.06, 1.08, 1.1, 1.6])
+    assert np.allclose(t[:6, 1], np.linspace(1500, 1600, 6))
+    assert np.allclose(t[:6, 2], np.linspace(1500, 1400, 6))
+    assert np.allclose(t[:6, 3], np.linspace(1100, 1200, 6))
+    assert (t[:5, 5] == 1165).all() and (t[:5, 6] == 1000).all() and t[5, 5] == 1685
+    # channel 6 mapped to roll: it moves, channel 1 is held
+    t = rc_table({"RCIN": rcin}, {"RCMAP_ROLL": 6})
+    assert np.allclose(t[:6, 6], np.linspace(1000, 2000, 6)) and (t[:5, 1] == 1500).all()
+
+
 def test_gcs_mode_changes_of_a_log_are_asked_for_again():
     import pandas as pd
 

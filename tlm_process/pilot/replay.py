@@ -2,8 +2,10 @@
 without an AUTO mission).
 
 A pilot-flown log carries what the pilot's transmitter sent: RCIN, channels 1..8 at the log's
-rate (10 Hz in SITL's and most real logs). tlm flies it as it was sent (:func:`rc_table`: each
-row held until the next, as tlm's 50 Hz receiver delivers it), from the log's parameters
+rate (10 Hz in SITL's and most real logs). tlm flies it as it was sent (:func:`rc_table`: the
+sticks interpolated between the rows onto tlm's 50 Hz receiver frames, so a stick moved over
+half a second is not replayed 0-100 ms late; the mode switch and the other channels held
+from row to row), from the log's parameters
 (:func:`log_params`: a SITL log's PARM as it starts; a real vehicle's modelled parameters,
 Copter 3.3 names translated, and its battery), with the sidecar's faults or the SIM_* changes
 in PARM, on the log's own time line: the vehicle arms by the rudder gesture where the log's
@@ -56,6 +58,10 @@ HEIGHT_MODES = (2, 5, 16)  # ALT_HOLD, LOITER, POSHOLD
 #: arms after 3 s, at the next tick)
 GESTURE_S = 3.02
 CHANNELS = tuple(f"C{k}" for k in range(1, 9))
+#: the receiver's frame rate the log's sticks are interpolated at [Hz] (tlm_sim.sensors.rc)
+RC_FRAME_HZ = 50.0
+#: rows further apart than this are not interpolated between [s]: the radio was lost
+RC_INTERP_GAP_S = 0.25
 
 
 def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
@@ -72,10 +78,13 @@ def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
     return bool((rcin[["C1", "C2", "C3", "C4"]].to_numpy(float) > 0).any())
 
 
-def rc_table(tables: Mapping[str, pd.DataFrame]) -> np.ndarray:
+def rc_table(tables: Mapping[str, pd.DataFrame],
+             params: Mapping[str, float] | None = None) -> np.ndarray:
     """The log's RCIN as tlm's RC table: rows (time since boot [s], channels 1..8 [us]) where
     the receiver delivered the sticks (rows with roll, pitch, throttle and yaw all 0, no
-    radio, are dropped; a channel the log lacks or logs as 0 takes SITL's idle value)."""
+    radio, are dropped; a channel the log lacks or logs as 0 takes SITL's idle value), the
+    stick channels (``params``' RCMAP_*, 1-4 by default) interpolated in between at
+    :data:`RC_FRAME_HZ` (:func:`_interpolate_sticks`)."""
     from tlm_sim.ardupilot import RC_IDLE_PWM
 
     rcin = tables["RCIN"]
@@ -87,7 +96,36 @@ def rc_table(tables: Mapping[str, pd.DataFrame]) -> np.ndarray:
     for k, ch in enumerate(CHANNELS):
         v = r[ch].to_numpy(float) if ch in r else np.zeros(len(r))
         out[:, k + 1] = np.where(v > 0, v, RC_IDLE_PWM[k])
-    return out
+    p = params or {}
+    cols = sorted({int(p.get(f"RCMAP_{a}", d)) for a, d in
+                   (("ROLL", 1), ("PITCH", 2), ("THROTTLE", 3), ("YAW", 4))} & set(range(1, 9)))
+    return _interpolate_sticks(out, cols)
+
+
+def _interpolate_sticks(rows: np.ndarray, cols: Sequence[int]) -> np.ndarray:
+    """``rows`` (time [s], channels 1..8) with rows added every 1/:data:`RC_FRAME_HZ` s
+    between two rows at most :data:`RC_INTERP_GAP_S` apart: the channels ``cols``
+    (1-based) linear between the two, the others the first row's (a switch is not moved
+    through its middle positions). A gap longer than that (the radio lost) is held, as
+    before."""
+    if len(rows) < 2:
+        return rows
+    t = rows[:, 0]
+    dt = np.diff(t)
+    n = np.where((dt <= RC_INTERP_GAP_S) & (dt > 0.0),
+                 np.ceil(dt * RC_FRAME_HZ - 1e-6).astype(int) - 1, 0)
+    n = np.maximum(n, 0)
+    src = np.repeat(np.arange(len(dt)), n)
+    if not len(src):
+        return rows
+    j = np.arange(len(src)) - np.repeat(np.cumsum(n) - n, n) + 1
+    frac = j / RC_FRAME_HZ / dt[src]
+    added = rows[src].copy()
+    added[:, 0] = t[src] + j / RC_FRAME_HZ
+    c = np.asarray(cols, dtype=int)
+    added[:, c] += frac[:, None] * (rows[src + 1][:, c] - rows[src][:, c])
+    out = np.concatenate([rows, added])
+    return out[np.argsort(out[:, 0], kind="stable")]
 
 
 def _gesture_in_log(table: np.ndarray, arm_s: float, params: Mapping[str, float]) -> bool:
@@ -219,7 +257,7 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
     values = dict(lt.params)
     doc = _sidecar(path, sidecar)
     params, notes = log_params(tables, values)
-    table = rc_table(tables)
+    table = rc_table(tables, values)
     if not len(table):
         raise ValueError(f"{path}: RCIN has no stick input to replay")
     arm_us, _ = arming_time_us(tables, values)
