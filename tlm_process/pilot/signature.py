@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from tlm_process.fit.stats import throttle_out
-from tlm_process.logread import arming_time_us, disarm_time_us
+from tlm_process.logread import arming_time_us, disarm_time_us, motor_columns
 from tlm_process.reference import time_window
 
 __all__ = ["METRICS", "StickSegment", "flight_time_s", "pilot_signature", "segment_metrics",
@@ -167,9 +167,10 @@ def _nan_stat(s: pd.Series | None, how: str) -> float:
 
 
 def segment_metrics(tables: Mapping[str, pd.DataFrame], seg: StickSegment,
-                    n_motors: int = 4) -> dict[str, float]:
+                    params: Mapping[str, float] | None = None) -> dict[str, float]:
     """The :data:`METRICS` of one stick segment (NaN where the log lacks the table);
-    ``n_motors``: the frame's motors (RCOU C1..Cn)."""
+    ``params`` (the log's) give the frame's motors, RCOU's first N outputs
+    (:func:`tlm_process.logread.motor_columns`: FRAME_CLASS; a quad without it)."""
     a, b = seg.start_us, seg.end_us
     att = time_window(tables.get("ATT"), a, b)
     gps = tables.get("GPS")
@@ -178,9 +179,9 @@ def segment_metrics(tables: Mapping[str, pd.DataFrame], seg: StickSegment,
     gps = time_window(gps, a, b)
     ctun = time_window(tables.get("CTUN"), a, b)
     rcou = time_window(tables.get("RCOU"), a, b)
-    prefix = "C" if "C1" in rcou else "Ch"  # Copter 3.x: Ch1..
-    others = [f"{prefix}{k}" for k in range(2, n_motors + 1) if f"{prefix}{k}" in rcou]
-    excess = (rcou[f"{prefix}1"] - rcou[others].mean(axis=1)) if len(rcou) and others else None
+    motors = motor_columns(rcou, dict(params or {}))
+    others = motors[1:]
+    excess = (rcou[motors[0]] - rcou[others].mean(axis=1)) if len(rcou) and others else None
     thr = throttle_out(ctun) if len(ctun) and ("ThO" in ctun or "ThrOut" in ctun) else None
     return {
         "pitch_mean_deg": _nan_stat(att.get("Pitch"), "mean"),
@@ -200,24 +201,13 @@ def pilot_signature(tables: Mapping[str, pd.DataFrame], segments: Sequence[Stick
     """One row per stick segment: ``segment``, ``start_s`` / ``end_s`` (log time [s]), the
     stick positions and the :data:`METRICS`; ``params`` (the log's) give the frame's motor
     count (FRAME_CLASS; a quad without it)."""
-    n = _n_motors(params or {})
     rows = []
     for seg in segments:
         rows.append({"segment": seg.name, "start_s": seg.start_us * 1e-6,
                      "end_s": seg.end_us * 1e-6,
                      **{f"stick_{k}": v for k, v in seg.sticks.items()},
-                     **segment_metrics(tables, seg, n)})
+                     **segment_metrics(tables, seg, params)})
     return pd.DataFrame(rows)
-
-
-def _n_motors(params: Mapping[str, float]) -> int:
-    """The motors of the log's frame (FRAME_CLASS / FRAME_TYPE; 4 when unknown)."""
-    from tlm_sim.frames import FrameError, frame_for
-
-    try:
-        return frame_for(params.get("FRAME_CLASS", 1.0), params.get("FRAME_TYPE", 1.0)).n_motors
-    except FrameError:
-        return 4
 
 
 def flight_time_s(tables: Mapping[str, pd.DataFrame],
