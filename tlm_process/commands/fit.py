@@ -161,10 +161,10 @@ def _replay(args: argparse.Namespace, fitted: dict[str, float], target: dict[str
 
 def format_table(log: dict[str, float], tlm: dict[str, float]) -> str:
     """statistic | log | tlm | tlm / log - 1, one line each."""
-    from tlm_process.fit.fit import FIT_STATS
+    from tlm_process.fit.fit import fitted_stats
     from tlm_process.fit.stats import ASYM_NAMES
 
-    fitted = (*FIT_STATS, *ASYM_NAMES)
+    fitted = (*fitted_stats(log), *ASYM_NAMES)
     lines = [f"{'statistic':<24} {'log':>9} {'tlm':>9} {'diff':>7}  fitted"]
     for k, v in log.items():
         t = tlm.get(k, math.nan)

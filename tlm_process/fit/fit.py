@@ -19,12 +19,19 @@ adjusts, a few flights in turn:
   a real airframe is never balanced, and a detector trained on a balanced one calls the log's
   unequal motors a fault).
 
+* with a log that has VIBE (Copter 3.4 on): the rotor frequency (``SIM_VIB_MOT_MAX``) to
+  how the log's VIBE stands to its logged accel noise (:func:`_rotor_step`). VIBE measures the
+  vibration at the sensor's own rate, the logged IMU rows see it through the 20 Hz INS filter
+  (about (20 Hz / f)^2 at a rotor frequency f), so their ratio grows with f squared; fitting
+  the accel noise alone at an assumed frequency leaves VIBE tens of per cent off, and a
+  detector that reads VIBE calls the difference a fault.
+
 A statistic is the flight's own motion and the sensor's noise together; the motion (the
 statistic of a first flight without vibration or gusts, the *floor*) is taken out in
 quadrature when a gain is scaled. The rate-tracking error is not fitted: it follows from the
 gyro noise and the gusts through tlm's controllers, and the report compares it too; the gusts
 are the same on every axis, so roll and pitch are fitted as one. A log's rotor
-frequency is not in its 25-50 Hz IMU rows: ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ`, the
+frequency is not in its 25-50 Hz IMU rows: without VIBE ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ`, the
 rotors' speed lags their commands by :data:`ROTOR_TC`, they turn :data:`MOT_SPREAD` apart and
 their vibration goes with their command squared about :data:`CMD_REF` (a SITL log's own SIM_*
 parameters are its simulator's, not its vehicle's, and are not taken).
@@ -44,6 +51,7 @@ import pandas as pd
 from tlm_process.fit.stats import ASYM_NAMES, STAT_NAMES, motor_asymmetry, segment_stats
 
 __all__ = ["ACC_AMP", "CMD_REF", "FIT_SEEDS", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ",
+           "ROTOR_HZ_RANGE", "VIBE_STATS", "fitted_stats",
            "ROTOR_TC", "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_steps",
            "fit_vehicle", "fly_hover", "fly_hover_stats", "hover_mission", "hover_window",
            "log_battery", "log_vehicle_params", "tracking_error_std"]
@@ -58,6 +66,12 @@ GYR_AMP = 20.0
 #: pass the 20 Hz INS filters into the logged IMU rows as real logs show it (at SITL's
 #: autotest 350 Hz almost none does)
 ROTOR_HZ = 150.0
+#: the rotor frequencies [Hz at full command] a fit from VIBE keeps to
+ROTOR_HZ_RANGE = (50.0, 500.0)
+#: flights that find the rotor frequency before the calibrations (a log with VIBE)
+ROTOR_START_FLIGHTS = 3
+#: VIBE per axis, fitted (through the rotor frequency) where the log has it
+VIBE_STATS = ("vibe_x", "vibe_y", "vibe_z")
 #: rotor speed time constant [s] the vibration follows (``TLM_ROTOR_TC``): a motor, its ESC
 #: and its propeller answer a command change in tens of milliseconds; without it the rate
 #: controller's answer to the gyro vibration modulates the vibration's own frequency and
@@ -299,12 +313,20 @@ def hover_window(tables: Mapping[str, Any], alt_m: float = 10.0) -> tuple[float,
 def _gain(gain: float, target: float, got: float, floor: float) -> float:
     """A vibration gain moved towards the one at which sqrt(floor^2 + (gain x v)^2) meets
     target (the statistic's excess over the floor taken as proportional to the gain), damped
-    (the excess's exponent :data:`DAMPING`, at most x4 per flight) and within the gain's range."""
+    (the excess's exponent :data:`DAMPING`, at most x4 per flight) and within the gain's range;
+    where the flight's statistic hardly exceeds the floor, by the ratio of the statistics."""
     if not (math.isfinite(target) and math.isfinite(got)):
         return gain
     want = max(target**2 - floor**2, (0.1 * target) ** 2)
-    have = max(got**2 - floor**2, 1e-12)
-    step = min(max((want / have) ** (0.5 * DAMPING), 0.25), 4.0)
+    have = got**2 - floor**2
+    if have > (0.1 * got) ** 2:
+        step = min(max((want / have) ** (0.5 * DAMPING), 0.25), 4.0)
+    else:
+        # the flight's statistic is (nearly) all the floor's: the other knobs' shares, measured
+        # at other settings, say more than the flight shows, and the excess ratio would send
+        # the gain x4 (and the gusts, the fluctuation and the gyro gains with it, together):
+        # the ratio of the statistics themselves moves it instead
+        step = min(max((target / max(got, 1e-9)) ** DAMPING, 0.25), 4.0)
     return float(min(max(gain * step, 0.0), 20.0))
 
 
@@ -313,7 +335,8 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
                 progress: Callable[[int], None] | None = None,
                 battery: Mapping[str, float] | None = None) -> FitResult:
     """Fit tlm's vehicle to ``log_stats`` (:func:`segment_stats` of the log's steady segment),
-    starting from the log's parameters; a floor flight (no vibration), two calibration
+    starting from the log's parameters; a floor flight (no vibration), with VIBE in the log
+    the rotor frequency's start (:func:`_rotor_start`), two calibration
     flights (gyro vibration alone, the rotors' fluctuation alone: :func:`_shared_start`), then
     ``iterations`` fitting flights; the knobs averaged over the second half of them are
     returned with a flight of them (fewer than :data:`TAIL_MIN` in that half: the flight with
@@ -337,6 +360,11 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     floor = fly(base)
     if progress is not None:
         progress(1)
+    if _has_vibe(log_stats):
+        # the rotor frequency before the calibrations: the gyro vibration's share of the
+        # logged noise depends on it
+        base["SIM_VIB_MOT_MAX"] = _rotor_start(log_stats, floor, lambda hz: fly(
+            {**base, **fixed, "SIM_VIB_MOT_MAX": hz}))
     knobs = {"TLM_HOVER_THR": Params(base)["TLM_HOVER_THR"],
              **{f"TLM_VIB_ACC_{a}": 1.0 for a in "XYZ"},
              **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"},
@@ -355,6 +383,8 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     balance = [k for k, (stat, _, _) in ASYM_KNOBS.items()
                if math.isfinite(log_stats.get(stat, math.nan))]
     knobs.update(dict.fromkeys(balance, 0.0))
+    if _has_vibe(log_stats):
+        knobs["SIM_VIB_MOT_MAX"] = base["SIM_VIB_MOT_MAX"]
     last: dict[str, tuple[float, float]] = {}
     history, best, best_err = [], None, math.inf
     for k in range(iterations):
@@ -367,28 +397,7 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
                         **knobs, "max_rel_err": err})
         if err < best_err:
             best, best_err = (dict(params), got), err
-        thr = knobs["TLM_HOVER_THR"] * log_stats["hover_thr"] / max(got["hover_thr"], 1e-3)
-        knobs["TLM_HOVER_THR"] = float(min(max(thr, 0.05), 0.95))
-        for a in "xyz":
-            for kind, stat in (("ACC", f"acc_{a}_std"), ("GYR", f"gyr_{a}_std_dps")):
-                name = f"TLM_VIB_{kind}_{a.upper()}"
-                # what the statistic would be without this gain: the floor and, for the
-                # roll and pitch gyros, the rotors' fluctuation's share
-                without = _without(floor, shares, stat, knobs, "TLM_ROTOR_RND")
-                knobs[name] = _gain(knobs[name], log_stats[stat], got[stat], without)
-        if knobs["SIM_WIND_TURB"] > 0.0:
-            without = 0.5 * sum(_without(floor, shares, s, knobs, "TLM_ROTOR_RND", gain)
-                                for gain, s in AXIS_ATTITUDE.items())
-            knobs["SIM_WIND_TURB"] = _gain(knobs["SIM_WIND_TURB"], attitude_std(log_stats),
-                                           attitude_std(got), without)
-        if knobs["TLM_ROTOR_RND"] > 0.0:
-            without = 0.5 * sum(_without(floor, shares, err, knobs, gain)
-                                for gain, _, err in SHARED_STATS)
-            knobs["TLM_ROTOR_RND"] = min(_gain(knobs["TLM_ROTOR_RND"],
-                                               tracking_error_std(log_stats),
-                                               tracking_error_std(got), without), 0.5)
-        for name in balance:
-            knobs[name] = _balance_step(name, knobs[name], log_stats, got, floor, last)
+        _step_knobs(knobs, log_stats, got, floor, shares, balance, last)
     assert best is not None
     params, got = best
     tail = history[iterations // 2:]
@@ -402,6 +411,41 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
         progress(fit_steps(iterations))
     return FitResult(params=params, log=dict(log_stats), tlm=got, history=history,
                      dropped=dropped)
+
+
+
+def _step_knobs(knobs: dict[str, float], log_stats: Mapping[str, float],
+                got: Mapping[str, float], floor: Mapping[str, float],
+                shares: Mapping[str, Mapping[str, float]], balance: list[str],
+                last: dict[str, tuple[float, float]]) -> None:
+    """One fitting step: every knob moved (in place) from the flight ``got`` towards the log's
+    ``log_stats`` (the hover thrust, the vibration gains, the gusts, the rotors' fluctuation,
+    the balance and, with VIBE, the rotor frequency)."""
+    thr = knobs["TLM_HOVER_THR"] * log_stats["hover_thr"] / max(got["hover_thr"], 1e-3)
+    knobs["TLM_HOVER_THR"] = float(min(max(thr, 0.05), 0.95))
+    for a in "xyz":
+        for kind, stat in (("ACC", f"acc_{a}_std"), ("GYR", f"gyr_{a}_std_dps")):
+            name = f"TLM_VIB_{kind}_{a.upper()}"
+            # what the statistic would be without this gain: the floor and, for the
+            # roll and pitch gyros, the rotors' fluctuation's share
+            without = _without(floor, shares, stat, knobs, "TLM_ROTOR_RND")
+            knobs[name] = _gain(knobs[name], log_stats[stat], got[stat], without)
+    if knobs["SIM_WIND_TURB"] > 0.0:
+        without = 0.5 * sum(_without(floor, shares, s, knobs, "TLM_ROTOR_RND", gain)
+                            for gain, s in AXIS_ATTITUDE.items())
+        knobs["SIM_WIND_TURB"] = _gain(knobs["SIM_WIND_TURB"], attitude_std(log_stats),
+                                       attitude_std(got), without)
+    if knobs["TLM_ROTOR_RND"] > 0.0:
+        without = 0.5 * sum(_without(floor, shares, err, knobs, gain)
+                            for gain, _, err in SHARED_STATS)
+        knobs["TLM_ROTOR_RND"] = min(_gain(knobs["TLM_ROTOR_RND"],
+                                           tracking_error_std(log_stats),
+                                           tracking_error_std(got), without), 0.5)
+    for name in balance:
+        knobs[name] = _balance_step(name, knobs[name], log_stats, got, floor, last)
+    if "SIM_VIB_MOT_MAX" in knobs:
+        knobs["SIM_VIB_MOT_MAX"] = _rotor_step(knobs["SIM_VIB_MOT_MAX"], log_stats, got,
+                                               floor)
 
 
 def fit_steps(iterations: int) -> int:
@@ -509,10 +553,59 @@ def tracking_error_std(stats: Mapping[str, float]) -> float:
     return 0.5 * (stats["rate_roll_err_std_dps"] + stats["rate_pitch_err_std_dps"])
 
 
+def _has_vibe(stats: Mapping[str, float]) -> bool:
+    """Whether ``stats`` hold VIBE on every axis (a log of Copter 3.4 on)."""
+    return all(math.isfinite(stats.get(v, math.nan)) and stats[v] > 0 for v in VIBE_STATS)
+
+
+def fitted_stats(log_stats: Mapping[str, float]) -> tuple[str, ...]:
+    """The statistics a fit of ``log_stats`` drives to the log's: :data:`FIT_STATS`, and
+    :data:`VIBE_STATS` where the log has VIBE."""
+    return (*FIT_STATS, *(VIBE_STATS if _has_vibe(log_stats) else ()))
+
+
+def _vibe_ratio(stats: Mapping[str, float], floor: Mapping[str, float]) -> float:
+    """The geometric mean over the axes of VIBE over the accel noise's excess over the floor
+    (the flight's own motion, in quadrature)."""
+    r = [stats[f"vibe_{a}"] / math.sqrt(max(stats[f"acc_{a}_std"] ** 2
+                                            - floor[f"acc_{a}_std"] ** 2, 1e-12))
+         for a in "xyz"]
+    return float(np.exp(np.mean(np.log(r))))
+
+
+def _rotor_start(target: Mapping[str, float], floor: Mapping[str, float],
+                 fly: Callable[[float], Mapping[str, float]]) -> float:
+    """The rotor frequency [Hz at full command] the fit starts from: from :data:`ROTOR_HZ`,
+    :data:`ROTOR_START_FLIGHTS` flights with the vibration at its starting gains, each moving
+    the frequency by the square root of the log's :func:`_vibe_ratio` over the flight's
+    (undamped), within :data:`ROTOR_HZ_RANGE`."""
+    hz = ROTOR_HZ
+    for _ in range(ROTOR_START_FLIGHTS):
+        want, have = _vibe_ratio(target, floor), _vibe_ratio(fly(hz), floor)
+        if not (math.isfinite(want) and math.isfinite(have) and want > 0 and have > 0):
+            break
+        hz = float(min(max(hz * math.sqrt(want / have), ROTOR_HZ_RANGE[0]),
+                       ROTOR_HZ_RANGE[1]))
+    return hz
+
+
+def _rotor_step(hz: float, target: Mapping[str, float], got: Mapping[str, float],
+                floor: Mapping[str, float]) -> float:
+    """The rotor frequency at full command [Hz] moved towards the log's ratio of VIBE to the
+    logged accel noise (:func:`_vibe_ratio`), which goes with the frequency squared (the INS
+    filter's roll-off): damped (:data:`DAMPING`), at most x1.4 per flight, within
+    :data:`ROTOR_HZ_RANGE`."""
+    want, have = _vibe_ratio(target, floor), _vibe_ratio(got, floor)
+    if not (math.isfinite(want) and math.isfinite(have) and want > 0 and have > 0):
+        return hz
+    step = min(max((want / have) ** (0.5 * DAMPING), 1 / 1.4), 1.4)
+    return float(min(max(hz * step, ROTOR_HZ_RANGE[0]), ROTOR_HZ_RANGE[1]))
+
+
 def _max_rel_err(got: Mapping[str, float], want: Mapping[str, float]) -> float:
-    """Largest |got / want - 1| over the :data:`FIT_STATS` the log has, the attitude
+    """Largest |got / want - 1| over the :func:`fitted_stats` the log has, the attitude
     (:func:`attitude_std`) and its tracking (:func:`tracking_error_std`)."""
-    pairs = [(got[s], want[s]) for s in FIT_STATS]
+    pairs = [(got[s], want[s]) for s in fitted_stats(want)]
     pairs.append((attitude_std(got), attitude_std(want)))
     pairs.append((tracking_error_std(got), tracking_error_std(want)))
     errs = [abs(g / w - 1.0) for g, w in pairs if math.isfinite(w) and w > 0]
