@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tests.conftest import flown, real_path
+from tests.conftest import flown, real_path, reference_path
 from tlm_process.fit.segment import parse_segment, steady_segments
 from tlm_process.fit.stats import STAT_NAMES, StatsError, rate_unit, segment_stats
 
@@ -229,6 +229,12 @@ def test_the_logs_battery_is_flown():
     assert keep["BATT_LOW_VOLT"] == 14.0 and keep["BATT_FS_LOW_ACT"] == 2.0
     assert keep["MOT_BAT_VOLT_MAX"] == pytest.approx(16.8)
     assert log_battery({}, {}) == {}
+    # a simulator's log flies the pack it flew (SITL's and tlm's: SIM_BATT_CAP_AH 0, never
+    # empty), not the autopilot's BATT_CAPACITY: a 3.3 Ah pack ran dry in the fitted missions
+    sitl = read_log_tables(reference_path("normal_s11.bin"))
+    assert sitl.params["BATT_CAPACITY"] == 3300.0
+    assert log_battery(sitl.tables, sitl.params) == {
+        "SIM_BATT_VOLTAGE": 12.6, "TLM_MAX_VOLT": 12.6, "SIM_BATT_CAP_AH": 0.0}
 
 
 # ------------------------------------------------------------------------------ the spectrum

@@ -210,8 +210,9 @@ def log_battery(tables: Mapping[str, Any], log_params: Mapping[str, float]) -> d
     """The log's battery for tlm to fly: the cell count from the voltage at arming (BAT.Volt,
     or Copter 3.x's CURR.Volt in V or cV) as ``SIM_BATT_VOLTAGE`` and the frame's full-pack
     ``TLM_MAX_VOLT`` (cells x :data:`CELL_FULL_V`, so a full pack gives the same thrust scale),
-    and ``BATT_CAPACITY`` as the simulated pack's ``SIM_BATT_CAP_AH``. Empty when the log has
-    no battery voltage."""
+    and ``BATT_CAPACITY`` as the simulated pack's ``SIM_BATT_CAP_AH`` (a simulator's log: its own
+    ``SIM_BATT_CAP_AH``, which SITL and tlm leave at 0, a pack that never empties). Empty when
+    the log has no battery voltage."""
     volts = None
     for name in ("BAT", "CURR"):
         df = tables.get(name)
@@ -228,7 +229,11 @@ def log_battery(tables: Mapping[str, Any], log_params: Mapping[str, float]) -> d
         cells = max(round(volts / CELL_AT_ARMING_V), 1)
         out["SIM_BATT_VOLTAGE"] = out["TLM_MAX_VOLT"] = round(cells * CELL_FULL_V, 2)
     cap = float(log_params.get("BATT_CAPACITY", 0.0) or 0.0)
-    if cap > 0:
+    if "SIM_BATT_CAP_AH" in log_params:
+        # a simulator's log (SITL's, tlm's): the pack it flew, 0 = never empty, whatever the
+        # autopilot's BATT_CAPACITY says (3300 mAh at SITL's defaults)
+        out["SIM_BATT_CAP_AH"] = float(log_params["SIM_BATT_CAP_AH"])
+    elif cap > 0:
         out["SIM_BATT_CAP_AH"] = cap * 1e-3
     return out
 
