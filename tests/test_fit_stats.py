@@ -262,3 +262,21 @@ def test_spectrum_of_imu_rows_finds_bands_and_peak():
     assert imu_spectra(tables, 10e6, 10.1e6) == {}
     text = format_spectra(spec, spec)
     assert "log at 50 Hz" in text and "gyr_x" in text and "peak  7.0 Hz" in text
+
+
+def test_a_fit_whose_hover_does_not_hold_stops_with_one_line(tmp_path, capsys, monkeypatch):
+    """A fitting flight that no longer holds its hover ends ``tlm fit`` with one error line
+    naming the segment (exit 2), not a traceback."""
+    import tlm_process.fit.fit as fit_mod
+    from tlm_process.cli import main
+
+    def stalls(*_a, **_k):
+        raise fit_mod.FitError("tlm's hover flight did not hold its position (too much noise?)")
+
+    monkeypatch.setattr(fit_mod, "fit_vehicle", stalls)
+    assert main(["fit", str(real_path("log171.bin")), "--out", str(tmp_path / "v.parm")]) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("tlm: error:")]
+    assert "Traceback" not in err and len(lines) == 1
+    assert "the fit stopped" in lines[0] and "197.5-216.5 s" in lines[0]
+    assert not (tmp_path / "v.parm").exists()

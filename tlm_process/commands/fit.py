@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from tlm_process.fit.fit import FIT_SEEDS, fit_steps, fit_vehicle, log_battery
+    from tlm_process.fit.fit import FIT_SEEDS, FitError, fit_steps, fit_vehicle, log_battery
     from tlm_process.fit.segment import parse_segment, steady_segments
     from tlm_process.fit.spectrum import format_spectra
     from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
@@ -93,9 +93,14 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = fit_vehicle(target, lt.params, args.iterations, args.seed,
-                        progress=lambda k: bar.update(FIT_SEEDS * k - bar.n),
-                        battery=log_battery(lt.tables, lt.params))
+        try:
+            r = fit_vehicle(target, lt.params, args.iterations, args.seed,
+                            progress=lambda k: bar.update(FIT_SEEDS * k - bar.n),
+                            battery=log_battery(lt.tables, lt.params))
+        except FitError as exc:
+            raise UsageError(f"the fit stopped: {exc}; the segment "
+                             f"{t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s may not be a steady hover "
+                             f"(give --segment)") from None
     print(format_table(r.log, r.tlm))
     spectra = _spectra(lt.tables, (t0, t1), r.params, args.seed)
     print(format_spectra(*spectra))

@@ -51,7 +51,7 @@ import pandas as pd
 from tlm_process.fit.stats import ASYM_NAMES, STAT_NAMES, motor_asymmetry, segment_stats
 
 __all__ = ["ACC_AMP", "CMD_REF", "FIT_SEEDS", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ",
-           "ROTOR_HZ_RANGE", "VIBE_STATS", "fitted_stats",
+           "ROTOR_HZ_RANGE", "VIBE_STATS", "FitError", "fitted_stats",
            "ROTOR_TC", "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_steps",
            "fit_vehicle", "fly_hover", "fly_hover_stats", "hover_mission", "hover_window",
            "log_battery", "log_vehicle_params", "tracking_error_std"]
@@ -131,6 +131,10 @@ HOVER_S = 60
 SETTLE_S = 8.0
 #: and before its end (the copter turns for its RTL there) [s]
 END_S = 4.0
+
+
+class FitError(RuntimeError):
+    """A fit that cannot go on: a hover of the vehicle being fitted did not hold."""
 
 
 @dataclass
@@ -311,7 +315,7 @@ def hover_window(tables: Mapping[str, Any], alt_m: float = 10.0) -> tuple[float,
                 best = (start, k)
             start = None
     if t[best[1] - 1] - t[best[0]] < (SETTLE_S + END_S + 10.0) * 1e6:
-        raise RuntimeError("tlm's hover flight did not hold its position (too much noise?)")
+        raise FitError("tlm's hover flight did not hold its position (too much noise?)")
     return float(t[best[0]]), float(t[best[1] - 1])
 
 
