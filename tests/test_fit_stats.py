@@ -280,3 +280,20 @@ def test_a_fit_whose_hover_does_not_hold_stops_with_one_line(tmp_path, capsys, m
     assert "Traceback" not in err and len(lines) == 1
     assert "the fit stopped" in lines[0] and "197.5-216.5 s" in lines[0]
     assert not (tmp_path / "v.parm").exists()
+
+
+def test_a_segment_flown_without_position_hold_is_noted(tmp_path, capsys):
+    """SITL's ALT_HOLD flight: ``tlm fit`` notes that the segment's mode does not hold the
+    position, while the fit's hovers do (their attitude std runs higher); a LOITER segment
+    gets no such note."""
+    from tlm_process.cli import main
+    from tlm_process.commands.fit import segment_mode
+
+    log = reference_path("pilot/manual_althold_s92.bin")
+    assert main(["fit", str(log), "--out", str(tmp_path / "v.parm"), "--iterations", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "note: the segment was flown in ALT_HOLD, which does not hold the position" in out
+    from tlm_process.logread import read_log_tables
+
+    lt = read_log_tables(reference_path("pilot/manual_loiter_s90.bin"), ["MODE"])
+    assert segment_mode(lt.tables, 60e6) == 5 and segment_mode(lt.tables, 0.0) is None

@@ -106,6 +106,14 @@ def run(args: argparse.Namespace) -> int:
     print(format_spectra(*spectra))
     for name, why in r.dropped.items():
         print(f"note: the log's {name} is not flown: {why}")
+    mode = segment_mode(lt.tables, t0)
+    if mode is not None and mode not in POSITION_MODES:
+        from tlm_sim.ardupilot import MODE_NAMES
+
+        print(f"note: the segment was flown in {MODE_NAMES.get(mode, mode)}, which does not hold "
+              "the position; tlm's fitting hovers hold theirs and lean against the gusts, so "
+              "their roll_std_deg and pitch_std_deg (compared, not fitted) run higher than the "
+              "log's")
     from tlm_sim.params import Params
 
     p = Params(r.params)
@@ -119,6 +127,21 @@ def run(args: argparse.Namespace) -> int:
     if args.replay:
         _replay(args, r.params, target, (t0, t1))
     return 0
+
+
+#: flight modes that hold the horizontal position, as the fit's hovers (AUTO) do: AUTO,
+#: GUIDED, LOITER, RTL, CIRCLE, LAND, POSHOLD, BRAKE
+POSITION_MODES = frozenset({3, 4, 5, 6, 7, 9, 16, 17})
+
+
+def segment_mode(tables: Any, t0_us: float) -> int | None:
+    """The flight mode (MODE.ModeNum) at ``t0_us``: the last MODE row at or before it; None
+    without MODE rows before it."""
+    mode = tables.get("MODE")
+    if mode is None or not len(mode) or "ModeNum" not in mode:
+        return None
+    before = mode[mode["TimeUS"] <= t0_us]
+    return int(before["ModeNum"].iloc[-1]) if len(before) else None
 
 
 def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int
