@@ -50,7 +50,7 @@ from tlm_sim.control.pilot_modes import (
 from tlm_sim.control.position import (
     althold_lean_update,
     angle_boost,
-    relax_xy_target,
+    soften_for_landing_xy,
     xy_init_stopping_point,
     xy_reset,
     xy_update,
@@ -539,14 +539,8 @@ def _land_descent(c, g, t_us, pos, land_vertical, ev):
     c[C.PXY_ACC_FF + 1] = 0.0
     c[C.PZ_ACC_FF] = 0.0
     if c[C.MAYBE_LANDED] != 0.0:
-        # AC_PosControl::soften_for_landing_NE (Mode::land_run_horizontal_control while
-        # land_complete_maybe): the position target decays to the estimate with
-        # POSCONTROL_RELAX_TC and the velocity integrator may not grow along the acceleration
-        # target (set_externally_limited_NE), so a copter on the ground in wind does not wind
-        # its lean target up before the detector completes
-        relax_xy_target(c, pos, dt)
-        for j in range(2):
-            c[C.PXY_LIMIT + j] = c[C.PXY_ACC_T + j]
+        # Mode::land_run_horizontal_control while land_complete_maybe
+        soften_for_landing_xy(c, pos, dt)
     if land_vertical:
         # ArduCopter's land descent rate: the square-root controller (PSC_POSZ_P,
         # WPNAV_ACCEL_Z) towards LAND_ALT_LOW, kept between LAND_SPEED and LAND_SPEED_HIGH

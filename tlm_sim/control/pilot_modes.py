@@ -46,7 +46,7 @@ from tlm_sim.control.position import (
     LEAN_LIMIT_MIN,
     althold_lean_update,
     angle_boost,
-    relax_xy_target,
+    soften_for_landing_xy,
     xy_control,
     xy_reset,
     z_control,
@@ -445,7 +445,8 @@ def _loiter_xy(c, g, t_s, inputs, stick_in):
     drag (terminal speed LOIT_SPEED at full stick) and braking once the stick has been
     centred LOIT_BRK_DELAY; the position target moves with it and the position controller
     follows (LOIT_ACC_MAX, 2 m of error). While the land detector says "maybe landed" the
-    position target decays to the estimate (soften_for_landing)."""
+    position target decays to the estimate and the velocity integrator may not grow along the
+    acceleration target (soften_for_landing)."""
     dt = g[C.G_DT]
     pos, vel, q = inputs.pos, inputs.vel, inputs.q
     cy, sy = _heading(q)
@@ -486,7 +487,7 @@ def _loiter_xy(c, g, t_s, inputs, stick_in):
     c[C.PXY_POS_T] += vn * dt
     c[C.PXY_POS_T + 1] += ve * dt
     if c[C.MAYBE_LANDED] != 0.0:
-        relax_xy_target(c, pos, dt)
+        soften_for_landing_xy(c, pos, dt)
     c[C.PXY_VEL_FF] = vn
     c[C.PXY_VEL_FF + 1] = ve
     c[C.PXY_ACC_FF] = an

@@ -90,6 +90,19 @@ def relax_xy_target(c, pos, dt):
 
 
 @tick_jit
+def soften_for_landing_xy(c, pos, dt):
+    """AC_PosControl::soften_for_landing_NE, while the land detector says maybe landed (LAND,
+    and AC_Loiter's soften_for_landing in LOITER and POSHOLD): the horizontal position target
+    decays to the estimate pos (NED) [m] (:func:`relax_xy_target`), and the velocity
+    integrator may not grow along last tick's acceleration target
+    (set_externally_limited_NE), so a copter on the ground in wind does not wind its lean
+    target up before the detector completes."""
+    relax_xy_target(c, pos, dt)
+    for j in range(2):
+        c[C.PXY_LIMIT + j] = c[C.PXY_ACC_T + j]
+
+
+@tick_jit
 def althold_lean_update(c, g, throttle):
     """Update the lean-angle limit from the throttle demand (0..1): acos(throttle / 0.8) low-passed
     with ATC_ANG_LIM_TC, so that a saturated throttle leaves thrust for height before lean
