@@ -283,17 +283,42 @@ def test_a_fit_whose_hover_does_not_hold_stops_with_one_line(tmp_path, capsys, m
 
 
 def test_a_segment_flown_without_position_hold_is_noted(tmp_path, capsys):
-    """SITL's ALT_HOLD flight: ``tlm fit`` notes that the segment's mode does not hold the
-    position, while the fit's hovers do (their attitude std runs higher); a LOITER segment
-    gets no such note."""
+    """SITL's ALT_HOLD flight is fitted with ALT_HOLD hovers and no gusts (a note says so);
+    its STABILIZE flight with the AUTO hovers and a note that their attitude std runs higher;
+    a LOITER segment's mode holds the position."""
     from tlm_process.cli import main
     from tlm_process.commands.fit import segment_mode
-
-    log = reference_path("pilot/manual_althold_s92.bin")
-    assert main(["fit", str(log), "--out", str(tmp_path / "v.parm"), "--iterations", "1"]) == 0
-    out = capsys.readouterr().out
-    assert "note: the segment was flown in ALT_HOLD, which does not hold the position" in out
     from tlm_process.logread import read_log_tables
+    from tlm_sim.params import Params
 
+    out = tmp_path / "v.parm"
+    log = reference_path("pilot/manual_althold_s92.bin")
+    assert main(["fit", str(log), "--out", str(out), "--iterations", "1"]) == 0
+    text = capsys.readouterr().out
+    assert "note: the segment was flown in ALT_HOLD: so were tlm's fitting hovers" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert Params.from_parm(out)["SIM_WIND_TURB"] == 0.0
+    log = reference_path("pilot/manual_stabilize_s93.bin")
+    assert main(["fit", str(log), "--out", str(out), "--iterations", "1"]) == 0
+    text = capsys.readouterr().out
+    assert "note: the segment was flown in STABILIZE, which does not hold the position" in text
     lt = read_log_tables(reference_path("pilot/manual_loiter_s90.bin"), ["MODE"])
     assert segment_mode(lt.tables, 60e6) == 5 and segment_mode(lt.tables, 0.0) is None
+
+
+def test_an_alt_hold_hover_does_not_lean_against_the_gusts():
+    """The fit's ALT_HOLD hover (a pilot's, sticks centred) flies ALT_HOLD through its window,
+    and in the same gusts its attitude wanders far less than the AUTO hold's, which leans
+    against them to keep its position."""
+    from tlm_process.fit.fit import ALT_HOLD, fly_hover, fly_hover_stats
+
+    p = {"FRAME_TYPE": 1, "SIM_WIND_TURB": 1.0, "TLM_TURB_TC": 1.0}
+    log, t0, t1 = fly_hover(p, 1, 40, ALT_HOLD)
+    mode = log.tables["MODE"]
+    assert int(mode[mode.TimeUS <= t0].ModeNum.iloc[-1]) == ALT_HOLD and t1 - t0 > 25e6
+    assert not (mode.TimeUS.between(t0, t1)).any()
+    held = fly_hover_stats(p, 1, 40, ALT_HOLD)
+    auto = fly_hover_stats(p, 1, 40)
+    assert held["roll_std_deg"] < 0.5 * auto["roll_std_deg"]
+    assert held["pitch_std_deg"] < 0.5 * auto["pitch_std_deg"]

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tlm_process.fit.fit import fit_vehicle, fly_hover_stats, log_battery
+from tlm_process.commands.fit import segment_mode
+from tlm_process.fit.fit import ALT_HOLD, fit_vehicle, fly_hover_stats, log_battery
 from tlm_process.fit.segment import parse_segment
 from tlm_process.fit.stats import segment_stats
 from tlm_process.logread import read_log_tables
@@ -48,9 +49,12 @@ def main() -> int:
         lt = read_log_tables(args.log)
         first = segment_stats(lt.tables, t0, mid)
         second = segment_stats(lt.tables, mid, t1)
+        # a segment flown in ALT_HOLD is fitted and compared with ALT_HOLD hovers (tlm fit)
+        mode = ALT_HOLD if segment_mode(lt.tables, t0) == ALT_HOLD else None
         fit = fit_vehicle(first, lt.params, args.iterations, seed=args.fit_seed,
-                          battery=log_battery(lt.tables, lt.params))
-        runs = [fly_hover_stats(fit.params, seed=101 + k) for k in range(args.seeds)]
+                          battery=log_battery(lt.tables, lt.params), mode=mode)
+        runs = [fly_hover_stats(fit.params, seed=101 + k, mode=mode)
+                for k in range(args.seeds)]
     tlm = {k: float(np.mean([r[k] for r in runs])) for k in runs[0]}
     spread = {k: float(np.std([r[k] for r in runs])) for k in runs[0]}
     print(f"{Path(args.log).name}: fitted on {t0 * 1e-6:.1f}-{mid * 1e-6:.1f} s, compared "

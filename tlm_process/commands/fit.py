@@ -58,7 +58,14 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from tlm_process.fit.fit import FIT_SEEDS, FitError, fit_steps, fit_vehicle, log_battery
+    from tlm_process.fit.fit import (
+        ALT_HOLD,
+        FIT_SEEDS,
+        FitError,
+        fit_steps,
+        fit_vehicle,
+        log_battery,
+    )
     from tlm_process.fit.segment import parse_segment, steady_segments
     from tlm_process.fit.spectrum import format_spectra
     from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
@@ -90,30 +97,37 @@ def run(args: argparse.Namespace) -> int:
     except StatsError as exc:
         raise UsageError(str(exc)) from None
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
+    mode = segment_mode(lt.tables, t0)
+    hover_mode = ALT_HOLD if mode == ALT_HOLD else None
     with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
             r = fit_vehicle(target, lt.params, args.iterations, args.seed,
                             progress=lambda k: bar.update(FIT_SEEDS * k - bar.n),
-                            battery=log_battery(lt.tables, lt.params))
+                            battery=log_battery(lt.tables, lt.params), mode=hover_mode)
         except FitError as exc:
             raise UsageError(f"the fit stopped: {exc}; the segment "
                              f"{t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s may not be a steady hover "
                              f"(give --segment)") from None
     print(format_table(r.log, r.tlm))
-    spectra = _spectra(lt.tables, (t0, t1), r.params, args.seed)
+    spectra = _spectra(lt.tables, (t0, t1), r.params, args.seed, hover_mode)
     print(format_spectra(*spectra))
     for name, why in r.dropped.items():
         print(f"note: the log's {name} is not flown: {why}")
-    mode = segment_mode(lt.tables, t0)
     if mode is not None and mode not in POSITION_MODES:
         from tlm_sim.ardupilot import MODE_NAMES
 
-        print(f"note: the segment was flown in {MODE_NAMES.get(mode, mode)}, which does not hold "
-              "the position; tlm's fitting hovers hold theirs and lean against the gusts, so "
-              "their roll_std_deg and pitch_std_deg (compared, not fitted) run higher than the "
-              "log's")
+        name = MODE_NAMES.get(mode, mode)
+        if hover_mode == ALT_HOLD:
+            print("note: the segment was flown in ALT_HOLD: so were tlm's fitting hovers (sticks "
+                  "centred), and the gusts, which do not lean a copter that holds no position, "
+                  "were not fitted (SIM_WIND_TURB 0; tlm generate draws its own wind)")
+        else:
+            print(f"note: the segment was flown in {name}, which does not hold the position; "
+                  "tlm's fitting hovers hold theirs and lean against the gusts, so their "
+                  "roll_std_deg and pitch_std_deg (compared, not fitted) run higher than the "
+                  "log's")
     from tlm_sim.params import Params
 
     p = Params(r.params)
@@ -144,14 +158,14 @@ def segment_mode(tables: Any, t0_us: float) -> int | None:
     return int(before["ModeNum"].iloc[-1]) if len(before) else None
 
 
-def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int
-             ) -> tuple[dict[str, Any], dict[str, Any]]:
+def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int,
+             mode: int | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """The spectra of the log's IMU rows over the segment and of a hover of the fitted
-    vehicle (one more flight, seed ``seed`` + 100)."""
+    vehicle (one more flight, seed ``seed`` + 100, in ``mode`` as the fit's)."""
     from tlm_process.fit.fit import fly_hover
     from tlm_process.fit.spectrum import imu_spectra
 
-    log, h0, h1 = fly_hover(fitted, seed + 100)
+    log, h0, h1 = fly_hover(fitted, seed + 100, mode=mode)
     return imu_spectra(tables, *segment), imu_spectra(log.tables, h0, h1)
 
 

@@ -50,11 +50,11 @@ import pandas as pd
 
 from tlm_process.fit.stats import ASYM_NAMES, STAT_NAMES, motor_asymmetry, segment_stats
 
-__all__ = ["ACC_AMP", "CMD_REF", "FIT_SEEDS", "FIT_STATS", "GYR_AMP", "MOT_SPREAD", "ROTOR_HZ",
-           "ROTOR_HZ_RANGE", "VIBE_STATS", "FitError", "fitted_stats",
-           "ROTOR_TC", "TURB_TC", "FitResult", "attitude_std", "copter33_params", "fit_steps",
-           "fit_vehicle", "fly_hover", "fly_hover_stats", "hover_mission", "hover_window",
-           "log_battery", "log_vehicle_params", "tracking_error_std"]
+__all__ = ["ACC_AMP", "ALT_HOLD", "CMD_REF", "FIT_SEEDS", "FIT_STATS", "GYR_AMP", "MOT_SPREAD",
+           "ROTOR_HZ", "ROTOR_HZ_RANGE", "ROTOR_TC", "TURB_TC", "VIBE_STATS", "FitError",
+           "FitResult", "althold_hover_script", "attitude_std", "copter33_params", "fit_steps",
+           "fit_vehicle", "fitted_stats", "fly_hover", "fly_hover_stats", "hover_mission",
+           "hover_window", "log_battery", "log_vehicle_params", "tracking_error_std"]
 
 #: accelerometer vibration amplitude per motor [m/s^2] the per-axis gains scale (SITL's
 #: autotest quad's SIM_ACCn_RND)
@@ -126,6 +126,8 @@ ASYM_KNOBS: dict[str, tuple[str, float, float]] = {
     "TLM_CG_X": ("mot_pitch_us", 2000.0, 0.05),
     "TLM_CG_Y": ("mot_roll_us", -2000.0, 0.05),
     "TLM_YAW_ASYM": ("mot_yaw_us", -350.0, 0.5)}
+#: ArduCopter's ALT_HOLD mode number: a segment flown in it is fitted with ALT_HOLD hovers
+ALT_HOLD = 2
 #: hover flown per fit flight [s], and what of it is measured (after settling)
 HOVER_S = 60
 SETTLE_S = 8.0
@@ -270,14 +272,25 @@ def log_vehicle_params(log_params: Mapping[str, float]) -> tuple[dict[str, float
     return keep, dropped
 
 
-def fly_hover(params: Mapping[str, float], seed: int = 1, hold_s: int = HOVER_S
-              ) -> tuple[Any, float, float]:
+def fly_hover(params: Mapping[str, float], seed: int = 1, hold_s: int = HOVER_S,
+              mode: int | None = None) -> tuple[Any, float, float]:
     """A hover flown with ``params``: (the flight log, t0_us, t1_us), the window from
     :data:`SETTLE_S` after it reaches the hold point to :data:`END_S` before the hold of
-    ``hold_s`` ends (:func:`hover_window`)."""
+    ``hold_s`` ends (:func:`hover_window`). ``mode`` :data:`ALT_HOLD`: the hover is a pilot's
+    in ALT_HOLD, sticks centred at 10 m (:func:`althold_hover_script`), which does not hold
+    its position; any other: the AUTO hold of :func:`hover_mission`."""
     from tlm_sim import fly
     from tlm_sim.params import Params
 
+    if mode == ALT_HOLD:
+        from tlm_sim.mission.sticks import StickScript
+
+        rows, origin, descent = althold_hover_script(hold_s)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            log = fly(None, params=Params(dict(params)), seed=seed,
+                      sticks=StickScript.from_dict({"sticks": rows}))
+        return log, (origin + SETTLE_S) * 1e6, (descent - END_S) * 1e6
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         log = fly(hover_mission(hold_s=hold_s), params=Params(dict(params)), seed=seed)
@@ -286,11 +299,22 @@ def fly_hover(params: Mapping[str, float], seed: int = 1, hold_s: int = HOVER_S
     return log, t0 + SETTLE_S * 1e6, t1
 
 
+def althold_hover_script(hold_s: int = HOVER_S, alt_m: float = 10.0
+                         ) -> tuple[list[dict[str, Any]], float, float]:
+    """A pilot's ALT_HOLD hover as a stick script (generate's pilot flights: the ground station
+    selects the mode, rudder arming, a climb to ``alt_m``, sticks centred ``hold_s`` s, descent,
+    landing, rudder disarming): (rows, the hold's start, its end) [s since boot]."""
+    from tlm_process.generate.pilot_flights import pilot_script
+
+    return pilot_script({"mode": "ALT_HOLD", "alt": alt_m,
+                         "segments": [[0.0, 0.0, 0.0, float(hold_s), 0.0]]})
+
+
 def fly_hover_stats(params: Mapping[str, float], seed: int = 1,
-                    hold_s: int = HOVER_S) -> dict[str, float]:
+                    hold_s: int = HOVER_S, mode: int | None = None) -> dict[str, float]:
     """tlm's :data:`STAT_NAMES` and motor asymmetry over a hover flown with ``params``
     (:func:`fly_hover`)."""
-    log, t0, t1 = fly_hover(params, seed, hold_s)
+    log, t0, t1 = fly_hover(params, seed, hold_s, mode)
     return {**segment_stats(log.tables, t0, t1, unit=1.0),
             **motor_asymmetry(log.tables, t0, t1, log.params)}
 
@@ -342,7 +366,8 @@ def _gain(gain: float, target: float, got: float, floor: float) -> float:
 def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] | None = None,
                 iterations: int = 10, seed: int = 1,
                 progress: Callable[[int], None] | None = None,
-                battery: Mapping[str, float] | None = None) -> FitResult:
+                battery: Mapping[str, float] | None = None,
+                mode: int | None = None) -> FitResult:
     """Fit tlm's vehicle to ``log_stats`` (:func:`segment_stats` of the log's steady segment),
     starting from the log's parameters; a floor flight (no vibration), with VIBE in the log
     the rotor frequency's start (:func:`_rotor_start`), two calibration
@@ -351,7 +376,9 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     returned with a flight of them (fewer than :data:`TAIL_MIN` in that half: the flight with
     the smallest largest relative error over :data:`FIT_STATS`). ``progress`` is called with
     the number of fitting steps flown (:func:`fit_steps` in all); ``battery``: the log's pack
-    (:func:`log_battery`)."""
+    (:func:`log_battery`); ``mode``: the segment's flight mode (:data:`ALT_HOLD`: the hovers
+    fly it, and the gusts, which do not lean a copter that holds no position, are not
+    fitted; :func:`fly_hover`)."""
     from tlm_sim.params import Params
 
     base, dropped = log_vehicle_params(log_params or {})
@@ -364,7 +391,8 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
              "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_TURB_TC": TURB_TC}
 
     def fly(params: Mapping[str, float]) -> dict[str, float]:
-        return _mean_stats([fly_hover_stats(params, seed + j) for j in range(FIT_SEEDS)])
+        return _mean_stats([fly_hover_stats(params, seed + j, mode=mode)
+                            for j in range(FIT_SEEDS)])
 
     floor = fly(base)
     if progress is not None:
@@ -377,7 +405,8 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
     knobs = {"TLM_HOVER_THR": Params(base)["TLM_HOVER_THR"],
              **{f"TLM_VIB_ACC_{a}": 1.0 for a in "XYZ"},
              **{f"TLM_VIB_GYR_{a}": 1.0 for a in "XYZ"},
-             "SIM_WIND_TURB": TURB_START if math.isfinite(attitude_std(log_stats)) else 0.0,
+             "SIM_WIND_TURB": (TURB_START if math.isfinite(attitude_std(log_stats))
+                               and mode != ALT_HOLD else 0.0),
              "TLM_ROTOR_RND": 0.0}
     shares: dict[str, dict[str, float]] = {}
     if math.isfinite(tracking_error_std(log_stats)):
