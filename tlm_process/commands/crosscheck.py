@@ -56,7 +56,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "too)")
     c.add_argument("--replay", action="store_true",
                    help="re-fly the log from its RCIN (the pilot's sticks) and compare per "
-                        "stick segment; the default for a log with RCIN and no AUTO mode")
+                        "stick segment; the default for a log with RCIN and no AUTO mode (a "
+                        "log flown in random gusts, SIM_WIND_TURB > 0, is re-flown with five "
+                        "draws of them and judged on their range)")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
     c.add_argument("--out", type=folder, metavar="DIR",
                    help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "

@@ -19,7 +19,9 @@ sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segme
 peak pitch and roll and the top speed within 15 % of the log's (or within a noise floor of
 0.5 deg and 0.3 m/s, whichever is larger), the height held within 0.5 m (range of CTUN.Alt;
 or as well as the log held it, if worse) in the modes that hold it, motor 1's excess over
-the others within 15 % (floor 5 us); the flight time within 5 %.
+the others within 15 % (floor 5 us); the flight time within 5 %. A log flown in SITL's random
+gusts (``SIM_WIND_TURB`` > 0) holds one draw of them: it is re-flown with :data:`GUST_DRAWS`
+draws (seeds) and each measure judged on tlm's range over them, widened by the tolerance.
 """
 
 from __future__ import annotations
@@ -42,8 +44,8 @@ from tlm_process.pilot.signature import (
     segments_from_sidecar,
 )
 
-__all__ = ["PilotScenario", "REL_TOL", "judge", "log_params", "reconstruct_pilot", "replay",
-           "rc_table", "with_arm_gesture", "is_pilot_flown", "format_report", "plot"]
+__all__ = ["GUST_DRAWS", "PilotScenario", "REL_TOL", "format_report", "is_pilot_flown", "judge",
+           "log_params", "plot", "rc_table", "reconstruct_pilot", "replay", "with_arm_gesture"]
 
 #: issue 42's tolerances: relative, per measure, and the noise floors below which a difference
 #: is not judged relative (hover attitude ~0.1 deg, speed ~0.05 m/s, motor 1 +-1 us)
@@ -52,6 +54,10 @@ FLOORS: dict[str, float] = {"pitch_mean_deg": 0.5, "pitch_peak_deg": 0.5, "roll_
                             "roll_peak_deg": 0.5, "speed_max_ms": 0.3, "motor1_excess_us": 5.0}
 HEIGHT_HELD_M = 0.5
 FLIGHT_TIME_REL_TOL = 0.05
+#: draws of the gusts a log flown in SITL's random gusts (SIM_WIND_TURB > 0) is re-flown with:
+#: its gusts are one draw, tlm's seeds others, so a measure is judged against tlm's range over
+#: the draws (widened by the tolerance)
+GUST_DRAWS = 5
 #: the modes that hold height (their segments' CTUN.Alt range is judged)
 HEIGHT_MODES = (2, 5, 16)  # ALT_HOLD, LOITER, POSHOLD
 #: the rudder gesture tlm inserts: this long before the log's arming time [s] (the gesture
@@ -313,26 +319,36 @@ def _mode_at(tables: Mapping[str, pd.DataFrame], t_us: float) -> int | None:
 
 
 def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.DataFrame],
-          rel_tol: float = REL_TOL) -> pd.DataFrame:
+          rel_tol: float = REL_TOL, draws: Sequence[pd.DataFrame] = ()) -> pd.DataFrame:
     """Per segment and measure: the log's value, tlm's, the tolerance and whether tlm is
-    within it (see the module docstring)."""
+    within it (see the module docstring). ``draws``: tlm's signatures with other draws of the
+    gusts (``ours`` is one more): the measure passes when the log's value lies within their
+    range widened by the tolerance (``tlm_min`` / ``tlm_max``; the height held: by the draw
+    that held it best)."""
     rows = []
-    for (_, a), (_, b) in zip(ref.iterrows(), ours.iterrows(), strict=True):
+    sigs = [ours, *draws]
+    for k, (_, a) in enumerate(ref.iterrows()):
+        b = [sig.iloc[k] for sig in sigs]
         mode = _mode_at(ref_tables, a["start_s"] * 1e6)
         for m, floor in FLOORS.items():
-            x, y = float(a[m]), float(b[m])
-            if not (math.isfinite(x) and math.isfinite(y)):
+            x, ys = float(a[m]), [float(v[m]) for v in b]
+            if not (math.isfinite(x) and all(math.isfinite(y) for y in ys)):
                 continue
             tol = max(rel_tol * abs(x), floor)
-            rows.append({"segment": a["segment"], "measure": m, "log": x, "tlm": y,
-                         "tol": tol, "pass": abs(y - x) <= tol})
-        if mode in HEIGHT_MODES and math.isfinite(float(b["alt_range_m"])):
+            lo, hi = min(ys), max(ys)
+            rows.append({"segment": a["segment"], "measure": m, "log": x, "tlm": ys[0],
+                         "tol": tol, "pass": lo - tol <= x <= hi + tol,
+                         "tlm_min": lo, "tlm_max": hi})
+        ys = [float(v["alt_range_m"]) for v in b]
+        if mode in HEIGHT_MODES and all(math.isfinite(y) for y in ys):
             # held within 0.5 m, or as well as the log held it (gusts move SITL's too)
-            x, y = float(a["alt_range_m"]), float(b["alt_range_m"])
+            x = float(a["alt_range_m"])
             tol = max(HEIGHT_HELD_M, x) if math.isfinite(x) else HEIGHT_HELD_M
             rows.append({"segment": a["segment"], "measure": "alt_range_m", "log": x,
-                         "tlm": y, "tol": tol, "pass": y <= tol})
-    return pd.DataFrame(rows, columns=["segment", "measure", "log", "tlm", "tol", "pass"])
+                         "tlm": ys[0], "tol": tol, "pass": min(ys) <= tol,
+                         "tlm_min": min(ys), "tlm_max": max(ys)})
+    return pd.DataFrame(rows, columns=["segment", "measure", "log", "tlm", "tol", "pass",
+                                       "tlm_min", "tlm_max"])
 
 
 def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | None = None,
@@ -345,14 +361,21 @@ def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | 
 
     sc = reconstruct_pilot(bin_path, sidecar, seed)
     flown = {**sc.params, **dict(params or {})}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        log = fly(None, sc.changes or None, params=Params(flown), seed=sc.seed, sticks=sc.rc,
-                  gcs_modes=sc.gcs)
+
+    def fly_seed(s: int) -> Any:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return fly(None, sc.changes or None, params=Params(flown), seed=s, sticks=sc.rc,
+                       gcs_modes=sc.gcs)
+
+    log = fly_seed(sc.seed)
     ours = {n: log.tables[n] for n in log.tables}
     ref_sig = pilot_signature(sc.tables, sc.segments, sc.log_values)
     tlm_sig = pilot_signature(ours, sc.segments, dict(log.params))
-    judged = judge(ref_sig, tlm_sig, sc.tables)
+    gusts = float(Params(flown)["SIM_WIND_TURB"]) > 0.0
+    draws = [pilot_signature(other.tables, sc.segments, dict(other.params))
+             for other in (fly_seed(sc.seed + k) for k in range(1, GUST_DRAWS))] if gusts else []
+    judged = judge(ref_sig, tlm_sig, sc.tables, draws=draws)
     ft_log = flight_time_s(sc.tables, sc.log_values)
     ft_tlm = flight_time_s(ours, dict(log.params))
     ft_ok = (math.isfinite(ft_log) and math.isfinite(ft_tlm)
@@ -365,7 +388,8 @@ def replay(bin_path: str | Path, sidecar: str | Path | None = None, seed: int | 
                      "gcs_modes": [list(g) for g in sc.gcs],
                      "params_from_log": dict(sc.params),
                      "overrides": {k: float(v) for k, v in (params or {}).items()},
-                     "end_reason": log.meta.get("end_reason")},
+                     "end_reason": log.meta.get("end_reason"),
+                     "gust_draws": 1 + len(draws)},
         "segments": {"log": ref_sig, "tlm": tlm_sig},
         "judged": judged,
         "flight_time_s": {"log": ft_log, "tlm": ft_tlm},
@@ -392,6 +416,12 @@ def format_report(r: Mapping[str, Any]) -> str:
              f"{sc['end_reason']}.", ""]
     for note in sc["notes"]:
         lines.append(f"- note: {note}")
+    draws = int(sc.get("gust_draws", 1))
+    if draws > 1:
+        lines += ["", f"The log flew in SITL's random gusts (SIM_WIND_TURB > 0), one draw of "
+                  f"them: tlm flew {draws} (seeds {sc['seed']}-{sc['seed'] + draws - 1}). A "
+                  "measure passes when the log's value lies within tlm's range over the draws "
+                  "(min..max) widened by the tolerance; tlm's column is the first draw's."]
     lines += ["", f"**Flight time**: log {_fmt(ft['log'])} s, tlm {_fmt(ft['tlm'])} s "
               f"({'pass' if c['flight_time']['pass'] else 'FAIL'}, within "
               f"{FLIGHT_TIME_REL_TOL:.0%}).", "",
@@ -399,9 +429,13 @@ def format_report(r: Mapping[str, Any]) -> str:
               f"measures within tolerance ({REL_TOL:.0%} or the noise floor; height held "
               f"within {HEIGHT_HELD_M} m).", "",
               "| segment | measure | log | tlm | tolerance | |", "|---|---|---|---|---|---|"]
+    if draws > 1:
+        lines[-2:] = ["| segment | measure | log | tlm | tlm min..max | tolerance | |",
+                      "|---|---|---|---|---|---|---|"]
     for row in r["judged"].to_dict("records"):
+        spread = f" {_fmt(row['tlm_min'])}..{_fmt(row['tlm_max'])} |" if draws > 1 else ""
         lines.append(f"| {row['segment']} | {row['measure']} | {_fmt(row['log'])} | "
-                     f"{_fmt(row['tlm'])} | {_fmt(row['tol'])} | "
+                     f"{_fmt(row['tlm'])} |{spread} {_fmt(row['tol'])} | "
                      f"{'pass' if row['pass'] else 'FAIL'} |")
     lines += ["", "![overlay](overlay.png)", ""]
     return "\n".join(lines)
@@ -453,7 +487,11 @@ def plot(r: Mapping[str, Any], out: Path) -> Path:
 def summary_lines(r: Mapping[str, Any]) -> Sequence[str]:
     """The console lines of a replay."""
     c, ft = r["checks"], r["flight_time_s"]
-    out = [f"replayed from RCIN: {r['scenario']['name']} (seed {r['scenario']['seed']})"]
+    sc = r["scenario"]
+    draws = int(sc.get("gust_draws", 1))
+    gusts = (f"; {draws} draws of the gusts, seeds {sc['seed']}-{sc['seed'] + draws - 1}, a "
+             "measure judged on their range" if draws > 1 else "")
+    out = [f"replayed from RCIN: {sc['name']} (seed {sc['seed']}{gusts})"]
     out += [f"note: {n}" for n in r["scenario"]["notes"]]
     out.append(f"flight time: tlm {_fmt(ft['tlm'])} s, log {_fmt(ft['log'])} s "
                f"({'pass' if c['flight_time']['pass'] else 'FAIL'})")
@@ -461,6 +499,8 @@ def summary_lines(r: Mapping[str, Any]) -> Sequence[str]:
                "within tolerance")
     for row in r["judged"].to_dict("records"):
         if not row["pass"]:
+            got = (f"tlm {_fmt(row['tlm_min'])}..{_fmt(row['tlm_max'])}" if draws > 1
+                   else f"tlm {_fmt(row['tlm'])}")
             out.append(f"  outside: {row['segment']} {row['measure']}: log {_fmt(row['log'])}, "
-                       f"tlm {_fmt(row['tlm'])} (tolerance {_fmt(row['tol'])})")
+                       f"{got} (tolerance {_fmt(row['tol'])})")
     return out
