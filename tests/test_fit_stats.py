@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from typing import Any
 
 import numpy as np
 import pytest
@@ -81,29 +82,37 @@ KNOWN = {"TLM_HOVER_THR": 0.45, "TLM_VIB_ACC_X": 1.2, "TLM_VIB_ACC_Y": 0.6,
          "SIM_WIND_TURB": 0.4, "TLM_CG_X": -0.01, "TLM_YAW_ASYM": -0.12, "TLM_ROTOR_RND": 0.012}
 
 
-@pytest.mark.slow
-def test_fit_recovers_known_parameters_from_a_tlm_flight():
-    """Issue 40: a tlm flight of a vehicle with known hover thrust, per-axis vibration, rotor
-    frequency (from its VIBE), gusts and balance (centre of gravity, rotor torque; one 4-minute
-    hover, another seed than the fit's), fitted: every parameter back within 10 %."""
+def _fit_known_vehicle(rotor_hz: float) -> tuple[dict[str, float], Any]:
+    """(the log's statistics, the fit) of a tlm vehicle with the :data:`KNOWN` knobs, its
+    rotors at ``rotor_hz`` (SIM_VIB_MOT_MAX), flown once (a 4-minute hover, another seed than
+    the fit's)."""
     from tlm_process.fit.fit import (
         ACC_AMP,
         CMD_REF,
         GYR_AMP,
         MOT_SPREAD,
-        ROTOR_HZ,
         ROTOR_TC,
         TURB_TC,
         fit_vehicle,
         fly_hover_stats,
     )
 
-    true = {"SIM_VIB_MOT_MAX": ROTOR_HZ, "SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
+    true = {"SIM_VIB_MOT_MAX": rotor_hz, "SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
             "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_ROTOR_TC": ROTOR_TC,
             "TLM_VIB_SPREAD": MOT_SPREAD, "TLM_VIB_CMD_REF": CMD_REF, "TLM_TURB_TC": TURB_TC,
             **KNOWN}
     target = fly_hover_stats(true, seed=5, hold_s=240)
-    r = fit_vehicle(target, {}, seed=1)
+    return target, fit_vehicle(target, {}, seed=1)
+
+
+@pytest.mark.slow
+def test_fit_recovers_known_parameters_from_a_tlm_flight():
+    """Issue 40: a tlm flight of a vehicle with known hover thrust, per-axis vibration, rotor
+    frequency (from its VIBE), gusts and balance (centre of gravity, rotor torque; one 4-minute
+    hover, another seed than the fit's), fitted: every parameter back within 10 %."""
+    from tlm_process.fit.fit import ROTOR_HZ
+
+    _, r = _fit_known_vehicle(ROTOR_HZ)
     for name, want in {**KNOWN, "SIM_VIB_MOT_MAX": ROTOR_HZ}.items():
         assert r.params[name] == pytest.approx(want, rel=0.10), name
 
@@ -115,25 +124,9 @@ def test_fit_finds_the_rotor_frequency_from_vibe(rotor_hz):
     turn slower or faster than the fit's start (ROTOR_HZ, 150 Hz) is found within 5 %, the
     accelerometer gains within 10 % and the fitted flight's VIBE within 10 % of the log's
     (at an assumed 150 Hz, VIBE came out ~30 % off with the accel noise matched)."""
-    from tlm_process.fit.fit import (
-        ACC_AMP,
-        CMD_REF,
-        GYR_AMP,
-        MOT_SPREAD,
-        ROTOR_HZ,
-        ROTOR_TC,
-        TURB_TC,
-        VIBE_STATS,
-        fit_vehicle,
-        fly_hover_stats,
-    )
+    from tlm_process.fit.fit import ROTOR_HZ, VIBE_STATS
 
-    true = {"SIM_VIB_MOT_MAX": rotor_hz, "SIM_ACC1_RND": ACC_AMP, "SIM_ACC2_RND": ACC_AMP,
-            "SIM_GYR1_RND": GYR_AMP, "SIM_GYR2_RND": GYR_AMP, "TLM_ROTOR_TC": ROTOR_TC,
-            "TLM_VIB_SPREAD": MOT_SPREAD, "TLM_VIB_CMD_REF": CMD_REF, "TLM_TURB_TC": TURB_TC,
-            **KNOWN}
-    target = fly_hover_stats(true, seed=5, hold_s=240)
-    r = fit_vehicle(target, {}, seed=1)
+    target, r = _fit_known_vehicle(rotor_hz)
     assert abs(rotor_hz - ROTOR_HZ) > 0.25 * ROTOR_HZ
     assert r.params["SIM_VIB_MOT_MAX"] == pytest.approx(rotor_hz, rel=0.05)
     for a in "XYZ":
