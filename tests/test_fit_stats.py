@@ -280,7 +280,7 @@ def test_a_segment_flown_without_position_hold_is_noted(tmp_path, capsys):
     its STABILIZE flight with the AUTO hovers and a note that their attitude std runs higher;
     a LOITER segment's mode holds the position."""
     from tlm_process.cli import main
-    from tlm_process.commands.fit import segment_mode
+    from tlm_process.fit.segment import segment_mode
     from tlm_process.logread import read_log_tables
     from tlm_sim.params import Params
 

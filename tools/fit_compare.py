@@ -19,9 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tlm_process.commands.fit import segment_mode
 from tlm_process.fit.fit import ALT_HOLD, fit_vehicle, fly_hover_stats, log_battery
-from tlm_process.fit.segment import parse_segment
+from tlm_process.fit.segment import parse_segment, segment_mode
 from tlm_process.fit.stats import segment_stats
 from tlm_process.logread import read_log_tables
 

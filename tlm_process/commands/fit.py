@@ -66,7 +66,12 @@ def run(args: argparse.Namespace) -> int:
         fit_vehicle,
         log_battery,
     )
-    from tlm_process.fit.segment import parse_segment, steady_segments
+    from tlm_process.fit.segment import (
+        POSITION_MODES,
+        parse_segment,
+        segment_mode,
+        steady_segments,
+    )
     from tlm_process.fit.spectrum import format_spectra
     from tlm_process.fit.stats import StatsError, motor_asymmetry, segment_stats
     from tlm_process.logread import LogReadError, read_log_tables, warn_damage
@@ -141,21 +146,6 @@ def run(args: argparse.Namespace) -> int:
     if args.replay:
         _replay(args, r.params, target, (t0, t1))
     return 0
-
-
-#: flight modes that hold the horizontal position, as the fit's hovers (AUTO) do: AUTO,
-#: GUIDED, LOITER, RTL, CIRCLE, LAND, POSHOLD, BRAKE
-POSITION_MODES = frozenset({3, 4, 5, 6, 7, 9, 16, 17})
-
-
-def segment_mode(tables: Any, t0_us: float) -> int | None:
-    """The flight mode (MODE.ModeNum) at ``t0_us``: the last MODE row at or before it; None
-    without MODE rows before it."""
-    mode = tables.get("MODE")
-    if mode is None or not len(mode) or "ModeNum" not in mode:
-        return None
-    before = mode[mode["TimeUS"] <= t0_us]
-    return int(before["ModeNum"].iloc[-1]) if len(before) else None
 
 
 def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int,

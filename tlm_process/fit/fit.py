@@ -31,10 +31,11 @@ statistic of a first flight without vibration or gusts, the *floor*) is taken ou
 quadrature when a gain is scaled. The rate-tracking error is not fitted: it follows from the
 gyro noise and the gusts through tlm's controllers, and the report compares it too; the gusts
 are the same on every axis, so roll and pitch are fitted as one. A log's rotor
-frequency is not in its 25-50 Hz IMU rows: without VIBE ``SIM_VIB_MOT_MAX`` is :data:`ROTOR_HZ`, the
-rotors' speed lags their commands by :data:`ROTOR_TC`, they turn :data:`MOT_SPREAD` apart and
-their vibration goes with their command squared about :data:`CMD_REF` (a SITL log's own SIM_*
-parameters are its simulator's, not its vehicle's, and are not taken).
+frequency is not in its 25-50 Hz IMU rows: without VIBE ``SIM_VIB_MOT_MAX`` is
+:data:`ROTOR_HZ`, the rotors' speed lags their commands by :data:`ROTOR_TC`, they turn
+:data:`MOT_SPREAD` apart and their vibration goes with their command squared about
+:data:`CMD_REF` (a SITL log's own SIM_* parameters are its simulator's, not its vehicle's, and
+are not taken, but for the pack it flew: :func:`log_battery`).
 """
 
 from __future__ import annotations

@@ -18,9 +18,8 @@ import pandas as pd
 
 from tlm_process.fit.stats import StatsError
 
-__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "STEP_S", "UPRIGHT_MAX_DEG",
-           "WINDOW_S",
-           "parse_segment", "steady_segments"]
+__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "POSITION_MODES", "STEP_S",
+           "UPRIGHT_MAX_DEG", "WINDOW_S", "parse_segment", "segment_mode", "steady_segments"]
 
 WINDOW_S = 6.0
 STEP_S = 1.0
@@ -89,3 +88,18 @@ def parse_segment(text: str) -> tuple[float, float]:
     if not (np.isfinite(a) and np.isfinite(b) and b > a >= 0):
         raise StatsError(f"--segment {text}: END must be after START")
     return a * 1e6, b * 1e6
+
+
+#: flight modes that hold the horizontal position, as the fit's hovers (AUTO) do: AUTO,
+#: GUIDED, LOITER, RTL, CIRCLE, LAND, POSHOLD, BRAKE
+POSITION_MODES = frozenset({3, 4, 5, 6, 7, 9, 16, 17})
+
+
+def segment_mode(tables: Mapping[str, pd.DataFrame], t0_us: float) -> int | None:
+    """The flight mode (MODE.ModeNum) at ``t0_us``: the last MODE row at or before it; None
+    without MODE rows before it."""
+    mode = tables.get("MODE")
+    if mode is None or not len(mode) or "ModeNum" not in mode:
+        return None
+    before = mode[mode["TimeUS"] <= t0_us]
+    return int(before["ModeNum"].iloc[-1]) if len(before) else None
