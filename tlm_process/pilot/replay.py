@@ -19,9 +19,10 @@ sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segme
 peak pitch and roll and the top speed within 15 % of the log's (or within a noise floor of
 0.5 deg and 0.3 m/s, whichever is larger), the height held within 0.5 m (range of CTUN.Alt;
 or as well as the log held it, if worse) in the modes that hold it, motor 1's excess over
-the others within 15 % (floor 5 us); the flight time within 5 %. A log flown in SITL's random
-gusts (``SIM_WIND_TURB`` > 0) holds one draw of them: it is re-flown with :data:`GUST_DRAWS`
-draws (seeds) and each measure judged on tlm's range over them, widened by the tolerance.
+the others within 15 % (floor 5 us); the flight time within 5 %. A flight in random gusts
+(``SIM_WIND_TURB`` > 0: a SITL log's, or a fitted vehicle's) is one draw of them: it is re-flown
+with :data:`GUST_DRAWS` draws (seeds) and each measure judged on tlm's range over them, widened
+by the tolerance.
 """
 
 from __future__ import annotations
@@ -418,10 +419,11 @@ def format_report(r: Mapping[str, Any]) -> str:
         lines.append(f"- note: {note}")
     draws = int(sc.get("gust_draws", 1))
     if draws > 1:
-        lines += ["", f"The log flew in SITL's random gusts (SIM_WIND_TURB > 0), one draw of "
-                  f"them: tlm flew {draws} (seeds {sc['seed']}-{sc['seed'] + draws - 1}). A "
-                  "measure passes when the log's value lies within tlm's range over the draws "
-                  "(min..max) widened by the tolerance; tlm's column is the first draw's."]
+        lines += ["", "The flight is flown in random gusts (SIM_WIND_TURB > 0: the log's SITL "
+                  "setting, or a fitted vehicle's), of which the log holds one draw: tlm flew "
+                  f"{draws} (seeds {sc['seed']}-{sc['seed'] + draws - 1}). A measure passes when "
+                  "the log's value lies within tlm's range over the draws (min..max) widened by "
+                  "the tolerance; tlm's column is the first draw's."]
     lines += ["", f"**Flight time**: log {_fmt(ft['log'])} s, tlm {_fmt(ft['tlm'])} s "
               f"({'pass' if c['flight_time']['pass'] else 'FAIL'}, within "
               f"{FLIGHT_TIME_REL_TOL:.0%}).", "",
