@@ -276,9 +276,9 @@ def test_a_fit_whose_hover_does_not_hold_stops_with_one_line(tmp_path, capsys, m
 
 
 def test_a_segment_flown_without_position_hold_is_noted(tmp_path, capsys):
-    """SITL's ALT_HOLD flight is fitted with ALT_HOLD hovers and no gusts (a note says so);
-    its STABILIZE flight with the AUTO hovers and a note that their attitude std runs higher;
-    a LOITER segment's mode holds the position."""
+    """SITL's ALT_HOLD and STABILIZE flights are fitted with ALT_HOLD hovers and no gusts (a
+    note says so); a LOITER segment's mode holds the position; another mode without position
+    hold (ACRO) keeps the AUTO hovers with a note that their attitude std runs higher."""
     from tlm_process.cli import main
     from tlm_process.fit.segment import segment_mode
     from tlm_process.logread import read_log_tables
@@ -288,14 +288,19 @@ def test_a_segment_flown_without_position_hold_is_noted(tmp_path, capsys):
     log = reference_path("pilot/manual_althold_s92.bin")
     assert main(["fit", str(log), "--out", str(out), "--iterations", "1"]) == 0
     text = capsys.readouterr().out
-    assert "note: the segment was flown in ALT_HOLD: so were tlm's fitting hovers" in text
+    assert "note: the segment was flown in ALT_HOLD: tlm's fitting hovers flew ALT_HOLD" in text
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert Params.from_parm(out)["SIM_WIND_TURB"] == 0.0
     log = reference_path("pilot/manual_stabilize_s93.bin")
     assert main(["fit", str(log), "--out", str(out), "--iterations", "1"]) == 0
     text = capsys.readouterr().out
-    assert "note: the segment was flown in STABILIZE, which does not hold the position" in text
+    assert "note: the segment was flown in STABILIZE: tlm's fitting hovers flew ALT_HOLD" in text
+    # log171's ACRO, 218-228 s (before the flip): the AUTO hovers, and the note
+    assert main(["fit", str(real_path("log171.bin")), "--out", str(out), "--iterations", "1",
+                 "--segment", "218:228"]) == 0
+    assert "note: the segment was flown in ACRO, which does not hold the position" in (
+        capsys.readouterr().out)
     lt = read_log_tables(reference_path("pilot/manual_loiter_s90.bin"), ["MODE"])
     assert segment_mode(lt.tables, 60e6) == 5 and segment_mode(lt.tables, 0.0) is None
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from tlm_process.fit.fit import ALT_HOLD, fit_vehicle, fly_hover_stats, log_battery
-from tlm_process.fit.segment import parse_segment, segment_mode
+from tlm_process.fit.segment import LEVEL_MODES, parse_segment, segment_mode
 from tlm_process.fit.stats import segment_stats
 from tlm_process.logread import read_log_tables
 
@@ -48,8 +48,9 @@ def main() -> int:
         lt = read_log_tables(args.log)
         first = segment_stats(lt.tables, t0, mid)
         second = segment_stats(lt.tables, mid, t1)
-        # a segment flown in ALT_HOLD is fitted and compared with ALT_HOLD hovers (tlm fit)
-        mode = ALT_HOLD if segment_mode(lt.tables, t0) == ALT_HOLD else None
+        # a segment flown in STABILIZE or ALT_HOLD is fitted and compared with ALT_HOLD
+        # hovers (tlm fit)
+        mode = ALT_HOLD if segment_mode(lt.tables, t0) in LEVEL_MODES else None
         fit = fit_vehicle(first, lt.params, args.iterations, seed=args.fit_seed,
                           battery=log_battery(lt.tables, lt.params), mode=mode)
         runs = [fly_hover_stats(fit.params, seed=101 + k, mode=mode)

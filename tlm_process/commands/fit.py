@@ -67,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         log_battery,
     )
     from tlm_process.fit.segment import (
+        LEVEL_MODES,
         POSITION_MODES,
         parse_segment,
         segment_mode,
@@ -103,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
     mode = segment_mode(lt.tables, t0)
-    hover_mode = ALT_HOLD if mode == ALT_HOLD else None
+    hover_mode = ALT_HOLD if mode in LEVEL_MODES else None
     with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -125,9 +126,11 @@ def run(args: argparse.Namespace) -> int:
 
         name = MODE_NAMES.get(mode, mode)
         if hover_mode == ALT_HOLD:
-            print("note: the segment was flown in ALT_HOLD: so were tlm's fitting hovers (sticks "
-                  "centred), and the gusts, which do not lean a copter that holds no position, "
-                  "were not fitted (SIM_WIND_TURB 0; tlm generate draws its own wind)")
+            print(f"note: the segment was flown in {name}: tlm's fitting hovers flew ALT_HOLD "
+                  "(sticks centred; it levels the copter as STABILIZE does and holds the height "
+                  "a hovering pilot holds), and the gusts, which do not lean a copter that holds "
+                  "no position, were not fitted (SIM_WIND_TURB 0; tlm generate draws its own "
+                  "wind)")
         else:
             print(f"note: the segment was flown in {name}, which does not hold the position; "
                   "tlm's fitting hovers hold theirs and lean against the gusts, so their "

@@ -18,7 +18,8 @@ import pandas as pd
 
 from tlm_process.fit.stats import StatsError
 
-__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "POSITION_MODES", "STEP_S",
+__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "LEVEL_MODES", "POSITION_MODES",
+           "STEP_S",
            "UPRIGHT_MAX_DEG", "WINDOW_S", "parse_segment", "segment_mode", "steady_segments"]
 
 WINDOW_S = 6.0
@@ -93,6 +94,10 @@ def parse_segment(text: str) -> tuple[float, float]:
 #: flight modes that hold the horizontal position, as the fit's hovers (AUTO) do: AUTO,
 #: GUIDED, LOITER, RTL, CIRCLE, LAND, POSHOLD, BRAKE
 POSITION_MODES = frozenset({3, 4, 5, 6, 7, 9, 16, 17})
+#: flight modes that level the copter from the sticks but hold no position: STABILIZE and
+#: ALT_HOLD. A segment flown in one is fitted with ALT_HOLD hovers (a script can fly ALT_HOLD;
+#: STABILIZE's height is the pilot's, and a hovering pilot holds it)
+LEVEL_MODES = frozenset({0, 2})
 
 
 def segment_mode(tables: Mapping[str, pd.DataFrame], t0_us: float) -> int | None:
