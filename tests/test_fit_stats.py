@@ -43,6 +43,24 @@ def test_real_log_steady_segment_is_its_loiter_hover():
     assert all(b <= 230e6 for _, b in segs)
 
 
+def test_steady_segments_put_hovers_first_and_keep_them_apart_from_cruise():
+    """SITL's LOITER flight: its hover (56.5-77.5 s) comes first and ends before the pilot's
+    pitch forward at 77.2 s, which once merged into it at 4 m/s (a cruise's drag, lean and
+    motor commands are not the fit's hovers'); an AUTO mission's minute-long cruise legs come
+    before the seconds of hover before its landing (HOVER_PREFERENCE)."""
+    from tlm_process.fit.segment import HOVER_SPEED_MS, segment_speed
+    from tlm_process.logread import read_log_tables
+
+    lt = read_log_tables(reference_path("pilot/manual_loiter_s90.bin"),
+                         ["ATT", "CTUN", "MODE", "GPS"])
+    t0, t1 = steady_segments(lt.tables)[0]
+    assert 55e6 < t0 < 58e6 and 76e6 < t1 <= 78e6
+    assert segment_speed(lt.tables, t0, t1) < HOVER_SPEED_MS
+    mission = flown(1).tables
+    t0, t1 = steady_segments(mission)[0]
+    assert t1 - t0 > 60e6 and segment_speed(mission, t0, t1) > 3.0
+
+
 def test_real_log_statistics():
     """log171's hover: ~0.4 throttle, accel noise largest on x, gyro noise of several deg/s on
     roll, RATE error in deg/s (not cdeg/s), no VIBE in a 3.3 log."""

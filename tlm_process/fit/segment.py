@@ -6,7 +6,13 @@ airborne and upright (mean throttle above :data:`AIRBORNE_THR`, mean |roll| and 
 :data:`UPRIGHT_MAX_DEG`), holds one flight mode, and neither it nor its pilot moves much: the
 standard deviations of the desired roll and pitch (ATT ``DesRoll``/``DesPitch``) stay below
 :data:`DES_STD_MAX_DEG` and of the altitude (CTUN ``Alt``) below :data:`ALT_STD_MAX_M`.
-Overlapping steady windows merge into segments.
+Overlapping steady windows merge into segments, hovers and cruise apart: a window is a hover
+when the copter's mean GPS ground speed in it stays below :data:`HOVER_SPEED_MS` (leaning into
+the wind, standing still), or, in a mode that levels the copter but holds no position
+(:data:`LEVEL_MODES`), when its desired roll and pitch stay within :data:`HOVER_LEAN_DEG` on
+average (drifting with the air, hovering in it); cruise otherwise. Hovers come first (unless
+the log's longest cruise is more than :data:`HOVER_PREFERENCE` times its longest hover): the fit
+flies hovers, and a cruise's drag, lean and motor commands are not a hover's.
 """
 
 from __future__ import annotations
@@ -18,9 +24,9 @@ import pandas as pd
 
 from tlm_process.fit.stats import StatsError
 
-__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "LEVEL_MODES", "POSITION_MODES",
-           "STEP_S",
-           "UPRIGHT_MAX_DEG", "WINDOW_S", "parse_segment", "segment_mode", "steady_segments"]
+__all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "HOVER_LEAN_DEG", "HOVER_PREFERENCE",
+           "HOVER_SPEED_MS", "LEVEL_MODES", "POSITION_MODES", "STEP_S", "UPRIGHT_MAX_DEG",
+           "WINDOW_S", "parse_segment", "segment_mode", "segment_speed", "steady_segments"]
 
 WINDOW_S = 6.0
 STEP_S = 1.0
@@ -28,6 +34,14 @@ AIRBORNE_THR = 0.2
 DES_STD_MAX_DEG = 1.5
 ALT_STD_MAX_M = 0.5
 UPRIGHT_MAX_DEG = 30.0
+#: a window whose mean GPS ground speed is below this is a hover [m/s]
+HOVER_SPEED_MS = 1.0
+#: hovers come first unless the longest cruise segment is more than this many times the longest
+#: hover (a mission log: cruise legs of a minute, a hover of seconds before its landing)
+HOVER_PREFERENCE = 4.0
+#: in STABILIZE or ALT_HOLD a window whose mean desired roll and pitch are within this is a
+#: hover whatever its ground speed (the air carries it) [deg]
+HOVER_LEAN_DEG = 3.0
 
 
 def _col(df: pd.DataFrame, *names: str) -> pd.Series | None:
@@ -37,8 +51,25 @@ def _col(df: pd.DataFrame, *names: str) -> pd.Series | None:
     return None
 
 
+def segment_speed(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float) -> float:
+    """The mean GPS ground speed (GPS instance 0's ``Spd``) over ``[t0_us, t1_us)`` [m/s]; NaN
+    without GPS rows there."""
+    gps = tables.get("GPS")
+    if gps is None or not len(gps) or "Spd" not in gps:
+        return float("nan")
+    if "I" in gps:
+        gps = gps[gps["I"] == 0]
+    t = gps.TimeUS.to_numpy(float)
+    v = pd.to_numeric(gps.Spd, errors="coerce").to_numpy(float)[(t >= t0_us) & (t < t1_us)]
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if len(v) else float("nan")
+
+
 def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, float]]:
-    """The log's steady segments ``(t0_us, t1_us)``, longest first (empty when none)."""
+    """The log's steady segments ``(t0_us, t1_us)``: the hovers, longest first, then the
+    cruise segments, longest first; longest first whatever their kind when the longest cruise
+    is more than :data:`HOVER_PREFERENCE` times the longest hover (empty when none; a log
+    without GPS: all hovers)."""
     att, ctun = tables.get("ATT"), tables.get("CTUN")
     if att is None or ctun is None or not len(att) or not len(ctun):
         return []
@@ -69,15 +100,23 @@ def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, flo
               and float(a.DesPitch.std()) < DES_STD_MAX_DEG
               and float(alt[c].std()) < ALT_STD_MAX_M)
         if ok:
-            steady.append(t)
+            level = (segment_mode(tables, t) in LEVEL_MODES
+                     and abs(float(a.DesRoll.mean())) < HOVER_LEAN_DEG
+                     and abs(float(a.DesPitch.mean())) < HOVER_LEAN_DEG)
+            steady.append((t, level or not segment_speed(tables, t, t + w) >= HOVER_SPEED_MS))
         t += step
     segments: list[list[float]] = []
-    for s in steady:
-        if segments and s <= segments[-1][1]:
+    for s, hover in steady:
+        if segments and s <= segments[-1][1] and hover == segments[-1][2]:
             segments[-1][1] = s + w
         else:
-            segments.append([s, s + w])
-    return sorted(((a, b) for a, b in segments), key=lambda ab: ab[0] - ab[1])
+            segments.append([s, s + w, hover])
+    longest = sorted(segments, key=lambda s: s[0] - s[1])
+    hovers = [s for s in longest if s[2]]
+    if hovers and (hovers[0][1] - hovers[0][0]) * HOVER_PREFERENCE >= (
+            longest[0][1] - longest[0][0]):
+        longest = hovers + [s for s in longest if not s[2]]
+    return [(a, b) for a, b, _ in longest]
 
 
 def parse_segment(text: str) -> tuple[float, float]:
