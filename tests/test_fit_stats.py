@@ -61,6 +61,16 @@ def test_steady_segments_put_hovers_first_and_keep_them_apart_from_cruise():
     assert t1 - t0 > 60e6 and segment_speed(mission, t0, t1) > 3.0
 
 
+def test_a_cruise_segment_is_noted(tmp_path, capsys):
+    """SITL's mission flight: ``tlm fit`` takes a cruise leg (no hover of its length) and says
+    that its fitting flights hover."""
+    from tlm_process.cli import main
+
+    assert main(["fit", str(reference_path("normal_s11.bin")), "--out",
+                 str(tmp_path / "v.parm"), "--iterations", "1"]) == 0
+    assert "note: the segment is a cruise (mean ground speed" in capsys.readouterr().out
+
+
 def test_real_log_statistics():
     """log171's hover: ~0.4 throttle, accel noise largest on x, gyro noise of several deg/s on
     roll, RATE error in deg/s (not cdeg/s), no VIBE in a 3.3 log."""

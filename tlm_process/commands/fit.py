@@ -69,8 +69,10 @@ def run(args: argparse.Namespace) -> int:
     from tlm_process.fit.segment import (
         LEVEL_MODES,
         POSITION_MODES,
+        is_hover,
         parse_segment,
         segment_mode,
+        segment_speed,
         steady_segments,
     )
     from tlm_process.fit.spectrum import format_spectra
@@ -105,6 +107,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
     mode = segment_mode(lt.tables, t0)
     hover_mode = ALT_HOLD if mode in LEVEL_MODES else None
+    if not is_hover(lt.tables, t0, t1):
+        print(f"note: the segment is a cruise (mean ground speed "
+              f"{segment_speed(lt.tables, t0, t1):.1f} m/s): tlm's fitting flights hover, so "
+              "a cruise's drag, lean and motor commands are compared with a hover's; give "
+              "--segment for a hover")
     with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -26,7 +26,8 @@ from tlm_process.fit.stats import StatsError
 
 __all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "HOVER_LEAN_DEG", "HOVER_PREFERENCE",
            "HOVER_SPEED_MS", "LEVEL_MODES", "POSITION_MODES", "STEP_S", "UPRIGHT_MAX_DEG",
-           "WINDOW_S", "parse_segment", "segment_mode", "segment_speed", "steady_segments"]
+           "WINDOW_S", "is_hover", "parse_segment", "segment_mode", "segment_speed",
+           "steady_segments"]
 
 WINDOW_S = 6.0
 STEP_S = 1.0
@@ -65,6 +66,19 @@ def segment_speed(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float
     return float(v.mean()) if len(v) else float("nan")
 
 
+def is_hover(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float) -> bool:
+    """Whether the copter hovers over ``[t0_us, t1_us)``: its mean GPS ground speed below
+    :data:`HOVER_SPEED_MS` (or no GPS rows), or in a :data:`LEVEL_MODES` mode its mean desired
+    roll and pitch (ATT) within :data:`HOVER_LEAN_DEG` (drifting with the air)."""
+    att = tables.get("ATT")
+    if segment_mode(tables, t0_us) in LEVEL_MODES and att is not None and len(att):
+        a = att[(att.TimeUS >= t0_us) & (att.TimeUS < t1_us)]
+        if (len(a) and abs(float(a.DesRoll.mean())) < HOVER_LEAN_DEG
+                and abs(float(a.DesPitch.mean())) < HOVER_LEAN_DEG):
+            return True
+    return not segment_speed(tables, t0_us, t1_us) >= HOVER_SPEED_MS
+
+
 def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, float]]:
     """The log's steady segments ``(t0_us, t1_us)``: the hovers, longest first, then the
     cruise segments, longest first; longest first whatever their kind when the longest cruise
@@ -100,10 +114,7 @@ def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, flo
               and float(a.DesPitch.std()) < DES_STD_MAX_DEG
               and float(alt[c].std()) < ALT_STD_MAX_M)
         if ok:
-            level = (segment_mode(tables, t) in LEVEL_MODES
-                     and abs(float(a.DesRoll.mean())) < HOVER_LEAN_DEG
-                     and abs(float(a.DesPitch.mean())) < HOVER_LEAN_DEG)
-            steady.append((t, level or not segment_speed(tables, t, t + w) >= HOVER_SPEED_MS))
+            steady.append((t, is_hover(tables, t, t + w)))
         t += step
     segments: list[list[float]] = []
     for s, hover in steady:
