@@ -1,6 +1,6 @@
 """``tlm fit LOG --out vehicle.parm``: the vehicle of one ArduCopter log, for tlm to fly (issue 40).
 
-Finds the log's steady segment (or takes ``--segment START:END``), measures it
+Finds the log's steady hover (or takes ``--segment START:END``), measures it
 (:mod:`tlm_process.fit.stats`), and fits tlm's vehicle to it by flying hovers
 (:mod:`tlm_process.fit.fit`): the log's own parameters tlm models, the hover thrust, and the
 vibration per axis of the accelerometers and gyros. Prints each statistic, log against the
@@ -28,17 +28,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``fit`` to ``tlm``'s subcommands; returns its parser."""
     p = sub.add_parser(
         "fit", help="fit tlm's vehicle (noise, vibration, hover) to one real ArduCopter log",
-        description="Measure a steady segment of an ArduCopter log (hover throttle, attitude "
-                    "noise, IMU accel and gyro noise per axis, rate-tracking error) and fit "
-                    "tlm's vehicle to it by flying hovers: the log's parameters tlm models, "
-                    "the hover thrust, the vibration per axis, the gusts, the rotors' thrust "
-                    "fluctuation and the airframe's balance. Writes a .parm file that "
-                    "tlm fly / tlm generate take with --params.")
+        description="Measure a steady hover of an ArduCopter log (hover throttle, attitude "
+                    "noise, IMU accel and gyro noise per axis, rate-tracking error, VIBE) and "
+                    "fit tlm's vehicle to it by flying hovers (ALT_HOLD ones for a STABILIZE "
+                    "or ALT_HOLD segment): the log's parameters tlm models, the hover thrust, "
+                    "the vibration per axis, the rotor frequency (from VIBE), the gusts, the "
+                    "rotors' thrust fluctuation and the airframe's balance. Writes a .parm "
+                    "file that tlm fly / tlm generate take with --params.")
     p.add_argument("log", help="the ArduCopter log (.bin or text .log; Copter 3.x to 4.x)")
     p.add_argument("--out", required=True, metavar="vehicle.parm", help="the fitted parameters")
     p.add_argument("--segment", metavar="START:END",
                    help="the segment to fit, seconds of log time (default: the log's longest "
-                        "steady segment)")
+                        "steady hover; a cruise only when more than four times longer)")
     p.add_argument("--iterations", type=int, default=10,
                    help="fitting steps, each two hover flights (default 10)")
     p.add_argument("--seed", type=int, default=1, help="first seed of tlm's hovers (default 1)")
