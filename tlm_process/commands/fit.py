@@ -69,11 +69,8 @@ def run(args: argparse.Namespace) -> int:
     )
     from tlm_process.fit.segment import (
         LEVEL_MODES,
-        POSITION_MODES,
-        is_hover,
         parse_segment,
         segment_mode,
-        segment_speed,
         steady_segments,
     )
     from tlm_process.fit.spectrum import format_spectra
@@ -108,11 +105,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"segment            {t0 * 1e-6:.1f}-{t1 * 1e-6:.1f} s of {args.log}")
     mode = segment_mode(lt.tables, t0)
     hover_mode = ALT_HOLD if mode in LEVEL_MODES else None
-    if not is_hover(lt.tables, t0, t1):
-        print(f"note: the segment is a cruise (mean ground speed "
-              f"{segment_speed(lt.tables, t0, t1):.1f} m/s): tlm's fitting flights hover, so "
-              "a cruise's drag, lean and motor commands are compared with a hover's; give "
-              "--segment for a hover")
     with tqdm(total=FIT_SEEDS * fit_steps(args.iterations), desc="fit", unit="hover") as bar, \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -129,21 +121,8 @@ def run(args: argparse.Namespace) -> int:
     print(format_spectra(*spectra))
     for name, why in r.dropped.items():
         print(f"note: the log's {name} is not flown: {why}")
-    if mode is not None and mode not in POSITION_MODES:
-        from tlm_sim.ardupilot import MODE_NAMES
-
-        name = MODE_NAMES.get(mode, mode)
-        if hover_mode == ALT_HOLD:
-            print(f"note: the segment was flown in {name}: tlm's fitting hovers flew ALT_HOLD "
-                  "(sticks centred; it levels the copter as STABILIZE does and holds the height "
-                  "a hovering pilot holds), and the gusts, which do not lean a copter that holds "
-                  "no position, were not fitted (SIM_WIND_TURB 0; tlm generate draws its own "
-                  "wind)")
-        else:
-            print(f"note: the segment was flown in {name}, which does not hold the position; "
-                  "tlm's fitting hovers hold theirs and lean against the gusts, so their "
-                  "roll_std_deg and pitch_std_deg (compared, not fitted) run higher than the "
-                  "log's")
+    for note in segment_notes(lt.tables, (t0, t1), mode, hover_mode):
+        print(f"note: {note}")
     from tlm_sim.params import Params
 
     p = Params(r.params)
@@ -157,6 +136,39 @@ def run(args: argparse.Namespace) -> int:
     if args.replay:
         _replay(args, r.params, target, (t0, t1))
     return 0
+
+
+def segment_notes(tables: Any, segment: tuple[float, float], mode: int | None,
+                  hover_mode: int | None) -> list[str]:
+    """What the fit's hovers could not match of the segment: a cruise (the fit flies hovers),
+    a mode without position hold (``mode``; the fit's hovers fly ``hover_mode``, ALT_HOLD for
+    STABILIZE and ALT_HOLD, else AUTO)."""
+    from tlm_process.fit.fit import ALT_HOLD
+    from tlm_process.fit.segment import POSITION_MODES, is_hover, segment_speed
+
+    out = []
+    if not is_hover(tables, *segment):
+        out.append(f"the segment is a cruise (mean ground speed "
+                   f"{segment_speed(tables, *segment):.1f} m/s): tlm's fitting flights hover, "
+                   "so a cruise's drag, lean and motor commands are compared with a hover's; "
+                   "give --segment for a hover")
+    if mode is None or mode in POSITION_MODES:
+        return out
+    from tlm_sim.ardupilot import MODE_NAMES
+
+    name = MODE_NAMES.get(mode, mode)
+    if hover_mode == ALT_HOLD:
+        out.append(f"the segment was flown in {name}: tlm's fitting hovers flew ALT_HOLD (sticks "
+                   "centred; it levels the copter as STABILIZE does and holds the height a "
+                   "hovering pilot holds), and the gusts, which do not lean a copter that holds "
+                   "no position, were not fitted (SIM_WIND_TURB 0; tlm generate draws its own "
+                   "wind)")
+    else:
+        out.append(f"the segment was flown in {name}, which does not hold the position; tlm's "
+                   "fitting hovers hold theirs and lean against the gusts, so their "
+                   "roll_std_deg and pitch_std_deg (compared, not fitted) run higher than the "
+                   "log's")
+    return out
 
 
 def _spectra(tables: Any, segment: tuple[float, float], fitted: dict[str, float], seed: int,
