@@ -524,6 +524,10 @@ def test_a_per_table_model_detects_on_a_log(table_model, tmp_path):
     summary = pd.read_csv(tmp_path / "f" / "summary.csv")
     gps = summary[summary["class"] == "GPS"]
     assert len(gps) and abs(gps["start_s"].iloc[0] - 71.7) < 3.0
+    # the decision per row on the table's own rows: the GPS fault found is the GPS rows' fault
+    t = pred["TimeUS"] * 1e-6
+    inside = (t >= gps["start_s"].iloc[0] - 0.01) & (t < gps["end_s"].iloc[0] - 0.01)
+    assert inside.any() and (pred["fault"][inside] == gps["label"].iloc[0]).all()
 
 
 def test_train_models_refuses_what_it_cannot_save(table_model, tmp_path, capsys):
