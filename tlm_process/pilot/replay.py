@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tlm_process.fit.segment import segment_mode
 from tlm_process.pilot.signature import (
     StickSegment,
     flight_time_s,
@@ -311,14 +312,6 @@ def _rc_defaults() -> dict[str, float]:
     return {k: float(v) for k, v in d.items() if k.startswith(("RC", "RCMAP_"))}
 
 
-def _mode_at(tables: Mapping[str, pd.DataFrame], t_us: float) -> int | None:
-    mode = tables.get("MODE")
-    if mode is None or not len(mode):
-        return None
-    before = mode[mode["TimeUS"] <= t_us]
-    return int(before["ModeNum"].iloc[-1]) if len(before) else None
-
-
 def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.DataFrame],
           rel_tol: float = REL_TOL, draws: Sequence[pd.DataFrame] = ()) -> pd.DataFrame:
     """Per segment and measure: the log's value, tlm's, the tolerance and whether tlm is
@@ -330,7 +323,7 @@ def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.Dat
     sigs = [ours, *draws]
     for k, (_, a) in enumerate(ref.iterrows()):
         b = [sig.iloc[k] for sig in sigs]
-        mode = _mode_at(ref_tables, a["start_s"] * 1e6)
+        mode = segment_mode(ref_tables, a["start_s"] * 1e6)
         for m, floor in FLOORS.items():
             x, ys = float(a[m]), [float(v[m]) for v in b]
             if not (math.isfinite(x) and all(math.isfinite(y) for y in ys)):
