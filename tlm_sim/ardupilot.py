@@ -82,6 +82,7 @@ MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
 
 # ----------------------------------------------------------------------- flight modes
 MODE_STABILIZE = 0
+MODE_ACRO = 1
 MODE_ALT_HOLD = 2
 MODE_AUTO = 3
 MODE_GUIDED = 4

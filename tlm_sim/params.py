@@ -611,6 +611,19 @@ _add(["RCMAP_ROLL", "RCMAP_PITCH", "RCMAP_THROTTLE", "RCMAP_YAW"], "", 1, 4,
 _add("ARMING_RUDDER", "", 0, 2, "arm / disarm with the yaw stick: 0 off, 1 arm, 2 arm and disarm",
      True)
 _add("FLTMODE_CH", "", 0, 8, "the mode switch's RC channel, 0 = none", True)
+_add(["ACRO_RP_RATE", "ACRO_Y_RATE"], "deg/s", 1, 1080,
+     "ACRO: body rate at full roll / pitch, yaw stick")
+_add("ACRO_RP_EXPO", "", -0.5, 1, "ACRO: roll and pitch stick expo")
+_add("ACRO_Y_EXPO", "", -1, 1, "ACRO: yaw stick expo")
+_add(["ACRO_RP_RATE_TC", "ACRO_Y_RATE_TC"], "s", 0, 1,
+     "ACRO: roll / pitch, yaw rate time constant, 0 = none")
+_add("ACRO_TRAINER", "", 0, 2, "ACRO's trainer: 0 off, 1 levelling, 2 levelling and limited",
+     True)
+_add(["ACRO_BAL_ROLL", "ACRO_BAL_PITCH"], "1/s", 0, 3,
+     "ACRO trainer: levelling rate per radian of lean")
+_add("ACRO_THR_MID", "", 0, 1, "ACRO's mid-stick throttle, 0 = the hover throttle")
+_add("ACRO_OPTIONS", "", 0, 3, "ACRO option bits: 1 air mode, 2 rate loop only (tlm: 0 only)",
+     True, modelled=False)
 
 # ---- RTL, LAND, failsafes, arming (§3.1-3.7) --------------------------------------------------
 _add("RTL_ALT", "cm", 30, 300000, "RTL return altitude above home (§3.5)")

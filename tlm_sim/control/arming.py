@@ -288,8 +288,8 @@ def prearm_checks(c, g, t_s, s, gps, eo, report):
             mask |= AP.F_RC_NOT_FOUND
         elif s[S.RC_CH + 2] < g[C.G_FS_THR_VALUE]:
             mask |= AP.F_THR_LOW
-    if mode != AP.MODE_STABILIZE and not (eo[EK.O_HEALTHY] != 0.0
-                                          and eo[EK.O_F_VERT_POS] != 0.0):
+    manual = mode == AP.MODE_STABILIZE or mode == AP.MODE_ACRO  # has_manual_throttle
+    if not manual and not (eo[EK.O_HEALTHY] != 0.0 and eo[EK.O_F_VERT_POS] != 0.0):
         mask |= AP.F_NEED_ALT
     if _enabled(g, AP.CHK_BARO):
         healthy = True

@@ -11,6 +11,7 @@ import math
 
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import layout as C
+from tlm_sim.rotation import quat_mul_normalised, quat_to_euler, rotation_half_angle
 
 
 @tick_jit
@@ -81,6 +82,9 @@ def attitude_reset(c, roll, pitch, yaw):
     c[C.ATT_ROLL_RATE_T] = 0.0
     c[C.ATT_PITCH_RATE_T] = 0.0
     c[C.ATT_YAW_RATE_T] = 0.0
+    c[C.ATT_ANG_VEL_T] = 0.0
+    c[C.ATT_ANG_VEL_T + 1] = 0.0
+    c[C.ATT_ANG_VEL_T + 2] = 0.0
 
 
 #: thrust-vector error beyond which the feed-forward fades out and yaw is left alone [rad]
@@ -101,12 +105,10 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     loss does not also fight its heading).
     """
     dt = g[C.G_DT]
-    tc = g[C.G_INPUT_TC]
-    amax = g[C.G_ACCEL_MAX]
-    shape_angle(c, (C.ATT_ROLL_T, C.ATT_ROLL_RATE_T), c[C.ATT_ROLL_CMD], (tc, amax, dt), False)
-    amax = g[C.G_ACCEL_MAX + 1]
-    shape_angle(c, (C.ATT_PITCH_T, C.ATT_PITCH_RATE_T), c[C.ATT_PITCH_CMD], (tc, amax, dt), False)
-    _shape_yaw(c, g, tc, dt)
+    if c[C.ATT_RATE_BF_IN] != 0.0:
+        _shape_rate_bf(c, g, dt)
+    else:
+        _shape_angles(c, g, dt)
 
     # target quaternion from euler (ZYX)
     cr = math.cos(0.5 * c[C.ATT_ROLL_T])
@@ -287,6 +289,62 @@ def _shape_yaw_rate(c, g, dt):
     c[C.ATT_YAW_RATE_T] = want
     c[C.ATT_YAW_T] = wrap_pi(c[C.ATT_YAW_T] + want * dt)
     c[C.ATT_YAW_CMD] = c[C.ATT_YAW_T]
+
+
+@inline_jit
+def _shape_angles(c, g, dt):
+    """The angle targets move towards the commanded angles (ATT_*_CMD) through the input
+    shaping (ATC_INPUT_TC, ATC_ACCEL_*_MAX); the heading as :func:`_shape_yaw`."""
+    tc = g[C.G_INPUT_TC]
+    amax = g[C.G_ACCEL_MAX]
+    shape_angle(c, (C.ATT_ROLL_T, C.ATT_ROLL_RATE_T), c[C.ATT_ROLL_CMD], (tc, amax, dt), False)
+    amax = g[C.G_ACCEL_MAX + 1]
+    shape_angle(c, (C.ATT_PITCH_T, C.ATT_PITCH_RATE_T), c[C.ATT_PITCH_CMD], (tc, amax, dt), False)
+    _shape_yaw(c, g, tc, dt)
+
+
+@inline_jit
+def _shape_rate_bf(c, g, dt):
+    """AC_AttitudeControl::input_rate_bf_roll_pitch_yaw (ACRO, rate feed-forward on): the
+    attitude target turns by the shaped body rates ATT_ANG_VEL_T over dt, then those move
+    towards the commanded ACRO_RATE_CMD [rad/s] (input_shaping_ang_vel: a first-order lag of
+    ACRO_RP_RATE_TC / ACRO_Y_RATE_TC when set, then at most ATC_ACCEL_*_MAX per second). The
+    euler targets and their rates follow, so that an angle mode switched to next starts from
+    them (the rates stay as they were where the target pitch is within 0.06 deg of
+    vertical, as ang_vel_to_euler_rate gives up there)."""
+    r, p, y = c[C.ATT_ROLL_T], c[C.ATT_PITCH_T], c[C.ATT_YAW_T]
+    cr, sr = math.cos(0.5 * r), math.sin(0.5 * r)
+    cp, sp = math.cos(0.5 * p), math.sin(0.5 * p)
+    cy, sy = math.cos(0.5 * y), math.sin(0.5 * y)
+    q = (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+         cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+    w0, w1, w2 = c[C.ATT_ANG_VEL_T], c[C.ATT_ANG_VEL_T + 1], c[C.ATT_ANG_VEL_T + 2]
+    h, k = rotation_half_angle(w0, w1, w2, dt)
+    qw, qx, qy, qz = quat_mul_normalised(q, (h, k * w0, k * w1, k * w2))
+    r, p, y = quat_to_euler(qw, qx, qy, qz)
+    for i in range(3):
+        want = c[C.ACRO_RATE_CMD + i]
+        w = c[C.ATT_ANG_VEL_T + i]
+        tc = g[C.G_ACRO_TC + i]
+        if tc > 0.0:
+            want = w + sqrt_ctrl(want - w, 1.0 / max(tc, 0.01), 0.0, dt) * dt
+        dv = g[C.G_ACCEL_MAX + i] * dt
+        if dv > 0.0:
+            want = min(max(want, w - dv), w + dv)
+        c[C.ATT_ANG_VEL_T + i] = want
+    w0, w1, w2 = c[C.ATT_ANG_VEL_T], c[C.ATT_ANG_VEL_T + 1], c[C.ATT_ANG_VEL_T + 2]
+    c[C.ATT_ROLL_T] = r
+    c[C.ATT_PITCH_T] = p
+    c[C.ATT_YAW_T] = y
+    c[C.ATT_ROLL_CMD] = r
+    c[C.ATT_PITCH_CMD] = p
+    c[C.ATT_YAW_CMD] = y
+    cos_p = math.cos(p)
+    if abs(cos_p) > 1e-3:  # ang_vel_to_euler_rate
+        sin_r, cos_r = math.sin(r), math.cos(r)
+        c[C.ATT_ROLL_RATE_T] = w0 + (sin_r * w1 + cos_r * w2) * math.tan(p)
+        c[C.ATT_PITCH_RATE_T] = cos_r * w1 - sin_r * w2
+        c[C.ATT_YAW_RATE_T] = (sin_r * w1 + cos_r * w2) / cos_p
 
 
 @inline_jit

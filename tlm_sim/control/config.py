@@ -249,6 +249,17 @@ def _pilot(g: np.ndarray, p: Params) -> None:
         LOITER_VEL_CORRECTION_MAX_MS, p["PSC_POSXY_P"], g[C.G_LOIT_ACC_MAX]))
     g[C.G_PHLD_BRAKE_RATE] = max(p["PHLD_BRAKE_RATE"], 4.0)
     g[C.G_PHLD_BRAKE_ANGLE] = p["PHLD_BRAKE_ANGLE"]
+    g[C.G_ACRO_RP_RATE] = math.radians(p["ACRO_RP_RATE"])
+    g[C.G_ACRO_RP_EXPO] = p["ACRO_RP_EXPO"]
+    g[C.G_ACRO_Y_RATE] = math.radians(p["ACRO_Y_RATE"])
+    g[C.G_ACRO_Y_EXPO] = p["ACRO_Y_EXPO"]
+    g[C.G_ACRO_TC] = p["ACRO_RP_RATE_TC"]
+    g[C.G_ACRO_TC + 1] = p["ACRO_RP_RATE_TC"]
+    g[C.G_ACRO_TC + 2] = p["ACRO_Y_RATE_TC"]
+    g[C.G_ACRO_TRAINER] = p["ACRO_TRAINER"]
+    g[C.G_ACRO_BAL] = p["ACRO_BAL_ROLL"]
+    g[C.G_ACRO_BAL + 1] = p["ACRO_BAL_PITCH"]
+    g[C.G_ACRO_THR_MID] = p["ACRO_THR_MID"]
 
 
 def build_control_config(p: Params) -> np.ndarray:

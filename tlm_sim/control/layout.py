@@ -283,6 +283,14 @@ PH_B2L_T0 = _c.add("PH_B2L_T0", 1, "ms", "brake-to-loiter blend start")
 PH_WIND = _c.add("PH_WIND", 2, "cm/s^2", "wind compensation, earth-frame acceleration NE")
 PH_WIND_T0 = _c.add("PH_WIND_T0", 1, "ms", "wind compensation may learn after this")
 PH_WIND_ANG = _c.add("PH_WIND_ANG", 2, "cdeg", "wind compensation as body roll, pitch")
+# ACRO (body-rate input, AC_AttitudeControl::input_rate_bf_roll_pitch_yaw)
+ATT_RATE_BF_IN = _c.add("ATT_RATE_BF_IN", 1, "",
+                        "1: the attitude target turns at body rates (ACRO); 0: angle targets")
+ATT_ANG_VEL_T = _c.add("ATT_ANG_VEL_T", 3, "rad/s",
+                       "shaped body-rate target (roll, pitch, yaw; the target's frame, FRD)")
+ACRO_RATE_CMD = _c.add("ACRO_RATE_CMD", 3, "rad/s",
+                       "ACRO's desired body rates from the sticks and the trainer")
+ACRO_LEVEL = _c.add("ACRO_LEVEL", 3, "rad/s", "ACRO trainer's levelling as body rates")
 N_CONTROL_STATE = STATE.close()
 
 # sub-modes of AUTO / RTL / LAND
@@ -471,4 +479,13 @@ G_LOIT_ERR_MAX = _g.add("G_LOIT_ERR_MAX", 1, "m", "LOITER's largest position err
 G_THR_MIX_MAN = _g.add("G_THR_MIX_MAN", 1, "", "ATC_THR_MIX_MAN")
 G_PHLD_BRAKE_RATE = _g.add("G_PHLD_BRAKE_RATE", 1, "deg/s", "PHLD_BRAKE_RATE (at least 4)")
 G_PHLD_BRAKE_ANGLE = _g.add("G_PHLD_BRAKE_ANGLE", 1, "cdeg", "PHLD_BRAKE_ANGLE")
+G_ACRO_RP_RATE = _g.add("G_ACRO_RP_RATE", 1, "rad/s", "ACRO_RP_RATE")
+G_ACRO_RP_EXPO = _g.add("G_ACRO_RP_EXPO", 1, "", "ACRO_RP_EXPO")
+G_ACRO_Y_RATE = _g.add("G_ACRO_Y_RATE", 1, "rad/s", "ACRO_Y_RATE")
+G_ACRO_Y_EXPO = _g.add("G_ACRO_Y_EXPO", 1, "", "ACRO_Y_EXPO")
+G_ACRO_TC = _g.add("G_ACRO_TC", 3, "s",
+                   "body-rate input time constants: ACRO_RP_RATE_TC (roll, pitch), ACRO_Y_RATE_TC")
+G_ACRO_TRAINER = _g.add("G_ACRO_TRAINER", 1, "", "ACRO_TRAINER (0 off, 1 leveling, 2 limited)")
+G_ACRO_BAL = _g.add("G_ACRO_BAL", 2, "1/s", "ACRO_BAL_ROLL, ACRO_BAL_PITCH")
+G_ACRO_THR_MID = _g.add("G_ACRO_THR_MID", 1, "", "ACRO_THR_MID (0: the hover throttle)")
 N_CONTROL_CFG = CONFIG.close()

@@ -42,6 +42,7 @@ from tlm_sim.control.failsafe import (
 from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, mix, output_idle, voltage_compensation
 from tlm_sim.control.pilot_modes import (
     ARMING_DELAY_S,
+    has_manual_throttle,
     is_pilot_mode,
     log_land_complete,
     pilot_mix_want,
@@ -102,6 +103,8 @@ def set_mode(c, mode, rsn, t_us, ev):
     c[C.MODE_RSN] = rsn
     if not is_pilot_mode(mode):
         c[C.ATT_YAW_RATE_IN] = 0.0
+    if mode != AP.MODE_ACRO:
+        c[C.ATT_RATE_BF_IN] = 0.0
     E.log_mode(ev, t_us, mode, rsn)
 
 
@@ -268,14 +271,14 @@ def _throttle_failsafe_count(c, g, rc_last_frame_us, rc_throttle):
 @inline_jit
 def _should_disarm_on_failsafe(c, sub):
     """Copter's should_disarm_on_failsafe, for the radio failsafe: on the ground (landed, or
-    the arming delay's ground idle) disarm instead of flying the action; in STABILIZE also with
-    the throttle stick at zero (throttle_zero). AUTO disarms only if landed before auto_armed,
-    which tlm's missions never are (they arm with the throttle up): never here."""
+    the arming delay's ground idle) disarm instead of flying the action; in STABILIZE and ACRO
+    also with the throttle stick at zero (throttle_zero). AUTO disarms only if landed before
+    auto_armed, which tlm's missions never are (they arm with the throttle up): never here."""
     mode = c[C.MODE]
     if mode == AP.MODE_AUTO:
         return False
     on_ground = (c[C.LANDED] != 0.0 and sub != C.SUB_TAKEOFF) or sub == C.SUB_GROUND_IDLE
-    if mode == AP.MODE_STABILIZE and c[C.PIL_THR_ZERO] != 0.0:
+    if has_manual_throttle(mode) and c[C.PIL_THR_ZERO] != 0.0:
         return True
     return on_ground
 
@@ -628,7 +631,7 @@ def _attitude_rates_mix(c, g, meas, sub, thr, thr_b):
 @inline_jit
 def _pilot_tick(c, g, t_us, inputs, cos_tilt, ev):
     """The armed vehicle in a pilot mode (tlm_sim.control.pilot_modes): the mode's targets,
-    the controllers and mixer (unless the motors idle), hover learning outside STABILIZE,
+    the controllers and mixer (unless the motors idle), hover learning outside STABILIZE and ACRO,
     the land detector (not while a takeoff's throttle rises on the ground; EV
     LAND_COMPLETE / NOT_LANDED), the crash checks."""
     was_landed = c[C.LANDED] != 0.0
@@ -639,7 +642,7 @@ def _pilot_tick(c, g, t_us, inputs, cos_tilt, ev):
     if was_landed and c[C.LANDED] == 0.0:
         E.log_ev(ev, t_us, AP.EV_NOT_LANDED)
         was_landed = False
-    if c[C.MODE] != AP.MODE_STABILIZE:
+    if not has_manual_throttle(c[C.MODE]):
         _hover_learning(c, g, C.SUB_PILOT, thr, inputs)
     taking_off = c[C.PIL_TKOFF] == 1.0
     _land_detector(c, g, t_us, C.SUB_TAKEOFF if taking_off else C.SUB_PILOT, thr, inputs, ev)
@@ -741,11 +744,11 @@ def _land_conditions(c, g, thr, vd):
 
 @inline_jit
 def _crash_checks(c, g, t_us, inputs, cos_tilt, ev):
-    """The thrust-loss check, and the crash check (leaning over 15 deg): a crash disarms
-    (ERR 12/1, EV DISARMED)."""
+    """The thrust-loss check, and the crash check (leaning over 15 deg; not in ACRO, whose
+    crash_check_enabled is false): a crash disarms (ERR 12/1, EV DISARMED)."""
     dt, q, vel = g[C.G_DT], inputs.q, inputs.vel
     thrust_loss_check(c, dt, q, vel[2], ev, t_us)
-    if cos_tilt < CRASH_LEAN_COS:
+    if cos_tilt < CRASH_LEAN_COS and c[C.MODE] != AP.MODE_ACRO:
         roll, pitch, _ = quat_to_euler(q[0], q[1], q[2], q[3])
         if crash_check(c, g, dt, cos_tilt, roll, pitch, math.sqrt(vel[0] ** 2 + vel[1] ** 2)):
             E.log_err(ev, t_us, AP.ERR_CRASH_CHECK, AP.ERR_CODE_FAILSAFE)

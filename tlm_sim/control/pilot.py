@@ -13,7 +13,7 @@ Each main-loop tick, before the vehicle's step (ArduCopter's rc_loop), :func:`pi
   once) and auto_armed (EV AUTO_ARMED the first time the throttle is raised after arming);
 - reads the mode switch on FLTMODE_CH (six positions split at 1231 / 1361 / 1491 / 1621 /
   1750 us, PWM at or below 800 or at or above 2200 ignored), debounced: a new position must
-  read the same for 200 ms; then the mode FLTMODEn: STABILIZE, ALT_HOLD, LOITER, POSHOLD
+  read the same for 200 ms; then the mode FLTMODEn: STABILIZE, ACRO, ALT_HOLD, LOITER, POSHOLD
   (:mod:`tlm_sim.control.pilot_modes`), RTL or LAND; LOITER and POSHOLD are refused while
   armed without a position; other modes are refused (tlm flies no mission from a switch);
 - the ground station's mode requests (MAVLink SET_MODE, ``FlightPlan.gcs``): each tried once
@@ -21,7 +21,7 @@ Each main-loop tick, before the vehicle's step (ArduCopter's rc_loop), :func:`pi
 - the rudder gestures (ARMING_RUDDER): yaw stick beyond 4000 of 4500 with the throttle at 0
   for 3 s asks for an arm attempt (the pre-arm and arm checks,
   :func:`tlm_sim.control.arming.arming_step`); with ARMING_RUDDER 2, yaw beyond -4000 with
-  the throttle at 0 for 3 s disarms in STABILIZE or once landed (ARM.Method RUDDER);
+  the throttle at 0 for 3 s disarms in STABILIZE, ACRO or once landed (ARM.Method RUDDER);
 - auto-disarm: landed with the throttle at zero for DISARM_DELAY seconds disarms
   (ARM.Method DISARMDELAY).
 """
@@ -32,7 +32,12 @@ from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.modes import disarm, rtl_or_land, set_mode, start_land
-from tlm_sim.control.pilot_modes import SPOOLED_UP_S, is_pilot_mode, pilot_mode_enter
+from tlm_sim.control.pilot_modes import (
+    SPOOLED_UP_S,
+    has_manual_throttle,
+    is_pilot_mode,
+    pilot_mode_enter,
+)
 from tlm_sim.rotation import heading
 
 THROTTLE_ZERO_S = 0.4  # set_throttle_zero_flag: the stick at 0 this long
@@ -178,8 +183,8 @@ def pilot_gcs(c, g, t_us, gcs, inputs, out):
 def change_mode(c, g, t_us, request, inputs, out):
     """Copter::set_mode for a request (mode number, reason: RC_COMMAND from the switch, GCS
     over MAVLink); returns whether the mode is now the one asked for. Refused: an unflown
-    mode; LOITER or POSHOLD while armed without a position. out: (the RTL / LAND segment
-    scratch, the event buffers)."""
+    mode; LOITER or POSHOLD while armed without a position; ACRO in the radio failsafe.
+    out: (the RTL / LAND segment scratch, the event buffers)."""
     mode, rsn = request
     seg, ev = out
     if mode == c[C.MODE]:
@@ -187,12 +192,14 @@ def change_mode(c, g, t_us, request, inputs, out):
         return True
     armed = c[C.ARMED] != 0.0
     airborne = armed and c[C.LANDED] == 0.0
+    if mode == AP.MODE_ACRO and c[C.RC_FAILSAFE] != 0.0:
+        return False  # ModeAcro::allows_entry_in_rc_failsafe
     if is_pilot_mode(mode):
         needs_position = mode == AP.MODE_LOITER or mode == AP.MODE_POSHOLD
         if armed and needs_position and not (c[C.EKF_POS_OK] != 0.0
                                              and c[C.EKF_FAILSAFE] == 0.0):
             return False
-        from_manual = c[C.MODE] == AP.MODE_STABILIZE
+        from_manual = has_manual_throttle(c[C.MODE])
         set_mode(c, mode, rsn, t_us, ev)
         if armed:
             if c[C.SUBMODE] != C.SUB_PILOT:
@@ -218,7 +225,7 @@ def change_mode(c, g, t_us, request, inputs, out):
 def _rudder(c, g, t_us, ev):
     """The yaw-stick gestures: arm (ARMING_RUDDER >= 1) by yaw right with the throttle at 0
     for 3 s (an arm attempt: PIL_ARM_REQ); disarm (ARMING_RUDDER 2) by yaw left with the
-    throttle at 0 for 3 s, in STABILIZE or landed."""
+    throttle at 0 for 3 s, in STABILIZE, ACRO (manual throttle) or landed."""
     t_s = t_us * 1e-6
     rud = g[C.G_ARMING_RUDDER]
     thr_zero = c[C.PIL_THR] == 0.0
@@ -235,7 +242,7 @@ def _rudder(c, g, t_us, ev):
             c[C.PIL_RUDDER_T] = -1.0
         return
     c[C.PIL_RUDDER_T] = -1.0
-    may = c[C.MODE] == AP.MODE_STABILIZE or c[C.LANDED] != 0.0
+    may = has_manual_throttle(c[C.MODE]) or c[C.LANDED] != 0.0
     if rud == 2.0 and yaw < -RUDDER_CD and thr_zero and may:
         if c[C.PIL_RUDDER_DIS_T] < 0.0:
             c[C.PIL_RUDDER_DIS_T] = t_s

@@ -40,6 +40,7 @@ from tlm_sim.control.attitude import (
     shape_angle,
     sqrt_ctrl,
     throttle_mix_update,
+    wrap_pi,
 )
 from tlm_sim.control.mixer import MOT_SPOOL_TIME_S, output_idle, voltage_compensation
 from tlm_sim.control.position import (
@@ -80,6 +81,9 @@ PH_SMOOTH = 0.0125  # per loop at 400 Hz
 PH_NO_SMOOTH_CD = 1800.0
 PH_WIND_TC = 0.0025  # per loop
 PH_WIND_LEAN = 0.6666  # of ANGLE_MAX
+# ACRO's trainer (ArduCopter config.h)
+ACRO_LEVEL_MAX = math.radians(30.0)  # ACRO_LEVEL_MAX_ANGLE: levelling acts up to this lean
+ACRO_LEVEL_MAX_OVERSHOOT = math.radians(10.0)  # ACRO_LEVEL_MAX_OVERSHOOT
 
 
 @tick_jit
@@ -103,11 +107,7 @@ def lean_angles(roll_in, pitch_in, angle_max, angle_limit):
 @tick_jit
 def yaw_rate(g, yaw_in):
     """Yaw stick (-1..1) -> desired yaw rate [rad/s]: PILOT_Y_RATE with PILOT_Y_EXPO."""
-    e = g[C.G_PILOT_Y_EXPO]
-    x = yaw_in
-    if e < EXPO_MAX:
-        x = (1.0 - e) * yaw_in / (1.0 - e * abs(yaw_in))
-    return g[C.G_PILOT_Y_RATE] * x
+    return g[C.G_PILOT_Y_RATE] * input_expo(yaw_in, g[C.G_PILOT_Y_EXPO])
 
 
 @tick_jit
@@ -158,10 +158,16 @@ def lean_to_accel(roll, pitch, cy, sy):
 
 @tick_jit
 def is_pilot_mode(mode):
-    """Whether the mode is one tlm flies from the sticks (STABILIZE, ALT_HOLD, LOITER,
+    """Whether the mode is one tlm flies from the sticks (STABILIZE, ACRO, ALT_HOLD, LOITER,
     POSHOLD)."""
     return (mode == AP.MODE_STABILIZE or mode == AP.MODE_ALT_HOLD or mode == AP.MODE_LOITER
-            or mode == AP.MODE_POSHOLD)
+            or mode == AP.MODE_POSHOLD or mode == AP.MODE_ACRO)
+
+
+@tick_jit
+def has_manual_throttle(mode):
+    """Mode::has_manual_throttle: the throttle stick drives the motors (STABILIZE, ACRO)."""
+    return mode == AP.MODE_STABILIZE or mode == AP.MODE_ACRO
 
 
 @inline_jit
@@ -181,6 +187,13 @@ def pilot_mode_enter(c, g, t_s, inputs, from_manual):
     present position and velocity."""
     pos, vel = inputs.pos, inputs.vel
     c[C.ATT_YAW_RATE_IN] = 1.0
+    if c[C.MODE] == AP.MODE_ACRO:
+        if c[C.ATT_RATE_BF_IN] == 0.0:  # the body rates continue the angle target's rates
+            _euler_rate_to_ang_vel(c, c[C.ATT_ROLL_RATE_T], c[C.ATT_PITCH_RATE_T],
+                                   c[C.ATT_YAW_RATE_T], C.ATT_ANG_VEL_T)
+        c[C.ATT_RATE_BF_IN] = 1.0
+    else:
+        c[C.ATT_RATE_BF_IN] = 0.0
     c[C.YAW_RATE_CMD] = 0.0
     c[C.PIL_VEL_D] = vel[2]
     c[C.PIL_ACC_D] = 0.0
@@ -228,6 +241,8 @@ def pilot_step(c, g, t_us, inputs, cos_tilt):
     c[C.YAW_RATE_CMD] = yaw_rate(g, c[C.PIL_YAW])
     if mode == AP.MODE_STABILIZE:
         return _stabilize(c, g, inputs, cos_tilt)
+    if mode == AP.MODE_ACRO:
+        return _acro(c, g, inputs)
     climb = climb_rate(g, c[C.PIL_THR])
     c[C.PIL_CLIMB] = climb
     spooled = c[C.SUB_TIMER] >= SPOOLED_UP_S and c[C.PIL_AUTO_ARMED] != 0.0
@@ -286,11 +301,11 @@ def _throttle_out(c, g, thr, cos_tilt):
 
 @tick_jit
 def pilot_mix_want(c, g):
-    """Copter::update_throttle_mix in a pilot mode: STABILIZE ATC_THR_MIX_MIN with the
+    """Copter::update_throttle_mix in a pilot mode: STABILIZE and ACRO ATC_THR_MIX_MIN with the
     throttle stick at 0, else ATC_THR_MIX_MAN; the others ATC_THR_MIX_MAX in active flight,
     ATC_THR_MIX_MIN when landed, or descending with no large lean request, attitude error or
     acceleration."""
-    if c[C.MODE] == AP.MODE_STABILIZE:
+    if has_manual_throttle(c[C.MODE]):
         return g[C.G_THR_MIX_MIN] if c[C.PIL_THR] <= 0.0 else g[C.G_THR_MIX_MAN]
     if c[C.LANDED] != 0.0:
         return g[C.G_THR_MIX_MIN]
@@ -341,12 +356,113 @@ def _stabilize(c, g, inputs, cos_tilt):
     _xy_idle(c, inputs.pos)
     thr = manual_throttle(g, c[C.PIL_THR], c[C.THR_HOVER])
     c[C.THR_IN_RAW] = thr
-    if c[C.LANDED] != 0.0 and c[C.LIM_THR_LO] == 0.0:  # the motors left their lower limit
+    _leave_ground(c)
+    thr, thr_b = _throttle_out(c, g, thr, cos_tilt)
+    return thr, thr_b, True
+
+
+@inline_jit
+def _leave_ground(c):
+    """A manual-throttle mode clears the landed flag once the motors leave their lower
+    limit."""
+    if c[C.LANDED] != 0.0 and c[C.LIM_THR_LO] == 0.0:
         c[C.LANDED] = 0.0
         c[C.MAYBE_LANDED] = 0.0
         c[C.LAND_TIMER] = 0.0
-    thr, thr_b = _throttle_out(c, g, thr, cos_tilt)
-    return thr, thr_b, True
+
+
+@inline_jit
+def _acro(c, g, inputs):
+    """ACRO (mode_acro.cpp): body rates from the sticks and the trainer (:func:`acro_rates`),
+    flown through the attitude target (ATT_RATE_BF_IN); the throttle from the stick's curve
+    with mid-stick at ACRO_THR_MID (the hover throttle when 0), without angle boost; ground
+    idle while the throttle stick is at zero (or in the arming delay)."""
+    if c[C.PIL_THR_ZERO] != 0.0 or c[C.SUB_TIMER] < ARMING_DELAY_S:
+        _idle(c, g, inputs)
+        return 0.0, 0.0, False
+    acro_rates(c, g, inputs.q)
+    _xy_idle(c, inputs.pos)
+    mid = g[C.G_ACRO_THR_MID]
+    thr = manual_throttle(g, c[C.PIL_THR], mid if mid > 0.0 else c[C.THR_HOVER])
+    c[C.THR_IN_RAW] = thr
+    _leave_ground(c)
+    c[C.THR_OUT] = thr
+    althold_lean_update(c, g, thr)
+    c[C.THR_OUT_BOOSTED] = thr
+    return thr, thr, True
+
+
+@tick_jit
+def acro_rates(c, g, q):
+    """ModeAcro::get_pilot_desired_rates -> c[ACRO_RATE_CMD..+3], body rates [rad/s]: the
+    roll and pitch sticks (within a circle of 1) through ACRO_RP_EXPO to ACRO_RP_RATE, the yaw
+    stick through ACRO_Y_EXPO to ACRO_Y_RATE; with ACRO_TRAINER the target's roll and pitch
+    (to +-30 deg) are levelled at ACRO_BAL_ROLL / _PITCH per second, and with ACRO_TRAINER 2
+    beyond ANGLE_MAX a square-root controller (gain ACRO_RP_RATE / 10 deg, ATC_ACCEL_R/P_MAX)
+    pulls them back; with ACRO_TRAINER 1 the levelling fades with the largest stick and the
+    vehicle's cos(pitch) (q, the EKF attitude body->NED), the sum limited per axis to
+    ||stick rate| - |levelling||."""
+    roll_in, pitch_in, yaw_in = c[C.PIL_ROLL], c[C.PIL_PITCH], c[C.PIL_YAW]
+    n = math.sqrt(roll_in * roll_in + pitch_in * pitch_in)
+    if n > 1.0:
+        roll_in /= n
+        pitch_in /= n
+    rp = g[C.G_ACRO_RP_RATE]
+    c[C.ACRO_RATE_CMD] = rp * input_expo(roll_in, g[C.G_ACRO_RP_EXPO])
+    c[C.ACRO_RATE_CMD + 1] = rp * input_expo(pitch_in, g[C.G_ACRO_RP_EXPO])
+    c[C.ACRO_RATE_CMD + 2] = g[C.G_ACRO_Y_RATE] * input_expo(yaw_in, g[C.G_ACRO_Y_EXPO])
+    trainer = g[C.G_ACRO_TRAINER]
+    if trainer == 0.0:
+        return
+    level_r = _trainer_level(g, 0, wrap_pi(c[C.ATT_ROLL_T]), trainer == 2.0)
+    level_p = _trainer_level(g, 1, wrap_pi(c[C.ATT_PITCH_T]), trainer == 2.0)
+    _euler_rate_to_ang_vel(c, level_r, level_p, 0.0, C.ACRO_LEVEL)
+    if trainer == 2.0:
+        for k in range(3):
+            c[C.ACRO_RATE_CMD + k] += c[C.ACRO_LEVEL + k]
+        return
+    sp = min(max(2.0 * (q[0] * q[2] - q[3] * q[1]), -1.0), 1.0)
+    mix = min(max(1.0 - max(abs(roll_in), abs(pitch_in), abs(yaw_in)), 0.0), 1.0)
+    mix *= math.sqrt(1.0 - sp * sp)
+    for k in range(3):
+        req = c[C.ACRO_RATE_CMD + k]
+        lv = c[C.ACRO_LEVEL + k] * mix
+        lim = abs(abs(req) - abs(lv))
+        c[C.ACRO_RATE_CMD + k] = min(max(req + lv, -lim), lim)
+
+
+@inline_jit
+def _trainer_level(g, k, a, limited):
+    """The trainer's earth-frame rate [rad/s] for axis k (0 roll, 1 pitch) at target angle a
+    [rad]: levelling, and with ``limited`` the pull back inside ANGLE_MAX."""
+    rate = -min(max(a, -ACRO_LEVEL_MAX), ACRO_LEVEL_MAX) * g[C.G_ACRO_BAL + k]
+    amax = g[C.G_ANGLE_MAX]
+    if limited and abs(a) > amax:
+        edge = amax if a > 0.0 else -amax
+        rate += sqrt_ctrl(edge - a, g[C.G_ACRO_RP_RATE] / ACRO_LEVEL_MAX_OVERSHOOT,
+                          g[C.G_ACCEL_MAX + k], g[C.G_DT])
+    return rate
+
+
+@tick_jit
+def input_expo(x, expo):
+    """ArduPilot's input_expo: a stick x (clamped to -1..1) through expo (none at or beyond
+    0.95)."""
+    x = min(max(x, -1.0), 1.0)
+    if expo < EXPO_MAX:
+        return (1.0 - expo) * x / (1.0 - expo * abs(x))
+    return x
+
+
+@inline_jit
+def _euler_rate_to_ang_vel(c, droll, dpitch, dyaw, out):
+    """euler_rate_to_ang_vel at the attitude target (ATT_ROLL_T, ATT_PITCH_T): euler rates
+    [rad/s] -> body rates in c[out..out+3]."""
+    r, p = c[C.ATT_ROLL_T], c[C.ATT_PITCH_T]
+    sr, cr, sp, cp = math.sin(r), math.cos(r), math.sin(p), math.cos(p)
+    c[out] = droll - sp * dyaw
+    c[out + 1] = cr * dpitch + sr * cp * dyaw
+    c[out + 2] = -sr * dpitch + cp * cr * dyaw
 
 
 @inline_jit
