@@ -7,10 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from tests.conftest import reference_path
 from tlm_process.pilot.replay import (
+    gcs_requests,
     is_pilot_flown,
     judge,
     rc_table,
@@ -50,15 +52,45 @@ def test_weakened_motor_shows_in_the_hover():
 
 def test_real_log171_replays_to_the_end():
     """Another vehicle and firmware (Copter 3.3): no threshold, but the LOITER segments are
-    re-flown and compared, with notes on what tlm cannot fly (ACRO) and the inserted arming
-    gesture."""
+    re-flown and compared, with a note on the inserted arming gesture; its switch to ACRO
+    (not on its mode switch: every FLTMODEn is LOITER) is asked for at the log's time, and
+    the pilot's full pitch stick back then forward flips tlm's copter (ACRO_TRAINER 0) within
+    a quarter of a second of the real one (0.02 s, measured)."""
     r = replay(reference_path("../real/log171.bin"))
     assert len(r["judged"]) > 20
     notes = " ".join(r["scenario"]["notes"])
-    assert "ACRO" in notes and "rudder gesture" in notes
-    modes = r["_log"].tables["MODE"]
+    assert "rudder gesture" in notes and "ACRO" not in notes
+    log = r["_log"]
+    modes = log.tables["MODE"]
     assert (modes["ModeNum"] == AP.MODE_LOITER).any()
-    assert r["_log"].meta["armed_s"] == pytest.approx(72.6, abs=0.05)  # the log's arming
+    acro = modes[modes["ModeNum"] == AP.MODE_ACRO]
+    assert list(acro["TimeUS"] * 1e-6) == pytest.approx([217.209], abs=0.01)
+    assert log.meta["armed_s"] == pytest.approx(72.6, abs=0.05)  # the log's arming
+    att = log.tables["ATT"]
+    flip = att["TimeUS"][att["Roll"].abs() > 90.0].iloc[0] * 1e-6
+    assert flip == pytest.approx(238.98, abs=0.25)  # log171: |Roll| beyond 90 at 238.98 s
+
+
+def test_mode_changes_off_the_switch_are_asked_for_in_a_log_without_reasons():
+    """Copter 3.x logs no MODE reason: a change into a pilot mode that RCIN's mode switch does
+    not select becomes a request at its time; the switch's own changes and RTL / LAND (the
+    failsafes') do not."""
+    mode = pd.DataFrame({"TimeUS": [10e6, 20e6, 30e6, 40e6], "ModeNum": [5, 1, 5, 6]})
+    rcin = pd.DataFrame({"TimeUS": np.arange(0, 50e6, 1e5), "C5": 1000.0})
+    values = {f"FLTMODE{k}": 5.0 for k in range(1, 7)}
+    assert gcs_requests({"MODE": mode, "RCIN": rcin}, values) == [(20.0, 1)]
+    values["FLTMODE1"] = 1.0  # the switch selects ACRO itself: nothing to ask for
+    assert gcs_requests({"MODE": mode, "RCIN": rcin}, values) == [(30.0, 5)]
+    with_rsn = mode.assign(Rsn=[1, 2, 1, 3])  # a 4.x log: its GCS rows only
+    assert gcs_requests({"MODE": with_rsn, "RCIN": rcin}, values) == [(20.0, 1)]
+
+
+def test_acro_p_of_older_firmware_is_acro_rate():
+    from tlm_process.fit.fit import log_vehicle_params
+
+    assert Params({"ACRO_RP_P": 8.0})["ACRO_RP_RATE"] == 360.0
+    keep, _ = log_vehicle_params({"ACRO_YAW_P": 1.8, "ACRO_TRAINER": 0.0})
+    assert keep == {"ACRO_Y_RATE": pytest.approx(81.0), "ACRO_TRAINER": 0.0}
 
 
 def test_pilot_flown_detection():

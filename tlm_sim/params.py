@@ -812,6 +812,12 @@ def _unchanged(value: float) -> float:
     return value
 
 
+def _acro_p_to_rate(value: float) -> float:
+    """Copter 4.1's ``ACRO_RP_P`` / ``ACRO_YAW_P`` (a gain on the stick) -> 4.2's
+    ``ACRO_RP_RATE`` / ``ACRO_Y_RATE`` [deg/s at full stick]: x 45, Copter's own conversion."""
+    return 45.0 * value
+
+
 # Renamed parameters whose meaning and unit did not change (§6): ArduPilot made every
 # SIM_GPS_* a SIM_GPS1_* on 2024-11-12 (a few also got shorter names to fit 16 characters),
 # GPS_DELAY_MS GPS1_DELAY_MS with the GPS1_* parameters, and numbered the IMU-1 noise, bias
@@ -839,13 +845,16 @@ _RENAMED: dict[str, str] = {
     **{f"SIM_GYR_SCALE_{a}": f"SIM_GYR1_SCALE_{a}" for a in _XYZ},
 }
 
-#: Paper-era names, consulted by every input path (constructor, ``updated``, ``from_parm``)
-#: before validation: ``name -> Alias(target, convert)`` (§6). ``SIM_GPS_DISABLE`` 1 (the
-#: paper's GPS fault) becomes ``SIM_GPS1_ENABLE`` 0. Aliases are input-only: ``Params`` always
+#: Paper-era and older firmware's names, consulted by every input path (constructor,
+#: ``updated``, ``from_parm``) before validation: ``name -> Alias(target, convert)`` (§6).
+#: ``SIM_GPS_DISABLE`` 1 (the paper's GPS fault) becomes ``SIM_GPS1_ENABLE`` 0, Copter 4.1's
+#: ``ACRO_RP_P`` 8 ``ACRO_RP_RATE`` 360. Aliases are input-only: ``Params`` always
 #: stores and returns the current names.
 ALIASES: dict[str, Alias] = {
     "SIM_GPS_DISABLE": Alias("SIM_GPS1_ENABLE", _disable_to_enable),
     "SIM_GPS2_DISABLE": Alias("SIM_GPS2_ENABLE", _disable_to_enable),
+    "ACRO_RP_P": Alias("ACRO_RP_RATE", _acro_p_to_rate),
+    "ACRO_YAW_P": Alias("ACRO_Y_RATE", _acro_p_to_rate),
     **{old: Alias(new, _unchanged) for old, new in _RENAMED.items()},
 }
 

@@ -331,7 +331,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "LAND; anything else is refused (docs/missions.md)")
     f.add_argument("--sticks", metavar="FILE",
                    help="fly a pilot's stick script (.yaml/.json/.csv: time, roll, pitch, "
-                        "throttle, yaw, mode) instead of a mission: STABILIZE, ALT_HOLD, "
+                        "throttle, yaw, mode) instead of a mission: STABILIZE, ACRO, ALT_HOLD, "
                         "LOITER, POSHOLD from the sticks, arming by the rudder gesture "
                         "(docs/pilot.md)")
     f.add_argument("--seed", type=int, default=None,

@@ -248,12 +248,16 @@ def log_battery(tables: Mapping[str, Any], log_params: Mapping[str, float]) -> d
 def log_vehicle_params(log_params: Mapping[str, float]) -> tuple[dict[str, float], dict[str, str]]:
     """The log's parameters tlm models, where they differ from tlm's defaults, each checked
     alone (a value out of tlm's range is dropped, with why); Copter 3.3's attitude controller
-    under its 3.4+ names (:func:`copter33_params`); Copter 3.x's ``FRAME`` becomes
-    ``FRAME_CLASS`` 1 (quad) and ``FRAME_TYPE``."""
-    from tlm_sim.params import PARAM_INFO, ParamError, Params
+    under its 3.4+ names (:func:`copter33_params`), renamed ones under their present names
+    (:data:`tlm_sim.params.ALIASES`: ``ACRO_RP_P`` x 45 is ``ACRO_RP_RATE``); Copter 3.x's
+    ``FRAME`` becomes ``FRAME_CLASS`` 1 (quad) and ``FRAME_TYPE``."""
+    from tlm_sim.params import ALIASES, PARAM_INFO, ParamError, Params
 
     defaults = Params.defaults()
     values = copter33_params(log_params)
+    for old, alias in ALIASES.items():  # older names (ACRO_RP_P, ...) under the current ones
+        if old in values and alias.target not in values:
+            values[alias.target] = alias.convert(float(values.pop(old)))
     if "FRAME" in values and "FRAME_CLASS" not in values:
         values["FRAME_CLASS"], values["FRAME_TYPE"] = 1.0, float(values.pop("FRAME"))
     keep: dict[str, float] = {}

@@ -12,7 +12,8 @@ in PARM, on the log's own time line: the vehicle arms by the rudder gesture wher
 pilot made it. A log armed another way (a ground station, an arming switch) gets the gesture
 inserted before its arming time (:func:`with_arm_gesture`), the stick positions it replaces
 are noted. The mode switch is in RCIN; the mode changes a ground station made (MODE rows with
-reason GCS) are asked for again at their times (:func:`gcs_requests`).
+reason GCS; in a log without reasons, the changes into a pilot mode the switch does not
+select) are asked for again at their times (:func:`gcs_requests`).
 
 The two flights are then measured per stick segment (:mod:`tlm_process.pilot.signature`: the
 sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segment, mean and
@@ -55,6 +56,8 @@ REL_TOL = 0.15
 FLOORS: dict[str, float] = {"pitch_mean_deg": 0.5, "pitch_peak_deg": 0.5, "roll_mean_deg": 0.5,
                             "roll_peak_deg": 0.5, "speed_max_ms": 0.3, "motor1_excess_us": 5.0}
 HEIGHT_HELD_M = 0.5
+#: the modes tlm flies from the sticks: STABILIZE, ACRO, ALT_HOLD, LOITER, POSHOLD
+PILOT_MODE_NUMBERS = frozenset({0, 1, 2, 5, 16})
 FLIGHT_TIME_REL_TOL = 0.05
 #: draws of the gusts a log flown in SITL's random gusts (SIM_WIND_TURB > 0) is re-flown with:
 #: its gusts are one draw, tlm's seeds others, so a measure is judged against tlm's range over
@@ -281,7 +284,7 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
     if mode is not None and len(mode):
         after = mode[mode["TimeUS"] >= arm_us - 1e6]
         flown = pd.to_numeric(after["ModeNum"], errors="coerce").dropna()
-        unflown = sorted({int(m) for m in flown} - {0, 2, 5, 6, 9, 16})
+        unflown = sorted({int(m) for m in flown} - PILOT_MODE_NUMBERS - {6, 9})
         if unflown:
             from tlm_sim.ardupilot import MODE_NAMES
 
@@ -289,20 +292,48 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
                          + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
     s = int(seed if seed is not None else (doc or {}).get("seed", 0) or 0)
     return PilotScenario(path.stem, tables, values, params, table, _changes(doc, tables),
-                         segments, gcs_requests(tables), s, arm_s, notes)
+                         segments, gcs_requests(tables, values), s, arm_s, notes)
 
 
-def gcs_requests(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, int]]:
+def gcs_requests(tables: Mapping[str, pd.DataFrame],
+                 values: Mapping[str, float] | None = None) -> list[tuple[float, int]]:
     """The mode changes a ground station made: (time [s], mode number) of the MODE rows with
-    reason GCS (ModeReason 2; a log without reasons, Copter 3.x, has none)."""
+    reason GCS (ModeReason 2). A log without reasons (Copter 3.x) gets its changes into a
+    pilot mode that the mode switch does not explain (RCIN's position on ``FLTMODE_CH``, 5 if
+    the log has none, is another ``FLTMODEn``: a ground station, an auxiliary switch); changes
+    into RTL or LAND are left to tlm's failsafes."""
     from tlm_sim.ardupilot import RSN_GCS
 
     mode = tables.get("MODE")
-    if mode is None or not len(mode) or "Rsn" not in mode:
+    if mode is None or not len(mode):
         return []
-    gcs = mode[pd.to_numeric(mode["Rsn"], errors="coerce") == RSN_GCS]
-    return [(float(t) * 1e-6, int(m)) for t, m in zip(gcs["TimeUS"], gcs["ModeNum"],
-                                                       strict=True)]
+    if "Rsn" in mode:
+        gcs = mode[pd.to_numeric(mode["Rsn"], errors="coerce") == RSN_GCS]
+        return [(float(t) * 1e-6, int(m)) for t, m in zip(gcs["TimeUS"], gcs["ModeNum"],
+                                                           strict=True)]
+    return _unswitched_changes(mode, tables.get("RCIN"), values or {})
+
+
+def _unswitched_changes(mode: pd.DataFrame, rcin: pd.DataFrame | None,
+                        values: Mapping[str, float]) -> list[tuple[float, int]]:
+    """MODE rows after the first into a pilot mode tlm flies that RCIN's mode switch does not
+    select at their time."""
+    from tlm_sim.control.pilot import switch_position
+
+    ch = f"C{int(values.get('FLTMODE_CH', 5))}"
+    if rcin is None or not len(rcin) or ch not in rcin:
+        return []
+    t_rc = rcin["TimeUS"].to_numpy(dtype=float)
+    pwm = rcin[ch].to_numpy(dtype=float)
+    out = []
+    for t, m in zip(mode["TimeUS"].iloc[1:], mode["ModeNum"].iloc[1:], strict=True):
+        if int(m) not in PILOT_MODE_NUMBERS:
+            continue
+        k = int(np.searchsorted(t_rc, float(t), side="right")) - 1
+        pos = switch_position(pwm[k]) if k >= 0 else -1
+        if pos < 0 or int(values.get(f"FLTMODE{pos + 1}", -1)) != int(m):
+            out.append((float(t) * 1e-6, int(m)))
+    return out
 
 
 def _rc_defaults() -> dict[str, float]:

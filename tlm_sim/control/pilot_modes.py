@@ -1,5 +1,5 @@
-"""ArduCopter 4.7's pilot-flown modes: STABILIZE, ALT_HOLD, LOITER and POSHOLD from the sticks
-(design: ../shared/design/pilot-modes-and-vibration.md, Part A; our implementation).
+"""ArduCopter 4.7's pilot-flown modes: STABILIZE, ACRO, ALT_HOLD, LOITER and POSHOLD from the
+sticks (design: ../shared/design/pilot-modes-and-vibration.md, Part A; our implementation).
 
 The sticks arrive read by :mod:`tlm_sim.control.pilot` (c[PIL_*]: roll, pitch and yaw in -1..1
 outside their dead zones, the throttle as control_in 0..1000). Per main-loop tick
@@ -12,6 +12,9 @@ outside their dead zones, the throttle as control_in 0..1000). Per main-loop tic
   PILOT_Y_RATE_TC);
 - STABILIZE's throttle (A4.4): the stick through the curve that puts mid-stick at the hover
   throttle, with angle boost;
+- ACRO (mode_acro.cpp): body rates from the sticks (ACRO_RP_RATE, ACRO_Y_RATE, their expo)
+  and the trainer, the attitude target turned at them (ATT_RATE_BF_IN); STABILIZE's throttle
+  curve around ACRO_THR_MID, without angle boost;
 - ALT_HOLD, LOITER, POSHOLD's climb rate (A4.3): the dead band THR_DZ around mid-stick,
   PILOT_SPEED_UP / _DN, shaped at PILOT_ACCEL_Z and PSC_JERK_Z, held by the vertical position
   controller; on the ground the stick above the dead band starts the pilot takeoff (A9:

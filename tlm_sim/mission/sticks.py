@@ -24,8 +24,8 @@ or CSV with a header (``t,roll,pitch,throttle,yaw,mode,ramp``; an empty cell lea
 stick where it is). Errors are :class:`StickScriptError` (a ``ValueError``) with a one-line
 message naming the row.
 
-This module reads and renders scripts. Flying them (``tlm fly --sticks``, the pilot modes) is
-the next step of issue 42 (docs/pilot.md).
+This module reads and renders scripts; ``tlm fly --sticks`` and ``fly(None, sticks=...)`` fly
+them in the pilot modes (:mod:`tlm_sim.control.pilot_modes`, docs/pilot.md).
 """
 
 from __future__ import annotations
