@@ -305,7 +305,7 @@ def run_flight(state, cfg, plan, logs, work, t_end_us):
         next_loop += LOOP_DT_US
         tick += 1
         gps_new, baro_new, mag_new = _read_sensors(state, scfg, work, t_us, ev)
-        rc_update(s, scfg, float(t_us), rc)  # the RC receiver: the pilot's table or SITL's idle
+        rc_update(s, scfg, float(t_us), rc, x)  # the RC receiver: the pilot's table or idle
         now = LoopTick(t_us, tick, gps_new, baro_new, mag_new)
         inputs = _ekf_inputs(state, work, now)
         dcm_update(dcm, g, s, inputs, gps, int(eo[EK.O_IMU]), t_us)

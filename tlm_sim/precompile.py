@@ -129,7 +129,7 @@ JOBS: tuple[Job, ...] = (
     Job("tlm_sim.ekf.log:gps_glitch_check", (_EV, _i8, _F2, _F1), 0.1),
     Job("tlm_sim.ekf.log:log_lane_switch", (_EV, _i8, _F1), 0.1),
     Job("tlm_sim.sensors.gps:gps_init", (_F1, _f8, _f8), 0.1),
-    Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8, _F2), 0.1),
+    Job("tlm_sim.sensors.rc:rc_update", (_F1, _F1, _f8, _F2, _F1), 0.1),
     Job("tlm_sim.ekf.log:log_ekf_evidence", (_LOGS, _i8, _F2, _F1, _F1), 1.9),
     # issue 21: the arming driver, pre-arm checks and boot texts, the EKF's GPS checks
     Job("tlm_sim.control.arming:arming_step",

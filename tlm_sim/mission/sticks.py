@@ -3,7 +3,12 @@
 A script is a list of keyframes. Each row is a time ``t`` [s since boot, the log's
 ``TimeUS / 1e6``] and any of:
 - ``roll``, ``pitch``, ``yaw`` in -1..1 (right, nose forward, yaw right positive);
-- ``throttle`` in 0..1;
+- ``throttle`` in 0..1, or ``hold`` / ``land``: the pilot's hand flies the throttle stick from
+  then on, holding the height the copter has, or descending at 0.7 m/s and putting the stick
+  down on touchdown (as a pilot flying STABILIZE or ACRO does;
+  :func:`tlm_sim.sensors.rc.pilot_hand`); a number afterwards takes the stick back at once;
+- ``height`` [m above home, 0..100] instead of ``throttle``: the hand climbs (1.5 m/s) or
+  descends (0.7 m/s) to it and holds it;
 - ``mode``, a flight-mode name, set on the mode switch;
 - ``gcs_mode``, a flight-mode name the ground station asks for over MAVLink at ``t`` (the
   switch stays where it is);
@@ -44,7 +49,8 @@ import numpy as np
 from tlm_sim.ardupilot import MODE_NAMES, RC_IDLE_PWM
 from tlm_sim.textfile import TextFileError, read_text
 
-__all__ = ["AXES", "DEFAULT_RAMP_S", "StickScript", "StickScriptError", "mode_pwm"]
+__all__ = ["AXES", "DEFAULT_RAMP_S", "HAND", "HEIGHT_PWM", "HOLD_PWM", "LAND_PWM", "StickScript",
+           "StickScriptError", "height_code", "mode_pwm"]
 
 #: the stick axes of a row, with their range
 AXES: dict[str, tuple[float, float]] = {"roll": (-1.0, 1.0), "pitch": (-1.0, 1.0),
@@ -59,8 +65,22 @@ CHANNEL: dict[str, int] = {"roll": 1, "pitch": 2, "throttle": 3, "yaw": 4}
 #: position's centre [us]
 SWITCH_BOUNDS: tuple[float, ...] = (1231.0, 1361.0, 1491.0, 1621.0, 1750.0)
 SWITCH_CENTRES: tuple[float, ...] = (1165.0, 1295.0, 1425.0, 1555.0, 1685.0, 1815.0)
-_KEYS = ("t", *AXES, "mode", "gcs_mode", "ramp")
+_KEYS = ("t", *AXES, "height", "mode", "gcs_mode", "ramp")
+#: the pilot's hand holds heights up to this [m above home]
+MAX_HAND_HEIGHT_M = 100.0
 _MODES = {name: num for num, name in MODE_NAMES.items()}
+#: throttle codes of an RC table (never a PWM; :func:`tlm_sim.sensors.rc.pilot_hand` flies
+#: them): the pilot's hand holds the height, lands, or flies to the height -(code) - 10 m
+HOLD_PWM = -1.0
+LAND_PWM = -2.0
+HEIGHT_PWM = -10.0
+#: the throttle words: the pilot's hand flies the stick (their codes stand in the rendering)
+HAND: dict[str, float] = {"hold": HOLD_PWM, "land": LAND_PWM}
+
+
+def height_code(height_m: float) -> float:
+    """The RC table's throttle code for "fly to ``height_m`` [m above home] and hold it"."""
+    return HEIGHT_PWM - height_m
 
 
 class StickScriptError(ValueError):
@@ -147,7 +167,8 @@ class StickScript:
     def sticks(self, t_s: float) -> dict[str, float]:
         """Each axis's position at time ``t_s`` [s]: a row moves a stick linearly from where
         it is at the row's time (mid-ramp, if an earlier move has not ended) to the new
-        position over the row's ramp."""
+        position over the row's ramp. The throttle is :data:`HAND`'s code (negative) while
+        the pilot's hand flies it."""
         t = np.array([float(t_s)])
         return {axis: float(self._axis_at(axis, t)[0]) for axis in AXES}
 
@@ -169,7 +190,7 @@ class StickScript:
         ch = np.array(RC_IDLE_PWM)
         pos = self.sticks(t_s)
         for axis in AXES:
-            ch[CHANNEL[axis] - 1] = stick_pwm(axis, pos[axis], params)
+            ch[CHANNEL[axis] - 1] = _pwm(axis, np.array([pos[axis]]), params)[0]
         mode = self.mode(t_s)
         sw = int(params["FLTMODE_CH"])
         if mode is not None and 1 <= sw <= 8:
@@ -192,7 +213,7 @@ class StickScript:
         out[:, 0] = t
         out[:, 1:] = np.array(RC_IDLE_PWM)
         for axis in AXES:
-            out[:, CHANNEL[axis]] = stick_pwm(axis, self._axis_at(axis, t), params)
+            out[:, CHANNEL[axis]] = _pwm(axis, self._axis_at(axis, t), params)
         sw = int(params["FLTMODE_CH"])
         mode_rows = [r for r in self.rows if "mode" in r]
         if mode_rows and 1 <= sw <= 8:
@@ -210,11 +231,17 @@ class StickScript:
         moves = []
         move = (0.0, 0.0, 0.0, 0.0)
         for r in self.rows:
+            if axis == "throttle" and "height" in r:
+                r = {**r, "throttle": height_code(r["height"])}
             if axis in r:
                 t0, v0, v1, ramp = move
                 frac = 1.0 if ramp <= MIN_RAMP_S else min(max((r["t"] - t0) / ramp, 0.0),
                                                           1.0)
-                move = (r["t"], v0 + (v1 - v0) * frac, r[axis], r.get("ramp", DEFAULT_RAMP_S))
+                to = HAND.get(r[axis], r[axis]) if isinstance(r[axis], str) else r[axis]
+                if to < 0.0 or v1 < 0.0:  # into or out of the pilot's hand: a step
+                    move = (r["t"], to, to, 0.0)
+                else:
+                    move = (r["t"], v0 + (v1 - v0) * frac, to, r.get("ramp", DEFAULT_RAMP_S))
                 moves.append(move)
         out = np.zeros(len(t))
         if not moves:
@@ -244,10 +271,32 @@ def stick_pwm(axis: str, pos: Any, params: Mapping[str, float]) -> Any:
     return np.where(p >= 0.0, trim + p * (hi - trim), trim + p * (trim - lo))
 
 
+def _pwm(axis: str, pos: np.ndarray, params: Mapping[str, float]) -> np.ndarray:
+    """:func:`stick_pwm`, the pilot's-hand codes of the throttle passed through."""
+    pwm = np.asarray(stick_pwm(axis, pos, params), dtype=np.float64)
+    return np.where(pos < 0.0, pos, pwm) if axis == "throttle" else pwm
+
+
 def _number(v: Any, what: str, i: int) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
         raise StickScriptError(f"row {i}: {what} must be a finite number, got {v!r}")
     return float(v)
+
+
+def _axis_value(row: Mapping[str, Any], key: str, i: int, bounds: tuple[float, float]
+                ) -> float | str:
+    """Row i's checked ``key``: a number within bounds, or a throttle word of :data:`HAND`."""
+    if key == "throttle" and isinstance(row[key], str):
+        word = row[key].strip().lower()
+        if word not in HAND:
+            raise StickScriptError(f"row {i}: throttle {row[key]!r} is not a number, 'hold' "
+                                   f"or 'land'")
+        return word
+    v = _number(row[key], key, i)
+    lo, hi = bounds
+    if not lo <= v <= hi:
+        raise StickScriptError(f"row {i}: {key} {v:g} is outside {lo:g}..{hi:g}")
+    return v
 
 
 def _check_row(row: Any, i: int) -> dict[str, Any]:
@@ -264,10 +313,11 @@ def _check_row(row: Any, i: int) -> dict[str, Any]:
         raise StickScriptError(f"row {i}: t must be >= 0 s, got {out['t']:g}")
     for axis, (lo, hi) in AXES.items():
         if axis in row:
-            v = _number(row[axis], axis, i)
-            if not lo <= v <= hi:
-                raise StickScriptError(f"row {i}: {axis} {v:g} is outside {lo:g}..{hi:g}")
-            out[axis] = v
+            out[axis] = _axis_value(row, axis, i, (lo, hi))
+    if "height" in row:
+        if "throttle" in row:
+            raise StickScriptError(f"row {i}: give throttle or height, not both")
+        out["height"] = _axis_value(row, "height", i, (0.0, MAX_HAND_HEIGHT_M))
     for key in ("mode", "gcs_mode"):
         if key in row:
             name = str(row[key]).strip().upper()
@@ -298,7 +348,7 @@ def _csv_rows(text: str, path: Path) -> list[dict[str, Any]]:
         for k, v in rec.items():
             if k is None or v is None or not str(v).strip():
                 continue
-            if k in ("mode", "gcs_mode"):
+            if k in ("mode", "gcs_mode") or (k == "throttle" and v.strip().lower() in HAND):
                 row[k] = v.strip()
                 continue
             try:

@@ -152,6 +152,8 @@ def build_sensor_config(p: Params) -> np.ndarray:
     _baro_config(c, p)
     _mag_config(c, p)
     c[S.C_RC_FAIL] = p["SIM_RC_FAIL"]
+    c[S.C_RC3_RANGE] = p["RC3_MIN"]
+    c[S.C_RC3_RANGE + 1] = p["RC3_MAX"]
     c[S.C_HOME_ALT] = p["SIM_OPOS_ALT"]
     c[S.C_FRAME_HEIGHT] = p["TLM_FRAME_HEIGHT"]
     return c

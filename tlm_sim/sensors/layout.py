@@ -133,6 +133,12 @@ RC_NEXT_US = _s.add("RC_NEXT_US", 1, "us", "next RC frame")
 RC_LAST_FRAME_US = _s.add("RC_LAST_FRAME_US", 1, "us", "time of the last RC frame received")
 RC_CH = _s.add("RC_CH", 8, "us", "RC input channels 1..8 as the receiver delivers them (PWM)")
 RC_ROW = _s.add("RC_ROW", 1, "", "next row of the flight's RC table (a pilot-flown flight)")
+RC_HAND = _s.add("RC_HAND", 1, "",
+                 "the pilot's hand on the throttle: 0 the table's, else its HOLD / LAND code")
+RC_HAND_ALT = _s.add("RC_HAND_ALT", 1, "m",
+                     "height the pilot's hand holds (above home), moving towards RC_HAND_GOAL")
+RC_HAND_GOAL = _s.add("RC_HAND_GOAL", 1, "m", "height the pilot's hand is to reach")
+RC_HAND_I = _s.add("RC_HAND_I", 1, "us", "the hand's slowly learnt throttle stick")
 BARO_BASE = _s.block("BARO", BARO, N_BARO)
 B_GND_TEMP = _s.add("B_GND_TEMP", 1, "degC",
                     "AP_Baro's ground temperature: the primary's at calibration (BARO.GndTemp)")
@@ -206,6 +212,7 @@ C_MAG_ALY_HGT = _c.add("C_MAG_ALY_HGT", 1, "m",
 C_MAG_MOT = _c.add("C_MAG_MOT", 3, "gauss/A",
                    "SIM_MAG_MOT_X/Y/Z: body field per ampere of battery current")
 C_RC_FAIL = _c.add("C_RC_FAIL", 1, "", "SIM_RC_FAIL")
+C_RC3_RANGE = _c.add("C_RC3_RANGE", 2, "us", "RC3_MIN, RC3_MAX (the throttle stick's travel)")
 C_HOME_ALT = _c.add("C_HOME_ALT", 1, "m", "SIM_OPOS_ALT (AMSL)")
 C_VIB_MOT_MAX = _c.add("C_VIB_MOT_MAX", 1, "Hz", "SIM_VIB_MOT_MAX")
 C_ACC_RND = _c.add("C_ACC_RND", 2, "m/s/s", "SIM_ACC1_RND, SIM_ACC2_RND")

@@ -1,0 +1,91 @@
+"""The pilot's hand on the throttle (stick script ``throttle: hold`` / ``land``, ``height: H``;
+tlm_sim.sensors.rc.pilot_hand): the script's codes, and a STABILIZE flight that climbs to a
+height, holds it through lean steps and lands, as a pilot flies the manual-throttle modes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tlm_sim import ardupilot as AP
+from tlm_sim import fly
+from tlm_sim.mission.sticks import (
+    HOLD_PWM,
+    LAND_PWM,
+    StickScript,
+    StickScriptError,
+    height_code,
+)
+from tlm_sim.params import Params
+
+
+def test_script_codes_and_steps():
+    s = StickScript.from_dict({"sticks": [
+        {"t": 0, "mode": "STABILIZE"}, {"t": 10, "throttle": 0.6}, {"t": 20, "height": 12},
+        {"t": 30, "throttle": "HOLD"}, {"t": 40, "throttle": 0.3, "ramp": 2.0},
+        {"t": 50, "throttle": "land"}]})
+    tb = s.table(Params(), 60.0)
+    thr = {t: tb[int(t * 50), 3] for t in (15, 25, 35, 40.02, 45, 55)}
+    assert thr[15] == 1600.0 and thr[25] == height_code(12.0) == -22.0
+    assert thr[35] == HOLD_PWM and thr[55] == LAND_PWM
+    assert thr[40.02] == thr[45] == 1300.0  # out of the hand: a step, whatever the ramp
+    assert s.sticks(35)["throttle"] == HOLD_PWM
+    assert StickScript.from_dict(s.to_dict()) == s
+    assert s.channels(25, Params())[2] == -22.0
+
+
+@pytest.mark.parametrize("row, match", [
+    ({"t": 1, "throttle": "up"}, "'hold' or 'land'"),
+    ({"t": 1, "throttle": 0.5, "height": 3}, "not both"),
+    ({"t": 1, "height": 150}, "outside 0..100"),
+    ({"t": 1, "height": "ten"}, "finite number"),
+])
+def test_bad_hand_rows(row, match):
+    with pytest.raises(StickScriptError, match=match):
+        StickScript((row,))
+
+
+def test_csv_takes_the_hand_words(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("t,throttle,height,mode\n0,,,STABILIZE\n10,,8,\n20,hold,,\n30,land,,\n")
+    s = StickScript.from_file(p)
+    assert [r.get("throttle", r.get("height")) for r in s.rows[1:]] == [8.0, "hold", "land"]
+
+
+#: STABILIZE: the rudder gesture, the hand climbs to 10 m, pitch and roll steps, lands
+SCRIPT = {"sticks": [
+    {"t": 0, "mode": "STABILIZE"}, {"t": 20, "yaw": 1, "ramp": 0}, {"t": 23.5, "yaw": 0, "ramp": 0},
+    {"t": 24, "height": 10}, {"t": 45, "pitch": 0.4}, {"t": 53, "pitch": 0.0},
+    {"t": 61, "roll": 0.4}, {"t": 69, "roll": 0.0}, {"t": 85, "throttle": "land"}]}
+
+
+@pytest.fixture(scope="module")
+def log():
+    return fly(None, params=Params({"FLTMODE1": AP.MODE_STABILIZE}),
+               sticks=StickScript.from_dict(SCRIPT))
+
+
+def _window(table, a, b):
+    return table[(table.TimeUS >= a * 1e6) & (table.TimeUS < b * 1e6)]
+
+
+def test_the_hand_climbs_holds_and_lands_in_stabilize(log):
+    assert log.meta["end_reason"] == "landed"
+    ctun, rcin = log.tables["CTUN"], log.tables["RCIN"]
+    assert (rcin.C3 >= 1000).all()  # RCIN logs the hand's stick, never the code
+    # the climb at 1.5 m/s to 10 m (the centre of mass: CTUN.Alt from the armed height)
+    climb = _window(ctun, 27, 30).CRt.mean() / 100.0
+    assert climb == pytest.approx(1.5, rel=0.1)
+    held = _window(ctun, 36, 84).Alt
+    assert held.mean() == pytest.approx(10.0, abs=0.35)
+    assert held.max() - held.min() < 0.15  # through 8 s at 12 deg of pitch, then of roll
+    assert _window(log.tables["ATT"], 47, 53).Pitch.mean() == pytest.approx(-12.0, rel=0.1)
+    # landing: 0.7 m/s down, the stick down at touchdown, landed, auto-disarmed
+    assert _window(ctun, 88, 94).CRt.mean() / 100.0 == pytest.approx(-0.7, rel=0.05)
+    ev = log.tables["EV"]
+    landed = float(ev.TimeUS[ev.Id == AP.EV_LAND_COMPLETE].iloc[0]) * 1e-6
+    assert 95.0 < landed < 105.0
+    assert (_window(rcin, landed, landed + 5).C3 == 1000).all()
+    arm = log.tables["ARM"]
+    assert list(arm.ArmState) == [1, 0] and arm.Method.iloc[-1] == AP.ARM_METHOD_DISARMDELAY
+    assert np.all(np.diff(rcin.TimeUS) > 0)
