@@ -73,7 +73,7 @@ def test_freestyle_moves_every_stick_at_once():
 
 
 @pytest.mark.parametrize("bad, msg", [
-    ({"share": 1.5}, "share"), ({"modes": {"STABILIZE": 1}}, "STABILIZE needs a pilot"),
+    ({"share": 1.5}, "share"), ({"modes": {"ACRO": 1}}, "ACRO is not drawn"),
     ({"patterns": {"circle": 1}}, "unknown 'circle'"), ({"stick": [0.2, 1.5]}, "at most 1"),
     ({"speed": 3}, "unknown setting"),
 ])
@@ -92,6 +92,29 @@ def test_a_generated_pilot_flight_flies_its_faults_and_lands():
     assert log.meta["end_reason"] == "landed" and log.meta["mission"] == "pilot"
     assert [r["type"] for r in log.faults] == ["gps_glitch"]
     assert (log.tables["MODE"]["ModeNum"] == AP.MODE_LOITER).any()
+
+
+def test_a_generated_stabilize_flight_holds_its_height_by_the_pilots_hand():
+    """STABILIZE only when a configuration gives it a share: the pilot's hand climbs to the
+    drawn height, holds it through the pattern (a fault drawn in it) and lands; auto-disarm."""
+    cfg = ScenarioConfig(pilot={"share": 1.0, "modes": {"STABILIZE": 1},
+                                "patterns": {"lines": 1}, "duration": [40, 60]},
+                         kinds={"single": 1.0}, fault_weights={"gps_glitch": 1.0})
+    sc = sample_scenario(5, 0, cfg)
+    draw = sc.mission["pilot"]
+    assert draw["mode"] == "STABILIZE"
+    rows, origin, descent = pilot_script(draw)
+    assert {"t": 19.0, "height": draw["alt"]} in rows and {"t": descent, "throttle": "land"} in rows
+    spec = sc.realise()
+    log = fly(spec.mission, spec.schedule, spec.params, spec.seed, spec.profile,
+              sticks=spec.sticks)
+    assert log.meta["end_reason"] == "landed"
+    assert set(log.tables["MODE"]["ModeNum"]) == {AP.MODE_STABILIZE}
+    ctun = log.tables["CTUN"]
+    held = ctun[(ctun.TimeUS > origin * 1e6) & (ctun.TimeUS < descent * 1e6)]["Alt"]
+    assert abs(held.mean() - draw["alt"]) < 0.5 and held.max() - held.min() < 1.5
+    assert log.tables["ARM"]["Method"].iloc[-1] in (AP.ARM_METHOD_DISARMDELAY,
+                                                    AP.ARM_METHOD_RUDDER)
 
 
 def test_tlm_generate_pilot_share_and_fly_from_manifest(tmp_path, capsys):

@@ -331,9 +331,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "LAND; anything else is refused (docs/missions.md)")
     f.add_argument("--sticks", metavar="FILE",
                    help="fly a pilot's stick script (.yaml/.json/.csv: time, roll, pitch, "
-                        "throttle, yaw, mode) instead of a mission: STABILIZE, ACRO, ALT_HOLD, "
-                        "LOITER, POSHOLD from the sticks, arming by the rudder gesture "
-                        "(docs/pilot.md)")
+                        "throttle or the pilot's hand on it (hold, land, height), yaw, mode) "
+                        "instead of a mission: STABILIZE, ACRO, ALT_HOLD, LOITER, POSHOLD from "
+                        "the sticks, arming by the rudder gesture (docs/pilot.md)")
     f.add_argument("--seed", type=int, default=None,
                    help="random seed of the flight and of --faults paper (default 0)")
     f.add_argument("--out", type=folder, required=True, help="output folder")

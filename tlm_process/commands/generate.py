@@ -333,8 +333,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                     help="SIM_WIND_TURB of the windy flights, m/s (default 0:2)")
     sc.add_argument("--pilot-share", type=float, metavar="F",
                     help="share of pilot-flown flights (ALT_HOLD, LOITER, POSHOLD from a drawn "
-                         "stick script: hover, lines, boxes, yaw turns; default 0), the rest "
-                         "fly missions; faults are drawn as for missions (docs/generate.md)")
+                         "stick script: hover, lines, boxes, yaw turns, freestyle; default 0; "
+                         "STABILIZE by a --config's pilot modes), the rest fly missions; "
+                         "faults are drawn as for missions (docs/generate.md)")
     sc.add_argument("--real-share", type=float, metavar="F",
                     help="share of flights with a real copter's vibration and noise, the rest "
                          "SITL-quiet (default 0.5; 0 when --params gives the vehicle its own; "

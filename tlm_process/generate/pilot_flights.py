@@ -1,10 +1,11 @@
 """Pilot-flown flights of a generated data set (issue 42): a stick script drawn per flight.
 
 A pilot-flown flight arms by the rudder gesture in its mode (ALT_HOLD, LOITER or POSHOLD, by
-their shares), climbs to a drawn height, flies a drawn **pattern** of stick segments for a drawn
-time, descends, lands and disarms by the rudder gesture (still armed 20 s after the throttle
-went down, a fault having taken it higher or the wind keeping the land detector from
-completing, the ground station selects LAND, which lands and disarms it). The patterns:
+their shares; STABILIZE when asked for), climbs to a drawn height, flies a drawn **pattern** of
+stick segments for a drawn time, descends, lands and disarms by the rudder gesture (still
+armed 20 s after the throttle went down, a fault having taken it higher or the wind keeping
+the land detector from completing, the ground station selects LAND, which lands and disarms
+it). The patterns:
 
 * ``hover``: sticks centred throughout (the pilot holds position; the mode does the rest);
 * ``lines``: pitch forward, release, pitch back, release, ... (out-and-back lines);
@@ -16,8 +17,12 @@ completing, the ground station selects LAND, which lands and disarms it). The pa
 Each segment's stick deflection is uniform in ``stick`` (fraction of full stick), its length in
 ``leg_s`` [s], the release after it in ``release_s`` [s]. The ground station selects the mode
 1 s after boot (MAVLink; the mode switch stays where SITL's idle receiver has it), so a
-vehicle's own ``FLTMODEn`` (``--params``) need not hold it. STABILIZE is not drawn: a script
-has no pilot to hold the height with the throttle.
+vehicle's own ``FLTMODEn`` (``--params``) need not hold it. In STABILIZE (a share of 0 unless
+``modes`` gives it one) the pilot's hand works the throttle (stick script ``height`` /
+``land``, :func:`tlm_sim.sensors.rc.pilot_hand`): it climbs to the height and holds it through
+the pattern, lands at 0.7 m/s and puts the stick down on touchdown; auto-disarm
+(``DISARM_DELAY``) or the gesture then disarms it. ACRO is not drawn: a held stick is a rate
+there, and a script has no pilot closing the attitude loop.
 
 The script's **origin** (the start of the pattern, after the climb) is where the fault draws
 start counting, as AUTO's start does for missions; faults that would end after the descent
@@ -33,12 +38,15 @@ import numpy as np
 
 from tlm_process.generate.checks import fraction, known_keys, shares, value_range
 from tlm_process.generate.errors import GenerateError
+from tlm_sim.sensors.rc import HAND_CLIMB_MS, HAND_DESCENT_MS
 
 __all__ = ["DEFAULT_PILOT", "PATTERNS", "PILOT_MODES", "draw_pilot", "pilot_script",
            "validate_pilot"]
 
-#: the modes a drawn script flies (they hold the height themselves)
+#: the modes a drawn script flies by default (they hold the height themselves)
 PILOT_MODES: tuple[str, ...] = ("ALT_HOLD", "LOITER", "POSHOLD")
+#: and the ones a configuration may give a share: STABILIZE, its height held by the pilot's hand
+KNOWN_PILOT_MODES: tuple[str, ...] = (*PILOT_MODES, "STABILIZE")
 PATTERNS: tuple[str, ...] = ("hover", "lines", "box", "yaw_turns", "freestyle")
 #: Default: no pilot-flown flights (``--pilot-share``); when there are, every mode and pattern
 #: alike, sticks 20-60 %, heights 5-20 m, 150-400 s of pattern, legs 4-10 s, releases 5-10 s.
@@ -63,13 +71,14 @@ LAND_FALLBACK_S = 20.0
 
 def _weights(d: Any, known: tuple[str, ...], what: str) -> dict[str, float]:
     """Validated shares (:func:`~tlm_process.generate.checks.shares`); mode names in any
-    case, STABILIZE refused with why."""
+    case, ACRO refused with why."""
     if isinstance(d, Mapping):
         d = {str(k).strip().upper() if what == "modes" else str(k).strip().lower(): v
              for k, v in d.items()}
-        if "STABILIZE" in d:
-            raise GenerateError("pilot modes: STABILIZE needs a pilot holding the height with "
-                                f"the throttle; choose from {', '.join(known)}")
+        if "ACRO" in d:
+            raise GenerateError("pilot modes: ACRO is not drawn (a held stick is a rate, and a "
+                                f"script closes no attitude loop); choose from "
+                                f"{', '.join(known)}")
     return shares(d, known, f"pilot {what}")
 
 
@@ -85,7 +94,7 @@ def validate_pilot(v: Any) -> dict[str, Any] | None:
     share = fraction(v.get("share", DEFAULT_PILOT["share"]), "pilot share (--pilot-share)")
     out: dict[str, Any] = {"share": share,
                            "modes": _weights(v.get("modes", DEFAULT_PILOT["modes"]),
-                                             PILOT_MODES, "modes"),
+                                             KNOWN_PILOT_MODES, "modes"),
                            "patterns": _weights(v.get("patterns", DEFAULT_PILOT["patterns"]),
                                                 PATTERNS, "patterns")}
     for key, lo_min in (("stick", 0.0), ("alt", 2.0), ("duration", 10.0), ("leg_s", 0.5),
@@ -156,9 +165,14 @@ def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, 
         {"t": ARM_GESTURE_S + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0},
     ]
     t_up = ARM_GESTURE_S + GESTURE_HOLD_S + 0.5
-    rows.append({"t": t_up, "throttle": CLIMB_STICK, "ramp": 0.0})
-    t_hold = round(t_up + TAKEOFF_LAG_S + float(draw["alt"]) / CLIMB_MS, 1)
-    rows.append({"t": t_hold, "throttle": 0.5})
+    hand = draw["mode"] == "STABILIZE"  # the pilot's hand climbs, holds and lands
+    if hand:
+        rows.append({"t": t_up, "height": float(draw["alt"])})
+        t_hold = round(t_up + TAKEOFF_LAG_S + float(draw["alt"]) / HAND_CLIMB_MS, 1)
+    else:
+        rows.append({"t": t_up, "throttle": CLIMB_STICK, "ramp": 0.0})
+        t_hold = round(t_up + TAKEOFF_LAG_S + float(draw["alt"]) / CLIMB_MS, 1)
+        rows.append({"t": t_hold, "throttle": 0.5})
     t = round(t_hold + SETTLE_S, 1)
     origin = t
     for roll, pitch, yaw, leg, rel in draw["segments"]:
@@ -167,9 +181,13 @@ def pilot_script(draw: Mapping[str, Any]) -> tuple[list[dict[str, Any]], float, 
             rows.append({"t": round(t + leg, 1), "roll": 0.0, "pitch": 0.0, "yaw": 0.0})
         t = round(t + leg + rel, 1)
     descent = t
-    rows.append({"t": descent, "throttle": DESCENT_STICK})
-    t_down = round(descent + (float(draw["alt"]) + 2.0) / DESCENT_MS + 4.0, 1)
-    rows.append({"t": t_down, "throttle": 0.0, "ramp": 0.0})
+    if hand:  # the hand puts the stick down on touchdown
+        rows.append({"t": descent, "throttle": "land"})
+        t_down = round(descent + (float(draw["alt"]) + 2.0) / HAND_DESCENT_MS + 4.0, 1)
+    else:
+        rows.append({"t": descent, "throttle": DESCENT_STICK})
+        t_down = round(descent + (float(draw["alt"]) + 2.0) / DESCENT_MS + 4.0, 1)
+        rows.append({"t": t_down, "throttle": 0.0, "ramp": 0.0})
     rows.append({"t": t_down + 1.0, "yaw": -1.0, "ramp": 0.0})
     rows.append({"t": t_down + 1.0 + GESTURE_HOLD_S, "yaw": 0.0, "ramp": 0.0})
     # a pilot whose copter is still flying (a fault took it higher, the wind held it off the
