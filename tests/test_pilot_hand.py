@@ -32,6 +32,10 @@ def test_script_codes_and_steps():
     assert s.sticks(35)["throttle"] == HOLD_PWM
     assert StickScript.from_dict(s.to_dict()) == s
     assert s.channels(25, Params())[2] == -22.0
+    # only the throttle's codes make steps: a stick back from a negative position still ramps
+    s = StickScript(({"t": 0, "pitch": -0.4, "ramp": 0}, {"t": 10, "pitch": 0.0, "ramp": 1.0},
+                     {"t": 20, "throttle": 0.5}))
+    assert s.sticks(10.5)["pitch"] == pytest.approx(-0.2)
 
 
 @pytest.mark.parametrize("row, match", [

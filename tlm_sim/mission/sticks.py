@@ -238,7 +238,8 @@ class StickScript:
                 frac = 1.0 if ramp <= MIN_RAMP_S else min(max((r["t"] - t0) / ramp, 0.0),
                                                           1.0)
                 to = HAND.get(r[axis], r[axis]) if isinstance(r[axis], str) else r[axis]
-                if to < 0.0 or v1 < 0.0:  # into or out of the pilot's hand: a step
+                if axis == "throttle" and (to < 0.0 or v1 < 0.0):  # into or out of the
+                    # pilot's hand (its codes are negative): a step
                     move = (r["t"], to, to, 0.0)
                 else:
                     move = (r["t"], v0 + (v1 - v0) * frac, to, r.get("ramp", DEFAULT_RAMP_S))
