@@ -203,3 +203,26 @@ def test_acro_is_refused_in_the_radio_failsafe():
     rtl = mode[mode.ModeNum == AP.MODE_RTL]
     assert len(rtl) == 1 and float(rtl.TimeUS.iloc[0]) * 1e-6 < 75.0
     assert int(mode.ModeNum.iloc[-1]) in (AP.MODE_RTL, AP.MODE_LAND)
+
+
+def test_an_acro_log_replays_from_its_rcin(tmp_path):
+    """A log flown in ACRO (X frame; the pilot's hand on the throttle in STABILIZE and ACRO)
+    re-flown from its RCIN: the switch's ACRO is flown again and every judged measure of every
+    stick segment passes (the height is not judged: the throttle is the pilot's)."""
+    from tlm_process.pilot.replay import replay
+
+    rows = [{"t": 0, "mode": "STABILIZE"}, {"t": 20, "yaw": 1, "ramp": 0},
+            {"t": 23.5, "yaw": 0, "ramp": 0}, {"t": 24, "height": 10}, {"t": 40, "mode": "ACRO"},
+            {"t": 50, "pitch": 0.2}, {"t": 58, "pitch": 0}, {"t": 66, "roll": 0.2},
+            {"t": 74, "roll": 0}, {"t": 82, "yaw": 0.3}, {"t": 86, "yaw": 0},
+            {"t": 96, "mode": "STABILIZE"}, {"t": 99, "throttle": "land"}]
+    params = {"FLTMODE1": AP.MODE_STABILIZE, "FLTMODE2": AP.MODE_ACRO, "FRAME_TYPE": 1}
+    log = fly(None, params=Params(params), sticks=StickScript(tuple(rows)), seed=5)
+    path = tmp_path / "acro.bin"
+    log.write_bin(path)
+    r = replay(path)
+    modes = r["_log"].tables["MODE"]
+    assert (modes["ModeNum"] == AP.MODE_ACRO).any()
+    j = r["judged"]
+    assert len(j) > 40 and j["pass"].all(), j[~j["pass"]]
+    assert r["checks"]["flight_time"]["pass"]
