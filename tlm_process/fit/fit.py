@@ -624,12 +624,26 @@ def _rotor_start(target: Mapping[str, float], floor: Mapping[str, float],
     (undamped), within :data:`ROTOR_HZ_RANGE`."""
     hz = ROTOR_HZ
     for _ in range(ROTOR_START_FLIGHTS):
-        want, have = _vibe_ratio(target, floor), _vibe_ratio(fly(hz), floor)
-        if not (math.isfinite(want) and math.isfinite(have) and want > 0 and have > 0):
+        ratio = _rotor_ratio(target, fly(hz), floor)
+        if ratio is None:
             break
-        hz = float(min(max(hz * math.sqrt(want / have), ROTOR_HZ_RANGE[0]),
-                       ROTOR_HZ_RANGE[1]))
+        hz = _rotor_clamp(hz * math.sqrt(ratio))
     return hz
+
+
+def _rotor_ratio(target: Mapping[str, float], got: Mapping[str, float],
+                 floor: Mapping[str, float]) -> float | None:
+    """The log's :func:`_vibe_ratio` over a flight's (None when either is not a positive
+    number)."""
+    want, have = _vibe_ratio(target, floor), _vibe_ratio(got, floor)
+    if not (math.isfinite(want) and math.isfinite(have) and want > 0 and have > 0):
+        return None
+    return want / have
+
+
+def _rotor_clamp(hz: float) -> float:
+    """A rotor frequency [Hz] within :data:`ROTOR_HZ_RANGE`."""
+    return float(min(max(hz, ROTOR_HZ_RANGE[0]), ROTOR_HZ_RANGE[1]))
 
 
 def _rotor_step(hz: float, target: Mapping[str, float], got: Mapping[str, float],
@@ -638,11 +652,10 @@ def _rotor_step(hz: float, target: Mapping[str, float], got: Mapping[str, float]
     logged accel noise (:func:`_vibe_ratio`), which goes with the frequency squared (the INS
     filter's roll-off): damped (:data:`DAMPING`), at most x1.4 per flight, within
     :data:`ROTOR_HZ_RANGE`."""
-    want, have = _vibe_ratio(target, floor), _vibe_ratio(got, floor)
-    if not (math.isfinite(want) and math.isfinite(have) and want > 0 and have > 0):
+    ratio = _rotor_ratio(target, got, floor)
+    if ratio is None:
         return hz
-    step = min(max((want / have) ** (0.5 * DAMPING), 1 / 1.4), 1.4)
-    return float(min(max(hz * step, ROTOR_HZ_RANGE[0]), ROTOR_HZ_RANGE[1]))
+    return _rotor_clamp(hz * min(max(ratio ** (0.5 * DAMPING), 1 / 1.4), 1.4))
 
 
 def _max_rel_err(got: Mapping[str, float], want: Mapping[str, float]) -> float:
