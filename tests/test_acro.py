@@ -226,3 +226,22 @@ def test_an_acro_log_replays_from_its_rcin(tmp_path):
     j = r["judged"]
     assert len(j) > 40 and j["pass"].all(), j[~j["pass"]]
     assert r["checks"]["flight_time"]["pass"]
+
+
+def test_the_radio_failsafe_takes_acro_home():
+    """The transmitter lost in ACRO, airborne: RTL (reason RADIO_FAILSAFE) takes the attitude
+    target back from the body rates; the copter comes home level and lands."""
+    rows = ({"t": 0, "mode": "STABILIZE"}, {"t": 20, "yaw": 1, "ramp": 0},
+            {"t": 23.5, "yaw": 0, "ramp": 0}, {"t": 24, "height": 10}, {"t": 40, "mode": "ACRO"},
+            {"t": 45, "pitch": 0.1, "ramp": 0}, {"t": 47, "pitch": 0.0, "ramp": 0})
+    log = fly(None, params=Params({"FLTMODE1": AP.MODE_STABILIZE, "FLTMODE2": AP.MODE_ACRO}),
+              sticks=StickScript(rows), faults=[(55.0, "SIM_RC_FAIL", 1)], seed=1)
+    mode = log.tables["MODE"]
+    rtl = mode[mode.ModeNum == AP.MODE_RTL]
+    assert len(rtl) == 1 and int(rtl.Rsn.iloc[0]) == AP.RSN_RADIO_FAILSAFE
+    assert log.meta["end_reason"] == "landed"
+    att = log.tables["ATT"]
+    home = att[att.TimeUS > rtl.TimeUS.iloc[0] + 10e6]
+    assert abs(home.Roll).max() < 15.0 and abs(home.Pitch).max() < 25.0
+    pos = log.tables["POS"] if "POS" in log.tables else None
+    assert pos is None or abs(pos.RelHomeAlt.iloc[-1]) < 1.0
