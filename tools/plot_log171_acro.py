@@ -30,6 +30,7 @@ def main() -> None:
     import matplotlib.pyplot as plt
 
     from tlm_process.pilot.replay import replay
+    from tlm_sim import ardupilot as AP
 
     r = replay(args.log)
     ref, ours = r["_tables"], r["_log"].tables
@@ -49,7 +50,7 @@ def main() -> None:
     axes[2].set_ylabel("RCIN [us]")
     axes[2].grid(alpha=0.3)
     acro = ref["MODE"]
-    t_acro = float(acro.TimeUS[acro.ModeNum == 1].iloc[0]) * 1e-6
+    t_acro = float(acro.TimeUS[acro.ModeNum == AP.MODE_ACRO].iloc[0]) * 1e-6
     for ax in axes:
         ax.axvspan(t_acro, b, color="0.93", zorder=0)
         ax.legend(loc="lower left", fontsize=8)

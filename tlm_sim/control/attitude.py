@@ -73,18 +73,24 @@ def shape_angle(c, slots, cmd, shaping, wrap):
 @tick_jit
 def attitude_reset(c, roll, pitch, yaw):
     """Set the attitude targets to the given euler angles [rad] with zero target rates."""
-    c[C.ATT_ROLL_T] = roll
-    c[C.ATT_PITCH_T] = pitch
-    c[C.ATT_YAW_T] = yaw
-    c[C.ATT_ROLL_CMD] = roll
-    c[C.ATT_PITCH_CMD] = pitch
-    c[C.ATT_YAW_CMD] = yaw
+    _set_targets(c, roll, pitch, yaw)
     c[C.ATT_ROLL_RATE_T] = 0.0
     c[C.ATT_PITCH_RATE_T] = 0.0
     c[C.ATT_YAW_RATE_T] = 0.0
     c[C.ATT_ANG_VEL_T] = 0.0
     c[C.ATT_ANG_VEL_T + 1] = 0.0
     c[C.ATT_ANG_VEL_T + 2] = 0.0
+
+
+@inline_jit
+def _set_targets(c, roll, pitch, yaw):
+    """The euler targets and commands [rad] at once (the shaping starts from rest there)."""
+    c[C.ATT_ROLL_T] = roll
+    c[C.ATT_PITCH_T] = pitch
+    c[C.ATT_YAW_T] = yaw
+    c[C.ATT_ROLL_CMD] = roll
+    c[C.ATT_PITCH_CMD] = pitch
+    c[C.ATT_YAW_CMD] = yaw
 
 
 #: thrust-vector error beyond which the feed-forward fades out and yaw is left alone [rad]
@@ -333,12 +339,7 @@ def _shape_rate_bf(c, g, dt):
             want = min(max(want, w - dv), w + dv)
         c[C.ATT_ANG_VEL_T + i] = want
     w0, w1, w2 = c[C.ATT_ANG_VEL_T], c[C.ATT_ANG_VEL_T + 1], c[C.ATT_ANG_VEL_T + 2]
-    c[C.ATT_ROLL_T] = r
-    c[C.ATT_PITCH_T] = p
-    c[C.ATT_YAW_T] = y
-    c[C.ATT_ROLL_CMD] = r
-    c[C.ATT_PITCH_CMD] = p
-    c[C.ATT_YAW_CMD] = y
+    _set_targets(c, r, p, y)
     cos_p = math.cos(p)
     if abs(cos_p) > 1e-3:  # ang_vel_to_euler_rate
         sin_r, cos_r = math.sin(r), math.cos(r)
