@@ -93,3 +93,19 @@ def test_the_hand_climbs_holds_and_lands_in_stabilize(log):
     arm = log.tables["ARM"]
     assert list(arm.ArmState) == [1, 0] and arm.Method.iloc[-1] == AP.ARM_METHOD_DISARMDELAY
     assert np.all(np.diff(rcin.TimeUS) > 0)
+
+
+def test_the_documented_manual_throttle_script_flies_and_lands():
+    """docs/sticks/stabilize_acro.yaml (docs/pilot.md): STABILIZE and ACRO on the hand's
+    throttle, landed and disarmed at the end."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "sticks" / "stabilize_acro.yaml"
+    log = fly(None, params=Params({"FLTMODE1": AP.MODE_STABILIZE, "FLTMODE2": AP.MODE_ACRO}),
+              sticks=StickScript.from_file(path))
+    assert log.meta["end_reason"] == "landed"
+    modes = [int(m) for m in log.tables["MODE"].ModeNum]
+    changes = [m for k, m in enumerate(modes) if k == 0 or m != modes[k - 1]]
+    assert changes[-3:] == [AP.MODE_STABILIZE, AP.MODE_ACRO, AP.MODE_STABILIZE]
+    held = _window(log.tables["CTUN"], 36, 100).Alt
+    assert held.max() - held.min() < 1.0
