@@ -59,7 +59,8 @@ def test_real_log171_replays_to_the_end():
     r = replay(reference_path("../real/log171.bin"))
     assert len(r["judged"]) > 20
     notes = " ".join(r["scenario"]["notes"])
-    assert "rudder gesture" in notes and "ACRO" not in notes
+    assert "rudder gesture" in notes and "does not fly" not in notes
+    assert "asked for at their times: ACRO at 217.2 s" in notes
     log = r["_log"]
     modes = log.tables["MODE"]
     assert (modes["ModeNum"] == AP.MODE_LOITER).any()

@@ -283,19 +283,33 @@ def reconstruct_pilot(bin_path: str | Path, sidecar: str | Path | None = None,
         notes.append(note)
     segments = segments_from_sidecar(doc) if doc and doc.get("stick_script") else (
         segments_from_rcin(tables, values))
-    mode = tables.get("MODE")
-    if mode is not None and len(mode):
-        after = mode[mode["TimeUS"] >= arm_us - 1e6]
-        flown = pd.to_numeric(after["ModeNum"], errors="coerce").dropna()
-        unflown = sorted({int(m) for m in flown} - PILOT_MODE_NUMBERS - {6, 9})
-        if unflown:
-            from tlm_sim.ardupilot import MODE_NAMES
-
-            notes.append("modes tlm does not fly from the sticks (it stays in the mode before): "
-                         + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
+    gcs = gcs_requests(tables, values)
+    notes += _mode_notes(tables.get("MODE"), arm_us, gcs)
     s = int(seed if seed is not None else (doc or {}).get("seed", 0) or 0)
     return PilotScenario(path.stem, tables, values, params, table, _changes(doc, tables),
-                         segments, gcs_requests(tables, values), s, arm_s, notes)
+                         segments, gcs, s, arm_s, notes)
+
+
+def _mode_notes(mode: pd.DataFrame | None, arm_us: float,
+                gcs: Sequence[tuple[float, int]]) -> list[str]:
+    """Notes on the log's modes: those tlm does not fly from the sticks; in a log without
+    mode reasons, the changes off the mode switch that are asked for at their times."""
+    from tlm_sim.ardupilot import MODE_NAMES
+
+    if mode is None or not len(mode):
+        return []
+    out = []
+    after = mode[mode["TimeUS"] >= arm_us - 1e6]
+    flown = pd.to_numeric(after["ModeNum"], errors="coerce").dropna()
+    unflown = sorted({int(m) for m in flown} - PILOT_MODE_NUMBERS - {6, 9})
+    if unflown:
+        out.append("modes tlm does not fly from the sticks (it stays in the mode before): "
+                   + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
+    if gcs and "Rsn" not in mode:
+        out.append("mode changes the mode switch does not select (the log has no reasons: a "
+                   "ground station or an auxiliary switch), asked for at their times: "
+                   + ", ".join(f"{MODE_NAMES.get(m, m)} at {t:.1f} s" for t, m in gcs))
+    return out
 
 
 def gcs_requests(tables: Mapping[str, pd.DataFrame],
