@@ -36,8 +36,8 @@ from tlm_process.fit.stats import throttle_out
 from tlm_process.logread import arming_time_us, disarm_time_us, motor_columns
 from tlm_process.reference import time_window
 
-__all__ = ["METRICS", "StickSegment", "flight_time_s", "pilot_signature", "segment_metrics",
-           "segments_from_rcin", "segments_from_sidecar"]
+__all__ = ["METRICS", "StickSegment", "airborne_us", "flight_time_s", "pilot_signature",
+           "segment_metrics", "segments_from_rcin", "segments_from_sidecar"]
 
 #: The metrics of :func:`segment_metrics`, in column order.
 METRICS: tuple[str, ...] = ("pitch_mean_deg", "pitch_peak_deg", "roll_mean_deg",
@@ -59,6 +59,12 @@ THROTTLE_TOL_PWM = 50.0
 THROTTLE_MOVE_PWM = 100.0
 #: the shortest stick segment :func:`segments_from_rcin` reports [s]
 MIN_SEGMENT_S = 2.0
+#: :func:`segments_from_rcin` starts this long [s] after the copter first climbs LIFTOFF_M
+#: [m] above its height at arming: on the ground its attitude is the ground's, and the
+#: liftoff's transient depends on the throttle within RCIN's rows (10 Hz), which a replay
+#: cannot give back (a pilot's hand on a manual throttle: 0.3 s later in tlm's replay)
+LIFTOFF_M = 1.0
+LIFTOFF_SETTLE_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -115,12 +121,13 @@ def _name(sticks: Mapping[str, float], throttle: float, counts: dict[str, int]) 
 
 def segments_from_rcin(tables: Mapping[str, pd.DataFrame],
                        params: Mapping[str, float] | None = None) -> list[StickSegment]:
-    """Stick segments from the log's RCIN between arming and disarming: runs where C1, C2 and
-    C4 (roll, pitch, yaw) each stay within :data:`HOLD_TOL_PWM` of the run's first sample, at
-    least :data:`MIN_SEGMENT_S` long (a step's ramp falls between two runs); the throttle
-    (C3) splits runs where it moves more than :data:`THROTTLE_TOL_PWM`. Arming and
-    disarming as :func:`~tlm_process.logread.arming_time_us` finds them (``params``: the log's,
-    for a log without an arming event). Empty without RCIN."""
+    """Stick segments from the log's RCIN between the liftoff (:func:`airborne_us`) and
+    disarming: runs where C1, C2 and C4 (roll, pitch, yaw) each stay within
+    :data:`HOLD_TOL_PWM` of the run's first sample, at least :data:`MIN_SEGMENT_S` long (a
+    step's ramp falls between two runs); the throttle (C3) splits runs where it moves more
+    than :data:`THROTTLE_TOL_PWM`. Arming and disarming as
+    :func:`~tlm_process.logread.arming_time_us` finds them (``params``: the log's, for a log
+    without an arming event). Empty without RCIN."""
     rcin = tables.get("RCIN")
     if rcin is None or not len(rcin):
         return []
@@ -129,7 +136,8 @@ def segments_from_rcin(tables: Mapping[str, pd.DataFrame],
     t = rcin["TimeUS"].to_numpy(np.int64)
     keep = np.ones(len(t), bool)
     if t0 is not None:
-        keep &= t >= t0
+        up = airborne_us(tables, t0)
+        keep &= t >= (t0 if up is None else up)
     if t1 is not None:
         keep &= t <= t1
     rc = rcin[keep]
@@ -156,6 +164,22 @@ def segments_from_rcin(tables: Mapping[str, pd.DataFrame],
         name = _name(sticks, float(np.median(thr[a:b + 1])), counts)
         out.append(StickSegment(name, int(t[a]), int(t[b]), sticks))
     return out
+
+
+def airborne_us(tables: Mapping[str, pd.DataFrame], armed_us: float) -> float | None:
+    """:data:`LIFTOFF_SETTLE_S` after the copter first climbs :data:`LIFTOFF_M` above its
+    CTUN.Alt at arming [us]; None without CTUN or a climb."""
+    ctun = tables.get("CTUN")
+    if ctun is None or not len(ctun) or "Alt" not in ctun:
+        return None
+    after = ctun[ctun["TimeUS"] >= armed_us]
+    alt = after["Alt"].to_numpy(float)
+    if not len(alt):
+        return None
+    up = np.flatnonzero(alt > alt[0] + LIFTOFF_M)
+    if not len(up):
+        return None
+    return float(after["TimeUS"].iloc[up[0]]) + LIFTOFF_SETTLE_S * 1e6
 
 
 def _nan_stat(s: pd.Series | None, how: str) -> float:
