@@ -19,7 +19,8 @@ The two flights are then measured per stick segment (:mod:`tlm_process.pilot.sig
 sidecar's script, else RCIN's held sticks) and judged (:func:`judge`): per segment, mean and
 peak pitch and roll and the top speed within 15 % of the log's (or within a noise floor of
 0.5 deg and 0.3 m/s, whichever is larger), the height held within 0.5 m (range of CTUN.Alt;
-or as well as the log held it, if worse) in the modes that hold it, motor 1's excess over
+or as well as the log held it, if worse) in the modes that hold it, outside the pilot's
+climbs and descents, motor 1's excess over
 the others within 15 % (floor 5 us); the flight time within 5 %. A flight in random gusts
 (``SIM_WIND_TURB`` > 0: a SITL log's, or a fitted vehicle's) is one draw of them: it is re-flown
 with :data:`GUST_DRAWS` draws (seeds) and each measure judged on tlm's range over them, widened
@@ -366,7 +367,8 @@ def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.Dat
     within it (see the module docstring). ``draws``: tlm's signatures with other draws of the
     gusts (``ours`` is one more): the measure passes when the log's value lies within their
     range widened by the tolerance (``tlm_min`` / ``tlm_max``; the height held: by the draw
-    that held it best)."""
+    that held it best, and not in a ``climb`` or ``descend`` segment, where the pilot's
+    throttle moves the height)."""
     rows = []
     sigs = [ours, *draws]
     for k, (_, a) in enumerate(ref.iterrows()):
@@ -382,7 +384,8 @@ def judge(ref: pd.DataFrame, ours: pd.DataFrame, ref_tables: Mapping[str, pd.Dat
                          "tol": tol, "pass": lo - tol <= x <= hi + tol,
                          "tlm_min": lo, "tlm_max": hi})
         ys = [float(v["alt_range_m"]) for v in b]
-        if mode in HEIGHT_MODES and all(math.isfinite(y) for y in ys):
+        held = not str(a["segment"]).startswith(("climb", "descend"))  # the pilot's, not held
+        if mode in HEIGHT_MODES and held and all(math.isfinite(y) for y in ys):
             # held within 0.5 m, or as well as the log held it (gusts move SITL's too)
             x = float(a["alt_range_m"])
             tol = max(HEIGHT_HELD_M, x) if math.isfinite(x) else HEIGHT_HELD_M
