@@ -55,10 +55,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "TLM_BOOT_PHASE=1: then the pre-arm and EKF start-up texts are compared "
                         "too)")
     c.add_argument("--replay", action="store_true",
-                   help="re-fly the log from its RCIN (the pilot's sticks) and compare per "
-                        "stick segment; the default for a log with RCIN and no AUTO mode (a "
-                        "log flown in random gusts, SIM_WIND_TURB > 0, is re-flown with five "
-                        "draws of them and judged on their range)")
+                   help="re-fly the log from its RCIN (the pilot's sticks; STABILIZE, ACRO, "
+                        "ALT_HOLD, LOITER, POSHOLD) and compare per stick segment; the default "
+                        "for a log with RCIN and no AUTO mode (a log flown in random gusts, "
+                        "SIM_WIND_TURB > 0, is re-flown with ten draws of them and judged on "
+                        "their range)")
     c.add_argument("--json", metavar="R.json", help="write the metrics as JSON")
     c.add_argument("--out", type=folder, metavar="DIR",
                    help="write report.md, overlay PNGs and the re-flown flight (tlm_flight.bin) "
