@@ -245,3 +245,18 @@ def test_the_radio_failsafe_takes_acro_home():
     assert abs(home.Roll).max() < 15.0 and abs(home.Pitch).max() < 25.0
     pos = log.tables["POS"] if "POS" in log.tables else None
     assert pos is None or abs(pos.RelHomeAlt.iloc[-1]) < 1.0
+
+
+def test_the_replay_rehearsal_tool_flies_and_judges_one_flight(tmp_path):
+    """tools/replay_rehearsal.py (docs/pilot.md): one of its 15 flights, ACRO on the X frame in
+    wind with motor 2 weakened, re-flown from RCIN: every measure within tolerance."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "replay_rehearsal.py"
+    spec = importlib.util.spec_from_file_location("replay_rehearsal", path)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    text = tool.one(("ACRO", "x", str(tmp_path)))
+    assert text.split()[:3] == ["ACRO", "x", "landed"] and "54/54 measures" in text
+    assert "outside" not in text and (tmp_path / "ACRO_x.bin").is_file()
