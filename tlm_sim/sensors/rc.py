@@ -28,8 +28,9 @@ RC_DEFAULTS = RC_IDLE_PWM
 #: columns of an RC table row: the time [us since boot], then channels 1..8 [us]
 RC_T, RC_C1 = 0, 1
 RC_COLS = 9
-#: the pilot's hand: a steady pilot's PID from height to throttle stick (a vertical loop of
-#: about 1.6 rad/s, critically damped, on a quad at the default throttle curve)
+#: the pilot's hand: a steady pilot's PID from height to throttle stick (gains chosen for a
+#: vertical loop of about 1.6 rad/s, critically damped: an estimate from the default quad's
+#: thrust per us of stick around mid-stick, not a measurement)
 HAND_KP = 80.0  # us of stick per m below the height held
 HAND_KD = 100.0  # us per m/s of climb (beyond the descent wanted, landing)
 HAND_KI = 20.0  # us per m s: the stick that hovers, learnt
