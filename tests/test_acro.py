@@ -260,3 +260,13 @@ def test_the_replay_rehearsal_tool_flies_and_judges_one_flight(tmp_path):
     text = tool.one(("ACRO", "x", str(tmp_path)))
     assert text.split()[:3] == ["ACRO", "x", "landed"] and "54/54 measures" in text
     assert "outside" not in text and (tmp_path / "ACRO_x.bin").is_file()
+
+
+def test_one_list_of_pilot_modes():
+    """PILOT_MODES (Python: the replay) and is_pilot_mode (the loop) name the same modes, and
+    the manual-throttle ones are STABILIZE and ACRO."""
+    from tlm_sim.control.pilot_modes import PILOT_MODES, has_manual_throttle, is_pilot_mode
+
+    for m in AP.MODE_NAMES:
+        assert is_pilot_mode(float(m)) == (m in PILOT_MODES), AP.MODE_NAMES[m]
+        assert has_manual_throttle(float(m)) == (m in (AP.MODE_STABILIZE, AP.MODE_ACRO))

@@ -456,7 +456,6 @@ def fit_vehicle(log_stats: Mapping[str, float], log_params: Mapping[str, float] 
                      dropped=dropped)
 
 
-
 def _step_knobs(knobs: dict[str, float], log_stats: Mapping[str, float],
                 got: Mapping[str, float], floor: Mapping[str, float],
                 shares: Mapping[str, Mapping[str, float]], balance: list[str],

@@ -57,8 +57,6 @@ REL_TOL = 0.15
 FLOORS: dict[str, float] = {"pitch_mean_deg": 0.5, "pitch_peak_deg": 0.5, "roll_mean_deg": 0.5,
                             "roll_peak_deg": 0.5, "speed_max_ms": 0.3, "motor1_excess_us": 5.0}
 HEIGHT_HELD_M = 0.5
-#: the modes tlm flies from the sticks: STABILIZE, ACRO, ALT_HOLD, LOITER, POSHOLD
-PILOT_MODE_NUMBERS = frozenset({0, 1, 2, 5, 16})
 FLIGHT_TIME_REL_TOL = 0.05
 #: draws of the gusts a log flown in SITL's random gusts (SIM_WIND_TURB > 0) is re-flown with:
 #: its gusts are one draw, tlm's seeds others, so a measure is judged against tlm's range over
@@ -295,14 +293,16 @@ def _mode_notes(mode: pd.DataFrame | None, arm_us: float,
                 gcs: Sequence[tuple[float, int]]) -> list[str]:
     """Notes on the log's modes: those tlm does not fly from the sticks; in a log without
     mode reasons, the changes off the mode switch that are asked for at their times."""
+    from tlm_sim import ardupilot as AP
     from tlm_sim.ardupilot import MODE_NAMES
+    from tlm_sim.control.pilot_modes import PILOT_MODES
 
     if mode is None or not len(mode):
         return []
     out = []
     after = mode[mode["TimeUS"] >= arm_us - 1e6]
     flown = pd.to_numeric(after["ModeNum"], errors="coerce").dropna()
-    unflown = sorted({int(m) for m in flown} - PILOT_MODE_NUMBERS - {6, 9})
+    unflown = sorted({int(m) for m in flown} - set(PILOT_MODES) - {AP.MODE_RTL, AP.MODE_LAND})
     if unflown:
         out.append("modes tlm does not fly from the sticks (it stays in the mode before): "
                    + ", ".join(MODE_NAMES.get(m, str(m)) for m in unflown))
@@ -337,6 +337,7 @@ def _unswitched_changes(mode: pd.DataFrame, rcin: pd.DataFrame | None,
     """MODE rows after the first into a pilot mode tlm flies that RCIN's mode switch does not
     select at their time."""
     from tlm_sim.control.pilot import switch_position
+    from tlm_sim.control.pilot_modes import PILOT_MODES
 
     ch = f"C{int(values.get('FLTMODE_CH', 5))}"
     if rcin is None or not len(rcin) or ch not in rcin:
@@ -345,7 +346,7 @@ def _unswitched_changes(mode: pd.DataFrame, rcin: pd.DataFrame | None,
     pwm = rcin[ch].to_numpy(dtype=float)
     out = []
     for t, m in zip(mode["TimeUS"].iloc[1:], mode["ModeNum"].iloc[1:], strict=True):
-        if int(m) not in PILOT_MODE_NUMBERS:
+        if int(m) not in PILOT_MODES:
             continue
         k = int(np.searchsorted(t_rc, float(t), side="right")) - 1
         pos = switch_position(pwm[k]) if k >= 0 else -1

@@ -33,6 +33,7 @@ from tlm_sim import ardupilot as AP
 from tlm_sim._jit import inline_jit, tick_jit
 from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
+from tlm_sim.control.pilot_modes import has_manual_throttle
 from tlm_sim.ekf import layout as EK
 from tlm_sim.sensors import layout as S
 from tlm_sim.sensors.baro import baro_set_field_elevation
@@ -288,8 +289,8 @@ def prearm_checks(c, g, t_s, s, gps, eo, report):
             mask |= AP.F_RC_NOT_FOUND
         elif s[S.RC_CH + 2] < g[C.G_FS_THR_VALUE]:
             mask |= AP.F_THR_LOW
-    manual = mode == AP.MODE_STABILIZE or mode == AP.MODE_ACRO  # has_manual_throttle
-    if not manual and not (eo[EK.O_HEALTHY] != 0.0 and eo[EK.O_F_VERT_POS] != 0.0):
+    if not has_manual_throttle(mode) and not (eo[EK.O_HEALTHY] != 0.0
+                                              and eo[EK.O_F_VERT_POS] != 0.0):
         mask |= AP.F_NEED_ALT
     if _enabled(g, AP.CHK_BARO):
         healthy = True

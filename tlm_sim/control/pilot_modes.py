@@ -159,6 +159,12 @@ def lean_to_accel(roll, pitch, cy, sy):
     return k * (-cy * sp - sy * sr), k * (-sy * sp + cy * sr)
 
 
+#: the modes tlm flies from the sticks (:func:`is_pilot_mode` in the loop; this tuple for
+#: Python code: the replay's notes and requests)
+PILOT_MODES: tuple[int, ...] = (AP.MODE_STABILIZE, AP.MODE_ACRO, AP.MODE_ALT_HOLD,
+                                AP.MODE_LOITER, AP.MODE_POSHOLD)
+
+
 @tick_jit
 def is_pilot_mode(mode):
     """Whether the mode is one tlm flies from the sticks (STABILIZE, ACRO, ALT_HOLD, LOITER,
