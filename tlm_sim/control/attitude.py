@@ -123,10 +123,7 @@ def attitude_update(c, g, q, gyro, body_rate_out):
     sp = math.sin(0.5 * c[C.ATT_PITCH_T])
     cy = math.cos(0.5 * c[C.ATT_YAW_T])
     sy = math.sin(0.5 * c[C.ATT_YAW_T])
-    tw = cr * cp * cy + sr * sp * sy
-    tx = sr * cp * cy - cr * sp * sy
-    ty = cr * sp * cy + sr * cp * sy
-    tz = cr * cp * sy - sr * sp * cy
+    tw, tx, ty, tz = _euler_quat(sr, cr, sp, cp, sy, cy)
     # error rotation in the body frame: q_err = q^-1 * q_target
     qw, qx, qy, qz = q[0], -q[1], -q[2], -q[3]
     ew = qw * tw - qx * tx - qy * ty - qz * tz
@@ -241,10 +238,27 @@ def _feed_forward(c, half_angles, dye, dy_axis, q_err):
     cos_r = cr * cr - sr * sr
     sin_p = 2.0 * sp * cp
     cos_p = cp * cp - sp * sp
-    dr = c[C.ATT_ROLL_RATE_T]
-    dp = c[C.ATT_PITCH_RATE_T]
-    return _rotate(ew, ex, ey, ez, dr - sin_p * dye, cos_r * dp + sin_r * cos_p * dye,
-                   -sin_r * dp + cos_r * cos_p * dye + dy_axis)
+    v0, v1, v2 = euler_rate_to_body((sin_r, cos_r, sin_p, cos_p), c[C.ATT_ROLL_RATE_T],
+                                    c[C.ATT_PITCH_RATE_T], dye)
+    return _rotate(ew, ex, ey, ez, v0, v1, v2 + dy_axis)
+
+
+@inline_jit
+def euler_rate_to_body(trig, droll, dpitch, dyaw):
+    """AC_AttitudeControl::euler_rate_to_ang_vel: 321 euler rates [rad/s] -> the angular
+    velocity in the frame of the attitude whose roll and pitch have the sines and cosines
+    ``trig`` = (sin_r, cos_r, sin_p, cos_p)."""
+    sin_r, cos_r, sin_p, cos_p = trig
+    return (droll - sin_p * dyaw, cos_r * dpitch + sin_r * cos_p * dyaw,
+            -sin_r * dpitch + cos_r * cos_p * dyaw)
+
+
+@inline_jit
+def _euler_quat(sr, cr, sp, cp, sy, cy):
+    """The ZYX (321) quaternion of the euler angles whose halves have the sines and cosines
+    (sr, cr), (sp, cp), (sy, cy)."""
+    return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
 
 
 @inline_jit
@@ -322,8 +336,7 @@ def _shape_rate_bf(c, g, dt):
     cr, sr = math.cos(0.5 * r), math.sin(0.5 * r)
     cp, sp = math.cos(0.5 * p), math.sin(0.5 * p)
     cy, sy = math.cos(0.5 * y), math.sin(0.5 * y)
-    q = (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-         cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+    q = _euler_quat(sr, cr, sp, cp, sy, cy)
     w0, w1, w2 = c[C.ATT_ANG_VEL_T], c[C.ATT_ANG_VEL_T + 1], c[C.ATT_ANG_VEL_T + 2]
     h, k = rotation_half_angle(w0, w1, w2, dt)
     qw, qx, qy, qz = quat_mul_normalised(q, (h, k * w0, k * w1, k * w2))

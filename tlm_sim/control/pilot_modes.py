@@ -39,6 +39,7 @@ from tlm_sim.control import events as E
 from tlm_sim.control import layout as C
 from tlm_sim.control.attitude import (
     attitude_reset,
+    euler_rate_to_body,
     rate_reset,
     shape_angle,
     sqrt_ctrl,
@@ -468,10 +469,8 @@ def _euler_rate_to_ang_vel(c, droll, dpitch, dyaw, out):
     """euler_rate_to_ang_vel at the attitude target (ATT_ROLL_T, ATT_PITCH_T): euler rates
     [rad/s] -> body rates in c[out..out+3]."""
     r, p = c[C.ATT_ROLL_T], c[C.ATT_PITCH_T]
-    sr, cr, sp, cp = math.sin(r), math.cos(r), math.sin(p), math.cos(p)
-    c[out] = droll - sp * dyaw
-    c[out + 1] = cr * dpitch + sr * cp * dyaw
-    c[out + 2] = -sr * dpitch + cp * cr * dyaw
+    trig = (math.sin(r), math.cos(r), math.sin(p), math.cos(p))
+    c[out], c[out + 1], c[out + 2] = euler_rate_to_body(trig, droll, dpitch, dyaw)
 
 
 @inline_jit
