@@ -36,11 +36,40 @@ def test_rate_unit_is_read_from_the_log():
 
 def test_real_log_steady_segment_is_its_loiter_hover():
     """log171: the longest steady segment is the LOITER hover before the pilot's ACRO switch at
-    217.2 s; nothing after the crash (inverted at full throttle) counts."""
+    217.2 s, from SETTLE_S after the pilot let go of the roll stick (196.3 s; LOITER braked
+    from 3 m/s, 7 deg of lean at 197.6 s); nothing after the crash (inverted at full
+    throttle) counts."""
+    from tlm_process.fit.segment import SETTLE_S
+
     segs = steady_segments(_real171())
     t0, t1 = segs[0]
-    assert 195e6 <= t0 < 200e6 and 214e6 < t1 <= 217.2e6
+    assert 196.3e6 + SETTLE_S * 1e6 <= t0 < 200.5e6 and 214e6 < t1 <= 217.2e6
     assert all(b <= 230e6 for _, b in segs)
+
+
+def test_a_window_waits_for_the_sticks_to_rest():
+    """``sticks_rest``: a roll, pitch or yaw stick beyond STICK_REST_PWM of its rest within
+    SETTLE_S before a window or inside it keeps the window out; the rest is the stick's
+    median in the window (a trim off 1500 us is a rest too); the throttle does not count; a log
+    without RCIN rows there is not judged."""
+    import pandas as pd
+
+    from tlm_process.fit.segment import SETTLE_S, STICK_REST_PWM, sticks_rest
+
+    t = np.arange(0.0, 30.0, 0.1)
+    c1 = np.where((t > 9.0) & (t < 10.0), 1700.0, 1512.0)  # a roll stick out at 9-10 s
+    rcin = pd.DataFrame({"TimeUS": t * 1e6, "C1": c1, "C2": 1500.0,
+                         "C3": 1500.0 + 300.0 * np.sin(t), "C4": 1496.0})
+    tables = {"RCIN": rcin}
+    assert not sticks_rest(tables, 10.0e6, 16e6)
+    assert not sticks_rest(tables, (10.0 + SETTLE_S - 0.2) * 1e6, 18e6)
+    assert sticks_rest(tables, (10.0 + SETTLE_S) * 1e6, 19e6)
+    assert not sticks_rest(tables, 2e6, 8e6 + 1.5e6)  # the stick moves inside the window
+    nudged = rcin.assign(C4=np.where(t > 20.0, 1496.0 + STICK_REST_PWM + 1.0, 1496.0))
+    assert not sticks_rest({"RCIN": nudged}, 18e6, 24e6)
+    assert sticks_rest({"RCIN": nudged.assign(C4=np.where(t > 20.0, 1506.0, 1496.0))},
+                       18e6, 24e6)
+    assert sticks_rest({}, 10e6, 16e6) and sticks_rest(tables, 100e6, 106e6)
 
 
 def test_steady_segments_put_hovers_first_and_keep_them_apart_from_cruise():
@@ -177,8 +206,8 @@ def test_tlm_fit_command_on_the_real_log(tmp_path, capsys):
     out = tmp_path / "v.parm"
     assert main(["fit", str(real_path("log171.bin")), "--out", str(out), "--replay",
                  str(tmp_path / "replay")]) == 0
-    text, replayed = capsys.readouterr().out.split("the segment 197.5-216.5 s in the replay:")
-    assert "segment            197.5-216.5 s" in text
+    text, replayed = capsys.readouterr().out.split("the segment 199.5-216.5 s in the replay:")
+    assert "segment            199.5-216.5 s" in text
     assert "spectrum of IMU 0's rows (log at 50 Hz, tlm at 25 Hz)" in text
     rows = {ln.split()[0]: ln.split() for ln in text.splitlines()
             if ln.split() and ln.split()[0] in FIT_STATS}
@@ -299,7 +328,7 @@ def test_a_fit_whose_hover_does_not_hold_stops_with_one_line(tmp_path, capsys, m
     err = capsys.readouterr().err
     lines = [ln for ln in err.splitlines() if ln.startswith("tlm: error:")]
     assert "Traceback" not in err and len(lines) == 1
-    assert "the fit stopped" in lines[0] and "197.5-216.5 s" in lines[0]
+    assert "the fit stopped" in lines[0] and "199.5-216.5 s" in lines[0]
     assert not (tmp_path / "v.parm").exists()
 
 

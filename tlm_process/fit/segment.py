@@ -5,7 +5,10 @@ A window of :data:`WINDOW_S` seconds, stepped by :data:`STEP_S`, is steady when 
 airborne and upright (mean throttle above :data:`AIRBORNE_THR`, mean |roll| and |pitch| below
 :data:`UPRIGHT_MAX_DEG`), holds one flight mode, and neither it nor its pilot moves much: the
 standard deviations of the desired roll and pitch (ATT ``DesRoll``/``DesPitch``) stay below
-:data:`DES_STD_MAX_DEG` and of the altitude (CTUN ``Alt``) below :data:`ALT_STD_MAX_M`.
+:data:`DES_STD_MAX_DEG` and of the altitude (CTUN ``Alt``) below :data:`ALT_STD_MAX_M`, and
+(where the log has RCIN) the pilot's roll, pitch and yaw sticks have rested for
+:data:`SETTLE_S` before it and rest through it (:func:`sticks_rest`): after a stick release
+LOITER and POSHOLD brake for seconds, a manoeuvre's tail, not the vehicle's noise.
 Overlapping steady windows merge into segments, hovers and cruise apart: a window is a hover
 when the copter's mean GPS ground speed in it stays below :data:`HOVER_SPEED_MS` (leaning into
 the wind, standing still), or, in a mode that levels the copter but holds no position
@@ -25,9 +28,9 @@ import pandas as pd
 from tlm_process.fit.stats import StatsError
 
 __all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "HOVER_LEAN_DEG", "HOVER_PREFERENCE",
-           "HOVER_SPEED_MS", "LEVEL_MODES", "POSITION_MODES", "STEP_S", "UPRIGHT_MAX_DEG",
-           "WINDOW_S", "is_hover", "parse_segment", "segment_mode", "segment_speed",
-           "steady_segments"]
+           "HOVER_SPEED_MS", "LEVEL_MODES", "POSITION_MODES", "SETTLE_S", "STEP_S",
+           "STICK_CHANNELS", "STICK_REST_PWM", "UPRIGHT_MAX_DEG", "WINDOW_S", "is_hover",
+           "parse_segment", "segment_mode", "segment_speed", "steady_segments", "sticks_rest"]
 
 WINDOW_S = 6.0
 STEP_S = 1.0
@@ -43,6 +46,17 @@ HOVER_PREFERENCE = 4.0
 #: in STABILIZE or ALT_HOLD a window whose mean desired roll and pitch are within this is a
 #: hover whatever its ground speed (the air carries it) [deg]
 HOVER_LEAN_DEG = 3.0
+#: a steady window starts this long [s] after the pilot last moved a roll, pitch or yaw stick:
+#: LOITER brakes a released stick's speed after LOIT_BRK_DELAY (1 s) at up to LOIT_BRK_ACCEL,
+#: POSHOLD over PHLD_BRAKE_RATE's few seconds. log171's pilot let go of the roll stick at
+#: 196.3 s from 3 m/s; its LOITER leaned 12.8 deg at 197.1 s and 7.1 deg at 197.6 s, settled
+#: by 198.2 s
+SETTLE_S = 3.0
+#: RCIN's roll, pitch and yaw channels (ArduPilot's default RCMAP)
+STICK_CHANNELS = ("C1", "C2", "C4")
+#: a stick within this of its median over the window rests there [us] (Copter's default RC1_DZ,
+#: RC2_DZ, RC4_DZ: within it the sticks ask for nothing)
+STICK_REST_PWM = 20.0
 
 
 def _col(df: pd.DataFrame, *names: str) -> pd.Series | None:
@@ -79,6 +93,28 @@ def is_hover(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float) -> 
     return not segment_speed(tables, t0_us, t1_us) >= HOVER_SPEED_MS
 
 
+def sticks_rest(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float) -> bool:
+    """Whether the pilot's roll, pitch and yaw sticks (RCIN :data:`STICK_CHANNELS`) rest over
+    ``[t0_us - SETTLE_S, t1_us)``: every row within :data:`STICK_REST_PWM` of the stick's
+    median over ``[t0_us, t1_us)`` (its rest, whatever the trim). True without RCIN rows
+    there (a log without a receiver's record, or an AUTO flight's idle sticks)."""
+    rcin = tables.get("RCIN")
+    if rcin is None or not len(rcin):
+        return True
+    t = rcin.TimeUS.to_numpy(float)
+    before = (t >= t0_us - SETTLE_S * 1e6) & (t < t1_us)
+    inside = (t >= t0_us) & (t < t1_us)
+    if not inside.any():
+        return True
+    for ch in STICK_CHANNELS:
+        if ch in rcin:
+            pwm = pd.to_numeric(rcin[ch], errors="coerce").to_numpy(float)
+            dev = np.abs(pwm[before] - np.median(pwm[inside]))
+            if (dev > STICK_REST_PWM).any():
+                return False
+    return True
+
+
 def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, float]]:
     """The log's steady segments ``(t0_us, t1_us)``: the hovers, longest first, then the
     cruise segments, longest first; longest first whatever their kind when the longest cruise
@@ -112,7 +148,8 @@ def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, flo
               and float(a.Pitch.abs().mean()) < UPRIGHT_MAX_DEG
               and float(a.DesRoll.std()) < DES_STD_MAX_DEG
               and float(a.DesPitch.std()) < DES_STD_MAX_DEG
-              and float(alt[c].std()) < ALT_STD_MAX_M)
+              and float(alt[c].std()) < ALT_STD_MAX_M
+              and sticks_rest(tables, t, t + w))
         if ok:
             steady.append((t, is_hover(tables, t, t + w)))
         t += step
