@@ -5,10 +5,10 @@ segment, then tlm flying the fitted vehicle (new seeds) against the segment's se
         [--fit-seed 1]
 
 Prints a markdown table (statistic, log first half, log second half, how the halves differ,
-tlm, tlm against each half, within 30 % of the second) and writes the fitted parameters beside it with ``--out``. The steering's blind
-check on held-back vehicles runs the same script. Measured on log171.bin (199.5-216.5 s, the
-hover `tlm fit` finds, and 197.5-216.5 s with LOITER's brake):
-docs/noise.md.
+tlm, tlm against each half, within 30 % of the second) and writes the fitted parameters
+with ``--out``. The steering's blind check on held-back vehicles runs the same script.
+Measured on log171.bin (199.5-216.5 s, the hover ``tlm fit`` finds, and 197.5-216.5 s with
+LOITER's brake): docs/noise.md.
 """
 
 from __future__ import annotations
