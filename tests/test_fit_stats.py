@@ -382,7 +382,8 @@ def test_an_alt_hold_hover_does_not_lean_against_the_gusts():
 @pytest.mark.slow
 def test_fit_compare_tool_prints_the_check_and_the_logs_own_halves(tmp_path, capsys):
     """tools/fit_compare.py (issue 40's check, and the steering's blind one): one fit step and
-    one hover on log171's hover; the table holds each judged statistic with how the log's two
+    one hover on log171's hover (the one ``tlm fit`` finds when no --segment is given); the
+    table holds each judged statistic with how the log's two
     halves differ, tlm against each half and the verdict, and the counts add up."""
     import importlib.util
     import sys
@@ -393,19 +394,20 @@ def test_fit_compare_tool_prints_the_check_and_the_logs_own_halves(tmp_path, cap
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     out = tmp_path / "v.parm"
-    argv = [str(path), str(real_path("log171.bin")), "--segment", "199.5:216.5",
-            "--iterations", "1", "--seeds", "1", "--out", str(out)]
+    argv = [str(path), str(real_path("log171.bin")), "--iterations", "1", "--seeds", "1",
+            "--out", str(out)]
     old, sys.argv = sys.argv, argv
     try:
         assert mod.main() == 0
     finally:
         sys.argv = old
     text = capsys.readouterr().out
+    assert "fitted on 199.5-208.0 s, compared with 208.0-216.5 s" in text
     rows = {ln.split("|")[1].strip(): [c.strip() for c in ln.split("|")[2:-1]]
             for ln in text.splitlines() if ln.startswith("| ") and "---" not in ln}
     assert set(mod.JUDGED) <= set(rows)
-    # the log's own halves: the second half's roll std is 79 % above the first's
-    assert rows["roll_std_deg"][2] == "+79%"
+    # the log's own halves: the second half's roll std is ~80 % above the first's
+    assert 70 <= int(rows["roll_std_deg"][2].strip("+%")) <= 90
     verdicts = [rows[k][6] for k in mod.JUDGED]
     n_ok = sum(v == "yes" for v in verdicts)
     assert f"{n_ok} of {len(mod.JUDGED)} judged statistics within 30%" in text

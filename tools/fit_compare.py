@@ -1,8 +1,10 @@
 """Fit-and-compare on one real log (issue 40's check): ``tlm fit`` on the first half of a steady
 segment, then tlm flying the fitted vehicle (new seeds) against the segment's second half.
 
-    python tools/fit_compare.py LOG --segment START:END [--seeds 4] [--iterations 10]
+    python tools/fit_compare.py LOG [--segment START:END] [--seeds 4] [--iterations 10]
         [--fit-seed 1]
+
+Without ``--segment`` it takes the steady hover ``tlm fit`` would find.
 
 Prints a markdown table (statistic, log first half, log second half, how the halves differ,
 tlm, tlm against each half, within 30 % of the second) and writes the fitted parameters
@@ -21,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from tlm_process.fit.fit import ALT_HOLD, fit_vehicle, fly_hover_stats, log_battery
-from tlm_process.fit.segment import LEVEL_MODES, parse_segment, segment_mode
+from tlm_process.fit.segment import LEVEL_MODES, parse_segment, segment_mode, steady_segments
 from tlm_process.fit.stats import segment_stats
 from tlm_process.logread import read_log_tables
 
@@ -35,18 +37,22 @@ TOLERANCE = 0.30
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("log")
-    ap.add_argument("--segment", required=True, metavar="START:END")
+    ap.add_argument("--segment", metavar="START:END", help="seconds of log time (default: the "
+                    "steady segment tlm fit finds)")
     ap.add_argument("--seeds", type=int, default=4, help="tlm flights compared (default 4)")
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--fit-seed", type=int, default=1, help="first seed of the fit's hovers "
                     "(default 1; the fit's flights scatter, so its result does too)")
     ap.add_argument("--out", metavar="vehicle.parm", help="write the fitted parameters")
     args = ap.parse_args()
-    t0, t1 = parse_segment(args.segment)
-    mid = 0.5 * (t0 + t1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lt = read_log_tables(args.log)
+        segments = [parse_segment(args.segment)] if args.segment else steady_segments(lt.tables)
+        if not segments:
+            raise SystemExit("fit_compare: the log has no steady segment; give --segment")
+        t0, t1 = segments[0]
+        mid = 0.5 * (t0 + t1)
         first = segment_stats(lt.tables, t0, mid)
         second = segment_stats(lt.tables, mid, t1)
         # a segment flown in STABILIZE or ALT_HOLD is fitted and compared with ALT_HOLD
