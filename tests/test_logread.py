@@ -460,8 +460,8 @@ def test_crosscheck_scenario_of_a_log_that_starts_at_arming(tmp_path: Path) -> N
 
 
 @pytest.mark.parametrize("name, error", [
-    ("mechanical_fail.log", "the log has no mission"),
-    ("nan.log", "LOG_BITMASK"),
+    ("mechanical_fail.log", "the log has no mission (no CMD messages with Prm2, Prm3, Prm4, "
+                            "Frame: an older firmware's layout); nor RCIN with the pilot's sticks"),
     ("backend_log_80k.bin", "never armed"),
 ])
 def test_crosscheck_refuses_real_logs_in_one_line(name: str, error: str, tmp_path: Path,
@@ -471,6 +471,23 @@ def test_crosscheck_refuses_real_logs_in_one_line(name: str, error: str, tmp_pat
     assert rc == 2
     last = err.strip().splitlines()[-1]
     assert last.startswith("tlm: error:") and error in last
+
+
+def test_copter31_log_is_re_flown_from_its_rcin(tmp_path: Path, capsys) -> None:
+    """nan.log (Copter 3.1, STABILIZE, no mission): its RCIN and RCOU name the channels
+    ``Chan1``... (read as ``C1``...), its LOG_BITMASK is a 16-bit mask logged negative (-22530)
+    and its COMPASS_MOT_* are NaN (not modelled, left out): ``tlm crosscheck`` re-flies it from
+    its RCIN to a report instead of refusing it."""
+    lt = read_log_tables(real_path("nan.log"))
+    for name in ("RCIN", "RCOU"):
+        assert {f"C{k}" for k in range(1, 9)} <= set(lt.tables[name])
+        assert f"{name} Chan1... as C1... (Copter 3.1's channel names)" in lt.notes
+    assert lt.tables["RCIN"]["C3"].between(1000, 1100).all()
+    rc, out, err = _cli(["crosscheck", str(real_path("nan.log")), "--out", str(tmp_path / "c")],
+                        capsys)
+    assert rc in (0, 1) and "Traceback" not in err
+    assert "replayed from RCIN: nan" in out and "stick segments:" in out
+    assert (tmp_path / "c" / "report.md").is_file()
 
 
 def test_copter3_rate_and_ctun_come_in_4x_units():

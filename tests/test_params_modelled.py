@@ -237,3 +237,21 @@ def test_tlm_params_unknown_name_is_one_line(capsys):
         main(["params", "--help"])
     assert exc.value.code == 0
     assert "modelled" in capsys.readouterr().out
+
+
+def test_a_loaded_16_bit_mask_logged_negative_reads_as_its_bits():
+    """Copter 3.1 kept LOG_BITMASK in 16 bits: with bit 15 set its PARM row reads negative
+    (nan.log: -22530). A loaded set takes it as the unsigned bits (43006, 0xA7FE); other
+    negative values, and masks set explicitly, are still refused."""
+    with pytest.warns(UnmodelledParamWarning):
+        p = Params.from_values({"LOG_BITMASK": -22530})
+    assert p["LOG_BITMASK"] == 43006.0 == float(0xA7FE)
+    with pytest.warns(UnmodelledParamWarning):
+        assert Params.from_parm_text("LOG_BITMASK -1\n")["LOG_BITMASK"] == 65535.0
+    for bad in (-40000, -1.5):
+        with pytest.raises(ParamError):
+            Params.from_values({"LOG_BITMASK": bad})
+    with pytest.raises(ParamError, match="out of range"):
+        Params.from_values({"WPNAV_SPEED": -5})  # not a mask
+    with pytest.raises(ParamError, match="out of range"):
+        Params().updated(ARMING_CHECK=-1)  # set on its own: as given

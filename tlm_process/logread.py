@@ -15,6 +15,9 @@ generation and the text ``.log`` files Mission Planner and old firmware write.
   ``IMU2``/``IMU3`` become ``IMU`` rows with ``I`` = 1/2 (the ``IMU`` rows get ``I`` = 0 when
   they have no ``I``), likewise ``BAR2``/``BAR3`` → ``BARO``, ``MAG2``/``MAG3`` → ``MAG``,
   ``GPS2`` → ``GPS``, ``GPA2`` → ``GPA`` (``FOLDS``). Columns one instance lacks are NaN.
+* **Units and names.** Copter 3.x's RATE outputs, rates and throttle, CTUN's ``ThrOut`` and
+  MODE's ``Mode`` come in 4.x's units and names, and Copter 3.1's RCIN / RCOU channels
+  ``Chan1``... as ``C1``... (``_as_4x``).
 * Rows are sorted by ``TimeUS`` within a table (stable: log order and then instance at equal
   times), the index is a fresh RangeIndex, NaN values are kept, tables without rows dropped.
 
@@ -315,7 +318,15 @@ def _as_4x(tables: dict[str, pd.DataFrame], notes: list[str]) -> None:
     """Copter 3.x's RATE, CTUN and MODE as 4.x logs them: rate outputs from +-4500 to +-1 and
     the throttle from 0..1000 to 0..1 (an AOut above 1.5 tells), the rates from centidegrees
     to degrees per second (RATE's roll rate 100 times IMU 0's gyro), CTUN's ThrOut as ThO,
-    MODE's mode number as ModeNum where only Mode has it."""
+    MODE's mode number as ModeNum where only Mode has it, Copter 3.1's RCIN and RCOU channels
+    ``Chan1``... as ``C1``..."""
+    for name in ("RCIN", "RCOU"):
+        df = tables.get(name)
+        chans = {} if df is None else {c: "C" + c[4:] for c in df.columns
+                                        if re.fullmatch(r"Chan\d+", c) and "C" + c[4:] not in df}
+        if chans:
+            tables[name] = df.rename(columns=chans)
+            notes.append(f"{name} Chan1... as C1... (Copter 3.1's channel names)")
     mode = tables.get("MODE")
     if mode is not None and "ModeNum" not in mode and "Mode" in mode:
         tables["MODE"] = mode.assign(ModeNum=pd.to_numeric(mode["Mode"], errors="coerce"))

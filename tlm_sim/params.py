@@ -959,8 +959,21 @@ def _check(name: str, value: Any, defaults: Mapping[str, float],
     x = _to_float(name, value)
     info = PARAM_INFO.get(name)
     if info is not None:
+        if not explicit:
+            x = _unsigned_mask(x, info)
         _check_range(name, x, info)
     return name, x
+
+
+def _unsigned_mask(x: float, info: ParamInfo) -> float:
+    """A bit mask (a whole number in [0, 2^32 - 1]) a loaded set gives as a negative 16-bit
+    number, as its unsigned bits: older firmware kept some masks in 16 bits (Copter 3.1's
+    ``LOG_BITMASK`` is an ``AP_Int16``), and a mask with bit 15 set logs as a negative value
+    (ArduPilot's LogAnalyzer example ``nan.log``: -22530, bits 0xA7FE). Anything else as is."""
+    if (info.integer and info.min == 0.0 and info.max == _U32 and x.is_integer()
+            and -32768.0 <= x < 0.0):
+        return x + 65536.0
+    return x
 
 
 def _check_range(name: str, x: float, info: ParamInfo) -> None:

@@ -94,7 +94,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         r = crosscheck(args.log, args.sidecar, args.seed, params=overrides or None)
     except ScenarioError as e:
-        raise UsageError(str(e)) from None
+        msg = str(e)
+        if msg.startswith("the log has no mission"):
+            msg += ("; --replay re-flies it from its RCIN instead" if _has_sticks(args.log)
+                    else "; nor RCIN with the pilot's sticks to re-fly it from")
+        raise UsageError(msg) from None
     text = format_report(r)
     print(text.split("\n| metric")[0])
     ft = r["flight_time_s"]
@@ -170,6 +174,18 @@ def _pilot_flown(path: str) -> bool:
         return is_pilot_flown(read_log_tables(path, ["MODE", "RCIN"]).tables)
     except LogReadError:
         return False  # (the mission path reports what is wrong with the file)
+
+
+def _has_sticks(path: str) -> bool:
+    """Whether the log has RCIN rows with the four sticks (Copter 3.1's ``Chan1``... read as
+    ``C1``...)."""
+    from tlm_process.logread import LogReadError, read_log_tables
+
+    try:
+        rcin = read_log_tables(path, ["RCIN"]).tables.get("RCIN")
+    except LogReadError:
+        return False
+    return rcin is not None and len(rcin) > 0 and {"C1", "C2", "C3", "C4"} <= set(rcin)
 
 
 def _run_replay(args: argparse.Namespace, overrides: dict[str, float], out: Path | None) -> int:

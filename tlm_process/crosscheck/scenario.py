@@ -152,14 +152,17 @@ def mission_from_cmd(cmd: pd.DataFrame, home: tuple[float, float, float], name: 
 
 def _initial_params(parm: pd.DataFrame) -> dict[str, float]:
     """PARM values at log start, limited to parameters tlm knows, where they differ from its
-    defaults."""
-    from tlm_sim.params import Params
+    defaults. A parameter tlm does not model (and ignores) is left out when its value is not a
+    number (ArduPilot's LogAnalyzer example ``nan.log`` logs NaN for ``COMPASS_MOT_*``)."""
+    from tlm_sim.params import Params, is_modelled
 
     defaults = Params.defaults()
     first = parm.drop_duplicates("Name", keep="first")
     out = {}
     for n, v in zip(first.Name.astype(str), first.Value.astype(float), strict=True):
-        if n in defaults and not np.isclose(defaults[n], v, rtol=1e-6, atol=1e-9):
+        if n not in defaults or (not np.isfinite(v) and not is_modelled(n)):
+            continue
+        if not np.isclose(defaults[n], v, rtol=1e-6, atol=1e-9):
             out[n] = float(v)
     return out
 
