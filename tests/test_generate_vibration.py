@@ -83,6 +83,41 @@ def test_a_fitted_vehicle_keeps_its_own_vibration():
         ScenarioConfig(**FAST, vibration={"ranges": {"TLM_VIB_ACC_X": (0.0, 99.0)}})
 
 
+def test_a_vibration_scale_spreads_the_vehicles_own_level():
+    """``vibration: {scale: [lo, hi]}``: every flight multiplies the six vibration gains (the
+    fitted vehicle's own, or tlm's default 1 where it has none) by one factor uniform in the
+    scale, drawn last in stream 8, so every other draw and parameter is the unscaled set's;
+    a setting without a scale is as before; a scale that would leave the gains' range, or
+    is not above 0, is refused."""
+    from tlm_process.generate.scenario import VIB_GAINS
+
+    own = {"SIM_ACC1_RND": 5.0, "SIM_ACC2_RND": 5.0, "SIM_VIB_MOT_MAX": 150.0,
+           "TLM_VIB_ACC_X": 1.4, "TLM_VIB_GYR_X": 3.0, "TLM_VIB_GYR_Y": 0.5}
+    plain = ScenarioConfig(**FAST, params=own)
+    assert "scale" not in plain.vibration
+    cfg = ScenarioConfig(**FAST, params=own, vibration={"scale": [0.8, 1.5]})
+    assert cfg.vibration["real"] == 0.0 and cfg.vibration["scale"] == (0.8, 1.5)
+    assert ScenarioConfig.from_dict(cfg.to_dict()) == cfg
+    factors = []
+    for i in range(60):
+        a, b = sample_scenario(5, i, plain), sample_scenario(5, i, cfg)
+        assert (a.kind, a.mission, a.faults, a.seed, a.frame) == (
+            b.kind, b.mission, b.faults, b.seed, b.frame)
+        assert {n: v for n, v in a.params.items() if n not in VIB_GAINS} == {
+            n: v for n, v in b.params.items() if n not in VIB_GAINS}
+        f = b.params["TLM_VIB_GYR_X"] / 3.0
+        for g in VIB_GAINS:
+            assert b.params[g] == pytest.approx(f * a.params.get(g, 1.0), abs=1e-5), g
+        factors.append(f)
+    assert 0.8 <= min(factors) < 0.9 and 1.4 < max(factors) <= 1.5
+    with pytest.raises(GenerateError, match="scale must be above 0"):
+        ScenarioConfig(**FAST, params=own, vibration={"scale": [0.0, 1.0]})
+    with pytest.raises(GenerateError, match="leaves the gains' range"):
+        ScenarioConfig(**FAST, params=own, vibration={"scale": [1.0, 7.0]})
+    with pytest.raises(GenerateError, match="leaves the gains' range"):  # drawn up to 8.0
+        ScenarioConfig(**FAST, vibration={"real": 0.5, "scale": [1.0, 3.0]})
+
+
 def _args(**kw) -> argparse.Namespace:
     base = dict(config=None, faults=None, kinds=None, missions=None, profile=None, lam=None,
                 frame=None, range=None, params=None, param=None, no_env=False,

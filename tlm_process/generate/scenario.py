@@ -218,6 +218,11 @@ REAL_VIBRATION: dict[str, tuple[float, float]] = {
 #: Default vibration setting: half the flights with a real copter's vibration, half
 #: SITL-quiet.
 DEFAULT_VIBRATION: dict[str, Any] = {"real": 0.5, "ranges": REAL_VIBRATION}
+#: The airframe's vibration gains a vibration ``scale`` multiplies, per flight: a real
+#: copter's vibration is not one level (log171's steady LOITER hover: gyro noise x 3.2-5.4
+#: deg/s, y 1.6-3.3 in 5 s blocks with the sticks centred; props, payload and battery move it
+#: from flight to flight), and a detector trained on one level reads any other as a fault
+VIB_GAINS: tuple[str, ...] = tuple(f"TLM_VIB_{s}_{a}" for s in ("ACC", "GYR") for a in "XYZ")
 
 
 @dataclass(frozen=True)
@@ -262,8 +267,11 @@ class ScenarioConfig:
             :data:`DEFAULT_VIBRATION`'s (half the flights real, :data:`REAL_VIBRATION`). When
             ``params`` fix any of these parameters (``--params vehicle.parm`` of a ``tlm fit``
             vehicle) and no share is given, no flight draws them (the vehicle has its own);
-            a share > 0 with such ``params`` is refused. ``None``: no draw (every flight
-            SITL-quiet, or what ``params`` give).
+            a share > 0 with such ``params`` is refused. ``scale`` (low, high), optional:
+            every flight multiplies the six vibration gains (:data:`VIB_GAINS`, the vehicle's
+            own or the drawn ones) by one factor uniform in it, drawn after the airframe's
+            draws (a fitted vehicle's level spread as a real copter's spreads). ``None``: no
+            draw (every flight SITL-quiet, or what ``params`` give).
         pilot: ``share`` of pilot-flown flights (0..1, default 0), their ``modes`` and
             ``patterns`` shares and the ranges ``stick``, ``alt``, ``duration``, ``leg_s``,
             ``release_s`` (:data:`~tlm_process.generate.pilot_flights.DEFAULT_PILOT`);
@@ -482,7 +490,12 @@ def _vibration(v: Any, params: Mapping[str, Any],
     if not isinstance(v, Mapping):
         raise GenerateError(f"vibration must be a mapping (real, ranges) or null for no draw, "
                             f"got {v!r}")
-    known_keys(v, ("real", "ranges"), "vibration")
+    known_keys(v, ("real", "ranges", "scale"), "vibration")
+    scale = None
+    if v.get("scale") is not None:
+        scale = _range(v["scale"], "vibration: scale (a factor on the vibration gains)", 0.0)
+        if scale[0] <= 0.0:
+            raise GenerateError(f"vibration: scale must be above 0, got {list(scale)}")
     raw = v.get("ranges", DEFAULT_VIBRATION["ranges"])
     if not isinstance(raw, Mapping):
         raise GenerateError(f"vibration: ranges must be a mapping NAME -> [low, high], got "
@@ -494,8 +507,8 @@ def _vibration(v: Any, params: Mapping[str, Any],
             r = (r, r)
         out_ranges[str(name)] = _range(r, f"vibration range of {name}", -math.inf)
     fixed = sorted(n for n in out_ranges if n in params)
-    if "real" not in v and fixed:
-        return {"real": 0.0, "ranges": out_ranges}  # the vehicle has its own vibration
+    if "real" not in v and fixed:  # the vehicle has its own vibration
+        return _with_scale({"real": 0.0, "ranges": out_ranges}, scale, params)
     real = fraction(v.get("real", DEFAULT_VIBRATION["real"]),
                     "vibration: real (the share of real-level flights, --real-share)")
     if real > 0 and fixed:
@@ -506,7 +519,27 @@ def _vibration(v: Any, params: Mapping[str, Any],
     if real > 0 and drawn_twice:
         raise GenerateError(f"{drawn_twice[0]} is drawn twice (ranges and the real-level "
                             "vibration); give it once")
-    return {"real": float(real), "ranges": out_ranges}
+    return _with_scale({"real": float(real), "ranges": out_ranges}, scale, params)
+
+
+def _with_scale(vib: dict[str, Any], scale: tuple[float, float] | None,
+                params: Mapping[str, Any]) -> dict[str, Any]:
+    """``vib`` with its ``scale`` (only when given, so a setting without one is as before);
+    GenerateError when the largest gain a flight can have, times the scale's top, leaves the
+    gains' range."""
+    if scale is None:
+        return vib
+    from tlm_sim.params import PARAM_INFO, Params
+
+    defaults = Params.defaults()
+    top = max(max(float(params.get(g, defaults[g])),
+                  vib["ranges"][g][1] if vib["real"] > 0 and g in vib["ranges"] else 0.0)
+              for g in VIB_GAINS)
+    limit = min(PARAM_INFO[g].max for g in VIB_GAINS)
+    if top * scale[1] > limit:
+        raise GenerateError(f"vibration: scale {scale[1]:g} times a gain of {top:g} leaves the "
+                            f"gains' range (up to {limit:g})")
+    return {**vib, "scale": scale}
 
 
 def _check_params(params: Mapping[str, Any], ranges: Mapping[str, tuple[float, float]],
@@ -953,7 +986,9 @@ def sample_scenario(run_seed: int, flight: int, cfg: ScenarioConfig) -> Scenario
     if cfg.wind is not None:
         params.update(_draw_wind(_stream(run_seed, flight, _S_WIND), cfg.wind))
     if cfg.vibration is not None:
-        params.update(_draw_vibration(_stream(run_seed, flight, _S_VIBRATION), cfg.vibration))
+        vib_rng = _stream(run_seed, flight, _S_VIBRATION)
+        params.update(_draw_vibration(vib_rng, cfg.vibration))
+        params.update(_scale_vibration(vib_rng, cfg.vibration, params))
     params = dict(sorted(params.items()))
     seed_ss = np.random.SeedSequence(run_seed, spawn_key=(flight, _S_SEED))
     seed = int(seed_ss.generate_state(1, np.uint32)[0] & 0x7FFFFFFF)
@@ -986,6 +1021,21 @@ def _draw_vibration(rng: np.random.Generator, vib: Mapping[str, Any]) -> dict[st
     drawn = {name: round(float(rng.uniform(lo, hi)), 3)
              for name, (lo, hi) in sorted(vib["ranges"].items())}
     return drawn if real else {}
+
+
+def _scale_vibration(rng: np.random.Generator, vib: Mapping[str, Any],
+                     params: Mapping[str, float]) -> dict[str, float]:
+    """The flight's vibration gains times one factor uniform in the setting's ``scale`` (the
+    next draw of stream 8, after the airframe's; rounded to 0.001), the gains ``params`` lack
+    at tlm's default; nothing without a scale."""
+    if vib.get("scale") is None:
+        return {}
+    from tlm_sim.params import Params
+
+    lo, hi = vib["scale"]
+    factor = float(rng.uniform(lo, hi))
+    defaults = Params.defaults()
+    return {g: round(factor * float(params.get(g, defaults[g])), 6) for g in VIB_GAINS}
 
 
 def _draw_wind(rng: np.random.Generator, wind: Mapping[str, Any]) -> dict[str, float]:
