@@ -39,7 +39,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="vehicle.parm", help="the fitted parameters")
     p.add_argument("--segment", metavar="START:END",
                    help="the segment to fit, seconds of log time (default: the log's longest "
-                        "steady hover; a cruise only when more than four times longer)")
+                        "steady hover, from 3 s after the pilot's last stick movement; a "
+                        "cruise only when more than four times longer)")
     p.add_argument("--iterations", type=int, default=10,
                    help="fitting steps, each two hover flights (default 10)")
     p.add_argument("--seed", type=int, default=1, help="first seed of tlm's hovers (default 1)")
