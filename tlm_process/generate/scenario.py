@@ -1026,8 +1026,8 @@ def _draw_vibration(rng: np.random.Generator, vib: Mapping[str, Any]) -> dict[st
 def _scale_vibration(rng: np.random.Generator, vib: Mapping[str, Any],
                      params: Mapping[str, float]) -> dict[str, float]:
     """The flight's vibration gains times one factor uniform in the setting's ``scale`` (the
-    next draw of stream 8, after the airframe's; rounded to 0.001), the gains ``params`` lack
-    at tlm's default; nothing without a scale."""
+    next draw of stream 8, after the airframe's; the products rounded to 1e-6), the gains
+    ``params`` lack at tlm's default; nothing without a scale."""
     if vib.get("scale") is None:
         return {}
     from tlm_sim.params import Params
