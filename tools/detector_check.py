@@ -42,8 +42,9 @@ TRAIN_FAULTS = "vibration,motor_partial,prop_damage"
 MILD_MOTOR = {"mul": [0.8, 0.97], "motor": [1, 2, 3, 4]}
 
 
-def _tlm(argv: list[str], quiet: bool = True) -> None:
-    """Run one ``tlm`` command in this process; SystemExit with its error when it fails."""
+def _tlm(argv: list[str]) -> None:
+    """Run one ``tlm`` command in this process, its output kept back; SystemExit with its
+    error output when it fails."""
     from tlm_process.cli import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -52,8 +53,6 @@ def _tlm(argv: list[str], quiet: bool = True) -> None:
             rc = main(argv)
         except SystemExit as exc:  # argparse's usage errors
             rc = exc.code if isinstance(exc.code, int) else 2
-    if not quiet:
-        print(out.getvalue(), end="")
     if rc != 0:
         raise SystemExit(f"detector_check: tlm {argv[0]} failed ({rc}):\n{err.getvalue()}")
 
