@@ -183,7 +183,8 @@ def _vehicle_params(path: str | None, wind_drawn: bool = False) -> dict[str, flo
     fixed parameters of every flight; its frame is --frame's to choose (FRAME_CLASS /
     FRAME_TYPE are left out), and while the wind is drawn (``wind_drawn``) so is its wind:
     the file's SIM_WIND_SPD / _DIR / _TURB (a fit's gusts are its log's air, not the vehicle)
-    are left out, with a note on stderr."""
+    are left out, with a note on stderr. A vehicle whose motors vibrate without the rotor lag
+    (TLM_ROTOR_TC 0) gets a note too."""
     if not path:
         return {}
     import sys
@@ -206,6 +207,13 @@ def _vehicle_params(path: str | None, wind_drawn: bool = False) -> dict[str, flo
         print(f"tlm generate: --params {path}: {', '.join(air)} left to the drawn wind "
               "(--no-env, or --calm-share 0 with --wind-* ranges, to fly the file's air)",
               file=sys.stderr)
+    vibrates = p["SIM_VIB_MOT_MAX"] > 0.0 and max(
+        p[f"SIM_{s}{i}_RND"] for s in ("ACC", "GYR") for i in (1, 2)) > 0.0
+    if vibrates and p["TLM_ROTOR_TC"] == 0.0:
+        print(f"tlm generate: --params {path}: the vehicle's motors vibrate with SITL's rotor "
+              "model (TLM_ROTOR_TC 0): strong vibration then goes round the rate loop at its "
+              "own frequency and pilot-flown landings may never complete; tlm fit's vehicles "
+              "set TLM_ROTOR_TC 0.05 (docs/noise.md)", file=sys.stderr)
     return out
 
 
