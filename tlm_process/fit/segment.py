@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from tlm_process.fit.stats import StatsError
+from tlm_process.pilot.signature import STICK_CHANNELS as _SEGMENT_STICKS
 
 __all__ = ["AIRBORNE_THR", "ALT_STD_MAX_M", "DES_STD_MAX_DEG", "HOVER_LEAN_DEG", "HOVER_PREFERENCE",
            "HOVER_SPEED_MS", "LEVEL_MODES", "POSITION_MODES", "SETTLE_S", "STEP_S",
@@ -52,8 +53,8 @@ HOVER_LEAN_DEG = 3.0
 #: 196.3 s from 3 m/s; its LOITER leaned 12.8 deg at 197.1 s and 7.1 deg at 197.6 s, settled
 #: by 198.2 s
 SETTLE_S = 3.0
-#: RCIN's roll, pitch and yaw channels (ArduPilot's default RCMAP)
-STICK_CHANNELS = ("C1", "C2", "C4")
+#: RCIN's roll, pitch and yaw channels (ArduPilot's default RCMAP), the stick segments' own
+STICK_CHANNELS = tuple(_SEGMENT_STICKS.values())
 #: a stick within this of its median over the window rests there [us] (Copter's default RC1_DZ,
 #: RC2_DZ, RC4_DZ: within it the sticks ask for nothing)
 STICK_REST_PWM = 20.0
@@ -98,21 +99,32 @@ def sticks_rest(tables: Mapping[str, pd.DataFrame], t0_us: float, t1_us: float) 
     ``[t0_us - SETTLE_S, t1_us)``: every row within :data:`STICK_REST_PWM` of the stick's
     median over ``[t0_us, t1_us)`` (its rest, whatever the trim). True without RCIN rows
     there (a log without a receiver's record, or an AUTO flight's idle sticks)."""
+    return _sticks_rest(_stick_rows(tables), t0_us, t1_us)
+
+
+def _stick_rows(tables: Mapping[str, pd.DataFrame]) -> tuple[np.ndarray, np.ndarray] | None:
+    """RCIN's times [us] and its :data:`STICK_CHANNELS` that the log has, as PWM columns
+    [us], read once for every window; None without RCIN rows."""
     rcin = tables.get("RCIN")
     if rcin is None or not len(rcin):
+        return None
+    cols = [pd.to_numeric(rcin[ch], errors="coerce").to_numpy(float)
+            for ch in STICK_CHANNELS if ch in rcin]
+    pwm = np.column_stack(cols) if cols else np.empty((len(rcin), 0))
+    return rcin.TimeUS.to_numpy(float), pwm
+
+
+def _sticks_rest(rows: tuple[np.ndarray, np.ndarray] | None, t0_us: float,
+                 t1_us: float) -> bool:
+    """:func:`sticks_rest` on :func:`_stick_rows` (RCIN rows are in time order)."""
+    if rows is None:
         return True
-    t = rcin.TimeUS.to_numpy(float)
-    before = (t >= t0_us - SETTLE_S * 1e6) & (t < t1_us)
-    inside = (t >= t0_us) & (t < t1_us)
-    if not inside.any():
+    t, pwm = rows
+    a, k0, k1 = np.searchsorted(t, (t0_us - SETTLE_S * 1e6, t0_us, t1_us))
+    if k1 <= k0:
         return True
-    for ch in STICK_CHANNELS:
-        if ch in rcin:
-            pwm = pd.to_numeric(rcin[ch], errors="coerce").to_numpy(float)
-            dev = np.abs(pwm[before] - np.median(pwm[inside]))
-            if (dev > STICK_REST_PWM).any():
-                return False
-    return True
+    rest = np.median(pwm[k0:k1], axis=0)
+    return not (np.abs(pwm[a:k1] - rest) > STICK_REST_PWM).any()
 
 
 def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, float]]:
@@ -136,6 +148,7 @@ def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, flo
     mode = tables.get("MODE")
     changes = (mode.TimeUS.to_numpy(float) if mode is not None and "TimeUS" in mode
                else np.array([]))
+    sticks = _stick_rows(tables)
     steady = []
     t = start
     w, step = WINDOW_S * 1e6, STEP_S * 1e6
@@ -149,7 +162,7 @@ def steady_segments(tables: Mapping[str, pd.DataFrame]) -> list[tuple[float, flo
               and float(a.DesRoll.std()) < DES_STD_MAX_DEG
               and float(a.DesPitch.std()) < DES_STD_MAX_DEG
               and float(alt[c].std()) < ALT_STD_MAX_M
-              and sticks_rest(tables, t, t + w))
+              and _sticks_rest(sticks, t, t + w))
         if ok:
             steady.append((t, is_hover(tables, t, t + w)))
         t += step
