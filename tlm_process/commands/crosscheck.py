@@ -177,15 +177,15 @@ def _pilot_flown(path: str) -> bool:
 
 
 def _has_sticks(path: str) -> bool:
-    """Whether the log has RCIN rows with the four sticks (Copter 3.1's ``Chan1``... read as
-    ``C1``...)."""
+    """Whether the log's RCIN holds the pilot's sticks
+    (:func:`tlm_process.pilot.replay.has_sticks`)."""
     from tlm_process.logread import LogReadError, read_log_tables
+    from tlm_process.pilot.replay import has_sticks
 
     try:
-        rcin = read_log_tables(path, ["RCIN"]).tables.get("RCIN")
+        return has_sticks(read_log_tables(path, ["RCIN"]).tables)
     except LogReadError:
         return False
-    return rcin is not None and len(rcin) > 0 and {"C1", "C2", "C3", "C4"} <= set(rcin)
 
 
 def _run_replay(args: argparse.Namespace, overrides: dict[str, float], out: Path | None) -> int:

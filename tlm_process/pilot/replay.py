@@ -48,8 +48,9 @@ from tlm_process.pilot.signature import (
     segments_from_sidecar,
 )
 
-__all__ = ["GUST_DRAWS", "PilotScenario", "REL_TOL", "format_report", "is_pilot_flown", "judge",
-           "log_params", "plot", "rc_table", "reconstruct_pilot", "replay", "with_arm_gesture"]
+__all__ = ["GUST_DRAWS", "PilotScenario", "REL_TOL", "format_report", "has_sticks",
+           "is_pilot_flown", "judge", "log_params", "plot", "rc_table", "reconstruct_pilot",
+           "replay", "with_arm_gesture"]
 
 #: issue 42's tolerances: relative, per measure, and the noise floors below which a difference
 #: is not judged relative (hover attitude ~0.1 deg, speed ~0.05 m/s, motor 1 +-1 us)
@@ -77,18 +78,25 @@ RC_FRAME_HZ = 50.0
 RC_INTERP_GAP_S = 0.25
 
 
-def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
-    """A log flown by a pilot: RCIN with stick input and no AUTO in MODE."""
-    mode = tables.get("MODE")
+def has_sticks(tables: Mapping[str, pd.DataFrame]) -> bool:
+    """RCIN with the four sticks (C1-C4) and a row where the receiver delivered them."""
     rcin = tables.get("RCIN")
-    if rcin is None or not len(rcin) or not {"C1", "C2", "C3", "C4"} <= set(rcin.columns):
+    sticks = ["C1", "C2", "C3", "C4"]
+    if rcin is None or not len(rcin) or not set(sticks) <= set(rcin.columns):
         return False
+    return bool((rcin[sticks].to_numpy(float) > 0).any())
+
+
+def is_pilot_flown(tables: Mapping[str, pd.DataFrame]) -> bool:
+    """A log flown by a pilot: RCIN with stick input (:func:`has_sticks`) and no AUTO in
+    MODE."""
+    mode = tables.get("MODE")
     if mode is not None and len(mode):
         from tlm_sim.ardupilot import MODE_AUTO
 
         if (pd.to_numeric(mode["ModeNum"], errors="coerce") == MODE_AUTO).any():
             return False
-    return bool((rcin[["C1", "C2", "C3", "C4"]].to_numpy(float) > 0).any())
+    return has_sticks(tables)
 
 
 def rc_table(tables: Mapping[str, pd.DataFrame],
